@@ -1,0 +1,114 @@
+// Reading and writing DEM results in the HDF5 layout `crackvis-dem` v1
+// (docs/data-format.md is the contract).
+//
+// The reader validates as it goes and reports every problem as a Status with
+// one line naming the file, the dataset or attribute, and what is wrong; it
+// never lets HDF5 print to stderr. The writer appends steps to an open file
+// and flushes after each, so an interrupted simulation leaves a file whose
+// completed steps are readable.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <crackvis/common/status.hpp>
+#include <crackvis/dem/h5.hpp>
+#include <crackvis/dem/model.hpp>
+
+namespace crackvis::dem {
+
+inline constexpr std::string_view kFormatName = "crackvis-dem";
+inline constexpr int kFormatVersion = 1;
+
+// "/steps/000042": the group that holds step 42.
+std::string stepGroupPath(int step);
+
+// Free-form provenance stored in root attributes.
+struct DemMetadata {
+  std::string source;  // what produced the file, e.g. "crackvis sim cuboid3d --set A"
+  std::string units = "SI";
+};
+
+struct StepInfo {
+  int index = 0;
+  double time = 0.0;
+};
+
+// What a file holds, read from its attributes and dataset headers only.
+struct DemFileInfo {
+  std::string path;
+  std::string format;
+  int version = 0;
+  int dimension = 0;
+  std::string units;
+  std::string source;
+  std::int64_t particleCount = 0;  // N
+  std::int64_t bondCount = 0;      // M
+  std::vector<StepInfo> steps;     // complete steps, in order
+  int incompleteSteps = 0;         // step groups an interrupted writer left unfinished
+};
+
+class DemFileReader {
+ public:
+  // Opens and checks the file's structure: HDF5 signature, format and
+  // version attributes, the time-independent datasets' presence, dtypes and
+  // shapes, and the list of steps. Array contents are checked when read.
+  static Result<DemFileReader> open(const std::string& path);
+
+  const DemFileInfo& info() const { return m_info; }
+  int stepCount() const { return static_cast<int>(m_info.steps.size()); }
+
+  // Radii, bonds and strengths; validated (bond indices, self and duplicate
+  // bonds, radii).
+  Result<Lattice> readLattice() const;
+  // /bonds/break_step: first step at which each bond is broken, -1 never.
+  Result<std::vector<std::int32_t>> readBreakSteps() const;
+  // One whole step: a few contiguous reads, validated against N and M.
+  Result<StepState> readStep(int step) const;
+  // Only the bond states of a step (for statistics over many steps).
+  Result<std::vector<std::uint8_t>> readBondState(int step) const;
+
+ private:
+  DemFileReader() = default;
+  Status fail(const Status& status) const;
+  Status readStructure();
+  Status readSteps();
+  Result<h5::Handle> openChecked(const std::string& path, h5::ElementType type,
+                                 const std::vector<std::uint64_t>& dims) const;
+  Status checkStepIndex(int step) const;
+
+  std::string m_path;
+  h5::Handle m_file;
+  DemFileInfo m_info;
+};
+
+class DemFileWriter {
+ public:
+  // Creates (or truncates) `path` and writes the time-independent part.
+  static Result<DemFileWriter> create(const std::string& path, const Lattice& lattice,
+                                      const DemMetadata& metadata);
+
+  // Writes the next step, updates /bonds/break_step and flushes to disk.
+  // Refuses a step that disagrees with the lattice or that heals a bond
+  // (bonds break for good).
+  Status appendStep(const StepState& step);
+  // Closes the file; the destructor closes too but cannot report errors.
+  Status close();
+
+  int stepCount() const { return m_stepCount; }
+  const std::vector<std::int32_t>& breakSteps() const { return m_breakStep; }
+
+ private:
+  DemFileWriter() = default;
+  Status recordBreaks(const StepState& step, bool& changed);
+
+  std::string m_path;
+  h5::Handle m_file;
+  Lattice m_lattice;
+  std::vector<std::int32_t> m_breakStep;
+  int m_stepCount = 0;
+};
+
+}  // namespace crackvis::dem

@@ -1,0 +1,126 @@
+// Thin RAII and error helpers over the HDF5 C API, shared by the DEM file
+// reader and writer and by the data service's catalogue.
+//
+// HDF5 reports errors by printing its error stack to stderr; crackvis never
+// lets that reach a user. quietHdf5() turns the printing off once per process,
+// and lastHdf5Error() turns the innermost entry of the stack into a short text
+// that a Status message can carry ("truncated file: eof = 1024, ...").
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <hdf5.h>
+
+#include <crackvis/common/status.hpp>
+
+namespace crackvis::dem::h5 {
+
+// Disables HDF5's automatic error printing for the whole process (idempotent).
+void quietHdf5();
+
+// The innermost message on HDF5's error stack (then clears the stack); empty
+// when the stack is empty.
+std::string lastHdf5Error();
+
+// A move-only owner of one hid_t, closed with the matching H5*close.
+class Handle {
+ public:
+  using Closer = herr_t (*)(hid_t);
+
+  Handle() = default;
+  Handle(hid_t id, Closer closer) : m_id(id), m_closer(closer) {}
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  Handle(Handle&& other) noexcept
+      : m_id(std::exchange(other.m_id, H5I_INVALID_HID)), m_closer(other.m_closer) {}
+  Handle& operator=(Handle&& other) noexcept {
+    if (this != &other) {
+      reset();
+      m_id = std::exchange(other.m_id, H5I_INVALID_HID);
+      m_closer = other.m_closer;
+    }
+    return *this;
+  }
+  ~Handle() { reset(); }
+
+  hid_t get() const { return m_id; }
+  bool valid() const { return m_id >= 0; }
+  // Closes now and reports whether HDF5 could (a file close writes metadata).
+  herr_t reset() {
+    herr_t result = 0;
+    if (m_id >= 0 && m_closer != nullptr) {
+      result = m_closer(m_id);
+    }
+    m_id = H5I_INVALID_HID;
+    return result;
+  }
+
+ private:
+  hid_t m_id = H5I_INVALID_HID;
+  Closer m_closer = nullptr;
+};
+
+inline Handle fileHandle(hid_t id) {
+  return {id, H5Fclose};
+}
+inline Handle groupHandle(hid_t id) {
+  return {id, H5Gclose};
+}
+inline Handle datasetHandle(hid_t id) {
+  return {id, H5Dclose};
+}
+inline Handle dataspaceHandle(hid_t id) {
+  return {id, H5Sclose};
+}
+inline Handle datatypeHandle(hid_t id) {
+  return {id, H5Tclose};
+}
+inline Handle attributeHandle(hid_t id) {
+  return {id, H5Aclose};
+}
+inline Handle propertyListHandle(hid_t id) {
+  return {id, H5Pclose};
+}
+
+// The element types crackvis files use, with their names in messages.
+enum class ElementType { kInt32, kUInt8, kFloat32, kFloat64, kOther };
+const char* elementTypeName(ElementType type);
+// Native in-memory HDF5 type for reads and writes.
+hid_t nativeType(ElementType type);
+// Classifies a stored datatype (any byte order).
+ElementType classify(hid_t datatype);
+
+// What a dataset is: its element type and shape (and chunking, if chunked).
+struct DatasetShape {
+  ElementType type = ElementType::kOther;
+  std::string typeName;  // "int32", "float64", or HDF5's class for others
+  std::vector<std::uint64_t> dims;
+  std::vector<std::uint64_t> chunkDims;  // empty when contiguous
+};
+Result<DatasetShape> describeDataset(hid_t dataset);
+std::string formatDims(const std::vector<std::uint64_t>& dims);
+
+bool linkExists(hid_t location, const std::string& path);
+
+// Attribute access; strings may be fixed-length or variable-length.
+Result<std::string> readStringAttribute(hid_t object, const std::string& name);
+Result<std::int64_t> readIntAttribute(hid_t object, const std::string& name);
+Result<double> readDoubleAttribute(hid_t object, const std::string& name);
+Status writeStringAttribute(hid_t object, const std::string& name, const std::string& value);
+Status writeIntAttribute(hid_t object, const std::string& name, std::int64_t value);
+Status writeDoubleAttribute(hid_t object, const std::string& name, double value);
+
+// Creates a contiguous dataset of the given shape and writes `data` into it.
+Status writeDataset(hid_t location, const std::string& name, ElementType type,
+                    const std::vector<std::uint64_t>& dims, const void* data);
+// Overwrites the whole of an existing dataset.
+Status overwriteDataset(hid_t location, const std::string& name, ElementType type,
+                        const void* data);
+// Reads the whole dataset into `out` (sized by the caller), converting to the
+// native type.
+Status readDataset(hid_t dataset, ElementType type, void* out);
+
+}  // namespace crackvis::dem::h5

@@ -1,0 +1,94 @@
+// The DEM data model: particles, the fixed lattice of bonds between them, and
+// the per-step state (positions, which bonds are broken).
+//
+// Arrays are flat (structure of arrays) and indexed by particle or bond index,
+// so a step maps 1:1 onto the HDF5 datasets of docs/data-format.md and onto
+// the hot loops of the crack extraction. 2D data sets keep three coordinates
+// with z = 0, so every consumer handles one layout.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <crackvis/common/status.hpp>
+
+namespace crackvis::dem {
+
+using ParticleIndex = std::int32_t;
+using BondIndex = std::int32_t;
+
+struct Vec3 {
+  double x = 0.0;
+  double y = 0.0;
+  double z = 0.0;
+
+  friend bool operator==(const Vec3&, const Vec3&) = default;
+};
+static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 must map onto float64[N,3] rows");
+
+inline Vec3 operator+(Vec3 a, Vec3 b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+inline Vec3 operator-(Vec3 a, Vec3 b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+inline Vec3 operator*(double s, Vec3 a) {
+  return {s * a.x, s * a.y, s * a.z};
+}
+inline double dot(Vec3 a, Vec3 b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+double norm(Vec3 a);
+
+// A bond (spring) of the lattice between two particles; first < second in
+// files written by crackvis, but readers accept either order.
+struct Bond {
+  ParticleIndex first = 0;
+  ParticleIndex second = 0;
+
+  friend bool operator==(const Bond&, const Bond&) = default;
+};
+static_assert(sizeof(Bond) == 2 * sizeof(std::int32_t), "Bond must map onto int32[M,2] rows");
+
+// Values of a bond_state array.
+enum class BondState : std::uint8_t { kIntact = 0, kBroken = 1 };
+
+// The time-independent part of a data set: what every step shares.
+struct Lattice {
+  int dimension = 3;             // 2 or 3
+  std::vector<double> radius;    // [N] particle radii, m
+  std::vector<Bond> bonds;       // [M] the fixed lattice topology
+  std::vector<double> strength;  // [M] tensile strength R_n of each bond, N
+
+  std::size_t particleCount() const { return radius.size(); }
+  std::size_t bondCount() const { return bonds.size(); }
+};
+
+// The state of the lattice at one saved time step.
+struct StepState {
+  double time = 0.0;                             // simulated time, s
+  std::vector<Vec3> positions;                   // [N] particle centres, m
+  std::vector<std::uint8_t> bondState;           // [M] BondState values
+  std::vector<std::array<float, 3>> velocities;  // [N] optional, m/s
+  std::vector<float> bondForce;                  // [M] optional normal force, N
+
+  std::size_t brokenBondCount() const;
+};
+
+// Checks what a lattice must satisfy whatever its source: dimension 2 or 3,
+// positive finite radii, strengths of length M that are not NaN or negative,
+// bond ends in range, no self-bond, no duplicate bond. The message names the
+// first offending bond or particle.
+Status validateLattice(const Lattice& lattice);
+
+// Checks a step against its lattice: array lengths agree with N and M,
+// positions finite, z = 0 in 2D, bond states 0 or 1.
+Status validateStep(const Lattice& lattice, const StepState& step);
+// The same, for readers that know only the dimension, N and M.
+Status validateStep(int dimension, std::size_t particleCount, std::size_t bondCount,
+                    const StepState& step);
+
+}  // namespace crackvis::dem

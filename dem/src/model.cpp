@@ -1,0 +1,137 @@
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <fmt/format.h>
+
+#include <crackvis/dem/model.hpp>
+
+namespace crackvis::dem {
+namespace {
+
+std::string describe(Vec3 p) {
+  return fmt::format("({}, {}, {})", p.x, p.y, p.z);
+}
+
+Status checkBondEnds(const Lattice& lattice) {
+  const auto n = static_cast<std::int64_t>(lattice.particleCount());
+  for (std::size_t b = 0; b < lattice.bonds.size(); ++b) {
+    const Bond bond = lattice.bonds[b];
+    if (bond.first < 0 || bond.second < 0 || bond.first >= n || bond.second >= n) {
+      return invalidArgument(
+          fmt::format("bond {} joins particles {} and {}: index out of range (N = {} particles)", b,
+                      bond.first, bond.second, n));
+    }
+    if (bond.first == bond.second) {
+      return invalidArgument(fmt::format("bond {} is a self-bond of particle {}", b, bond.first));
+    }
+  }
+  return Status::ok();
+}
+
+// Sorting bond keys finds duplicates in O(M log M) without a hash set.
+Status checkDuplicateBonds(const Lattice& lattice) {
+  const std::size_t m = lattice.bondCount();
+  std::vector<std::uint64_t> keys(m);
+  for (std::size_t b = 0; b < m; ++b) {
+    const auto lo =
+        static_cast<std::uint32_t>(std::min(lattice.bonds[b].first, lattice.bonds[b].second));
+    const auto hi =
+        static_cast<std::uint32_t>(std::max(lattice.bonds[b].first, lattice.bonds[b].second));
+    keys[b] = (std::uint64_t{lo} << 32) | hi;
+  }
+  std::vector<std::uint32_t> order(m);
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return keys[a] != keys[b] ? keys[a] < keys[b] : a < b;
+  });
+  for (std::size_t i = 1; i < m; ++i) {
+    if (keys[order[i]] == keys[order[i - 1]]) {
+      const Bond bond = lattice.bonds[order[i]];
+      return invalidArgument(fmt::format("bond {} duplicates bond {} (particles {} and {})",
+                                         order[i], order[i - 1], bond.first, bond.second));
+    }
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+double norm(Vec3 a) {
+  return std::sqrt(dot(a, a));
+}
+
+std::size_t StepState::brokenBondCount() const {
+  return static_cast<std::size_t>(std::count(bondState.begin(), bondState.end(),
+                                             static_cast<std::uint8_t>(BondState::kBroken)));
+}
+
+Status validateLattice(const Lattice& lattice) {
+  if (lattice.dimension != 2 && lattice.dimension != 3) {
+    return invalidArgument(fmt::format("dimension is {}, expected 2 or 3", lattice.dimension));
+  }
+  for (std::size_t i = 0; i < lattice.radius.size(); ++i) {
+    if (!std::isfinite(lattice.radius[i]) || lattice.radius[i] <= 0.0) {
+      return invalidArgument(fmt::format(
+          "radius of particle {} is {}, expected a positive finite value", i, lattice.radius[i]));
+    }
+  }
+  if (lattice.strength.size() != lattice.bondCount()) {
+    return invalidArgument(fmt::format("{} bond strengths for {} bonds", lattice.strength.size(),
+                                       lattice.bondCount()));
+  }
+  for (std::size_t b = 0; b < lattice.strength.size(); ++b) {
+    if (std::isnan(lattice.strength[b]) || lattice.strength[b] < 0.0) {
+      return invalidArgument(
+          fmt::format("strength of bond {} is {}, expected >= 0", b, lattice.strength[b]));
+    }
+  }
+  CRACKVIS_RETURN_IF_ERROR(checkBondEnds(lattice));
+  return checkDuplicateBonds(lattice);
+}
+
+Status validateStep(const Lattice& lattice, const StepState& step) {
+  return validateStep(lattice.dimension, lattice.particleCount(), lattice.bondCount(), step);
+}
+
+Status validateStep(int dimension, std::size_t n, std::size_t m, const StepState& step) {
+  if (step.positions.size() != n) {
+    return invalidArgument(
+        fmt::format("{} positions for N = {} particles", step.positions.size(), n));
+  }
+  if (step.bondState.size() != m) {
+    return invalidArgument(
+        fmt::format("{} bond states for M = {} bonds", step.bondState.size(), m));
+  }
+  if (!step.velocities.empty() && step.velocities.size() != n) {
+    return invalidArgument(
+        fmt::format("{} velocities for N = {} particles", step.velocities.size(), n));
+  }
+  if (!step.bondForce.empty() && step.bondForce.size() != m) {
+    return invalidArgument(
+        fmt::format("{} bond forces for M = {} bonds", step.bondForce.size(), m));
+  }
+  if (!std::isfinite(step.time)) {
+    return invalidArgument("time is not finite");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 p = step.positions[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+      return invalidArgument(
+          fmt::format("position of particle {} is not finite {}", i, describe(p)));
+    }
+    if (dimension == 2 && p.z != 0.0) {
+      return invalidArgument(
+          fmt::format("2D data set but particle {} has z = {} (expected 0)", i, p.z));
+    }
+  }
+  for (std::size_t b = 0; b < m; ++b) {
+    if (step.bondState[b] > static_cast<std::uint8_t>(BondState::kBroken)) {
+      return invalidArgument(fmt::format(
+          "state of bond {} is {}, expected 0 (intact) or 1 (broken)", b, step.bondState[b]));
+    }
+  }
+  return Status::ok();
+}
+
+}  // namespace crackvis::dem

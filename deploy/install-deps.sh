@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package crackvis needs to build, test and run.
+#
+# Idempotent: packages already installed are skipped, and a machine that has
+# everything returns in about a second without touching the network. Works as
+# root with no terminal (CI); as another user it goes through sudo.
+#
+#   deploy/install-deps.sh            # everything
+#   deploy/install-deps.sh --list     # print the package list and exit
+set -euo pipefail
+
+# One package per line, grouped by the part of crackvis that needs it.
+readonly PACKAGES=(
+  # toolchain
+  build-essential cmake ninja-build pkg-config git clang-format
+  # dem/: HDF5 files and their command-line tools (h5dump, h5ls)
+  libhdf5-dev hdf5-tools h5utils
+  # CLI, logging, JSON, parallel loops
+  libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libtbb-dev
+  # cracks/: kd-tree, global Voronoi baseline, VTK adapters
+  libnanoflann-dev voro++-dev libvtk9-dev
+  # dataservice/, server/: gRPC with TLS
+  libgrpc++-dev libgrpc-dev protobuf-compiler protobuf-compiler-grpc libprotobuf-dev libssl-dev openssl
+  # server/: off-screen rendering (EGL + Mesa llvmpipe), pipeline schemas, encoding
+  libegl-dev libegl-mesa0 libgl1-mesa-dri libgles-dev libopengl-dev
+  libxml2-dev libxml2-utils
+  libavcodec-dev libavformat-dev libavutil-dev libswscale-dev libx264-dev ffmpeg
+  # client/: Qt6 thin client, headless screenshots
+  qt6-base-dev qt6-base-dev-tools libqt6opengl6-dev xvfb
+  # tests and benchmark plots
+  catch2 gnuplot-nox
+)
+
+if [[ "${1:-}" == "--list" ]]; then
+  printf '%s\n' "${PACKAGES[@]}"
+  exit 0
+fi
+
+is_installed() {
+  [[ "$(dpkg-query -W -f='${db:Status-Status}' "$1" 2>/dev/null)" == "installed" ]]
+}
+
+missing=()
+for package in "${PACKAGES[@]}"; do
+  is_installed "$package" || missing+=("$package")
+done
+
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+as_root=()
+if ((EUID != 0)); then
+  command -v sudo >/dev/null || {
+    echo "install-deps: not root and no sudo; install as root: ${missing[*]}" >&2
+    exit 1
+  }
+  as_root=(sudo)
+fi
+
+echo "install-deps: installing ${#missing[@]} packages: ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+apt_get=("${as_root[@]}" apt-get -y -q -o Dpkg::Use-Pty=0 --no-install-recommends)
+# The package lists of a fresh machine are empty or stale; refresh them once.
+"${as_root[@]}" apt-get update -q
+"${apt_get[@]}" install "${missing[@]}"
+echo "install-deps: done"

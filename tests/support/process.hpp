@@ -1,0 +1,21 @@
+// Runs a program to completion and captures its exit status, stdout and
+// stderr: how CLI tests see exactly what a user sees.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace crackvis::testing {
+
+struct ProcessResult {
+  int exitCode = -1;  // the exit status, or 128 + signal when killed
+  std::string out;
+  std::string err;
+};
+
+ProcessResult runProcess(const std::vector<std::string>& argv);
+
+// Non-empty lines of a text.
+std::vector<std::string> lines(const std::string& text);
+
+}  // namespace crackvis::testing

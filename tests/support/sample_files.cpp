@@ -1,0 +1,72 @@
+#include "support/sample_files.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace crackvis::testing {
+
+SampleData makeSample(int dimension, int steps, bool optionalArrays) {
+  dem::BlockSpec spec;
+  spec.kind = dimension == 3 ? dem::LatticeKind::kFcc : dem::LatticeKind::kTriangular;
+  spec.sites = dimension == 3 ? std::array<int, 3>{5, 3, 3} : std::array<int, 3>{8, 5, 1};
+  spec.radius = 0.002;
+  spec.jitter = 0.2;
+  spec.seed = 7;
+  auto block = dem::generateBlock(spec);
+  if (!block) {
+    throw std::runtime_error(block.status().message());
+  }
+  SampleData sample;
+  sample.lattice = block->lattice;
+  for (size_t b = 0; b < sample.lattice.bondCount(); ++b) {
+    sample.lattice.strength[b] = 10.0 + 0.37 * static_cast<double>(b % 11);
+  }
+  const size_t m = sample.lattice.bondCount();
+  for (int k = 0; k < steps; ++k) {
+    dem::StepState step;
+    step.time = 1e-4 * k;
+    const double stretch = 1.0 + 0.01 * k;
+    for (const dem::Vec3& p : block->positions) {
+      step.positions.push_back({p.x * stretch, p.y, p.z});
+    }
+    step.bondState.assign(m, 0);
+    const size_t broken = static_cast<size_t>(k) * m / (2 * static_cast<size_t>(steps));
+    for (size_t b = 0; b < broken; ++b) {
+      step.bondState[b] = 1;
+    }
+    if (optionalArrays) {
+      for (size_t i = 0; i < step.positions.size(); ++i) {
+        step.velocities.push_back({0.05f * static_cast<float>(k), static_cast<float>(i) * 1e-3f,
+                                   dimension == 3 ? -0.25f : 0.0f});
+      }
+      for (size_t b = 0; b < m; ++b) {
+        step.bondForce.push_back(step.bondState[b] ? 0.0f : std::sin(static_cast<float>(b + k)));
+      }
+    }
+    sample.steps.push_back(std::move(step));
+  }
+  return sample;
+}
+
+void writeSample(const std::string& path, const SampleData& sample) {
+  auto writer = dem::DemFileWriter::create(path, sample.lattice, {"crackvis tests", "SI"});
+  if (!writer) {
+    throw std::runtime_error(writer.status().message());
+  }
+  for (const auto& step : sample.steps) {
+    if (Status status = writer->appendStep(step); !status) {
+      throw std::runtime_error(status.message());
+    }
+  }
+  if (Status status = writer->close(); !status) {
+    throw std::runtime_error(status.message());
+  }
+}
+
+SampleData writeSampleFile(const std::string& path, int dimension, int steps) {
+  SampleData sample = makeSample(dimension, steps);
+  writeSample(path, sample);
+  return sample;
+}
+
+}  // namespace crackvis::testing

@@ -1,0 +1,29 @@
+// Small, valid crackvis-dem data made in code for tests: a lattice block and a
+// few steps in which bonds break progressively, as a fracture run would.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <crackvis/dem/dem_file.hpp>
+#include <crackvis/dem/lattice_generator.hpp>
+
+namespace crackvis::testing {
+
+struct SampleData {
+  dem::Lattice lattice;
+  std::vector<dem::StepState> steps;
+};
+
+// A jittered block (fcc 3D or triangular 2D) stretched along x over `steps`
+// steps; at step k the first k * M / (2 * steps) bonds are broken. With
+// `optionalArrays`, steps also carry velocities and bond forces.
+SampleData makeSample(int dimension, int steps, bool optionalArrays = true);
+
+// Writes `sample` to `path`; throws on failure.
+void writeSample(const std::string& path, const SampleData& sample);
+
+// Shorthand: makeSample + writeSample.
+SampleData writeSampleFile(const std::string& path, int dimension = 3, int steps = 3);
+
+}  // namespace crackvis::testing

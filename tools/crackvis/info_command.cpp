@@ -1,0 +1,199 @@
+// crackvis info: what a crackvis-dem file holds, as text or JSON. Reading the
+// file validates it, so `info` doubles as a checker: a malformed file gets one
+// line on stderr and exit status 1.
+#include <cmath>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "commands.hpp"
+#include <crackvis/dem/dem_file.hpp>
+#include <crackvis/dem/lattice_generator.hpp>
+
+namespace crackvis::cli {
+namespace {
+
+struct InfoOptions {
+  std::string file;
+  bool perStep = false;
+  bool json = false;
+};
+
+struct StepRow {
+  int step = 0;
+  double time = 0.0;
+  std::int64_t broken = 0;
+  std::int64_t newlyBroken = 0;
+};
+
+struct FileSummary {
+  dem::DemFileInfo info;
+  double meanCoordination = 0.0;
+  std::vector<StepRow> rows;  // first and last only, unless per-step was asked
+};
+
+double percent(std::int64_t part, std::int64_t whole) {
+  return whole > 0 ? 100.0 * static_cast<double>(part) / static_cast<double>(whole) : 0.0;
+}
+
+Result<StepRow> summarizeStep(const dem::DemFileReader& reader, int step, bool fullStep) {
+  StepRow row{step, reader.info().steps[static_cast<size_t>(step)].time, 0, 0};
+  if (fullStep) {
+    // Reading positions too validates them (finite, z = 0 in 2D).
+    auto state = reader.readStep(step);
+    if (!state) {
+      return state.status();
+    }
+    row.broken = static_cast<std::int64_t>(state->brokenBondCount());
+  } else {
+    auto bondState = reader.readBondState(step);
+    if (!bondState) {
+      return bondState.status();
+    }
+    row.broken = std::count(bondState->begin(), bondState->end(), std::uint8_t{1});
+  }
+  return row;
+}
+
+Result<FileSummary> summarize(const InfoOptions& options) {
+  auto reader = dem::DemFileReader::open(options.file);
+  if (!reader) {
+    return reader.status();
+  }
+  FileSummary summary;
+  summary.info = reader->info();
+  auto lattice = reader->readLattice();
+  if (!lattice) {
+    return lattice.status();
+  }
+  if (auto breakSteps = reader->readBreakSteps(); !breakSteps) {
+    return breakSteps.status();
+  }
+  summary.meanCoordination = lattice->particleCount() > 0
+                                 ? 2.0 * static_cast<double>(lattice->bondCount()) /
+                                       static_cast<double>(lattice->particleCount())
+                                 : 0.0;
+  const int steps = reader->stepCount();
+  std::vector<int> wanted;
+  if (options.perStep) {
+    for (int step = 0; step < steps; ++step) {
+      wanted.push_back(step);
+    }
+  } else if (steps > 0) {
+    wanted = steps > 1 ? std::vector<int>{0, steps - 1} : std::vector<int>{0};
+  }
+  for (int step : wanted) {
+    const bool firstOrLast = step == 0 || step == steps - 1;
+    auto row = summarizeStep(*reader, step, firstOrLast);
+    if (!row) {
+      return row.status();
+    }
+    row->newlyBroken = summary.rows.empty() || summary.rows.back().step != step - 1
+                           ? row->broken
+                           : row->broken - summary.rows.back().broken;
+    summary.rows.push_back(*row);
+  }
+  return summary;
+}
+
+nlohmann::json toJson(const FileSummary& summary, bool perStep) {
+  const auto& info = summary.info;
+  nlohmann::json out = {
+      {"file", info.path},
+      {"format", info.format},
+      {"version", info.version},
+      {"dimension", info.dimension},
+      {"units", info.units},
+      {"source", info.source},
+      {"particles", info.particleCount},
+      {"bonds", info.bondCount},
+      {"mean_coordination", summary.meanCoordination},
+      {"steps", info.steps.size()},
+      {"incomplete_steps", info.incompleteSteps},
+  };
+  if (summary.rows.empty()) {
+    out["time"] = nullptr;
+    out["broken_bonds"] = nullptr;
+  } else {
+    out["time"] = {{"first", info.steps.front().time}, {"last", info.steps.back().time}};
+    out["broken_bonds"] = {{"first", summary.rows.front().broken},
+                           {"last", summary.rows.back().broken}};
+  }
+  if (perStep) {
+    out["per_step"] = nlohmann::json::array();
+    for (const StepRow& row : summary.rows) {
+      out["per_step"].push_back({{"step", row.step},
+                                 {"time", row.time},
+                                 {"broken", row.broken},
+                                 {"new", row.newlyBroken}});
+    }
+  }
+  return out;
+}
+
+void printText(const FileSummary& summary, bool perStep) {
+  const auto& info = summary.info;
+  const auto m = info.bondCount;
+  fmt::print("file          {}\n", info.path);
+  fmt::print("format        {} v{}\n", info.format, info.version);
+  fmt::print("dimension     {}D\n", info.dimension);
+  fmt::print("particles     N = {}\n", info.particleCount);
+  fmt::print("bonds         M = {} (mean coordination {:.3f})\n", m, summary.meanCoordination);
+  if (summary.rows.empty()) {
+    fmt::print("steps         0\n");
+  } else {
+    fmt::print("steps         {} (time {:.6g} .. {:.6g} s)\n", info.steps.size(),
+               info.steps.front().time, info.steps.back().time);
+    const StepRow& first = summary.rows.front();
+    const StepRow& last = summary.rows.back();
+    fmt::print("broken bonds  first step: {} ({:.2f} %), last step: {} ({:.2f} %)\n", first.broken,
+               percent(first.broken, m), last.broken, percent(last.broken, m));
+  }
+  if (info.incompleteSteps > 0) {
+    fmt::print("incomplete    {} step group(s) left unfinished by an interrupted writer\n",
+               info.incompleteSteps);
+  }
+  if (!info.source.empty()) {
+    fmt::print("source        {}\n", info.source);
+  }
+  if (perStep) {
+    fmt::print("\n{:>8} {:>14} {:>10} {:>9} {:>8}\n", "step", "time [s]", "broken", "broken %",
+               "new");
+    for (const StepRow& row : summary.rows) {
+      fmt::print("{:>8} {:>14.6g} {:>10} {:>9.3f} {:>8}\n", row.step, row.time, row.broken,
+                 percent(row.broken, m), row.newlyBroken);
+    }
+  }
+}
+
+int runInfo(const InfoOptions& options) {
+  auto summary = summarize(options);
+  if (!summary) {
+    printError("info", summary.status().message());
+    return kExitFailure;
+  }
+  if (options.json) {
+    std::printf("%s\n", toJson(*summary, options.perStep).dump(2).c_str());
+  } else {
+    printText(*summary, options.perStep);
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+Action addInfoCommand(CLI::App& app) {
+  auto options = std::make_shared<InfoOptions>();
+  auto* command = app.add_subcommand(
+      "info",
+      "Describe a crackvis-dem file: format, dimension, particles N, bonds M, steps, time range "
+      "and broken bonds. Validates the file on the way: a malformed file is reported in one "
+      "line and the exit status is 1.");
+  command->add_option("file", options->file, "HDF5 file in the crackvis-dem layout")->required();
+  command->add_flag("--steps", options->perStep,
+                    "Add a per-step table: time, broken bonds, newly broken bonds");
+  command->add_flag("--json", options->json, "Print JSON instead of text");
+  return [options] { return runInfo(*options); };
+}
+
+}  // namespace crackvis::cli
