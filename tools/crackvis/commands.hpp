@@ -1,15 +1,22 @@
-// The crackvis CLI's subcommands. Each registers its options on the app and
-// returns the action to run after parsing; an action returns the process exit
-// status (0 success, 1 failure on bad input or data, with one line on stderr).
+// The crackvis CLI's subcommands. Each add*Command registers one subcommand
+// (with its options) under `parent` and returns it with the action to run
+// after parsing; an action returns the process exit status (0 success,
+// 1 failure on bad input or data with one line on stderr, 2 usage).
 #pragma once
 
 #include <functional>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
 namespace crackvis::cli {
 
 using Action = std::function<int()>;
+
+struct Command {
+  CLI::App* app = nullptr;
+  Action action;
+};
 
 enum ExitCode : int { kExitOk = 0, kExitFailure = 1, kExitUsage = 2 };
 
@@ -19,7 +26,10 @@ const std::string& invocation();
 // Prints "crackvis <command>: <message>" as the one line a failure gets.
 void printError(const char* command, const std::string& message);
 
-Action addGenerateCommand(CLI::App& app);
-Action addInfoCommand(CLI::App& app);
+// Top level: crackvis generate | info | sim | extract
+Command addGenerateCommand(CLI::App& parent);
+Command addInfoCommand(CLI::App& parent);
+// Under `crackvis bench`: transfer | methods | render
+// (Declared here as each lands; main.cpp wires them.)
 
 }  // namespace crackvis::cli

@@ -94,9 +94,9 @@ int runGenerate(const GenerateOptions& options) {
 
 }  // namespace
 
-Action addGenerateCommand(CLI::App& app) {
+Command addGenerateCommand(CLI::App& parent) {
   auto options = std::make_shared<GenerateOptions>();
-  auto* command = app.add_subcommand(
+  auto* command = parent.add_subcommand(
       "generate",
       "Write a lattice block of monodisperse spheres, bonded to their nearest neighbours, as a "
       "one-step crackvis-dem file (all bonds intact).");
@@ -127,15 +127,15 @@ Action addGenerateCommand(CLI::App& app) {
   command->add_flag("-q,--quiet", options->quiet, "Print nothing on success");
   command->footer(
       "Example: crackvis generate --lattice fcc --sites 21 21 21 --radius 0.002 -o block.h5");
-  return [options] {
-    if (options->sites.empty() && options->box.empty()) {
-      // Default: an FCC block of 4 x 4 x 4 cubic cells, or a 20 x 20 2D patch.
-      options->sites = dem::dimensionOf(*dem::parseLatticeKind(options->lattice)) == 3
-                           ? std::vector<int>{9, 9, 9}
-                           : std::vector<int>{20, 20};
-    }
-    return runGenerate(*options);
-  };
+  return {command, [options] {
+            if (options->sites.empty() && options->box.empty()) {
+              // Default: an FCC block of 4 x 4 x 4 cubic cells, or a 20 x 20 2D patch.
+              options->sites = dem::dimensionOf(*dem::parseLatticeKind(options->lattice)) == 3
+                                   ? std::vector<int>{9, 9, 9}
+                                   : std::vector<int>{20, 20};
+            }
+            return runGenerate(*options);
+          }};
 }
 
 }  // namespace crackvis::cli

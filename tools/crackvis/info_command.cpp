@@ -182,9 +182,9 @@ int runInfo(const InfoOptions& options) {
 
 }  // namespace
 
-Action addInfoCommand(CLI::App& app) {
+Command addInfoCommand(CLI::App& parent) {
   auto options = std::make_shared<InfoOptions>();
-  auto* command = app.add_subcommand(
+  auto* command = parent.add_subcommand(
       "info",
       "Describe a crackvis-dem file: format, dimension, particles N, bonds M, steps, time range "
       "and broken bonds. Validates the file on the way: a malformed file is reported in one "
@@ -193,7 +193,7 @@ Action addInfoCommand(CLI::App& app) {
   command->add_flag("--steps", options->perStep,
                     "Add a per-step table: time, broken bonds, newly broken bonds");
   command->add_flag("--json", options->json, "Print JSON instead of text");
-  return [options] { return runInfo(*options); };
+  return {command, [options] { return runInfo(*options); }};
 }
 
 }  // namespace crackvis::cli

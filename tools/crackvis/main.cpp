@@ -1,18 +1,21 @@
-// crackvis: the command-line tool (generate, info; sim, extract, bench as
-// they land). Parses options, runs one subcommand, maps failures to exit codes.
+// crackvis: the command-line tool. Parses options, runs one subcommand, maps
+// failures to exit codes. Subcommands live in *_command.cpp files.
 #include <cstdio>
 #include <exception>
-#include <map>
+#include <vector>
 
 #include "commands.hpp"
 
 namespace crackvis::cli {
 namespace {
-std::string g_invocation;
+std::string& invocationText() {
+  static std::string text;
+  return text;
+}
 }  // namespace
 
 const std::string& invocation() {
-  return g_invocation;
+  return invocationText();
 }
 
 void printError(const char* command, const std::string& message) {
@@ -24,7 +27,7 @@ void printError(const char* command, const std::string& message) {
 int main(int argc, char** argv) {
   using namespace crackvis::cli;
   for (int i = 0; i < argc; ++i) {
-    crackvis::cli::g_invocation += (i == 0 ? "crackvis" : std::string(" ") + argv[i]);
+    invocationText() += i == 0 ? std::string("crackvis") : std::string(" ") + argv[i];
   }
   CLI::App app{
       "crackvis: crack surfaces in lattice DEM simulations.\n"
@@ -32,14 +35,16 @@ int main(int argc, char** argv) {
       "crackvis"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "crackvis 0.1.0");
-  std::map<CLI::App*, Action> actions;
-  auto add = [&](Action (*registerCommand)(CLI::App&)) {
-    const size_t before = app.get_subcommands({}).size();
-    Action action = registerCommand(app);
-    actions[app.get_subcommands({}).at(before)] = std::move(action);
-  };
-  add(addGenerateCommand);
-  add(addInfoCommand);
+  auto* bench = app.add_subcommand(
+      "bench", "Benchmarks that print ratios against a baseline measured in the same run.");
+  bench->require_subcommand(1);
+
+  std::vector<Command> commands;
+  commands.push_back(addGenerateCommand(app));
+  commands.push_back(addInfoCommand(app));
+  if (bench->get_subcommands({}).empty()) {
+    app.remove_subcommand(bench);  // no benchmark has landed yet
+  }
 
   try {
     app.parse(argc, argv);
@@ -54,9 +59,9 @@ int main(int argc, char** argv) {
     return kExitUsage;
   }
   try {
-    for (auto& [command, action] : actions) {
-      if (command->parsed()) {
-        return action();
+    for (const Command& command : commands) {
+      if (command.app->parsed()) {
+        return command.action();
       }
     }
   } catch (const std::exception& e) {
