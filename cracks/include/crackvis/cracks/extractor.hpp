@@ -1,0 +1,89 @@
+// The four crack extraction methods behind one interface. An extractor is
+// made once per data set (it keeps the bond graph view and, for the
+// cell-based methods, the local decomposition across steps) and called once
+// per step; calling it on steps in order is what makes it incremental.
+//
+// All methods run on all cores (TBB) and give the same output, in the same
+// order, for any thread count.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include <crackvis/common/status.hpp>
+#include <crackvis/cracks/bond_graph.hpp>
+#include <crackvis/cracks/crack_mesh.hpp>
+#include <crackvis/cracks/lattice_decomposition.hpp>
+
+namespace crackvis::cracks {
+
+enum class Method { kCellAttribute, kCellCut, kLocalVoronoi, kCellCentre };
+
+std::string_view toString(Method method);
+Result<Method> parseMethod(std::string_view name);
+
+// An axis-aligned box (the domain that clips local Voronoi cells).
+struct Box {
+  Vec3 lo;
+  Vec3 hi;
+};
+
+// Everything one step provides; optional arrays may be empty.
+struct StepInput {
+  std::span<const Vec3> positions;          // [N]
+  std::span<const std::uint8_t> bondState;  // [M], 1 broken
+  std::span<const double> radius;           // [N]
+  std::span<const float> bondForce;         // [M] optional
+  std::span<const std::int32_t> breakStep;  // [M] optional
+};
+
+struct ExtractOptions {
+  // cell attribute: decompose the whole lattice instead of the fractured
+  // region, and the fewest broken bonds a cell needs to be output.
+  bool globalDecomposition = false;
+  int minBrokenBonds = 1;
+  // local Voronoi: validate faces by the empty-sphere test; a vertex fails
+  // when a particle lies inside its sphere by more than tolerance * radius.
+  bool validate = true;
+  double validationTolerance = 1e-3;
+  // local Voronoi: also output the faces of intact bonds (the local
+  // decomposition), with bond_state 0, for display.
+  bool includeIntactFaces = false;
+  // local Voronoi: the clipping domain; default: the bounding box of the
+  // particle centres (see defaultDomain).
+  std::optional<Box> domain;
+  // cell centre: use the centroid of each whole octahedron instead of its two
+  // pyramids (on an undeformed FCC lattice the faces are then the Voronoi faces).
+  bool mergeOctahedra = false;
+};
+
+class CrackExtractor {
+ public:
+  virtual ~CrackExtractor() = default;
+  virtual Method method() const = 0;
+  // Extracts the crack geometry of one step into `out` (cleared first).
+  virtual Status extract(const StepInput& step, CrackMesh& out) = 0;
+  // Bytes held between steps (decomposition, caches), for the memory budget.
+  virtual std::size_t memoryBytes() const = 0;
+  // The cell decomposition, for methods that keep one (else nullptr).
+  virtual const LatticeDecomposition* decomposition() const { return nullptr; }
+  // Bonds the last step found inconsistent (local Voronoi only).
+  virtual std::size_t inconsistentBondCount() const { return 0; }
+};
+
+// The graph must outlive the extractor.
+std::unique_ptr<CrackExtractor> makeExtractor(Method method, const BondGraph& graph, int dimension,
+                                              const ExtractOptions& options = {});
+
+// Checks array lengths of a step against the graph.
+Status checkStepInput(const BondGraph& graph, const StepInput& step);
+
+// Per-point or per-primitive bond attributes: bond_id, bond_state and, when
+// the step has them, break_step and bond_force.
+void appendBondAttributes(const StepInput& step, std::span<const dem::BondIndex> bonds,
+                          std::vector<AttributeArray>& arrays);
+
+}  // namespace crackvis::cracks

@@ -1,0 +1,33 @@
+// Local Voronoi cells (dissertation 2.2): the cell of a particle cut from the
+// domain box by the bisector planes of its lattice neighbours only (bonded
+// particles, broken or not), as Voro++ would cut it if those were the only
+// particles. Where the lattice is consistent with the Voronoi diagram this is
+// the Voronoi cell; where it is not, the empty-sphere validation finds out.
+#pragma once
+
+#include <span>
+
+#include <crackvis/cracks/bond_graph.hpp>
+#include <crackvis/cracks/convex_cell.hpp>
+#include <crackvis/cracks/extractor.hpp>
+#include <crackvis/cracks/particle_grid.hpp>
+
+namespace crackvis::cracks {
+
+// The default domain: the bounding box of the particle centres (in 2D with
+// z in [-r, r]).
+Box defaultDomain(std::span<const Vec3> positions, std::span<const double> radius, int dimension);
+
+// Computes the local cell of particle i into `cell`; face labels are bond
+// indices (>= 0) or walls (< 0). In 2D the box's z range is [-r, r] and the
+// cell is a prism over the 2D cell.
+void computeLocalVoronoiCell(const BondGraph& graph, std::span<const Vec3> positions,
+                             dem::ParticleIndex i, const Box& box, ConvexCell& cell);
+
+// The empty-sphere test of one vertex of particle i's cell: false when some
+// particle lies inside the sphere centred at the vertex through particle i,
+// by more than tolerance times its radius.
+bool vertexIsValid(const ParticleGrid& grid, std::span<const Vec3> positions, dem::ParticleIndex i,
+                   Vec3 vertex, double tolerance);
+
+}  // namespace crackvis::cracks

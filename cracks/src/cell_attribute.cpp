@@ -1,0 +1,79 @@
+// Cell attribute method (dissertation 2.1.1): the cells of the decomposition
+// with the number of their broken bonds as a cell attribute (eq. 2.2).
+#include "methods.hpp"
+
+namespace crackvis::cracks {
+namespace {
+
+class CellAttributeExtractor final : public CrackExtractor {
+ public:
+  CellAttributeExtractor(const BondGraph& graph, int dimension, const ExtractOptions& options)
+      : m_decomposition(graph, dimension),
+        m_options(options),
+        m_pointOf(graph.particleCount(), -1) {}
+
+  Method method() const override { return Method::kCellAttribute; }
+  const LatticeDecomposition* decomposition() const override { return &m_decomposition; }
+
+  std::size_t memoryBytes() const override {
+    return m_decomposition.memoryBytes() + m_pointOf.capacity() * sizeof(std::int32_t);
+  }
+
+  Status extract(const StepInput& step, CrackMesh& out) override {
+    CRACKVIS_RETURN_IF_ERROR(checkStepInput(m_decomposition.graph(), step));
+    if (m_options.globalDecomposition && m_decomposition.cellCount() == 0) {
+      m_decomposition.buildGlobal(step.bondState);
+    }
+    m_decomposition.update(step.bondState);
+    out.clear();
+    out.dimension = m_decomposition.dimension();
+    AttributeArray broken{"broken_bonds", AttributeType::kInt32, 1, {}};
+    std::vector<dem::ParticleIndex> used;
+    for (const LatticeCell& cell : m_decomposition.cells()) {
+      if (cell.brokenCount() < m_options.minBrokenBonds) {
+        continue;
+      }
+      std::array<std::int32_t, kMaxCellNodes> ids{};
+      const int count = cell.nodeCount();
+      for (int k = 0; k < count; ++k) {
+        const auto particle = static_cast<std::size_t>(cell.nodes[static_cast<std::size_t>(k)]);
+        if (m_pointOf[particle] < 0) {
+          m_pointOf[particle] = static_cast<std::int32_t>(used.size());
+          used.push_back(static_cast<dem::ParticleIndex>(particle));
+        }
+        ids[static_cast<std::size_t>(k)] = m_pointOf[particle];
+      }
+      if (cell.type == CellType::kTriangle) {
+        out.polygons.addRange(ids.begin(), ids.begin() + 3);
+      } else {
+        out.volumeCells.addRange(ids.begin(), ids.begin() + count);
+        out.volumeCellTypes.push_back(static_cast<std::uint8_t>(vtkCellTypeOf(cell.type)));
+      }
+      broken.values.push_back(cell.brokenCount());
+    }
+    out.points.reserve(used.size());
+    AttributeArray particleId{"particle_id", AttributeType::kInt32, 1, {}};
+    for (dem::ParticleIndex p : used) {
+      out.points.push_back(step.positions[static_cast<std::size_t>(p)]);
+      particleId.values.push_back(p);
+      m_pointOf[static_cast<std::size_t>(p)] = -1;
+    }
+    out.cellData.push_back(std::move(broken));
+    out.pointData.push_back(std::move(particleId));
+    return Status::ok();
+  }
+
+ private:
+  LatticeDecomposition m_decomposition;
+  ExtractOptions m_options;
+  std::vector<std::int32_t> m_pointOf;  // particle -> output point during one step, else -1
+};
+
+}  // namespace
+
+std::unique_ptr<CrackExtractor> makeCellAttribute(const BondGraph& graph, int dimension,
+                                                  const ExtractOptions& options) {
+  return std::make_unique<CellAttributeExtractor>(graph, dimension, options);
+}
+
+}  // namespace crackvis::cracks

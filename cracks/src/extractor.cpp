@@ -1,0 +1,98 @@
+#include <fmt/format.h>
+
+#include "methods.hpp"
+#include <crackvis/cracks/extractor.hpp>
+
+namespace crackvis::cracks {
+
+std::string_view toString(Method method) {
+  switch (method) {
+    case Method::kCellAttribute:
+      return "cell-attribute";
+    case Method::kCellCut:
+      return "cell-cut";
+    case Method::kLocalVoronoi:
+      return "local-voronoi";
+    case Method::kCellCentre:
+      return "cell-centre";
+  }
+  return "unknown";
+}
+
+Result<Method> parseMethod(std::string_view name) {
+  for (auto method :
+       {Method::kCellAttribute, Method::kCellCut, Method::kLocalVoronoi, Method::kCellCentre}) {
+    if (name == toString(method)) {
+      return method;
+    }
+  }
+  return invalidArgument(fmt::format(
+      "unknown method '{}' (expected cell-attribute, cell-cut, local-voronoi or cell-centre)",
+      name));
+}
+
+std::unique_ptr<CrackExtractor> makeExtractor(Method method, const BondGraph& graph, int dimension,
+                                              const ExtractOptions& options) {
+  switch (method) {
+    case Method::kCellAttribute:
+      return makeCellAttribute(graph, dimension, options);
+    case Method::kCellCut:
+      return makeCellCut(graph, dimension, options);
+    case Method::kLocalVoronoi:
+      return makeLocalVoronoi(graph, dimension, options);
+    case Method::kCellCentre:
+      return makeCellCentre(graph, dimension, options);
+  }
+  return nullptr;
+}
+
+Status checkStepInput(const BondGraph& graph, const StepInput& step) {
+  const std::size_t n = graph.particleCount();
+  const std::size_t m = graph.bondCount();
+  if (step.positions.size() != n || step.radius.size() != n) {
+    return invalidArgument(fmt::format("{} positions and {} radii for N = {} particles",
+                                       step.positions.size(), step.radius.size(), n));
+  }
+  if (step.bondState.size() != m) {
+    return invalidArgument(
+        fmt::format("{} bond states for M = {} bonds", step.bondState.size(), m));
+  }
+  if ((!step.bondForce.empty() && step.bondForce.size() != m) ||
+      (!step.breakStep.empty() && step.breakStep.size() != m)) {
+    return invalidArgument(
+        fmt::format("bond force or break step arrays do not have M = {} values", m));
+  }
+  return Status::ok();
+}
+
+void appendBondAttributes(const StepInput& step, std::span<const dem::BondIndex> bonds,
+                          std::vector<AttributeArray>& arrays) {
+  AttributeArray id{"bond_id", AttributeType::kInt32, 1, {}};
+  AttributeArray state{"bond_state", AttributeType::kInt32, 1, {}};
+  id.values.reserve(bonds.size());
+  state.values.reserve(bonds.size());
+  for (dem::BondIndex b : bonds) {
+    id.values.push_back(b);
+    state.values.push_back(step.bondState[static_cast<std::size_t>(b)]);
+  }
+  arrays.push_back(std::move(id));
+  arrays.push_back(std::move(state));
+  if (!step.breakStep.empty()) {
+    AttributeArray breakStep{"break_step", AttributeType::kInt32, 1, {}};
+    breakStep.values.reserve(bonds.size());
+    for (dem::BondIndex b : bonds) {
+      breakStep.values.push_back(step.breakStep[static_cast<std::size_t>(b)]);
+    }
+    arrays.push_back(std::move(breakStep));
+  }
+  if (!step.bondForce.empty()) {
+    AttributeArray force{"bond_force", AttributeType::kFloat32, 1, {}};
+    force.values.reserve(bonds.size());
+    for (dem::BondIndex b : bonds) {
+      force.values.push_back(step.bondForce[static_cast<std::size_t>(b)]);
+    }
+    arrays.push_back(std::move(force));
+  }
+}
+
+}  // namespace crackvis::cracks

@@ -1,0 +1,301 @@
+// Local Voronoi method (dissertation 2.2, Figs. 2.9 and 2.11): Voronoi cells
+// only around the ends of broken bonds, validated by the empty-sphere test;
+// each broken bond is drawn as its face, with the bond's attributes, or, when
+// its faces fail validation or do not exist, reported as inconsistent.
+#include <algorithm>
+#include <cmath>
+
+#include <tbb/parallel_for.h>
+
+#include "methods.hpp"
+#include <crackvis/cracks/local_voronoi.hpp>
+
+namespace crackvis::cracks {
+
+Box defaultDomain(std::span<const Vec3> positions, std::span<const double> radius, int dimension) {
+  // The centres' bounding box, not enlarged by the radius: a surface
+  // particle's local cell then stops where its missing neighbours would have
+  // cut it, so it is its true Voronoi cell and validation stays quiet on the
+  // specimen's faces.
+  Box box{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
+  double largest = 0.0;
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    const Vec3 p = positions[i];
+    box.lo = {std::min(box.lo.x, p.x), std::min(box.lo.y, p.y), std::min(box.lo.z, p.z)};
+    box.hi = {std::max(box.hi.x, p.x), std::max(box.hi.y, p.y), std::max(box.hi.z, p.z)};
+    largest = std::max(largest, radius[i]);
+  }
+  if (dimension == 2) {
+    box.lo.z = -largest;
+    box.hi.z = largest;
+  }
+  return box;
+}
+
+void computeLocalVoronoiCell(const BondGraph& graph, std::span<const Vec3> positions,
+                             dem::ParticleIndex i, const Box& box, ConvexCell& cell) {
+  cell.reset(box.lo, box.hi);
+  const Vec3 xi = positions[static_cast<std::size_t>(i)];
+  for (dem::BondIndex b : graph.bondsOf(i)) {
+    const Vec3 xj = positions[static_cast<std::size_t>(graph.otherEnd(b, i))];
+    const Vec3 n = xj - xi;
+    const double length2 = dem::dot(n, n);
+    // Keep the half-space closer to i: dot(n, x) <= dot(n, (xi + xj) / 2).
+    if (!cell.clip(n, 0.5 * dem::dot(n, xi + xj), b, 1e-12 * length2)) {
+      return;
+    }
+  }
+}
+
+bool vertexIsValid(const ParticleGrid& grid, std::span<const Vec3> positions, dem::ParticleIndex i,
+                   Vec3 vertex, double tolerance) {
+  const double radius = dem::norm(vertex - positions[static_cast<std::size_t>(i)]);
+  const double inner = radius * (1.0 - tolerance);
+  const double inner2 = inner * inner;
+  bool valid = true;
+  grid.forEachNear(vertex, inner, [&](std::int32_t k) {
+    if (k != i && valid) {
+      const Vec3 d = positions[static_cast<std::size_t>(k)] - vertex;
+      valid = dem::dot(d, d) >= inner2;
+    }
+  });
+  return valid;
+}
+
+namespace {
+
+// One face of an end particle's cell that the output may need.
+struct FaceRecord {
+  dem::ParticleIndex particle;
+  dem::BondIndex bond;
+  bool valid;
+  std::int32_t firstPoint;  // into the block's points
+  std::int32_t pointCount;
+};
+
+struct CellBlock {
+  std::vector<FaceRecord> faces;            // by particle (ascending), then bond
+  std::vector<std::int32_t> particleStart;  // first face of each particle of the block
+  std::vector<Vec3> points;
+};
+
+class LocalVoronoiExtractor final : public CrackExtractor {
+ public:
+  LocalVoronoiExtractor(const BondGraph& graph, int dimension, const ExtractOptions& options)
+      : m_graph(graph), m_dimension(dimension), m_options(options) {}
+
+  Method method() const override { return Method::kLocalVoronoi; }
+  std::size_t inconsistentBondCount() const override { return m_inconsistent; }
+  std::size_t memoryBytes() const override {
+    return m_grid.memoryBytes() + m_rankOf.capacity() * sizeof(std::int32_t) +
+           m_broken.capacity() * sizeof(dem::BondIndex);
+  }
+
+  Status extract(const StepInput& step, CrackMesh& out) override {
+    CRACKVIS_RETURN_IF_ERROR(checkStepInput(m_graph, step));
+    out.clear();
+    out.dimension = m_dimension;
+    const Box box = m_options.domain ? *m_options.domain
+                                     : defaultDomain(step.positions, step.radius, m_dimension);
+    std::vector<dem::ParticleIndex> ends = endParticles(step.bondState);
+    if (m_options.validate) {
+      double largest = 0.0;
+      for (double r : step.radius) {
+        largest = std::max(largest, r);
+      }
+      m_grid.build(step.positions, 2.0 * largest);
+    }
+    // Cells of the end particles, on all cores, in blocks of particles.
+    const std::size_t blockCount = (ends.size() + kBlockSize - 1) / kBlockSize;
+    std::vector<CellBlock> blocks(blockCount);
+    tbb::parallel_for(std::size_t{0}, blockCount, [&](std::size_t k) {
+      ConvexCell cell;
+      std::vector<char> vertexValid;
+      for (std::size_t e = k * kBlockSize; e < std::min(ends.size(), (k + 1) * kBlockSize); ++e) {
+        blocks[k].particleStart.push_back(static_cast<std::int32_t>(blocks[k].faces.size()));
+        collectFaces(step, box, ends[e], cell, vertexValid, blocks[k]);
+      }
+      blocks[k].particleStart.push_back(static_cast<std::int32_t>(blocks[k].faces.size()));
+    });
+    assemble(step, blocks, out);
+    return Status::ok();
+  }
+
+ private:
+  // The broken bonds, and the particles at their ends with their rank.
+  std::vector<dem::ParticleIndex> endParticles(std::span<const std::uint8_t> state) {
+    m_rankOf.assign(m_graph.particleCount(), -1);
+    m_broken.clear();
+    for (std::size_t b = 0; b < state.size(); ++b) {
+      if (state[b] != 0) {
+        const dem::Bond& bond = m_graph.bond(static_cast<dem::BondIndex>(b));
+        m_rankOf[static_cast<std::size_t>(bond.first)] = 0;
+        m_rankOf[static_cast<std::size_t>(bond.second)] = 0;
+        m_broken.push_back(static_cast<dem::BondIndex>(b));
+      }
+    }
+    std::vector<dem::ParticleIndex> ends;
+    for (std::size_t i = 0; i < m_rankOf.size(); ++i) {
+      if (m_rankOf[i] == 0) {
+        m_rankOf[i] = static_cast<std::int32_t>(ends.size());
+        ends.push_back(static_cast<dem::ParticleIndex>(i));
+      }
+    }
+    return ends;
+  }
+
+  bool wanted(const StepInput& step, dem::ParticleIndex i, dem::BondIndex b) const {
+    if (step.bondState[static_cast<std::size_t>(b)] != 0) {
+      return true;
+    }
+    if (!m_options.includeIntactFaces) {
+      return false;
+    }
+    // An intact face is drawn once: from the lower end, or from the only end
+    // that has a cell.
+    const dem::ParticleIndex j = m_graph.otherEnd(b, i);
+    return i < j || m_rankOf[static_cast<std::size_t>(j)] < 0;
+  }
+
+  void collectFaces(const StepInput& step, const Box& box, dem::ParticleIndex i, ConvexCell& cell,
+                    std::vector<char>& vertexValid, CellBlock& block) const {
+    computeLocalVoronoiCell(m_graph, step.positions, i, box, cell);
+    const auto& vertices = cell.vertices();
+    vertexValid.assign(vertices.size(), 1);
+    if (m_options.validate) {
+      for (std::size_t v = 0; v < vertices.size(); ++v) {
+        Vec3 vertex = vertices[v];
+        if (m_dimension == 2) {
+          vertex.z = 0.0;  // the prism's vertices stand for the 2D vertex below them
+        }
+        vertexValid[v] =
+            vertexIsValid(m_grid, step.positions, i, vertex, m_options.validationTolerance);
+      }
+    }
+    std::vector<std::pair<dem::BondIndex, std::size_t>> faces;
+    for (std::size_t f = 0; f < cell.faceCount(); ++f) {
+      if (cell.faceLabel(f) >= 0 && wanted(step, i, cell.faceLabel(f))) {
+        faces.push_back({cell.faceLabel(f), f});
+      }
+    }
+    std::sort(faces.begin(), faces.end());
+    for (const auto& [bond, f] : faces) {
+      FaceRecord record{i, bond, true, static_cast<std::int32_t>(block.points.size()), 0};
+      for (std::int32_t v : cell.face(f)) {
+        record.valid = record.valid && vertexValid[static_cast<std::size_t>(v)] != 0;
+        const Vec3 p = vertices[static_cast<std::size_t>(v)];
+        if (m_dimension == 2) {
+          // The prism's side face stands for a 2D edge: keep its lower two vertices.
+          if (p.z == box.lo.z) {
+            block.points.push_back({p.x, p.y, 0.0});
+          }
+        } else {
+          block.points.push_back(p);
+        }
+      }
+      record.pointCount = static_cast<std::int32_t>(block.points.size()) - record.firstPoint;
+      block.faces.push_back(record);
+    }
+  }
+
+  // The face of particle i's cell made by bond b, if i has a cell and the face exists.
+  const FaceRecord* find(const std::vector<CellBlock>& blocks, dem::ParticleIndex i,
+                         dem::BondIndex b, const CellBlock** owner) const {
+    const std::int32_t rank = m_rankOf[static_cast<std::size_t>(i)];
+    if (rank < 0) {
+      return nullptr;
+    }
+    const CellBlock& block = blocks[static_cast<std::size_t>(rank) / kBlockSize];
+    const std::size_t local = static_cast<std::size_t>(rank) % kBlockSize;
+    for (std::int32_t f = block.particleStart[local]; f < block.particleStart[local + 1]; ++f) {
+      if (block.faces[static_cast<std::size_t>(f)].bond == b) {
+        *owner = &block;
+        return &block.faces[static_cast<std::size_t>(f)];
+      }
+    }
+    return nullptr;
+  }
+
+  void addFace(const FaceRecord& record, const CellBlock& block, CrackMesh& out) {
+    const auto first = static_cast<std::int32_t>(out.points.size());
+    out.points.insert(out.points.end(), block.points.begin() + record.firstPoint,
+                      block.points.begin() + record.firstPoint + record.pointCount);
+    PrimitiveList& target = m_dimension == 2 ? m_faceLines : out.polygons;
+    for (std::int32_t k = 0; k < record.pointCount; ++k) {
+      target.connectivity.push_back(first + k);
+    }
+    target.offsets.push_back(static_cast<std::int32_t>(target.connectivity.size()));
+  }
+
+  // Broken bonds in bond order: a face if consistent, else an inconsistency
+  // line; then, on request, the faces of intact bonds.
+  void assemble(const StepInput& step, const std::vector<CellBlock>& blocks, CrackMesh& out) {
+    std::vector<dem::BondIndex> faceBonds;
+    std::vector<dem::BondIndex> inconsistent;
+    m_faceLines.clear();
+    for (dem::BondIndex bond : m_broken) {
+      const dem::Bond& pair = m_graph.bond(bond);
+      const CellBlock* firstBlock = nullptr;
+      const CellBlock* secondBlock = nullptr;
+      const FaceRecord* first = find(blocks, pair.first, bond, &firstBlock);
+      const FaceRecord* second = find(blocks, pair.second, bond, &secondBlock);
+      const bool consistent = first != nullptr && second != nullptr && first->valid &&
+                              second->valid && first->pointCount >= 2;
+      if (consistent) {
+        addFace(*first, *firstBlock, out);
+        faceBonds.push_back(bond);
+      } else {
+        inconsistent.push_back(bond);
+      }
+    }
+    if (m_options.includeIntactFaces) {
+      for (const CellBlock& block : blocks) {
+        for (const FaceRecord& record : block.faces) {
+          if (step.bondState[static_cast<std::size_t>(record.bond)] == 0) {
+            addFace(record, block, out);
+            faceBonds.push_back(record.bond);
+          }
+        }
+      }
+    }
+    m_inconsistent = inconsistent.size();
+    // Inconsistent bonds: a line between the particle centres (VTK order:
+    // lines come before polygons, and in 2D before the face segments).
+    for (dem::BondIndex bond : inconsistent) {
+      const dem::Bond& pair = m_graph.bond(bond);
+      const auto first = static_cast<std::int32_t>(out.points.size());
+      out.points.push_back(step.positions[static_cast<std::size_t>(pair.first)]);
+      out.points.push_back(step.positions[static_cast<std::size_t>(pair.second)]);
+      out.lines.add({first, first + 1});
+    }
+    for (std::size_t k = 0; k < m_faceLines.size(); ++k) {
+      out.lines.addRange(m_faceLines.connectivity.begin() + m_faceLines.offsets[k],
+                         m_faceLines.connectivity.begin() + m_faceLines.offsets[k + 1]);
+    }
+    std::vector<dem::BondIndex> primitiveBonds = inconsistent;
+    primitiveBonds.insert(primitiveBonds.end(), faceBonds.begin(), faceBonds.end());
+    appendBondAttributes(step, primitiveBonds, out.cellData);
+    AttributeArray flag{"inconsistent", AttributeType::kInt32, 1, {}};
+    flag.values.assign(inconsistent.size(), 1.0);
+    flag.values.resize(primitiveBonds.size(), 0.0);
+    out.cellData.push_back(std::move(flag));
+  }
+
+  const BondGraph& m_graph;
+  int m_dimension;
+  ExtractOptions m_options;
+  ParticleGrid m_grid;
+  std::vector<std::int32_t> m_rankOf;  // [N] rank among end particles, -1 if none
+  std::vector<dem::BondIndex> m_broken;
+  PrimitiveList m_faceLines;
+  std::size_t m_inconsistent = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<CrackExtractor> makeLocalVoronoi(const BondGraph& graph, int dimension,
+                                                 const ExtractOptions& options) {
+  return std::make_unique<LocalVoronoiExtractor>(graph, dimension, options);
+}
+
+}  // namespace crackvis::cracks
