@@ -24,7 +24,7 @@ struct PrimitiveBlock {
   std::vector<std::int32_t> vertexTags, lineTags, polygonTags;  // e.g. the bond of each
 };
 
-inline constexpr std::size_t kBlockSize = 2048;
+inline constexpr std::size_t kBlockSize = 512;
 
 // Runs fill(first, last, block) over [0, count) in blocks and appends the
 // blocks to `mesh` (and their tags to `tags`, in VTK order).

@@ -48,7 +48,7 @@ struct ExtractOptions {
   // local Voronoi: validate faces by the empty-sphere test; a vertex fails
   // when a particle lies inside its sphere by more than tolerance * radius.
   bool validate = true;
-  double validationTolerance = 1e-3;
+  double validationTolerance = 0.1;
   // local Voronoi: also output the faces of intact bonds (the local
   // decomposition), with bond_state 0, for display.
   bool includeIntactFaces = false;
