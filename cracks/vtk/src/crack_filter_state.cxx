@@ -1,0 +1,238 @@
+#include "crack_filter_state.h"
+
+#include <cstring>
+
+#include <fmt/format.h>
+#include <vtkCellArray.h>
+#include <vtkCellArrayIterator.h>
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkFloatArray.h>
+#include <vtkIntArray.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkTypeInt32Array.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkUnstructuredGrid.h>
+
+namespace crackvis::cracks::vtkadapter {
+namespace {
+
+vtkDataArray* cellArray(vtkPolyData* input, const char* name) {
+  return input->GetCellData() != nullptr ? input->GetCellData()->GetArray(name) : nullptr;
+}
+
+vtkSmartPointer<vtkCellArray> toCellArray(const PrimitiveList& list) {
+  vtkNew<vtkTypeInt32Array> offsets;
+  vtkNew<vtkTypeInt32Array> connectivity;
+  offsets->SetNumberOfValues(static_cast<vtkIdType>(list.offsets.size()));
+  std::memcpy(offsets->GetPointer(0), list.offsets.data(),
+              list.offsets.size() * sizeof(std::int32_t));
+  connectivity->SetNumberOfValues(static_cast<vtkIdType>(list.connectivity.size()));
+  if (!list.connectivity.empty()) {
+    std::memcpy(connectivity->GetPointer(0), list.connectivity.data(),
+                list.connectivity.size() * sizeof(std::int32_t));
+  }
+  auto cells = vtkSmartPointer<vtkCellArray>::New();
+  cells->SetData(offsets, connectivity);
+  return cells;
+}
+
+vtkSmartPointer<vtkDataArray> toDataArray(const AttributeArray& array) {
+  vtkSmartPointer<vtkDataArray> out;
+  switch (array.type) {
+    case AttributeType::kInt32:
+      out = vtkSmartPointer<vtkIntArray>::New();
+      break;
+    case AttributeType::kFloat32:
+      out = vtkSmartPointer<vtkFloatArray>::New();
+      break;
+    case AttributeType::kFloat64:
+      out = vtkSmartPointer<vtkDoubleArray>::New();
+      break;
+  }
+  out->SetName(array.name.c_str());
+  out->SetNumberOfComponents(array.components);
+  out->SetNumberOfTuples(static_cast<vtkIdType>(array.tupleCount()));
+  for (std::size_t k = 0; k < array.values.size(); ++k) {
+    out->SetVariantValue(static_cast<vtkIdType>(k), array.values[k]);
+  }
+  return out;
+}
+
+vtkSmartPointer<vtkPoints> toPoints(const std::vector<Vec3>& points) {
+  vtkNew<vtkDoubleArray> coordinates;
+  coordinates->SetNumberOfComponents(3);
+  coordinates->SetNumberOfTuples(static_cast<vtkIdType>(points.size()));
+  if (!points.empty()) {
+    std::memcpy(coordinates->GetPointer(0), points.data(), points.size() * sizeof(Vec3));
+  }
+  auto result = vtkSmartPointer<vtkPoints>::New();
+  result->SetData(coordinates);
+  return result;
+}
+
+}  // namespace
+
+bool CrackFilterState::sameOptions(const ExtractOptions& o) const {
+  return o.globalDecomposition == m_options.globalDecomposition &&
+         o.minBrokenBonds == m_options.minBrokenBonds && o.validate == m_options.validate &&
+         o.validationTolerance == m_options.validationTolerance &&
+         o.includeIntactFaces == m_options.includeIntactFaces &&
+         o.mergeOctahedra == m_options.mergeOctahedra;
+}
+
+bool CrackFilterState::readLattice(vtkPolyData* input, double radiusDefault, std::string& error) {
+  const vtkIdType n = input->GetNumberOfPoints();
+  vtkCellArray* lines = input->GetLines();
+  const vtkIdType m = lines != nullptr ? lines->GetNumberOfCells() : 0;
+  vtkDataArray* state = cellArray(input, "bond_state");
+  if (state == nullptr || state->GetNumberOfTuples() != input->GetNumberOfCells() ||
+      input->GetNumberOfCells() != m) {
+    error = fmt::format(
+        "input needs one line per bond and cell data 'bond_state' with one value per "
+        "line ({} lines, {} cells, {} bond states)",
+        m, input->GetNumberOfCells(), state != nullptr ? state->GetNumberOfTuples() : 0);
+    return false;
+  }
+  std::vector<dem::Bond> bonds;
+  bonds.reserve(static_cast<std::size_t>(m));
+  const vtkIdType* ids = nullptr;
+  vtkIdType count = 0;
+  auto iterator = vtk::TakeSmartPointer(lines->NewIterator());
+  for (iterator->GoToFirstCell(); !iterator->IsDoneWithTraversal(); iterator->GoToNextCell()) {
+    iterator->GetCurrentCell(count, ids);
+    if (count != 2 || ids[0] < 0 || ids[1] < 0 || ids[0] >= n || ids[1] >= n) {
+      error = fmt::format("bond {} is not a line between two of the {} points", bonds.size(), n);
+      return false;
+    }
+    bonds.push_back(
+        {static_cast<dem::ParticleIndex>(ids[0]), static_cast<dem::ParticleIndex>(ids[1])});
+  }
+  m_positions.resize(static_cast<std::size_t>(n));
+  bool flat = true;
+  for (vtkIdType i = 0; i < n; ++i) {
+    double p[3];
+    input->GetPoint(i, p);
+    m_positions[static_cast<std::size_t>(i)] = {p[0], p[1], p[2]};
+    flat = flat && p[2] == 0.0;
+  }
+  vtkDataArray* radius =
+      input->GetPointData() != nullptr ? input->GetPointData()->GetArray("radius") : nullptr;
+  m_radius.assign(static_cast<std::size_t>(n), radiusDefault);
+  if (radius != nullptr && radius->GetNumberOfTuples() == n) {
+    for (vtkIdType i = 0; i < n; ++i) {
+      m_radius[static_cast<std::size_t>(i)] = radius->GetComponent(i, 0);
+    }
+  }
+  m_state.resize(static_cast<std::size_t>(m));
+  for (vtkIdType b = 0; b < m; ++b) {
+    m_state[static_cast<std::size_t>(b)] = state->GetComponent(b, 0) != 0.0 ? 1 : 0;
+  }
+  m_force.clear();
+  if (vtkDataArray* force = cellArray(input, "bond_force");
+      force != nullptr && force->GetNumberOfTuples() == m) {
+    m_force.resize(static_cast<std::size_t>(m));
+    for (vtkIdType b = 0; b < m; ++b) {
+      m_force[static_cast<std::size_t>(b)] = static_cast<float>(force->GetComponent(b, 0));
+    }
+  }
+  m_breakStep.clear();
+  if (vtkDataArray* breaks = cellArray(input, "break_step");
+      breaks != nullptr && breaks->GetNumberOfTuples() == m) {
+    m_breakStep.resize(static_cast<std::size_t>(m));
+    for (vtkIdType b = 0; b < m; ++b) {
+      m_breakStep[static_cast<std::size_t>(b)] =
+          static_cast<std::int32_t>(breaks->GetComponent(b, 0));
+    }
+  }
+  if (bonds != m_bonds || m_graph == nullptr) {
+    dem::Lattice check;
+    check.dimension = flat ? 2 : 3;
+    check.radius = m_radius;
+    check.bonds = bonds;
+    check.strength.assign(bonds.size(), 0.0);
+    if (Status valid = dem::validateLattice(check); !valid) {
+      error = valid.message();
+      return false;
+    }
+    m_bonds = std::move(bonds);
+    m_dimension = check.dimension;
+    m_extractor.reset();
+    m_graph = std::make_unique<BondGraph>(static_cast<std::size_t>(n), m_bonds);
+  }
+  return true;
+}
+
+bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptions& options,
+                           double radiusDefault, CrackMesh& mesh, std::string& error) {
+  if (input == nullptr) {
+    error = "no input";
+    return false;
+  }
+  if (!readLattice(input, radiusDefault, error)) {
+    return false;
+  }
+  if (m_extractor == nullptr || method != m_method || !sameOptions(options)) {
+    m_method = method;
+    m_options = options;
+    m_extractor = makeExtractor(method, *m_graph, m_dimension, options);
+  }
+  const StepInput step{m_positions, m_state, m_radius, m_force, m_breakStep};
+  if (Status status = m_extractor->extract(step, mesh); !status) {
+    error = status.message();
+    return false;
+  }
+  return true;
+}
+
+void toPolyData(const CrackMesh& mesh, vtkPolyData* output) {
+  output->Initialize();
+  output->SetPoints(toPoints(mesh.points));
+  PrimitiveList vertices;
+  for (std::int32_t v : mesh.vertices) {
+    vertices.add({v});
+  }
+  output->SetVerts(toCellArray(vertices));
+  output->SetLines(toCellArray(mesh.lines));
+  output->SetPolys(toCellArray(mesh.polygons));
+  for (const AttributeArray& array : mesh.cellData) {
+    output->GetCellData()->AddArray(toDataArray(array));
+  }
+  for (const AttributeArray& array : mesh.pointData) {
+    output->GetPointData()->AddArray(toDataArray(array));
+  }
+}
+
+void toUnstructuredGrid(const CrackMesh& mesh, vtkUnstructuredGrid* output) {
+  output->Initialize();
+  output->SetPoints(toPoints(mesh.points));
+  // Cells in the order of the cell data: vertices, lines, polygons, volumes.
+  PrimitiveList all;
+  vtkNew<vtkUnsignedCharArray> types;
+  for (std::int32_t v : mesh.vertices) {
+    all.add({v});
+    types->InsertNextValue(1);  // VTK_VERTEX
+  }
+  auto append = [&](const PrimitiveList& list, auto typeOf) {
+    for (std::size_t k = 0; k < list.size(); ++k) {
+      all.addRange(list.connectivity.begin() + list.offsets[k],
+                   list.connectivity.begin() + list.offsets[k + 1]);
+      types->InsertNextValue(typeOf(k));
+    }
+  };
+  append(mesh.lines, [](std::size_t) { return std::uint8_t{4}; });     // VTK_POLY_LINE
+  append(mesh.polygons, [](std::size_t) { return std::uint8_t{7}; });  // VTK_POLYGON
+  append(mesh.volumeCells, [&](std::size_t k) { return mesh.volumeCellTypes[k]; });
+  output->SetCells(types, toCellArray(all));
+  for (const AttributeArray& array : mesh.cellData) {
+    output->GetCellData()->AddArray(toDataArray(array));
+  }
+  for (const AttributeArray& array : mesh.pointData) {
+    output->GetPointData()->AddArray(toDataArray(array));
+  }
+}
+
+}  // namespace crackvis::cracks::vtkadapter

@@ -1,0 +1,47 @@
+// What the four crack filters share: turning the lattice polydata into the
+// core's arrays (checked), keeping the bond graph and the extractor while the
+// bonds stay the same, and turning a CrackMesh back into VTK data.
+#ifndef crackvis_crack_filter_state_h
+#define crackvis_crack_filter_state_h
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <crackvis/cracks/extractor.hpp>
+
+class vtkPolyData;
+class vtkUnstructuredGrid;
+
+namespace crackvis::cracks::vtkadapter {
+
+class CrackFilterState {
+ public:
+  // Extracts one step from `input`. On bad input returns false and says why
+  // in `error` (the filter reports it with vtkErrorMacro).
+  bool run(vtkPolyData* input, Method method, const ExtractOptions& options, double radiusDefault,
+           CrackMesh& mesh, std::string& error);
+
+ private:
+  bool readLattice(vtkPolyData* input, double radiusDefault, std::string& error);
+  bool sameOptions(const ExtractOptions& options) const;
+
+  std::vector<dem::Bond> m_bonds;
+  std::vector<Vec3> m_positions;
+  std::vector<double> m_radius;
+  std::vector<std::uint8_t> m_state;
+  std::vector<float> m_force;
+  std::vector<std::int32_t> m_breakStep;
+  std::unique_ptr<BondGraph> m_graph;
+  std::unique_ptr<CrackExtractor> m_extractor;
+  Method m_method = Method::kCellCut;
+  ExtractOptions m_options;
+  int m_dimension = 3;
+};
+
+void toPolyData(const CrackMesh& mesh, vtkPolyData* output);
+void toUnstructuredGrid(const CrackMesh& mesh, vtkUnstructuredGrid* output);
+
+}  // namespace crackvis::cracks::vtkadapter
+
+#endif

@@ -1,0 +1,44 @@
+#include "vtkCellCentreCrackFilter.h"
+
+#include <vtkInformation.h>
+#include <vtkInformationVector.h>
+#include <vtkObjectFactory.h>
+#include <vtkPolyData.h>
+#include <vtkUnstructuredGrid.h>
+
+#include "crack_filter_state.h"
+
+vtkStandardNewMacro(vtkCellCentreCrackFilter);
+
+vtkCellCentreCrackFilter::vtkCellCentreCrackFilter()
+    : State(std::make_unique<crackvis::cracks::vtkadapter::CrackFilterState>()) {}
+
+vtkCellCentreCrackFilter::~vtkCellCentreCrackFilter() = default;
+
+int vtkCellCentreCrackFilter::FillInputPortInformation(int, vtkInformation* info) {
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPolyData");
+  return 1;
+}
+
+int vtkCellCentreCrackFilter::RequestData(vtkInformation*, vtkInformationVector** inputVector,
+                                          vtkInformationVector* outputVector) {
+  vtkPolyData* input = vtkPolyData::GetData(inputVector[0]);
+  vtkPolyData* output = vtkPolyData::GetData(outputVector);
+  crackvis::cracks::ExtractOptions options;
+  options.mergeOctahedra = this->MergeOctahedra;
+  crackvis::cracks::CrackMesh mesh;
+  std::string error;
+  if (!this->State->run(input, crackvis::cracks::Method::kCellCentre, options, this->RadiusDefault,
+                        mesh, error)) {
+    vtkErrorMacro(<< error);
+    return 0;
+  }
+  crackvis::cracks::vtkadapter::toPolyData(mesh, output);
+  return 1;
+}
+
+void vtkCellCentreCrackFilter::PrintSelf(ostream& os, vtkIndent indent) {
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "RadiusDefault: " << this->RadiusDefault << "\n";
+  os << indent << "MergeOctahedra: " << this->MergeOctahedra << "\n";
+}

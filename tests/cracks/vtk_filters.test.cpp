@@ -1,0 +1,227 @@
+// The VTK adapters against the core, and the writers read back by VTK's own
+// XML readers.
+#include <filesystem>
+#include <fstream>
+
+#include <catch2/catch.hpp>
+#include <vtkCallbackCommand.h>
+#include <vtkCellAttributeCrackFilter.h>
+#include <vtkCellCentreCrackFilter.h>
+#include <vtkCellCutCrackFilter.h>
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkExecutive.h>
+#include <vtkIntArray.h>
+#include <vtkLocalVoronoiCrackFilter.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLPolyDataReader.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
+#include "crack_fixtures.hpp"
+#include "support/temp_dir.hpp"
+#include <crackvis/cracks/mesh_writers.hpp>
+
+using namespace crackvis;
+using namespace crackvis::cracks;
+
+namespace {
+
+vtkSmartPointer<vtkPolyData> latticePolyData(const testing::PlantedCrack& crack) {
+  auto data = vtkSmartPointer<vtkPolyData>::New();
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  for (const dem::Vec3& p : crack.block.positions) {
+    points->InsertNextPoint(p.x, p.y, p.z);
+  }
+  data->SetPoints(points);
+  vtkNew<vtkCellArray> lines;
+  vtkNew<vtkUnsignedCharArray> state;
+  state->SetName("bond_state");
+  for (std::size_t b = 0; b < crack.block.lattice.bonds.size(); ++b) {
+    const dem::Bond& bond = crack.block.lattice.bonds[b];
+    const vtkIdType ids[2] = {bond.first, bond.second};
+    lines->InsertNextCell(2, ids);
+    state->InsertNextValue(crack.state[b]);
+  }
+  data->SetLines(lines);
+  data->GetCellData()->AddArray(state);
+  vtkNew<vtkDoubleArray> radius;
+  radius->SetName("radius");
+  for (double r : crack.block.lattice.radius) {
+    radius->InsertNextValue(r);
+  }
+  data->GetPointData()->AddArray(radius);
+  return data;
+}
+
+CrackMesh core(Method method, const testing::PlantedCrack& crack) {
+  auto extractor = makeExtractor(method, *crack.graph, crack.block.lattice.dimension);
+  CrackMesh mesh;
+  REQUIRE(extractor->extract(crack.input(), mesh).isOk());
+  return mesh;
+}
+
+template <typename Filter>
+vtkPolyData* runFilter(Filter* filter, vtkPolyData* input) {
+  filter->SetInputData(input);
+  filter->Update();
+  return filter->GetOutput();
+}
+
+struct ErrorCounter {
+  int errors = 0;
+  vtkNew<vtkCallbackCommand> command;
+  ErrorCounter() {
+    command->SetClientData(this);
+    command->SetCallback([](vtkObject*, unsigned long, void* self, void*) {
+      ++static_cast<ErrorCounter*>(self)->errors;
+    });
+  }
+};
+
+testing::PlantedCrack sampleCrack() {
+  const double h = 1.0 / std::sqrt(2.0);
+  return testing::fccPlaneCrack(3, {1, 1, 1}, 9 * h + 1.5, 0.02);
+}
+
+}  // namespace
+
+TEST_CASE("each VTK filter outputs what the core extracts", "[cracks][vtk]") {
+  const auto crack = sampleCrack();
+  auto input = latticePolyData(crack);
+  SECTION("cell cut") {
+    vtkNew<vtkCellCutCrackFilter> filter;
+    vtkPolyData* out = runFilter(filter.Get(), input);
+    const CrackMesh mesh = core(Method::kCellCut, crack);
+    CHECK(out->GetNumberOfPoints() == static_cast<vtkIdType>(mesh.points.size()));
+    CHECK(out->GetNumberOfPolys() == static_cast<vtkIdType>(mesh.polygons.size()));
+    CHECK(out->GetPointData()->GetArray("bond_id") != nullptr);
+    double p[3];
+    out->GetPoint(7, p);
+    CHECK(dem::Vec3{p[0], p[1], p[2]} == mesh.points[7]);
+  }
+  SECTION("local Voronoi") {
+    vtkNew<vtkLocalVoronoiCrackFilter> filter;
+    vtkPolyData* out = runFilter(filter.Get(), input);
+    const CrackMesh mesh = core(Method::kLocalVoronoi, crack);
+    CHECK(out->GetNumberOfPolys() == static_cast<vtkIdType>(mesh.polygons.size()));
+    CHECK(out->GetNumberOfLines() == static_cast<vtkIdType>(mesh.lines.size()));
+    REQUIRE(out->GetCellData()->GetArray("inconsistent") != nullptr);
+    CHECK(out->GetCellData()->GetArray("bond_id")->GetNumberOfTuples() == out->GetNumberOfCells());
+  }
+  SECTION("cell centre") {
+    vtkNew<vtkCellCentreCrackFilter> filter;
+    filter->MergeOctahedraOn();
+    vtkPolyData* out = runFilter(filter.Get(), input);
+    CHECK(out->GetNumberOfCells() == static_cast<vtkIdType>(crack.brokenCount()));
+  }
+  SECTION("cell attribute") {
+    vtkNew<vtkCellAttributeCrackFilter> filter;
+    filter->SetInputData(input);
+    filter->Update();
+    vtkUnstructuredGrid* out = filter->GetOutput();
+    const CrackMesh mesh = core(Method::kCellAttribute, crack);
+    CHECK(out->GetNumberOfCells() == static_cast<vtkIdType>(mesh.volumeCells.size()));
+    CHECK(out->GetCellType(0) == mesh.volumeCellTypes[0]);
+    CHECK(out->GetCellData()->GetArray("broken_bonds") != nullptr);
+  }
+}
+
+TEST_CASE("a VTK filter stays incremental across updates and equals a fresh one", "[cracks][vtk]") {
+  auto crack = sampleCrack();
+  auto input = latticePolyData(crack);
+  vtkNew<vtkCellCutCrackFilter> kept;
+  runFilter(kept.Get(), input);
+  // More bonds break: the next "step".
+  auto* state = vtkUnsignedCharArray::SafeDownCast(input->GetCellData()->GetArray("bond_state"));
+  for (vtkIdType b = 0; b < state->GetNumberOfTuples(); b += 7) {
+    state->SetValue(b, 1);
+  }
+  state->Modified();
+  input->Modified();
+  vtkPolyData* incremental = runFilter(kept.Get(), input);
+  vtkNew<vtkCellCutCrackFilter> fresh;
+  vtkPolyData* scratch = runFilter(fresh.Get(), input);
+  CHECK(incremental->GetNumberOfPoints() == scratch->GetNumberOfPoints());
+  CHECK(incremental->GetNumberOfCells() == scratch->GetNumberOfCells());
+}
+
+TEST_CASE("a VTK filter refuses input without bond states, with an error", "[cracks][vtk]") {
+  const auto crack = sampleCrack();
+  auto input = latticePolyData(crack);
+  input->GetCellData()->RemoveArray("bond_state");
+  vtkNew<vtkLocalVoronoiCrackFilter> filter;
+  ErrorCounter counter;
+  filter->AddObserver(vtkCommand::ErrorEvent, counter.command);
+  filter->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, counter.command);
+  filter->SetInputData(input);
+  filter->Update();
+  CHECK(counter.errors >= 1);
+  CHECK(filter->GetOutput()->GetNumberOfCells() == 0);
+}
+
+TEST_CASE("writers: VTK reads back .vtp and .vtu; STL and OBJ have every face", "[cracks][io]") {
+  const auto crack = sampleCrack();
+  testing::TempDir dir;
+  SECTION("vtp") {
+    const CrackMesh mesh = core(Method::kLocalVoronoi, crack);
+    REQUIRE(writeMesh(mesh, dir.file("lv.vtp")).isOk());
+    vtkNew<vtkXMLPolyDataReader> reader;
+    reader->SetFileName(dir.file("lv.vtp").c_str());
+    reader->Update();
+    vtkPolyData* read = reader->GetOutput();
+    REQUIRE(read->GetNumberOfPoints() == static_cast<vtkIdType>(mesh.points.size()));
+    CHECK(read->GetNumberOfPolys() == static_cast<vtkIdType>(mesh.polygons.size()));
+    CHECK(read->GetNumberOfLines() == static_cast<vtkIdType>(mesh.lines.size()));
+    double p[3];
+    read->GetPoint(static_cast<vtkIdType>(mesh.points.size() - 1), p);
+    CHECK(dem::Vec3{p[0], p[1], p[2]} == mesh.points.back());
+    vtkDataArray* bondId = read->GetCellData()->GetArray("bond_id");
+    REQUIRE(bondId != nullptr);
+    CHECK(bondId->GetTuple1(3) == mesh.findCellData("bond_id")->values[3]);
+  }
+  SECTION("vtu with volume cells, and a pvd") {
+    const CrackMesh mesh = core(Method::kCellAttribute, crack);
+    REQUIRE(vtkExtensionFor(mesh) == "vtu");
+    REQUIRE(writeMesh(mesh, dir.file("cells.vtu")).isOk());
+    vtkNew<vtkXMLUnstructuredGridReader> reader;
+    reader->SetFileName(dir.file("cells.vtu").c_str());
+    reader->Update();
+    CHECK(reader->GetOutput()->GetNumberOfCells() ==
+          static_cast<vtkIdType>(mesh.volumeCells.size()));
+    CHECK(reader->GetOutput()->GetCellType(0) == mesh.volumeCellTypes[0]);
+    REQUIRE(writePvd({{0.5, "cells.vtu"}}, dir.file("series.pvd")).isOk());
+    std::ifstream pvd(dir.file("series.pvd"));
+    const std::string text((std::istreambuf_iterator<char>(pvd)), std::istreambuf_iterator<char>());
+    CHECK_THAT(text, Catch::Contains(R"(timestep="0.5")"));
+    CHECK_THAT(text, Catch::Contains(R"(file="cells.vtu")"));
+  }
+  SECTION("stl and obj") {
+    const CrackMesh mesh = core(Method::kCellCut, crack);
+    std::size_t triangles = 0;
+    for (std::size_t k = 0; k < mesh.polygons.size(); ++k) {
+      triangles +=
+          static_cast<std::size_t>(mesh.polygons.offsets[k + 1] - mesh.polygons.offsets[k] - 2);
+    }
+    REQUIRE(writeMesh(mesh, dir.file("cut.stl")).isOk());
+    CHECK(std::filesystem::file_size(dir.file("cut.stl")) == 84 + 50 * triangles);
+    REQUIRE(writeMesh(mesh, dir.file("cut.obj")).isOk());
+    std::ifstream obj(dir.file("cut.obj"));
+    std::size_t v = 0;
+    std::size_t f = 0;
+    for (std::string line; std::getline(obj, line);) {
+      v += line.rfind("v ", 0) == 0 ? 1 : 0;
+      f += line.rfind("f ", 0) == 0 ? 1 : 0;
+    }
+    CHECK(v == mesh.points.size());
+    CHECK(f == mesh.polygons.size());
+    CHECK(writeMesh(mesh, dir.file("cut.ply")).message() ==
+          dir.file("cut.ply") + ": unknown output format (expected .vtp, .vtu, .stl or .obj)");
+  }
+}
