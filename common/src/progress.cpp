@@ -63,7 +63,8 @@ void ProgressBar::draw(const std::string& detail, bool final) {
   if (!m_isTerminal) {
     // Plain logs: one line per completed tenth, and the final line.
     const int decile = static_cast<int>(fraction * 10.0);
-    if (!final && decile == m_lastDecile) {
+    // One line per tenth; the final line only if the last one was not 100 %.
+    if (decile == m_lastDecile && (!final || m_done == m_total)) {
       return;
     }
     m_lastDecile = decile;

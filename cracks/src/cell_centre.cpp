@@ -45,7 +45,8 @@ class CellCentreExtractor final : public CrackExtractor {
   const LatticeDecomposition* decomposition() const override { return &m_decomposition; }
   std::size_t memoryBytes() const override {
     return m_decomposition.memoryBytes() + m_pointOfCell.capacity() * sizeof(std::int32_t) +
-           m_centreCells.capacity() * sizeof(CellIndex);
+           m_centreCells.capacity() * sizeof(CellIndex) + m_fans.capacity() * sizeof(Fan) +
+           m_fanCells.capacity() * sizeof(CellIndex);
   }
 
   Status extract(const StepInput& step, CrackMesh& out) override {
@@ -70,15 +71,14 @@ class CellCentreExtractor final : public CrackExtractor {
           0.5 * (step.positions[static_cast<std::size_t>(bond.first)] +
                  step.positions[static_cast<std::size_t>(bond.second)]);
     });
+    updateFans(broken);
     std::vector<std::int32_t> tags;
-    fillInBlocks(broken.size(), out, tags,
+    fillInBlocks(broken.size(), m_blocks, out, tags,
                  [&](std::size_t first, std::size_t last, PrimitiveBlock& block) {
-                   std::vector<CellIndex> cells;
-                   std::vector<FanEntry> fan;
                    std::vector<std::int32_t> polygon;
                    for (std::size_t k = first; k < last; ++k) {
-                     emitBond(broken[k], midpointBase + static_cast<std::int32_t>(k),
-                              step.positions, out.points, cells, fan, polygon, block);
+                     emitBond(broken[k], m_fans[k], midpointBase + static_cast<std::int32_t>(k),
+                              step.positions, out.points, polygon, block);
                    }
                  });
     std::vector<BondIndex> primitiveBonds(tags.begin(), tags.end());
@@ -236,10 +236,19 @@ class CellCentreExtractor final : public CrackExtractor {
     });
   }
 
-  void emitBond(BondIndex b, std::int32_t midpoint, std::span<const Vec3> positions,
-                const std::vector<Vec3>& points, std::vector<CellIndex>& cells,
-                std::vector<FanEntry>& fan, std::vector<std::int32_t>& polygon,
-                PrimitiveBlock& block) const {
+  // The cells around a broken bond, in order around it. They are all made
+  // when the bond's end particles are processed, which happens the step it
+  // breaks, so the fan is computed once and only the centroids move later.
+  struct Fan {
+    BondIndex bond;
+    std::int32_t first;  // into m_fanCells
+    std::uint8_t count;
+    bool open;    // the bond is on the lattice's boundary: close through its midpoint
+    bool walked;  // ordered by shared faces; else angles decide, every step
+  };
+
+  void buildFan(BondIndex b, std::vector<CellIndex>& cells, std::vector<FanEntry>& fan, bool& open,
+                bool& walked) const {
     const dem::Bond& bond = m_decomposition.graph().bond(b);
     m_decomposition.cellsOfBond(b, cells);
     fan.clear();
@@ -253,13 +262,89 @@ class CellCentreExtractor final : public CrackExtractor {
     }
     std::sort(fan.begin(), fan.end(),
               [](const FanEntry& x, const FanEntry& y) { return x.cell < y.cell; });
+    open = false;
+    walked = true;
+    if (m_decomposition.dimension() == 3 && fan.size() > 1) {
+      walked = walkFan(fan, open);
+    }
+  }
+
+  // Keeps m_fans sorted by bond and equal to the broken bonds: new fans for
+  // bonds broken since the last step (computed on all cores), or all anew
+  // when a bond healed (the viewer stepped back).
+  void updateFans(const std::vector<BondIndex>& broken) {
+    std::vector<BondIndex> fresh;
+    std::size_t kept = 0;
+    bool healed = false;
+    for (const Fan& fan : m_fans) {
+      healed = healed || !std::binary_search(broken.begin(), broken.end(), fan.bond);
+    }
+    if (healed) {
+      m_fans.clear();
+      m_fanCells.clear();
+    }
+    for (BondIndex b : broken) {
+      while (kept < m_fans.size() && m_fans[kept].bond < b) {
+        ++kept;
+      }
+      if (kept == m_fans.size() || m_fans[kept].bond != b) {
+        fresh.push_back(b);
+      }
+    }
+    if (fresh.empty()) {
+      return;
+    }
+    std::vector<std::vector<CellIndex>> cells(fresh.size());
+    std::vector<Fan> made(fresh.size());
+    tbb::parallel_for(std::size_t{0}, fresh.size(), [&](std::size_t k) {
+      std::vector<CellIndex> scratch;
+      std::vector<FanEntry> fan;
+      bool open = false;
+      bool walked = true;
+      buildFan(fresh[k], scratch, fan, open, walked);
+      for (const FanEntry& entry : fan) {
+        cells[k].push_back(entry.cell);
+      }
+      made[k] = {fresh[k], 0, static_cast<std::uint8_t>(fan.size()), open, walked};
+    });
+    // Merge old and new fans by bond.
+    std::vector<Fan> fans;
+    std::vector<CellIndex> fanCells;
+    fans.reserve(m_fans.size() + made.size());
+    fanCells.reserve(m_fanCells.size() + 6 * made.size());
+    std::size_t a = 0;
+    std::size_t n = 0;
+    while (a < m_fans.size() || n < made.size()) {
+      const bool takeOld = n == made.size() || (a < m_fans.size() && m_fans[a].bond < made[n].bond);
+      Fan fan = takeOld ? m_fans[a] : made[n];
+      const auto first = static_cast<std::int32_t>(fanCells.size());
+      if (takeOld) {
+        fanCells.insert(fanCells.end(), m_fanCells.begin() + fan.first,
+                        m_fanCells.begin() + fan.first + fan.count);
+        ++a;
+      } else {
+        fanCells.insert(fanCells.end(), cells[n].begin(), cells[n].end());
+        ++n;
+      }
+      fan.first = first;
+      fans.push_back(fan);
+    }
+    m_fans = std::move(fans);
+    m_fanCells = std::move(fanCells);
+  }
+
+  void emitBond(BondIndex b, const Fan& fan, std::int32_t midpoint, std::span<const Vec3> positions,
+                const std::vector<Vec3>& points, std::vector<std::int32_t>& polygon,
+                PrimitiveBlock& block) const {
+    const dem::Bond& bond = m_decomposition.graph().bond(b);
     const Vec3 xa = positions[static_cast<std::size_t>(bond.first)];
     const Vec3 xb = positions[static_cast<std::size_t>(bond.second)];
     polygon.clear();
-    if (m_decomposition.dimension() == 2 || fan.size() <= 1) {
+    const CellIndex* cells = m_fanCells.data() + fan.first;
+    if (m_decomposition.dimension() == 2 || fan.count <= 1) {
       // 2D (a segment between the two triangles' centres) or a lone cell.
-      for (const FanEntry& entry : fan) {
-        polygon.push_back(m_pointOfCell[static_cast<std::size_t>(entry.cell)]);
+      for (std::uint8_t k = 0; k < fan.count; ++k) {
+        polygon.push_back(m_pointOfCell[static_cast<std::size_t>(cells[k])]);
       }
       if (polygon.size() == 1) {
         polygon.insert(polygon.begin(), midpoint);
@@ -273,15 +358,13 @@ class CellCentreExtractor final : public CrackExtractor {
       }
       return;
     }
-    bool open = false;
-    const bool walked = walkFan(fan, open);
-    if (open) {
+    if (fan.open) {
       polygon.push_back(midpoint);
     }
-    for (const FanEntry& entry : fan) {
-      polygon.push_back(m_pointOfCell[static_cast<std::size_t>(entry.cell)]);
+    for (std::uint8_t k = 0; k < fan.count; ++k) {
+      polygon.push_back(m_pointOfCell[static_cast<std::size_t>(cells[k])]);
     }
-    if (!walked) {
+    if (!fan.walked) {
       sortByAngle(polygon, points, 0.5 * (xa + xb), xb - xa);
     }
     // Normals along the bond, from its first particle to its second.
@@ -329,9 +412,12 @@ class CellCentreExtractor final : public CrackExtractor {
   }
 
   LatticeDecomposition m_decomposition;
+  std::vector<PrimitiveBlock> m_blocks;  // per-step scratch, kept for its buffers
   bool m_merge;
   std::vector<std::int32_t> m_pointOfCell;  // [cells] point of a (representative) cell, else -1
   std::vector<CellIndex> m_centreCells;     // point index -> representative cell
+  std::vector<Fan> m_fans;                  // one per broken bond, by bond
+  std::vector<CellIndex> m_fanCells;
 };
 
 }  // namespace

@@ -24,7 +24,8 @@ class CellCutExtractor final : public CrackExtractor {
 
   std::size_t memoryBytes() const override {
     return m_decomposition.memoryBytes() + m_pointOfBond.capacity() * sizeof(std::int32_t) +
-           m_pointBonds.capacity() * sizeof(dem::BondIndex);
+           m_pointBonds.capacity() * sizeof(dem::BondIndex) +
+           m_orientation.capacity() * sizeof(Orientation);
   }
 
   Status extract(const StepInput& step, CrackMesh& out) override {
@@ -35,14 +36,16 @@ class CellCutExtractor final : public CrackExtractor {
     computeMidpoints(step, out.points);
     std::vector<std::int32_t> tags;
     const auto& cells = m_decomposition.cells();
-    fillInBlocks(
-        cells.size(), out, tags, [&](std::size_t first, std::size_t last, PrimitiveBlock& block) {
-          for (std::size_t c = first; c < last; ++c) {
-            if (cells[c].brokenMask != 0) {
-              emitCell(cells[c], static_cast<std::int32_t>(c), out.points, step.positions, block);
-            }
-          }
-        });
+    m_orientation.resize(cells.size());
+    fillInBlocks(cells.size(), m_blocks, out, tags,
+                 [&](std::size_t first, std::size_t last, PrimitiveBlock& block) {
+                   for (std::size_t c = first; c < last; ++c) {
+                     if (cells[c].brokenMask != 0) {
+                       emitCell(cells[c], static_cast<std::int32_t>(c), out.points, step.positions,
+                                m_orientation[c], block);
+                     }
+                   }
+                 });
     AttributeArray cellIndex{"cell_index", AttributeType::kInt32, 1, {tags.begin(), tags.end()}};
     out.cellData.push_back(std::move(cellIndex));
     appendBondAttributes(step, m_pointBonds, out.pointData);
@@ -89,12 +92,26 @@ class CellCutExtractor final : public CrackExtractor {
   }
 
   std::int32_t pointOf(const LatticeCell& cell, std::uint8_t edge) const {
-    return m_pointOfBond[static_cast<std::size_t>(cell.bonds[edge])];
+    return m_pointOfBond[static_cast<std::size_t>(m_decomposition.bondOf(cell, edge))];
   }
 
+  // Which polygons of a cell's case are reversed, decided with the positions
+  // of the step the case first appeared in: lattice cells do not turn inside
+  // out, so the orientation holds until the case changes.
+  struct Orientation {
+    std::uint8_t mask = 0;  // the case it was computed for (0: not yet)
+    std::uint8_t reversed = 0;
+  };
+
   void emitCell(const LatticeCell& cell, std::int32_t index, const std::vector<Vec3>& points,
-                std::span<const Vec3> positions, PrimitiveBlock& block) const {
+                std::span<const Vec3> positions, Orientation& orientation,
+                PrimitiveBlock& block) const {
     const CutCase& cut = cutCase(cell.type, cell.brokenMask);
+    const bool known = orientation.mask == cell.brokenMask;
+    if (!known) {
+      orientation.mask = cell.brokenMask;
+      orientation.reversed = 0;
+    }
     for (std::uint8_t edge : cut.points) {
       block.vertices.push_back(pointOf(cell, edge));
       block.vertexTags.push_back(index);
@@ -103,7 +120,8 @@ class CellCutExtractor final : public CrackExtractor {
       block.lines.add({pointOf(cell, line[0]), pointOf(cell, line[1])});
       block.lineTags.push_back(index);
     }
-    for (const CutPolygon& polygon : cut.polygons) {
+    for (std::size_t p = 0; p < cut.polygons.size(); ++p) {
+      const CutPolygon& polygon = cut.polygons[p];
       std::array<std::int32_t, kMaxCellEdges> ids{};
       const std::size_t count = polygon.edges.size();
       for (std::size_t k = 0; k < count; ++k) {
@@ -114,16 +132,24 @@ class CellCutExtractor final : public CrackExtractor {
         block.lineTags.push_back(index);
         continue;
       }
-      orientAwayFrom(cell, polygon.insideNodes, points, positions, ids.data(), count);
+      const auto bit = static_cast<std::uint8_t>(1u << p);
+      if (!known &&
+          pointsTowards(cell, polygon.insideNodes, points, positions, ids.data(), count)) {
+        orientation.reversed = static_cast<std::uint8_t>(orientation.reversed | bit);
+      }
+      if (orientation.reversed & bit) {
+        std::reverse(ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(count));
+      }
       block.polygons.addRange(ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(count));
       block.polygonTags.push_back(index);
     }
   }
 
-  // Normals point from the enclosed particles to the rest of the cell.
-  static void orientAwayFrom(const LatticeCell& cell, std::uint8_t insideNodes,
-                             const std::vector<Vec3>& points, std::span<const Vec3> positions,
-                             std::int32_t* ids, std::size_t count) {
+  // Whether the polygon's normal points towards the enclosed particles (it
+  // should point away from them, to the rest of the cell).
+  static bool pointsTowards(const LatticeCell& cell, std::uint8_t insideNodes,
+                            const std::vector<Vec3>& points, std::span<const Vec3> positions,
+                            const std::int32_t* ids, std::size_t count) {
     Vec3 inside{};
     int insideCount = 0;
     for (int k = 0; k < cell.nodeCount(); ++k) {
@@ -139,14 +165,14 @@ class CellCutExtractor final : public CrackExtractor {
     }
     const Vec3 towardsInside =
         (1.0 / insideCount) * inside - (1.0 / static_cast<double>(count)) * centre;
-    if (dem::dot(polygonNormal(points, ids, count), towardsInside) > 0.0) {
-      std::reverse(ids, ids + count);
-    }
+    return dem::dot(polygonNormal(points, ids, count), towardsInside) > 0.0;
   }
 
   LatticeDecomposition m_decomposition;
+  std::vector<PrimitiveBlock> m_blocks;      // per-step scratch, kept for its buffers
   std::vector<std::int32_t> m_pointOfBond;   // [M] point index of a broken bond, else -1
   std::vector<dem::BondIndex> m_pointBonds;  // point index -> bond, in order of breaking
+  std::vector<Orientation> m_orientation;    // [cells]
 };
 
 }  // namespace

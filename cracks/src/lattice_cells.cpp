@@ -1,3 +1,5 @@
+#include <algorithm>
+
 #include <crackvis/cracks/lattice_cells.hpp>
 
 namespace crackvis::cracks {
@@ -74,6 +76,14 @@ int LatticeCell::localNode(dem::ParticleIndex p) const {
     }
   }
   return -1;
+}
+
+dem::ParticleIndex LatticeCell::lowestNode() const {
+  dem::ParticleIndex lowest = nodes[0];
+  for (int k = 1; k < nodeCount(); ++k) {
+    lowest = std::min(lowest, nodes[static_cast<std::size_t>(k)]);
+  }
+  return lowest;
 }
 
 }  // namespace crackvis::cracks

@@ -52,8 +52,8 @@ LatticeDecomposition::LatticeDecomposition(const BondGraph& graph, int dimension
     : m_graph(graph),
       m_dimension(dimension),
       m_head(graph.particleCount(), -1),
-      m_processed(graph.particleCount(), 0),
-      m_seenState(graph.bondCount(), 0) {}
+      m_processed(graph.particleCount()),
+      m_seenState(graph.bondCount()) {}
 
 void LatticeDecomposition::enumerateCandidates(ParticleIndex v, std::vector<Candidate>& out) const {
   NeighbourGraph local;
@@ -116,7 +116,7 @@ void LatticeDecomposition::enumerateCandidates(ParticleIndex v, std::vector<Cand
 
 bool LatticeDecomposition::hasCell(const LatticeCell& probe) const {
   bool found = false;
-  forEachCellOf(probe.nodes[0], [&](CellIndex c) {
+  forEachCellOwnedBy(probe.lowestNode(), [&](CellIndex c) {
     const LatticeCell& cell = m_cells[static_cast<std::size_t>(c)];
     found = found || (cell.type == probe.type && cell.nodes == probe.nodes);
   });
@@ -128,21 +128,26 @@ void LatticeDecomposition::appendCell(LatticeCell cell, std::span<const std::uin
   cell.brokenMask = 0;
   for (int e = 0; e < shape.edgeCount; ++e) {
     const auto& edge = shape.edges[static_cast<std::size_t>(e)];
-    const BondIndex b = m_graph.bondBetween(cell.nodes[edge[0]], cell.nodes[edge[1]]);
-    cell.bonds[static_cast<std::size_t>(e)] = b;
-    if (b >= 0 && bondState[static_cast<std::size_t>(b)] != 0) {
+    const ParticleIndex a = cell.nodes[edge[0]];
+    const ParticleIndex b = cell.nodes[edge[1]];
+    const auto bonds = m_graph.bondsOf(a);
+    const auto slot = std::find_if(bonds.begin(), bonds.end(),
+                                   [&](BondIndex bond) { return m_graph.otherEnd(bond, a) == b; });
+    cell.edgeSlots[static_cast<std::size_t>(e)] = static_cast<std::uint8_t>(slot - bonds.begin());
+    if (bondState[static_cast<std::size_t>(*slot)] != 0) {
       cell.brokenMask = static_cast<std::uint8_t>(cell.brokenMask | (1u << e));
     }
   }
-  const auto index = static_cast<std::int32_t>(m_cells.size());
-  m_cells.push_back(cell);
-  m_next.resize(m_cells.size() * kMaxCellNodes, -1);
-  for (int k = 0; k < shape.nodeCount; ++k) {
-    const auto node = static_cast<std::size_t>(cell.nodes[static_cast<std::size_t>(k)]);
-    const std::int32_t slot = index * kMaxCellNodes + k;
-    m_next[static_cast<std::size_t>(slot)] = m_head[node];
-    m_head[node] = slot;
+  // Grow by a quarter, not double: the cells are most of the memory.
+  if (m_cells.size() == m_cells.capacity()) {
+    m_cells.reserve(m_cells.size() + m_cells.size() / 4 + 1024);
+    m_next.reserve(m_cells.capacity());
   }
+  const auto index = static_cast<CellIndex>(m_cells.size());
+  const auto owner = static_cast<std::size_t>(cell.lowestNode());
+  m_cells.push_back(cell);
+  m_next.push_back(m_head[owner]);
+  m_head[owner] = index;
 }
 
 void LatticeDecomposition::insertCandidate(const Candidate& candidate,
@@ -206,8 +211,8 @@ void LatticeDecomposition::addCellsAround(std::span<const ParticleIndex> particl
                                           std::span<const std::uint8_t> bondState) {
   std::vector<ParticleIndex> todo;
   for (ParticleIndex p : particles) {
-    if (m_processed[static_cast<std::size_t>(p)] == 0) {
-      m_processed[static_cast<std::size_t>(p)] = 1;
+    if (!m_processed.test(static_cast<std::size_t>(p))) {
+      m_processed.set(static_cast<std::size_t>(p), true);
       todo.push_back(p);
     }
   }
@@ -234,20 +239,56 @@ void LatticeDecomposition::buildGlobal(std::span<const std::uint8_t> bondState) 
     all[i] = static_cast<ParticleIndex>(i);
   }
   addCellsAround(all, bondState);
-  std::copy(bondState.begin(), bondState.end(), m_seenState.begin());
+  for (std::size_t b = 0; b < bondState.size(); ++b) {
+    m_seenState.set(b, bondState[b] != 0);
+  }
+}
+
+// Cells containing bond (i, j) are owned by their lowest particle, which is
+// i, j, or bonded to one of them (in an octahedron every particle is bonded
+// to all but its opposite), and is not above min(i, j).
+template <typename Visit>
+void LatticeDecomposition::forEachCellWithBond(BondIndex b, Visit&& visit) const {
+  const dem::Bond& bond = m_graph.bond(b);
+  const ParticleIndex low = std::min(bond.first, bond.second);
+  auto visitOwner = [&](ParticleIndex owner) {
+    if (owner > low) {
+      return;
+    }
+    forEachCellOwnedBy(owner, [&](CellIndex c) {
+      const LatticeCell& cell = m_cells[static_cast<std::size_t>(c)];
+      const int a = cell.localNode(bond.first);
+      const int z = a >= 0 ? cell.localNode(bond.second) : -1;
+      if (z >= 0) {
+        const int edge = localEdge(cell.type, a, z);
+        if (edge >= 0) {
+          visit(c, edge);
+        }
+      }
+    });
+  };
+  // Owners can be reached from both ends; visit each owner once.
+  thread_local std::vector<ParticleIndex> owners;
+  owners.clear();
+  for (ParticleIndex end : {bond.first, bond.second}) {
+    owners.push_back(end);
+    for (BondIndex n : m_graph.bondsOf(end)) {
+      owners.push_back(m_graph.otherEnd(n, end));
+    }
+  }
+  std::sort(owners.begin(), owners.end());
+  owners.erase(std::unique(owners.begin(), owners.end()), owners.end());
+  for (ParticleIndex owner : owners) {
+    visitOwner(owner);
+  }
 }
 
 void LatticeDecomposition::setBrokenBit(BondIndex b, bool broken) {
-  const dem::Bond& bond = m_graph.bond(b);
-  forEachCellOf(bond.first, [&](CellIndex c) {
+  forEachCellWithBond(b, [&](CellIndex c, int edge) {
     LatticeCell& cell = m_cells[static_cast<std::size_t>(c)];
-    for (int e = 0; e < cell.edgeCount(); ++e) {
-      if (cell.bonds[static_cast<std::size_t>(e)] == b) {
-        const auto bit = static_cast<std::uint8_t>(1u << e);
-        cell.brokenMask =
-            static_cast<std::uint8_t>(broken ? cell.brokenMask | bit : cell.brokenMask & ~bit);
-      }
-    }
+    const auto bit = static_cast<std::uint8_t>(1u << edge);
+    cell.brokenMask =
+        static_cast<std::uint8_t>(broken ? cell.brokenMask | bit : cell.brokenMask & ~bit);
   });
 }
 
@@ -255,8 +296,16 @@ const std::vector<BondIndex>& LatticeDecomposition::update(
     std::span<const std::uint8_t> bondState) {
   m_changed.clear();
   std::vector<ParticleIndex> ends;
-  for (std::size_t b = 0; b < bondState.size(); ++b) {
-    if ((bondState[b] != 0) != (m_seenState[b] != 0)) {
+  // 64 bonds at a time against the seen bits: most words have not changed.
+  for (std::size_t word = 0; word * 64 < bondState.size(); ++word) {
+    const std::size_t first = word * 64;
+    const std::size_t count = std::min<std::size_t>(64, bondState.size() - first);
+    std::uint64_t now = 0;
+    for (std::size_t k = 0; k < count; ++k) {
+      now |= static_cast<std::uint64_t>(bondState[first + k] != 0) << k;
+    }
+    for (std::uint64_t diff = now ^ m_seenState.word(word); diff != 0; diff &= diff - 1) {
+      const std::size_t b = first + static_cast<std::size_t>(std::countr_zero(diff));
       m_changed.push_back(static_cast<BondIndex>(b));
       if (bondState[b] != 0) {
         ends.push_back(m_graph.bond(static_cast<BondIndex>(b)).first);
@@ -267,27 +316,23 @@ const std::vector<BondIndex>& LatticeDecomposition::update(
   m_firstNewCell = static_cast<CellIndex>(m_cells.size());
   addCellsAround(ends, bondState);  // new cells get their masks from bondState
   for (BondIndex b : m_changed) {
-    setBrokenBit(b, bondState[static_cast<std::size_t>(b)] != 0);
-    m_seenState[static_cast<std::size_t>(b)] = bondState[static_cast<std::size_t>(b)];
+    const bool broken = bondState[static_cast<std::size_t>(b)] != 0;
+    setBrokenBit(b, broken);
+    m_seenState.set(static_cast<std::size_t>(b), broken);
   }
   return m_changed;
 }
 
 void LatticeDecomposition::cellsOfBond(BondIndex b, std::vector<CellIndex>& out) const {
   out.clear();
-  const dem::Bond& bond = m_graph.bond(b);
-  forEachCellOf(bond.first, [&](CellIndex c) {
-    if (m_cells[static_cast<std::size_t>(c)].contains(bond.second)) {
-      out.push_back(c);
-    }
-  });
+  forEachCellWithBond(b, [&](CellIndex c, int) { out.push_back(c); });
   std::sort(out.begin(), out.end());
 }
 
 std::size_t LatticeDecomposition::memoryBytes() const {
-  return m_cells.capacity() * sizeof(LatticeCell) + m_head.capacity() * sizeof(std::int32_t) +
-         m_next.capacity() * sizeof(std::int32_t) + m_processed.capacity() +
-         m_seenState.capacity() + m_changed.capacity() * sizeof(BondIndex);
+  return m_cells.capacity() * sizeof(LatticeCell) + m_head.capacity() * sizeof(CellIndex) +
+         m_next.capacity() * sizeof(CellIndex) + m_processed.bytes() + m_seenState.bytes() +
+         m_changed.capacity() * sizeof(BondIndex);
 }
 
 }  // namespace crackvis::cracks

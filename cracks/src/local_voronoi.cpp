@@ -32,16 +32,107 @@ Box defaultDomain(std::span<const Vec3> positions, std::span<const double> radiu
   return box;
 }
 
-void computeLocalVoronoiCell(const BondGraph& graph, std::span<const Vec3> positions,
-                             dem::ParticleIndex i, const Box& box, ConvexCell& cell) {
-  cell.reset(box.lo, box.hi);
+namespace {
+
+bool clipByNeighbours(const BondGraph& graph, std::span<const Vec3> positions, dem::ParticleIndex i,
+                      ConvexCell& cell) {
   const Vec3 xi = positions[static_cast<std::size_t>(i)];
   for (dem::BondIndex b : graph.bondsOf(i)) {
     const Vec3 xj = positions[static_cast<std::size_t>(graph.otherEnd(b, i))];
     const Vec3 n = xj - xi;
-    const double length2 = dem::dot(n, n);
     // Keep the half-space closer to i: dot(n, x) <= dot(n, (xi + xj) / 2).
-    if (!cell.clip(n, 0.5 * dem::dot(n, xi + xj), b, 1e-12 * length2)) {
+    if (!cell.clip(n, 0.5 * dem::dot(n, xi + xj), b, 1e-12 * dem::dot(n, n))) {
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+void computeLocalVoronoiCell(const BondGraph& graph, std::span<const Vec3> positions,
+                             dem::ParticleIndex i, const Box& box, ConvexCell& cell) {
+  cell.reset(box.lo, box.hi);
+  clipByNeighbours(graph, positions, i, cell);
+}
+
+namespace {
+
+// Keeps the part of a convex polygon with dot(normal, p) <= offset; vertices
+// within `tolerance` of the line count as on it. False when nothing is left.
+bool clipPolygon(std::vector<Vec3>& polygon, std::vector<Vec3>& scratch, Vec3 normal, double offset,
+                 double tolerance) {
+  bool anyOut = false;
+  bool anyIn = false;
+  for (const Vec3& p : polygon) {
+    const double d = dem::dot(normal, p) - offset;
+    anyOut = anyOut || d > tolerance;
+    anyIn = anyIn || d < -tolerance;
+  }
+  if (!anyOut) {
+    return true;
+  }
+  if (!anyIn) {
+    polygon.clear();
+    return false;
+  }
+  scratch.clear();
+  const std::size_t n = polygon.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3 a = polygon[k];
+    const Vec3 b = polygon[(k + 1) % n];
+    const double da = dem::dot(normal, a) - offset;
+    const double db = dem::dot(normal, b) - offset;
+    if (da <= tolerance) {
+      scratch.push_back(a);
+    }
+    if ((da < -tolerance && db > tolerance) || (da > tolerance && db < -tolerance)) {
+      scratch.push_back(a + (da / (da - db)) * (b - a));
+    }
+  }
+  std::swap(polygon, scratch);
+  return polygon.size() >= 3;
+}
+
+}  // namespace
+
+void computeLocalVoronoiFace(const BondGraph& graph, std::span<const Vec3> positions,
+                             dem::ParticleIndex i, dem::BondIndex b, const Box& box,
+                             std::vector<Vec3>& polygon, std::vector<Vec3>& scratch) {
+  const Vec3 xi = positions[static_cast<std::size_t>(i)];
+  const Vec3 xj = positions[static_cast<std::size_t>(graph.otherEnd(b, i))];
+  const Vec3 n = xj - xi;
+  const double length = dem::norm(n);
+  polygon.clear();
+  if (length == 0.0) {
+    return;
+  }
+  // A square in the bisector plane, larger than the domain, counter-clockwise
+  // about n; the other bisectors and the box's walls cut it down to the face.
+  const Vec3 unit = (1.0 / length) * n;
+  const Vec3 helper = std::abs(unit.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+  Vec3 u = cross(unit, helper);
+  u = (1.0 / dem::norm(u)) * u;
+  const Vec3 w = cross(unit, u);
+  const double half = 2.0 * dem::norm(box.hi - box.lo) + length;
+  const Vec3 mid = 0.5 * (xi + xj);
+  polygon = {mid + half * (-1.0 * u - w), mid + half * (u - w), mid + half * (u + w),
+             mid + half * (w - u)};
+  for (dem::BondIndex other : graph.bondsOf(i)) {
+    if (other == b) {
+      continue;
+    }
+    const Vec3 xk = positions[static_cast<std::size_t>(graph.otherEnd(other, i))];
+    const Vec3 nk = xk - xi;
+    if (!clipPolygon(polygon, scratch, nk, 0.5 * dem::dot(nk, xi + xk), 1e-12 * dem::dot(nk, nk))) {
+      return;
+    }
+  }
+  const double tolerance = 1e-12 * dem::norm(box.hi - box.lo);
+  const Vec3 walls[6] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+  const double offsets[6] = {-box.lo.x, box.hi.x, -box.lo.y, box.hi.y, -box.lo.z, box.hi.z};
+  for (int k = 0; k < 6; ++k) {
+    if (!clipPolygon(polygon, scratch, walls[k], offsets[k], tolerance)) {
       return;
     }
   }
@@ -109,11 +200,14 @@ class LocalVoronoiExtractor final : public CrackExtractor {
     const std::size_t blockCount = (ends.size() + kBlockSize - 1) / kBlockSize;
     std::vector<CellBlock> blocks(blockCount);
     tbb::parallel_for(std::size_t{0}, blockCount, [&](std::size_t k) {
-      ConvexCell cell;
-      std::vector<char> vertexValid;
+      Scratch scratch;
       for (std::size_t e = k * kBlockSize; e < std::min(ends.size(), (k + 1) * kBlockSize); ++e) {
         blocks[k].particleStart.push_back(static_cast<std::int32_t>(blocks[k].faces.size()));
-        collectFaces(step, box, ends[e], cell, vertexValid, blocks[k]);
+        if (m_options.includeIntactFaces) {
+          collectCellFaces(step, box, ends[e], scratch, blocks[k]);
+        } else {
+          collectBrokenFaces(step, box, ends[e], scratch, blocks[k]);
+        }
       }
       blocks[k].particleStart.push_back(static_cast<std::int32_t>(blocks[k].faces.size()));
     });
@@ -157,44 +251,148 @@ class LocalVoronoiExtractor final : public CrackExtractor {
     return i < j || m_rankOf[static_cast<std::size_t>(j)] < 0;
   }
 
-  void collectFaces(const StepInput& step, const Box& box, dem::ParticleIndex i, ConvexCell& cell,
-                    std::vector<char>& vertexValid, CellBlock& block) const {
-    computeLocalVoronoiCell(m_graph, step.positions, i, box, cell);
-    const auto& vertices = cell.vertices();
-    vertexValid.assign(vertices.size(), 1);
-    if (m_options.validate) {
-      for (std::size_t v = 0; v < vertices.size(); ++v) {
-        Vec3 vertex = vertices[v];
-        if (m_dimension == 2) {
-          vertex.z = 0.0;  // the prism's vertices stand for the 2D vertex below them
-        }
-        vertexValid[v] =
-            vertexIsValid(m_grid, step.positions, i, vertex, m_options.validationTolerance);
+  // The empty-sphere test of the vertices marked 2 (to test) in `valid`,
+  // which become 1 (valid) or 0. Every sphere
+  // lies within twice the farthest vertex's distance of x_i, so one grid
+  // query per cell finds all particles that could violate any of them.
+  void validateVertices(std::span<const Vec3> positions, dem::ParticleIndex i,
+                        const std::vector<Vec3>& vertices, std::vector<char>& valid,
+                        std::vector<Vec3>& candidates) const {
+    const Vec3 xi = positions[static_cast<std::size_t>(i)];
+    auto project = [&](Vec3 v) {
+      if (m_dimension == 2) {
+        v.z = 0.0;  // the prism's vertices stand for the 2D vertex below them
+      }
+      return v;
+    };
+    double farthest = 0.0;
+    for (std::size_t v = 0; v < vertices.size(); ++v) {
+      if (valid[v] == 2) {
+        farthest = std::max(farthest, dem::norm(project(vertices[v]) - xi));
       }
     }
-    std::vector<std::pair<dem::BondIndex, std::size_t>> faces;
-    for (std::size_t f = 0; f < cell.faceCount(); ++f) {
-      if (cell.faceLabel(f) >= 0 && wanted(step, i, cell.faceLabel(f))) {
-        faces.push_back({cell.faceLabel(f), f});
+    if (farthest == 0.0) {
+      return;
+    }
+    const double reach = 2.0 * farthest;
+    candidates.clear();
+    m_grid.forEachNear(xi, reach, [&](std::int32_t k) {
+      const Vec3 xk = positions[static_cast<std::size_t>(k)];
+      if (k != i && dem::dot(xk - xi, xk - xi) <= reach * reach) {
+        candidates.push_back(xk);
       }
+    });
+    const double keep = 1.0 - m_options.validationTolerance;
+    for (std::size_t v = 0; v < vertices.size(); ++v) {
+      if (valid[v] != 2) {
+        continue;
+      }
+      valid[v] = 1;
+      const Vec3 vertex = project(vertices[v]);
+      const Vec3 toCentre = vertex - xi;
+      const double inner2 = dem::dot(toCentre, toCentre) * keep * keep;
+      for (const Vec3& xk : candidates) {
+        const Vec3 d = xk - vertex;
+        if (dem::dot(d, d) < inner2) {
+          valid[v] = 0;
+          break;
+        }
+      }
+    }
+  }
+
+  // Per-thread buffers, reused from particle to particle.
+  struct Scratch {
+    ConvexCell cell;
+    std::vector<char> valid;
+    std::vector<Vec3> candidates;
+    std::vector<Vec3> polygon;
+    std::vector<Vec3> clipBuffer;
+    std::vector<Vec3> faceVertices;
+    std::vector<std::pair<dem::BondIndex, std::size_t>> faces;  // bond, first vertex
+  };
+
+  // Appends a face's vertices to the block (in 2D the prism's side face
+  // stands for an edge: its two lower vertices).
+  void appendFace(dem::ParticleIndex i, dem::BondIndex bond, bool valid, const Vec3* vertices,
+                  std::size_t count, CellBlock& block) const {
+    FaceRecord record{i, bond, valid, static_cast<std::int32_t>(block.points.size()), 0};
+    for (std::size_t k = 0; k < count; ++k) {
+      const Vec3 p = vertices[k];
+      if (m_dimension == 2) {
+        if (p.z < 0.0) {
+          block.points.push_back({p.x, p.y, 0.0});
+        }
+      } else {
+        block.points.push_back(p);
+      }
+    }
+    record.pointCount = static_cast<std::int32_t>(block.points.size()) - record.firstPoint;
+    block.faces.push_back(record);
+  }
+
+  // Only the faces of i's broken bonds: each is its bisector plane clipped by
+  // i's other bisectors, so the rest of the cell is never built.
+  void collectBrokenFaces(const StepInput& step, const Box& box, dem::ParticleIndex i, Scratch& s,
+                          CellBlock& block) const {
+    s.faceVertices.clear();
+    s.faces.clear();
+    for (dem::BondIndex b : m_graph.bondsOf(i)) {
+      if (step.bondState[static_cast<std::size_t>(b)] == 0) {
+        continue;
+      }
+      computeLocalVoronoiFace(m_graph, step.positions, i, b, box, s.polygon, s.clipBuffer);
+      if (s.polygon.size() >= 3) {
+        s.faces.push_back({b, s.faceVertices.size()});
+        s.faceVertices.insert(s.faceVertices.end(), s.polygon.begin(), s.polygon.end());
+      }
+    }
+    s.faces.push_back({-1, s.faceVertices.size()});  // sentinel: end of the last face
+    s.valid.assign(s.faceVertices.size(), m_options.validate ? 2 : 1);
+    if (m_options.validate) {
+      validateVertices(step.positions, i, s.faceVertices, s.valid, s.candidates);
+    }
+    for (std::size_t f = 0; f + 1 < s.faces.size(); ++f) {
+      const std::size_t first = s.faces[f].second;
+      const std::size_t last = s.faces[f + 1].second;
+      bool valid = true;
+      for (std::size_t v = first; v < last; ++v) {
+        valid = valid && s.valid[v] != 0;
+      }
+      appendFace(i, s.faces[f].first, valid, s.faceVertices.data() + first, last - first, block);
+    }
+  }
+
+  // The whole cell, when the faces of intact bonds are wanted too.
+  void collectCellFaces(const StepInput& step, const Box& box, dem::ParticleIndex i, Scratch& s,
+                        CellBlock& block) const {
+    computeLocalVoronoiCell(m_graph, step.positions, i, box, s.cell);
+    const auto& vertices = s.cell.vertices();
+    std::vector<std::pair<dem::BondIndex, std::size_t>> faces;
+    for (std::size_t f = 0; f < s.cell.faceCount(); ++f) {
+      if (s.cell.faceLabel(f) >= 0 && wanted(step, i, s.cell.faceLabel(f))) {
+        faces.push_back({s.cell.faceLabel(f), f});
+      }
+    }
+    // Only vertices of faces that may be drawn need the sphere test.
+    s.valid.assign(vertices.size(), 1);
+    if (m_options.validate) {
+      for (const auto& face : faces) {
+        for (std::int32_t v : s.cell.face(face.second)) {
+          s.valid[static_cast<std::size_t>(v)] = 2;  // to test
+        }
+      }
+      validateVertices(step.positions, i, vertices, s.valid, s.candidates);
     }
     std::sort(faces.begin(), faces.end());
     for (const auto& [bond, f] : faces) {
-      FaceRecord record{i, bond, true, static_cast<std::int32_t>(block.points.size()), 0};
-      for (std::int32_t v : cell.face(f)) {
-        record.valid = record.valid && vertexValid[static_cast<std::size_t>(v)] != 0;
-        const Vec3 p = vertices[static_cast<std::size_t>(v)];
-        if (m_dimension == 2) {
-          // The prism's side face stands for a 2D edge: keep its lower two vertices.
-          if (p.z == box.lo.z) {
-            block.points.push_back({p.x, p.y, 0.0});
-          }
-        } else {
-          block.points.push_back(p);
-        }
+      s.faceVertices.clear();
+      bool valid = true;
+      for (std::int32_t v : s.cell.face(f)) {
+        valid = valid && s.valid[static_cast<std::size_t>(v)] != 0;
+        s.faceVertices.push_back(vertices[static_cast<std::size_t>(v)]);
       }
-      record.pointCount = static_cast<std::int32_t>(block.points.size()) - record.firstPoint;
-      block.faces.push_back(record);
+      appendFace(i, bond, valid, s.faceVertices.data(), s.faceVertices.size(), block);
     }
   }
 

@@ -22,14 +22,25 @@ struct PrimitiveBlock {
   PrimitiveList lines;
   PrimitiveList polygons;
   std::vector<std::int32_t> vertexTags, lineTags, polygonTags;  // e.g. the bond of each
+
+  void clear() {
+    vertices.clear();
+    lines.clear();
+    polygons.clear();
+    vertexTags.clear();
+    lineTags.clear();
+    polygonTags.clear();
+  }
 };
 
 inline constexpr std::size_t kBlockSize = 512;
 
 // Runs fill(first, last, block) over [0, count) in blocks and appends the
-// blocks to `mesh` (and their tags to `tags`, in VTK order).
+// blocks to `mesh` (and their tags to `tags`, in VTK order). `blocks` is
+// scratch kept by the caller so its buffers are reused from step to step.
 template <typename Fill>
-void fillInBlocks(std::size_t count, CrackMesh& mesh, std::vector<std::int32_t>& tags, Fill&& fill);
+void fillInBlocks(std::size_t count, std::vector<PrimitiveBlock>& blocks, CrackMesh& mesh,
+                  std::vector<std::int32_t>& tags, Fill&& fill);
 
 void appendBlocks(std::vector<PrimitiveBlock>& blocks, CrackMesh& mesh,
                   std::vector<std::int32_t>& tags);
@@ -41,11 +52,12 @@ void appendBlocks(std::vector<PrimitiveBlock>& blocks, CrackMesh& mesh,
 namespace crackvis::cracks {
 
 template <typename Fill>
-void fillInBlocks(std::size_t count, CrackMesh& mesh, std::vector<std::int32_t>& tags,
-                  Fill&& fill) {
+void fillInBlocks(std::size_t count, std::vector<PrimitiveBlock>& blocks, CrackMesh& mesh,
+                  std::vector<std::int32_t>& tags, Fill&& fill) {
   const std::size_t blockCount = (count + kBlockSize - 1) / kBlockSize;
-  std::vector<PrimitiveBlock> blocks(blockCount);
+  blocks.resize(blockCount);
   tbb::parallel_for(std::size_t{0}, blockCount, [&](std::size_t k) {
+    blocks[k].clear();
     fill(k * kBlockSize, std::min(count, (k + 1) * kBlockSize), blocks[k]);
   });
   appendBlocks(blocks, mesh, tags);

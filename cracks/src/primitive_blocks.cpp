@@ -17,6 +17,17 @@ void appendBlocks(std::vector<PrimitiveBlock>& blocks, CrackMesh& mesh,
                   std::vector<std::int32_t>& tags) {
   // VTK order: all vertices, then all lines, then all polygons.
   std::vector<std::int32_t> vertexTags, lineTags, polygonTags;
+  std::size_t vertices = 0;
+  std::size_t lines = 0;
+  std::size_t polygons = 0;
+  for (const PrimitiveBlock& block : blocks) {
+    vertices += block.vertices.size();
+    lines += block.lines.connectivity.size();
+    polygons += block.polygons.connectivity.size();
+  }
+  mesh.vertices.reserve(vertices);
+  mesh.lines.connectivity.reserve(lines);
+  mesh.polygons.connectivity.reserve(polygons);
   for (PrimitiveBlock& block : blocks) {
     mesh.vertices.insert(mesh.vertices.end(), block.vertices.begin(), block.vertices.end());
     vertexTags.insert(vertexTags.end(), block.vertexTags.begin(), block.vertexTags.end());

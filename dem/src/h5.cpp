@@ -1,4 +1,3 @@
-#include <mutex>
 
 #include <fmt/format.h>
 
@@ -58,8 +57,13 @@ Result<Handle> scalarAttribute(hid_t object, const std::string& name, H5T_class_
 }  // namespace
 
 void quietHdf5() {
-  static std::once_flag once;
-  std::call_once(once, [] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); });
+  // Debian's HDF5 is built thread-safe, and then its error printing is set
+  // per thread: every thread that touches HDF5 silences its own.
+  thread_local bool quiet = false;
+  if (!quiet) {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    quiet = true;
+  }
 }
 
 std::string lastHdf5Error() {

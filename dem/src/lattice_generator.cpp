@@ -3,29 +3,12 @@
 
 #include <fmt/format.h>
 
+#include <crackvis/common/random.hpp>
 #include <crackvis/dem/lattice_generator.hpp>
 #include <crackvis/dem/neighbour_grid.hpp>
 
 namespace crackvis::dem {
 namespace {
-
-// splitmix64: a tiny generator with a fixed, documented output sequence, so a
-// seed means the same jitter on every compiler and standard library.
-class SplitMix64 {
- public:
-  explicit SplitMix64(std::uint64_t seed) : m_state(seed) {}
-  std::uint64_t next() {
-    std::uint64_t z = (m_state += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-  }
-  // Uniform in [-1, 1).
-  double symmetric() { return static_cast<double>(next() >> 11) * 0x1.0p-52 - 1.0; }
-
- private:
-  std::uint64_t m_state;
-};
 
 std::vector<Vec3> fccSites(const std::array<int, 3>& sites, double radius) {
   const auto spacing = siteSpacing(LatticeKind::kFcc, radius);

@@ -57,10 +57,6 @@ Status checkDuplicateBonds(const Lattice& lattice) {
 
 }  // namespace
 
-double norm(Vec3 a) {
-  return std::sqrt(dot(a, a));
-}
-
 std::size_t StepState::brokenBondCount() const {
   return static_cast<std::size_t>(std::count(bondState.begin(), bondState.end(),
                                              static_cast<std::uint8_t>(BondState::kBroken)));

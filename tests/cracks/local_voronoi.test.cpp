@@ -1,4 +1,5 @@
 #include <map>
+#include <numeric>
 #include <set>
 
 #include <catch2/catch.hpp>
@@ -257,4 +258,41 @@ TEST_CASE("every method gives identical output for 1 and 2 threads", "[cracks][d
       CHECK(one.cellData[a].values == two.cellData[a].values);
     }
   }
+}
+
+TEST_CASE("a face computed alone equals the same face of the whole cell",
+          "[cracks][local-voronoi]") {
+  // The extractor computes only broken bonds' faces; the cell is the
+  // reference (the test above ties it to Voro++).
+  const double h = 1.0 / std::sqrt(2.0);
+  const PlantedCrack crack = fccPlaneCrack(4, {1, 1, 1}, 13 * h + 1.5, 0.05);
+  const Box box = defaultDomain(crack.block.positions, crack.block.lattice.radius, 3);
+  ConvexCell cell;
+  std::vector<dem::Vec3> face;
+  std::vector<dem::Vec3> scratch;
+  int compared = 0;
+  for (dem::ParticleIndex i : endParticles(crack)) {
+    computeLocalVoronoiCell(*crack.graph, crack.block.positions, i, box, cell);
+    for (dem::BondIndex b : crack.graph->bondsOf(i)) {
+      computeLocalVoronoiFace(*crack.graph, crack.block.positions, i, b, box, face, scratch);
+      const std::int32_t f = cell.findFace(b);
+      if (f < 0) {
+        REQUIRE(face.size() < 3);
+        continue;
+      }
+      const auto cycle = cell.face(static_cast<std::size_t>(f));
+      REQUIRE(face.size() == cycle.size());
+      std::vector<std::int32_t> ids(face.size());
+      std::iota(ids.begin(), ids.end(), 0);
+      CHECK(polygonArea(face, ids.data(), ids.size()) ==
+            Approx(cell.faceArea(static_cast<std::size_t>(f))).epsilon(1e-12));
+      for (const dem::Vec3& p : face) {
+        REQUIRE(std::any_of(cycle.begin(), cycle.end(), [&](std::int32_t k) {
+          return dem::norm(cell.vertices()[static_cast<std::size_t>(k)] - p) < 1e-12;
+        }));
+      }
+      ++compared;
+    }
+  }
+  CHECK(compared > 1000);
 }

@@ -29,7 +29,11 @@ void printError(const char* command, const std::string& message);
 // Top level: crackvis generate | info | sim | extract
 Command addGenerateCommand(CLI::App& parent);
 Command addInfoCommand(CLI::App& parent);
+Command addExtractCommand(CLI::App& parent);
+Command addBenchMethodsCommand(CLI::App& bench);
+Command addSimCommand(CLI::App& parent);
 // Under `crackvis bench`: transfer | methods | render
 // (Declared here as each lands; main.cpp wires them.)
+Command addBenchTransferCommand(CLI::App& bench);
 
 }  // namespace crackvis::cli

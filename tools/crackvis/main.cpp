@@ -42,6 +42,10 @@ int main(int argc, char** argv) {
   std::vector<Command> commands;
   commands.push_back(addGenerateCommand(app));
   commands.push_back(addInfoCommand(app));
+  commands.push_back(addExtractCommand(app));
+  commands.push_back(addBenchMethodsCommand(*bench));
+  commands.push_back(addBenchTransferCommand(*bench));
+  commands.push_back(addSimCommand(app));
   if (bench->get_subcommands({}).empty()) {
     app.remove_subcommand(bench);  // no benchmark has landed yet
   }

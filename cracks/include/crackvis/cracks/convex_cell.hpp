@@ -21,6 +21,8 @@ class ConvexCell {
   // The box [lo, hi] with its six wall faces.
   void reset(Vec3 lo, Vec3 hi);
   // Keeps {x : dot(normal, x) <= offset}; the new face gets `label`.
+  // The new face is assembled from the edges the clipped faces leave on the
+  // plane; only if rounding breaks that chain are its vertices sorted by angle.
   // Vertices within `tolerance` of the plane count as on it. Returns false
   // when nothing is left.
   bool clip(Vec3 normal, double offset, std::int32_t label, double tolerance);
@@ -37,16 +39,21 @@ class ConvexCell {
   double volume() const;
 
  private:
+  void orderByAngle(Vec3 normal);
+
   std::vector<Vec3> m_vertices;
   std::vector<std::int32_t> m_faceStart{0};
   std::vector<std::int32_t> m_faceVertices;
   std::vector<std::int32_t> m_labels;
   // scratch
   std::vector<double> m_distance;
+  std::vector<std::int8_t> m_side;
   std::vector<std::int32_t> m_remap;
   std::vector<Vec3> m_newVertices;
   std::vector<std::int32_t> m_newStart, m_newFaceVertices, m_newLabels, m_cap;
-  std::vector<std::array<std::int32_t, 3>> m_edgePoints;  // (a, b, new vertex)
+  std::vector<std::array<std::int32_t, 3>> m_edgePoints;          // (a, b, new vertex)
+  std::vector<std::pair<std::int32_t, std::int32_t>> m_capEdges;  // (from, to) around the cap
+  std::vector<std::pair<double, std::int32_t>> m_byAngle;
 };
 
 }  // namespace crackvis::cracks

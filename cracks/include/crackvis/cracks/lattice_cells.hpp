@@ -45,12 +45,17 @@ int localEdge(CellType type, int a, int b);
 // VTK cell type codes (vtkCellType.h) for writers and VTK adapters.
 int vtkCellTypeOf(CellType type);
 
+// 32 bytes: a decomposition of a fractured cuboid holds over two cells per
+// particle, and the memory budget is 200 bytes per particle for everything.
 struct LatticeCell {
   std::array<dem::ParticleIndex, kMaxCellNodes> nodes{-1, -1, -1, -1, -1};
-  std::array<dem::BondIndex, kMaxCellEdges> bonds{-1, -1, -1, -1, -1, -1, -1, -1};
+  // Edge e's bond is BondGraph::bondsOf(nodes[edges[e][0]])[edgeSlots[e]]
+  // (see LatticeDecomposition::bondOf): a byte instead of a bond index.
+  std::array<std::uint8_t, kMaxCellEdges> edgeSlots{};
   CellType type = CellType::kTetrahedron;
   std::int8_t partnerOffset = 0;  // pyramids: +1 or -1 to the other half of the octahedron
   std::uint8_t brokenMask = 0;    // bit e set when local edge e's bond is broken
+  std::uint8_t spare = 0;
 
   int nodeCount() const { return shapeOf(type).nodeCount; }
   int edgeCount() const { return shapeOf(type).edgeCount; }
@@ -59,6 +64,8 @@ struct LatticeCell {
   bool contains(dem::ParticleIndex p) const;
   // Local index of particle p in this cell, or -1.
   int localNode(dem::ParticleIndex p) const;
+  dem::ParticleIndex lowestNode() const;
 };
+static_assert(sizeof(LatticeCell) == 32);
 
 }  // namespace crackvis::cracks

@@ -9,8 +9,9 @@
 // never removed; their broken-bond masks follow the state they are given, so
 // stepping back in time stays correct (the decomposition is then a superset).
 //
-// Each cell knows its bonds; the cells of a particle or of a bond are found
-// through per-particle lists (cellsOfParticle, cellsOfBond).
+// Each cell knows its bonds (bondOf); the cells of a bond are found through
+// per-particle lists in which each cell is linked under its lowest particle
+// (cellsOfBond).
 #pragma once
 
 #include <cstdint>
@@ -45,7 +46,11 @@ class LatticeDecomposition {
   std::size_t cellCount() const { return m_cells.size(); }
   const LatticeCell& cell(CellIndex c) const { return m_cells[static_cast<std::size_t>(c)]; }
   bool processed(dem::ParticleIndex p) const {
-    return m_processed[static_cast<std::size_t>(p)] != 0;
+    return m_processed.test(static_cast<std::size_t>(p));
+  }
+  dem::BondIndex bondOf(const LatticeCell& cell, int edge) const {
+    const auto& e = shapeOf(cell.type).edges[static_cast<std::size_t>(edge)];
+    return m_graph.bondsOf(cell.nodes[e[0]])[cell.edgeSlots[static_cast<std::size_t>(edge)]];
   }
   int dimension() const { return m_dimension; }
   const BondGraph& graph() const { return m_graph; }
@@ -54,14 +59,15 @@ class LatticeDecomposition {
   // Particles whose degree exceeded what cell enumeration supports (64).
   std::size_t skippedParticles() const { return m_skipped; }
 
+  // Cells whose lowest particle is p.
   template <typename Visit>
-  void forEachCellOf(dem::ParticleIndex p, Visit&& visit) const {
-    for (std::int32_t slot = m_head[static_cast<std::size_t>(p)]; slot >= 0;
-         slot = m_next[static_cast<std::size_t>(slot)]) {
-      visit(static_cast<CellIndex>(slot / kMaxCellNodes));
+  void forEachCellOwnedBy(dem::ParticleIndex p, Visit&& visit) const {
+    for (CellIndex c = m_head[static_cast<std::size_t>(p)]; c >= 0;
+         c = m_next[static_cast<std::size_t>(c)]) {
+      visit(c);
     }
   }
-  // Cells containing bond b, ascending.
+  // Cells containing bond b, ascending (safe to call from several threads).
   void cellsOfBond(dem::BondIndex b, std::vector<CellIndex>& out) const;
 
   std::size_t memoryBytes() const;
@@ -77,14 +83,32 @@ class LatticeDecomposition {
   bool hasCell(const LatticeCell& probe) const;
   void appendCell(LatticeCell cell, std::span<const std::uint8_t> bondState);
   void setBrokenBit(dem::BondIndex b, bool broken);
+  template <typename Visit>
+  void forEachCellWithBond(dem::BondIndex b, Visit&& visit) const;
 
   const BondGraph& m_graph;
   int m_dimension;
   std::vector<LatticeCell> m_cells;
-  std::vector<std::int32_t> m_head;       // [N] first slot of each particle's list
-  std::vector<std::int32_t> m_next;       // [cells * 5] next slot in the same particle's list
-  std::vector<std::uint8_t> m_processed;  // [N]
-  std::vector<std::uint8_t> m_seenState;  // [M] the bond state of the last update
+  // One bit per particle or bond.
+  class Bits {
+   public:
+    explicit Bits(std::size_t size) : m_words((size + 63) / 64, 0) {}
+    bool test(std::size_t i) const { return (m_words[i / 64] >> (i % 64)) & 1u; }
+    void set(std::size_t i, bool value) {
+      const std::uint64_t bit = std::uint64_t{1} << (i % 64);
+      m_words[i / 64] = value ? m_words[i / 64] | bit : m_words[i / 64] & ~bit;
+    }
+    std::size_t bytes() const { return m_words.capacity() * sizeof(std::uint64_t); }
+    std::uint64_t word(std::size_t w) const { return m_words[w]; }
+
+   private:
+    std::vector<std::uint64_t> m_words;
+  };
+
+  std::vector<CellIndex> m_head;  // [N] first cell owned by each particle (its lowest)
+  std::vector<CellIndex> m_next;  // [cells] next cell with the same owner
+  Bits m_processed;               // [N]
+  Bits m_seenState;               // [M] the bond state of the last update
   std::vector<dem::BondIndex> m_changed;
   CellIndex m_firstNewCell = 0;
   std::size_t m_skipped = 0;

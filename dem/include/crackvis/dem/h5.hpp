@@ -18,7 +18,8 @@
 
 namespace crackvis::dem::h5 {
 
-// Disables HDF5's automatic error printing for the whole process (idempotent).
+// Disables HDF5's automatic error printing for the calling thread (cheap to
+// call again; thread-safe HDF5 keeps one setting per thread).
 void quietHdf5();
 
 // The innermost message on HDF5's error stack (then clears the stack); empty

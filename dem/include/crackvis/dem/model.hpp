@@ -8,6 +8,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -41,7 +42,9 @@ inline Vec3 operator*(double s, Vec3 a) {
 inline double dot(Vec3 a, Vec3 b) {
   return a.x * b.x + a.y * b.y + a.z * b.z;
 }
-double norm(Vec3 a);
+inline double norm(Vec3 a) {
+  return std::sqrt(dot(a, a));
+}
 
 // A bond (spring) of the lattice between two particles; first < second in
 // files written by crackvis, but readers accept either order.

@@ -1,0 +1,205 @@
+// crackvis-data: serves HDF5 DEM results from beside the storage over gRPC
+// with mutual TLS. Parses options, wires a DataServer, waits for SIGINT or
+// SIGTERM. docs/security.md and docs/protocol.md describe what it does.
+#include <csignal>
+#include <cstdio>
+#include <iostream>
+#include <optional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <crackvis/dataservice/credentials.hpp>
+#include <crackvis/dataservice/data_server.hpp>
+
+namespace {
+
+using crackvis::dataservice::ServerConfig;
+
+enum ExitCode : int { kExitOk = 0, kExitFailure = 1, kExitUsage = 2 };
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "crackvis-data: %s\n", message.c_str());
+  return kExitFailure;
+}
+
+struct Flags {
+  std::string config;
+  std::string listen;
+  std::string root;
+  std::string ca;
+  std::string cert;
+  std::string key;
+  bool insecure = false;
+  std::string accessLog;
+  std::string rawTlsListen;
+  std::optional<std::uint64_t> maxReadBytes;
+  std::optional<std::uint64_t> maxFetchBytes;
+  std::optional<int> maxStreams;
+  std::optional<double> maxCallSeconds;
+};
+
+// The configuration file first, then every flag given on top of it.
+crackvis::Result<ServerConfig> configure(const Flags& flags, const CLI::App& app) {
+  ServerConfig config;
+  if (!flags.config.empty()) {
+    auto loaded = crackvis::dataservice::loadServerConfig(flags.config);
+    if (!loaded) {
+      return loaded.status();
+    }
+    config = std::move(*loaded);
+  }
+  auto given = [&](const char* name) { return app.count(name) > 0; };
+  if (given("--listen")) {
+    config.listen = flags.listen;
+  }
+  if (given("--root")) {
+    config.dataRoot = flags.root;
+  }
+  if (given("--ca")) {
+    config.tls.ca = flags.ca;
+  }
+  if (given("--cert")) {
+    config.tls.cert = flags.cert;
+  }
+  if (given("--key")) {
+    config.tls.key = flags.key;
+  }
+  if (flags.insecure) {
+    config.insecure = true;
+  }
+  if (given("--access-log")) {
+    config.accessLog = flags.accessLog;
+  }
+  if (given("--raw-tls-listen")) {
+    config.rawTlsListen = flags.rawTlsListen;
+  }
+  if (flags.maxReadBytes) {
+    config.limits.maxReadBytes = *flags.maxReadBytes;
+  }
+  if (flags.maxFetchBytes) {
+    config.limits.maxFetchBytes = *flags.maxFetchBytes;
+  }
+  if (flags.maxStreams) {
+    config.limits.maxConcurrentStreams = *flags.maxStreams;
+  }
+  if (flags.maxCallSeconds) {
+    config.limits.maxCallSeconds = *flags.maxCallSeconds;
+  }
+  if (config.dataRoot.empty()) {
+    return crackvis::invalidArgument("no data root: give --root DIR or data_root in --config");
+  }
+  return config;
+}
+
+int hashSecretFromStdin() {
+  std::string secret;
+  std::getline(std::cin, secret);
+  auto hash = crackvis::dataservice::hashSecret(secret);
+  if (!hash) {
+    return fail(hash.status().message());
+  }
+  std::printf("%s\n", hash->c_str());
+  return kExitOk;
+}
+
+int newToken() {
+  auto token = crackvis::dataservice::generateToken();
+  auto hash = token ? crackvis::dataservice::hashSecret(*token) : token.status();
+  if (!hash) {
+    return fail(hash.status().message());
+  }
+  std::printf("token       %s\ntoken_hash  %s\n", token->c_str(), hash->c_str());
+  return kExitOk;
+}
+
+int serve(const ServerConfig& config) {
+  // Signals go to the thread that waits for them, not to gRPC's threads.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+
+  auto server = crackvis::dataservice::DataServer::start(config);
+  if (!server) {
+    return fail(server.status().message());
+  }
+  std::printf("crackvis-data: serving %s on %s (%s)\n", config.dataRoot.c_str(),
+              (*server)->address().c_str(),
+              config.insecure ? "INSECURE: plaintext, loopback only" : "mutual TLS");
+  if ((*server)->rawTlsPort() != 0) {
+    std::printf("crackvis-data: raw TLS baseline on port %d\n", (*server)->rawTlsPort());
+  }
+  std::fflush(stdout);
+  int signal = 0;
+  sigwait(&signals, &signal);
+  std::fprintf(stderr, "crackvis-data: signal %d, shutting down\n", signal);
+  (*server)->shutdown();
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "crackvis-data: partial reads of HDF5 DEM results over gRPC with mutual TLS.\n"
+      "Serves the files under a data root: ListFiles, Describe (a file's whole tree in one\n"
+      "call), Read (hyperslabs, streamed in chunks of at most 1 MiB), Fetch (the whole file),\n"
+      "plus grpc.health.v1 and server reflection. Flags override the --config file.\n"
+      "Certificates: certs/make-dev-certs.sh; see docs/security.md and docs/protocol.md.",
+      "crackvis-data"};
+  Flags flags;
+  app.add_option("-c,--config", flags.config,
+                 "JSON configuration file (listen, data_root, tls, limits, users, access_log, "
+                 "raw_tls_listen; docs/security.md)");
+  app.add_option("--listen", flags.listen,
+                 "host:port to listen on (default 127.0.0.1:50051; port 0 lets the OS choose)");
+  app.add_option("--root", flags.root, "data root: the folder whose files are served");
+  app.add_option("--ca", flags.ca,
+                 "CA certificate (PEM) that client certificates must be signed by "
+                 "(default certs/generated/ca.pem)");
+  app.add_option("--cert", flags.cert,
+                 "server certificate (PEM; default certs/generated/server.pem)");
+  app.add_option("--key", flags.key,
+                 "server private key (PEM; default certs/generated/server.key)");
+  app.add_flag("--insecure", flags.insecure,
+               "plaintext without client certificates, for development: refuses any address "
+               "but loopback and logs a warning");
+  app.add_option("--access-log", flags.accessLog,
+                 "file to append one line per call to; '-' for stderr (the default), '' for none");
+  app.add_option("--raw-tls-listen", flags.rawTlsListen,
+                 "host:port of the raw TLS baseline for 'crackvis bench transfer' (off unless "
+                 "given)");
+  app.add_option("--max-read-bytes", flags.maxReadBytes, "limit on the bytes of one Read call");
+  app.add_option("--max-fetch-bytes", flags.maxFetchBytes, "limit on the size of a fetched file");
+  app.add_option("--max-streams", flags.maxStreams, "limit on Read/Fetch calls at once");
+  app.add_option("--max-call-seconds", flags.maxCallSeconds,
+                 "a Read or Fetch running longer is cancelled");
+  auto* hash = app.add_subcommand(
+      "hash-secret", "Read a password or token from stdin and print its hash for the config");
+  auto* token = app.add_subcommand("new-token", "Print a random bearer token and its hash");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) {
+      return app.exit(e);
+    }
+    std::fprintf(stderr, "crackvis-data: %s\nRun 'crackvis-data --help' for usage.\n", e.what());
+    return kExitUsage;
+  }
+  if (hash->parsed()) {
+    return hashSecretFromStdin();
+  }
+  if (token->parsed()) {
+    return newToken();
+  }
+  auto config = configure(flags, app);
+  if (!config) {
+    return fail(config.status().message());
+  }
+  return serve(*config);
+}

@@ -1,0 +1,112 @@
+// The typed client of crackvis-data for the rest of crackvis (the render
+// server, the bench command, tests). Connects once with mutual TLS and turns
+// the DataService's calls into typed arrays and Status errors; no gRPC type
+// appears in this header.
+//
+// A DataClient is cheap to copy (copies share one channel) and safe to use
+// from several threads at once; each call has the options' deadline.
+#pragma once
+
+#include <bit>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include <crackvis/common/status.hpp>
+#include <crackvis/dataservice/tls_material.hpp>
+#include <crackvis/dataservice/types.hpp>
+
+namespace crackvis::dataservice {
+
+struct ClientOptions {
+  std::string target = "localhost:50051";  // host:port of crackvis-data
+  TlsFiles tls{"certs/generated/ca.pem", "certs/generated/client.pem",
+               "certs/generated/client.key"};
+  bool insecure = false;  // plaintext, for a server started with --insecure
+  std::string token;      // sent as "authorization: Bearer <token>"
+  std::string user;       // with `password`: sent as Basic credentials
+  std::string password;
+  std::string serverName;         // name the server certificate must carry; default: target's host
+  double timeoutSeconds = 120.0;  // deadline of each call
+};
+
+// One hyperslab as received: its elements in C order, little-endian.
+struct TypedArray {
+  std::string dataset;
+  DataType dtype = DataType::kUnspecified;
+  std::vector<std::uint64_t> shape;
+  std::vector<std::byte> bytes;
+
+  std::uint64_t elementCount() const {
+    std::uint64_t count = 1;
+    for (auto d : shape) {
+      count *= d;
+    }
+    return count;
+  }
+
+  // The values as T; INVALID_ARGUMENT when T is not the array's dtype.
+  template <typename T>
+  Result<std::vector<T>> values() const {
+    static_assert(std::endian::native == std::endian::little,
+                  "arrays arrive little-endian; a big-endian host must swap them");
+    if (dataTypeOf<T>() != dtype) {
+      return invalidArgument(fmt::format("{} holds {}, not {}", dataset, dataTypeName(dtype),
+                                         dataTypeName(dataTypeOf<T>())));
+    }
+    std::vector<T> out(bytes.size() / sizeof(T));
+    if (!out.empty()) {
+      std::memcpy(out.data(), bytes.data(), out.size() * sizeof(T));
+    }
+    return out;
+  }
+};
+
+class DataClient {
+ public:
+  // Reads the TLS files (FAILED_PRECONDITION naming a missing or bad one) and
+  // creates the channel; the connection is made on the first call.
+  static Result<DataClient> connect(const ClientOptions& options);
+
+  const ClientOptions& options() const;
+
+  // grpc.health.v1 Check: OK when the server reports SERVING.
+  Status checkHealth(const std::string& service = "") const;
+  Result<std::vector<FileEntry>> listFiles(const std::string& folder = "",
+                                           bool recursive = true) const;
+  Result<FileDescription> describe(const std::string& file) const;
+  // All slabs in one call; the arrays come back in request order.
+  Result<std::vector<TypedArray>> read(const std::string& file,
+                                       const std::vector<Hyperslab>& slabs) const;
+  // The same call, with the bytes going straight where the caller wants
+  // them: `sink` is called once per slab, when its first chunk announces its
+  // dtype, shape and size, and returns a buffer of exactly `bytes` bytes (or
+  // an error that ends the call). A slab of zero bytes gets no call.
+  struct SlabHeader {
+    std::size_t index = 0;
+    DataType dtype = DataType::kUnspecified;
+    std::vector<std::uint64_t> shape;
+    std::uint64_t bytes = 0;
+  };
+  using SlabSink = std::function<Result<std::byte*>(const SlabHeader& slab)>;
+  Status readInto(const std::string& file, const std::vector<Hyperslab>& slabs,
+                  const SlabSink& sink) const;
+  // Streams the whole file to `sink` (offset, bytes, file size) in chunks of
+  // at most 1 MiB; returns the bytes received. A sink error ends the call.
+  using FetchSink = std::function<Status(std::uint64_t offset, const std::byte* data,
+                                         std::size_t size, std::uint64_t fileBytes)>;
+  Result<std::uint64_t> fetch(const std::string& file, const FetchSink& sink) const;
+
+ private:
+  struct Impl;
+  explicit DataClient(std::shared_ptr<Impl> impl) : m_impl(std::move(impl)) {}
+  std::shared_ptr<Impl> m_impl;
+};
+
+}  // namespace crackvis::dataservice

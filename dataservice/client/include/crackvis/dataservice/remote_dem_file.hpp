@@ -1,0 +1,71 @@
+// A crackvis-dem file read through crackvis-data: what a renderer needs,
+// typed as in crackvis::dem, moving only the arrays a view uses.
+//
+// open() describes the file once (one round trip) and checks that it is
+// crackvis-dem v1 with the expected dtypes and shapes. The bond list is read
+// once, with the first step asked for, and kept; each further step is one
+// Read of its positions and bond states. Not thread-safe: one per session.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <crackvis/common/status.hpp>
+#include <crackvis/dataservice/data_client.hpp>
+#include <crackvis/dem/model.hpp>
+
+namespace crackvis::dataservice {
+
+struct RemoteStep {
+  int index = 0;
+  double time = 0.0;
+  std::vector<dem::Vec3> positions;     // [N]
+  std::vector<std::uint8_t> bondState;  // [M], dem::BondState values
+};
+
+class RemoteDemFile {
+ public:
+  static Result<RemoteDemFile> open(const DataClient& client, const std::string& file);
+
+  const std::string& file() const { return m_file; }
+  const FileDescription& description() const { return *m_description; }
+  int dimension() const { return m_dimension; }
+  std::int64_t particleCount() const { return m_particles; }
+  std::int64_t bondCount() const { return m_bonds; }
+  int stepCount() const { return static_cast<int>(m_description->steps.size()); }
+  const std::vector<StepEntry>& steps() const { return m_description->steps; }
+
+  // The fixed lattice topology, read on first use (alone, or with the first
+  // readStep) and kept.
+  Result<std::shared_ptr<const std::vector<dem::Bond>>> bonds();
+  bool bondsLoaded() const { return m_bondList != nullptr; }
+  Result<std::vector<double>> radii() const;
+
+  // Positions and bond states of a step in one Read (with the bond list in
+  // the same call when it has not been read yet).
+  Result<RemoteStep> readStep(int step);
+  Result<std::vector<dem::Vec3>> positions(int step) const;
+  // Particles [first, first + count) of a step: a spatial block's share.
+  Result<std::vector<dem::Vec3>> positions(int step, std::int64_t first, std::int64_t count) const;
+  Result<std::vector<std::uint8_t>> bondState(int step) const;
+
+ private:
+  RemoteDemFile() = default;
+  Status checkStep(int step) const;
+  Result<std::vector<dem::Bond>> toBonds(const TypedArray& array) const;
+  Result<std::vector<dem::Vec3>> toPositions(const TypedArray& array, std::uint64_t expected) const;
+  Result<std::vector<std::uint8_t>> toBondState(const TypedArray& array) const;
+
+  std::optional<DataClient> m_client;
+  std::string m_file;
+  std::shared_ptr<const FileDescription> m_description;
+  int m_dimension = 0;
+  std::int64_t m_particles = 0;
+  std::int64_t m_bonds = 0;
+  std::shared_ptr<const std::vector<dem::Bond>> m_bondList;
+};
+
+}  // namespace crackvis::dataservice

@@ -1,0 +1,260 @@
+#include <fmt/format.h>
+
+#include <crackvis/dataservice/remote_dem_file.hpp>
+#include <crackvis/dem/dem_file.hpp>
+
+namespace crackvis::dataservice {
+namespace {
+
+const AttributeInfo* findAttribute(const GroupInfo& group, std::string_view name) {
+  for (const AttributeInfo& attribute : group.attributes) {
+    if (attribute.name == name) {
+      return &attribute;
+    }
+  }
+  return nullptr;
+}
+
+Status expectDataset(const FileDescription& description, const std::string& path, DataType dtype,
+                     const std::vector<std::uint64_t>& shape) {
+  const DatasetInfo* dataset = description.findDataset(path);
+  if (dataset == nullptr) {
+    return notFound(fmt::format("{}: missing dataset {}", description.file, path));
+  }
+  if (dataset->dtype != dtype) {
+    return failedPrecondition(fmt::format("{}: dataset {} has dtype {}, expected {}",
+                                          description.file, path, dataset->dtypeName,
+                                          dataTypeName(dtype)));
+  }
+  if (dataset->shape != shape) {
+    return failedPrecondition(fmt::format("{}: dataset {} has shape [{}], expected [{}]",
+                                          description.file, path, fmt::join(dataset->shape, ","),
+                                          fmt::join(shape, ",")));
+  }
+  return Status::ok();
+}
+
+std::string positionsPath(int step) {
+  return dem::stepGroupPath(step) + "/positions";
+}
+std::string bondStatePath(int step) {
+  return dem::stepGroupPath(step) + "/bond_state";
+}
+
+}  // namespace
+
+Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::string& file) {
+  auto description = client.describe(file);
+  if (!description) {
+    return description.status();
+  }
+  if (description->format != dem::kFormatName) {
+    return failedPrecondition(
+        fmt::format("{}: not a crackvis-dem file (format '{}')", file, description->format));
+  }
+  if (description->formatVersion != dem::kFormatVersion) {
+    return failedPrecondition(
+        fmt::format("{}: unsupported crackvis-dem version {}", file, description->formatVersion));
+  }
+  RemoteDemFile remote;
+  remote.m_client = client;
+  remote.m_file = file;
+  const GroupInfo* root = description->findGroup("/");
+  const AttributeInfo* dimension = root != nullptr ? findAttribute(*root, "dimension") : nullptr;
+  const auto* values =
+      dimension != nullptr ? std::get_if<std::vector<std::int64_t>>(&dimension->value) : nullptr;
+  if (values == nullptr || values->size() != 1 || (values->front() != 2 && values->front() != 3)) {
+    return failedPrecondition(
+        fmt::format("{}: root attribute 'dimension' missing or not 2/3", file));
+  }
+  remote.m_dimension = static_cast<int>(values->front());
+  const DatasetInfo* radius = description->findDataset("/particles/radius");
+  const DatasetInfo* pairs = description->findDataset("/bonds/pairs");
+  if (radius == nullptr || radius->shape.size() != 1 || pairs == nullptr ||
+      pairs->shape.size() != 2) {
+    return failedPrecondition(
+        fmt::format("{}: missing or malformed /particles/radius or /bonds/pairs", file));
+  }
+  remote.m_particles = static_cast<std::int64_t>(radius->shape[0]);
+  remote.m_bonds = static_cast<std::int64_t>(pairs->shape[0]);
+  const auto n = static_cast<std::uint64_t>(remote.m_particles);
+  const auto m = static_cast<std::uint64_t>(remote.m_bonds);
+  CRACKVIS_RETURN_IF_ERROR(
+      expectDataset(*description, "/particles/radius", DataType::kFloat64, {n}));
+  CRACKVIS_RETURN_IF_ERROR(expectDataset(*description, "/bonds/pairs", DataType::kInt32, {m, 2}));
+  for (const StepEntry& step : description->steps) {
+    CRACKVIS_RETURN_IF_ERROR(
+        expectDataset(*description, positionsPath(step.index), DataType::kFloat64, {n, 3}));
+    CRACKVIS_RETURN_IF_ERROR(
+        expectDataset(*description, bondStatePath(step.index), DataType::kUInt8, {m}));
+  }
+  remote.m_description = std::make_shared<const FileDescription>(std::move(*description));
+  return remote;
+}
+
+Status RemoteDemFile::checkStep(int step) const {
+  if (step < 0 || step >= stepCount()) {
+    return invalidArgument(
+        fmt::format("{}: step {} out of range (the file has {} steps)", m_file, step, stepCount()));
+  }
+  return Status::ok();
+}
+
+Result<std::vector<dem::Bond>> RemoteDemFile::toBonds(const TypedArray& array) const {
+  if (array.dtype != DataType::kInt32 ||
+      array.elementCount() != 2 * static_cast<std::uint64_t>(m_bonds)) {
+    return failedPrecondition(fmt::format("{}: /bonds/pairs arrived as {} with {} values", m_file,
+                                          dataTypeName(array.dtype), array.elementCount()));
+  }
+  std::vector<dem::Bond> bonds(static_cast<size_t>(m_bonds));
+  if (!bonds.empty()) {
+    std::memcpy(bonds.data(), array.bytes.data(), array.bytes.size());
+  }
+  for (size_t b = 0; b < bonds.size(); ++b) {
+    if (bonds[b].first < 0 || bonds[b].first >= m_particles || bonds[b].second < 0 ||
+        bonds[b].second >= m_particles) {
+      return failedPrecondition(
+          fmt::format("{}: bond {} joins particles {} and {}: index out of range (N = {})", m_file,
+                      b, bonds[b].first, bonds[b].second, m_particles));
+    }
+  }
+  return bonds;
+}
+
+Result<std::vector<dem::Vec3>> RemoteDemFile::toPositions(const TypedArray& array,
+                                                          std::uint64_t expected) const {
+  if (array.dtype != DataType::kFloat64 || array.elementCount() != 3 * expected) {
+    return failedPrecondition(fmt::format("{}: {} arrived as {} with {} values, expected {}",
+                                          m_file, array.dataset, dataTypeName(array.dtype),
+                                          array.elementCount(), 3 * expected));
+  }
+  std::vector<dem::Vec3> positions(static_cast<size_t>(expected));
+  if (!positions.empty()) {
+    std::memcpy(positions.data(), array.bytes.data(), array.bytes.size());
+  }
+  return positions;
+}
+
+Result<std::vector<std::uint8_t>> RemoteDemFile::toBondState(const TypedArray& array) const {
+  auto values = array.values<std::uint8_t>();
+  if (!values) {
+    return values.status();
+  }
+  if (values->size() != static_cast<size_t>(m_bonds)) {
+    return failedPrecondition(fmt::format("{}: {} has {} values, expected M = {}", m_file,
+                                          array.dataset, values->size(), m_bonds));
+  }
+  return values;
+}
+
+Result<std::shared_ptr<const std::vector<dem::Bond>>> RemoteDemFile::bonds() {
+  if (!m_bondList) {
+    auto arrays = m_client->read(m_file, {Hyperslab::whole("/bonds/pairs")});
+    if (!arrays) {
+      return arrays.status();
+    }
+    auto bonds = toBonds(arrays->front());
+    if (!bonds) {
+      return bonds.status();
+    }
+    m_bondList = std::make_shared<const std::vector<dem::Bond>>(std::move(*bonds));
+  }
+  return m_bondList;
+}
+
+Result<std::vector<double>> RemoteDemFile::radii() const {
+  auto arrays = m_client->read(m_file, {Hyperslab::whole("/particles/radius")});
+  if (!arrays) {
+    return arrays.status();
+  }
+  return arrays->front().values<double>();
+}
+
+Result<RemoteStep> RemoteDemFile::readStep(int step) {
+  CRACKVIS_RETURN_IF_ERROR(checkStep(step));
+  std::vector<Hyperslab> slabs = {Hyperslab::whole(positionsPath(step)),
+                                  Hyperslab::whole(bondStatePath(step))};
+  const bool withBonds = !m_bondList;
+  if (withBonds) {
+    slabs.push_back(Hyperslab::whole("/bonds/pairs"));
+  }
+  const auto n = static_cast<std::uint64_t>(m_particles);
+  const auto m = static_cast<std::uint64_t>(m_bonds);
+  RemoteStep result;
+  result.index = step;
+  result.time = steps()[static_cast<size_t>(step)].time;
+  result.positions.resize(n);
+  result.bondState.resize(m);
+  std::vector<dem::Bond> bonds(withBonds ? m : 0);
+  // Straight into the typed arrays, once their dtype and shape are checked.
+  struct Expected {
+    DataType dtype;
+    std::vector<std::uint64_t> shape;
+    std::byte* data;
+  };
+  const std::vector<Expected> expected = {
+      {DataType::kFloat64, {n, 3}, reinterpret_cast<std::byte*>(result.positions.data())},
+      {DataType::kUInt8, {m}, reinterpret_cast<std::byte*>(result.bondState.data())},
+      {DataType::kInt32, {m, 2}, reinterpret_cast<std::byte*>(bonds.data())}};
+  std::vector<bool> arrived(slabs.size(), false);
+  CRACKVIS_RETURN_IF_ERROR(m_client->readInto(
+      m_file, slabs, [&](const DataClient::SlabHeader& slab) -> Result<std::byte*> {
+        const Expected& want = expected.at(slab.index);
+        if (slab.dtype != want.dtype || slab.shape != want.shape) {
+          return failedPrecondition(fmt::format(
+              "{}: {} arrived as {} [{}], expected {} [{}]", m_file, slabs[slab.index].dataset,
+              dataTypeName(slab.dtype), fmt::join(slab.shape, ","), dataTypeName(want.dtype),
+              fmt::join(want.shape, ",")));
+        }
+        arrived[slab.index] = true;
+        return want.data;
+      }));
+  for (size_t i = 0; i < slabs.size(); ++i) {
+    const bool empty = i == 0 ? n == 0 : m == 0;
+    if (!arrived[i] && !empty) {
+      return internalError(fmt::format("{}: {} did not arrive", m_file, slabs[i].dataset));
+    }
+  }
+  if (withBonds) {
+    for (size_t b = 0; b < bonds.size(); ++b) {
+      if (bonds[b].first < 0 || bonds[b].first >= m_particles || bonds[b].second < 0 ||
+          bonds[b].second >= m_particles) {
+        return failedPrecondition(
+            fmt::format("{}: bond {} joins particles {} and {}: index out of range (N = {})",
+                        m_file, b, bonds[b].first, bonds[b].second, m_particles));
+      }
+    }
+    m_bondList = std::make_shared<const std::vector<dem::Bond>>(std::move(bonds));
+  }
+  return result;
+}
+
+Result<std::vector<dem::Vec3>> RemoteDemFile::positions(int step) const {
+  CRACKVIS_RETURN_IF_ERROR(checkStep(step));
+  auto arrays = m_client->read(m_file, {Hyperslab::whole(positionsPath(step))});
+  if (!arrays) {
+    return arrays.status();
+  }
+  return toPositions(arrays->front(), static_cast<std::uint64_t>(m_particles));
+}
+
+Result<std::vector<dem::Vec3>> RemoteDemFile::positions(int step, std::int64_t first,
+                                                        std::int64_t count) const {
+  CRACKVIS_RETURN_IF_ERROR(checkStep(step));
+  auto arrays = m_client->read(m_file, {{positionsPath(step), {first, 0}, {count, 3}}});
+  if (!arrays) {
+    return arrays.status();
+  }
+  return toPositions(arrays->front(), static_cast<std::uint64_t>(count));
+}
+
+Result<std::vector<std::uint8_t>> RemoteDemFile::bondState(int step) const {
+  CRACKVIS_RETURN_IF_ERROR(checkStep(step));
+  auto arrays = m_client->read(m_file, {Hyperslab::whole(bondStatePath(step))});
+  if (!arrays) {
+    return arrays.status();
+  }
+  return toBondState(arrays->front());
+}
+
+}  // namespace crackvis::dataservice

@@ -1,0 +1,133 @@
+// The catalogue of a data root: listing, describing, hyperslab reads and
+// whole-file reads of the files under it. The data service's handlers call
+// it after they have checked the caller; it knows nothing of gRPC.
+//
+// Debian's HDF5 is not built thread-safe, so every HDF5 call the catalogue
+// makes holds hdf5Mutex(), one lock per process; a read is split into
+// pieces of about 1 MiB, each read under the lock, so concurrent streams
+// take turns rather than wait for each other's whole request.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <crackvis/common/status.hpp>
+#include <crackvis/dataservice/data_root.hpp>
+#include <crackvis/dataservice/types.hpp>
+
+namespace crackvis::dataservice {
+
+// The lock around every HDF5 call in this process that may run beside the
+// service (the catalogue's, and a test's or tool's direct reads).
+std::mutex& hdf5Mutex();
+
+// One validated hyperslab of a Read.
+struct SlabPlan {
+  std::string dataset;
+  DataType dtype = DataType::kUnspecified;
+  std::vector<std::uint64_t> datasetShape;
+  std::vector<std::uint64_t> start;  // one per dimension (empty for a scalar)
+  std::vector<std::uint64_t> count;  // the slab's shape
+  std::uint64_t bytes = 0;
+  std::uint64_t rowBytes = 0;  // bytes of one index of the first dimension
+};
+
+// The part of a slab read in one go: whole rows of the first dimension,
+// at most kMaxChunkBytes unless a single row is larger.
+struct Piece {
+  std::size_t slab = 0;
+  std::uint64_t offset = 0;  // within the slab, bytes
+  std::uint64_t bytes = 0;
+  std::uint64_t firstRow = 0;
+  std::uint64_t rows = 0;
+};
+
+// An open, validated Read: the file stays open until the reader is
+// destroyed; pieces come in slab order, then byte order.
+class SlabReader {
+ public:
+  SlabReader(const SlabReader&) = delete;
+  SlabReader& operator=(const SlabReader&) = delete;
+  ~SlabReader();
+
+  const std::vector<SlabPlan>& slabs() const { return m_slabs; }
+  std::uint64_t totalBytes() const { return m_totalBytes; }
+
+  // The next piece to read, or nothing when every slab is done.
+  std::optional<Piece> nextPiece();
+  // Reads a piece into `out` (piece.bytes long), little-endian.
+  Status read(const Piece& piece, void* out);
+
+ private:
+  friend class Catalogue;
+  struct Handles;
+  SlabReader();
+
+  std::string m_file;
+  std::unique_ptr<Handles> m_handles;
+  std::vector<SlabPlan> m_slabs;
+  std::uint64_t m_totalBytes = 0;
+  std::size_t m_cursorSlab = 0;
+  std::uint64_t m_cursorRow = 0;
+};
+
+// An open file streamed as stored (Fetch).
+class FileReader {
+ public:
+  FileReader(const FileReader&) = delete;
+  FileReader& operator=(const FileReader&) = delete;
+  ~FileReader();
+
+  std::uint64_t size() const { return m_size; }
+  // Reads up to `bytes` at `offset`; returns how many were read.
+  Result<std::size_t> readAt(std::uint64_t offset, void* out, std::size_t bytes);
+
+ private:
+  friend class Catalogue;
+  FileReader(int fd, std::uint64_t size, std::string name)
+      : m_fd(fd), m_size(size), m_name(std::move(name)) {}
+
+  int m_fd = -1;
+  std::uint64_t m_size = 0;
+  std::string m_name;
+};
+
+class Catalogue {
+ public:
+  explicit Catalogue(DataRoot root) : m_root(std::move(root)) {}
+
+  const DataRoot& root() const { return m_root; }
+
+  // Files under `folder` (relative, "" for the root), sorted by path; only
+  // those `mayRead` accepts (called with the real relative path), and never
+  // a symlink that leaves the root.
+  using AccessFilter = std::function<bool(const std::string& relative)>;
+  Result<std::vector<FileEntry>> listFiles(std::string_view folder, bool recursive,
+                                           const AccessFilter& mayRead) const;
+
+  // The whole tree of a file. FAILED_PRECONDITION for a file that is not
+  // HDF5 or that HDF5 cannot open (truncated, corrupt).
+  Result<FileDescription> describe(const ResolvedPath& file) const;
+
+  // Validates every slab (dataset present and readable, start and count
+  // inside its shape) and the total against `maxBytes`, and opens the file.
+  Result<std::unique_ptr<SlabReader>> openRead(const ResolvedPath& file,
+                                               const std::vector<Hyperslab>& slabs,
+                                               std::uint64_t maxBytes) const;
+
+  // Opens a file for streaming as stored; it must be HDF5 and at most
+  // `maxBytes` long.
+  Result<std::unique_ptr<FileReader>> openFetch(const ResolvedPath& file,
+                                                std::uint64_t maxBytes) const;
+
+ private:
+  DataRoot m_root;
+};
+
+}  // namespace crackvis::dataservice

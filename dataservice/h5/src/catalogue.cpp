@@ -1,0 +1,711 @@
+#include <algorithm>
+#include <limits>
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <crackvis/dataservice/catalogue.hpp>
+#include <crackvis/dem/dem_file.hpp>
+#include <crackvis/dem/h5.hpp>
+
+namespace crackvis::dataservice {
+namespace fs = std::filesystem;
+namespace h5 = crackvis::dem::h5;
+
+std::mutex& hdf5Mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+namespace {
+
+Status permissionDenied(std::string message) {
+  return {StatusCode::kPermissionDenied, std::move(message)};
+}
+Status resourceExhausted(std::string message) {
+  return {StatusCode::kResourceExhausted, std::move(message)};
+}
+
+// The element type of a stored datatype, as the service names it.
+DataType classifyType(hid_t type) {
+  const size_t size = H5Tget_size(type);
+  switch (H5Tget_class(type)) {
+    case H5T_INTEGER: {
+      const bool isSigned = H5Tget_sign(type) == H5T_SGN_2;
+      switch (size) {
+        case 1:
+          return isSigned ? DataType::kInt8 : DataType::kUInt8;
+        case 2:
+          return isSigned ? DataType::kInt16 : DataType::kUInt16;
+        case 4:
+          return isSigned ? DataType::kInt32 : DataType::kUInt32;
+        case 8:
+          return isSigned ? DataType::kInt64 : DataType::kUInt64;
+        default:
+          return DataType::kUnspecified;
+      }
+    }
+    case H5T_FLOAT:
+      return size == 8 ? DataType::kFloat64
+                       : (size == 4 ? DataType::kFloat32 : DataType::kUnspecified);
+    case H5T_STRING:
+      return DataType::kString;
+    default:
+      return DataType::kUnspecified;
+  }
+}
+
+// Little-endian memory types: what Read sends whatever the host's order.
+hid_t littleEndianType(DataType type) {
+  switch (type) {
+    case DataType::kInt8:
+      return H5T_STD_I8LE;
+    case DataType::kUInt8:
+      return H5T_STD_U8LE;
+    case DataType::kInt16:
+      return H5T_STD_I16LE;
+    case DataType::kUInt16:
+      return H5T_STD_U16LE;
+    case DataType::kInt32:
+      return H5T_STD_I32LE;
+    case DataType::kUInt32:
+      return H5T_STD_U32LE;
+    case DataType::kInt64:
+      return H5T_STD_I64LE;
+    case DataType::kUInt64:
+      return H5T_STD_U64LE;
+    case DataType::kFloat32:
+      return H5T_IEEE_F32LE;
+    case DataType::kFloat64:
+      return H5T_IEEE_F64LE;
+    case DataType::kUnspecified:
+    case DataType::kString:
+      break;
+  }
+  return H5I_INVALID_HID;
+}
+
+// Opens a file for reading once it is known to be HDF5; the caller holds
+// the HDF5 lock.
+Result<h5::Handle> openHdf5(const ResolvedPath& file) {
+  if (!hasHdf5Signature(file.absolute)) {
+    return failedPrecondition(fmt::format("{}: not an HDF5 file", file.requested));
+  }
+  h5::Handle handle = h5::fileHandle(H5Fopen(file.absolute.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
+  if (!handle.valid()) {
+    return failedPrecondition(fmt::format("{}: cannot open: file is truncated or corrupt ({})",
+                                          file.requested, h5::lastHdf5Error()));
+  }
+  return handle;
+}
+
+// ------------------------------------------------------------- Describe --
+
+Result<AttributeInfo> readAttribute(hid_t object, const char* name) {
+  AttributeInfo info;
+  info.name = name;
+  h5::Handle attribute = h5::attributeHandle(H5Aopen(object, name, H5P_DEFAULT));
+  h5::Handle type = h5::datatypeHandle(attribute.valid() ? H5Aget_type(attribute.get()) : -1);
+  h5::Handle space = h5::dataspaceHandle(attribute.valid() ? H5Aget_space(attribute.get()) : -1);
+  if (!type.valid() || !space.valid()) {
+    return failedPrecondition(
+        fmt::format("cannot read attribute '{}' ({})", name, h5::lastHdf5Error()));
+  }
+  info.dtype = classifyType(type.get());
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  if (rank > 0) {
+    std::vector<hsize_t> dims(static_cast<size_t>(rank));
+    H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+    info.shape.assign(dims.begin(), dims.end());
+  }
+  const hssize_t points = H5Sget_simple_extent_npoints(space.get());
+  // Attributes are small by HDF5's design; a huge one is described, not read.
+  constexpr hssize_t kMaxPointsRead = 1 << 20;
+  if (points <= 0 || points > kMaxPointsRead) {
+    info.truncated = points > 0;
+    return info;
+  }
+  const auto count = static_cast<size_t>(points);
+  switch (H5Tget_class(type.get())) {
+    case H5T_STRING:
+      if (count == 1) {
+        auto text = h5::readStringAttribute(object, name);
+        if (!text) {
+          return text.status();
+        }
+        info.value = *text;
+      } else {
+        info.truncated = true;
+      }
+      break;
+    case H5T_INTEGER: {
+      std::vector<std::int64_t> values(count);
+      if (H5Aread(attribute.get(), H5T_NATIVE_INT64, values.data()) < 0) {
+        return failedPrecondition(
+            fmt::format("cannot read attribute '{}' ({})", name, h5::lastHdf5Error()));
+      }
+      info.truncated = values.size() > AttributeInfo::kMaxAttributeValues;
+      values.resize(std::min(values.size(), AttributeInfo::kMaxAttributeValues));
+      info.value = std::move(values);
+      break;
+    }
+    case H5T_FLOAT: {
+      std::vector<double> values(count);
+      if (H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, values.data()) < 0) {
+        return failedPrecondition(
+            fmt::format("cannot read attribute '{}' ({})", name, h5::lastHdf5Error()));
+      }
+      info.truncated = values.size() > AttributeInfo::kMaxAttributeValues;
+      values.resize(std::min(values.size(), AttributeInfo::kMaxAttributeValues));
+      info.value = std::move(values);
+      break;
+    }
+    default:
+      break;
+  }
+  return info;
+}
+
+struct AttributeWalk {
+  std::vector<AttributeInfo> attributes;
+  Status status;
+};
+
+herr_t collectAttribute(hid_t object, const char* name, const H5A_info_t*, void* data) {
+  auto* walk = static_cast<AttributeWalk*>(data);
+  auto attribute = readAttribute(object, name);
+  if (!attribute) {
+    walk->status = attribute.status();
+    return 1;  // stop
+  }
+  walk->attributes.push_back(std::move(*attribute));
+  return 0;
+}
+
+Result<std::vector<AttributeInfo>> readAttributes(hid_t object, const std::string& path) {
+  AttributeWalk walk;
+  hsize_t index = 0;
+  if (H5Aiterate2(object, H5_INDEX_NAME, H5_ITER_INC, &index, collectAttribute, &walk) < 0) {
+    return failedPrecondition(
+        fmt::format("cannot list the attributes of {} ({})", path, h5::lastHdf5Error()));
+  }
+  if (!walk.status) {
+    return Status(walk.status.code(), fmt::format("{}: {}", path, walk.status.message()));
+  }
+  return std::move(walk.attributes);
+}
+
+struct TreeWalk {
+  FileDescription* description = nullptr;
+  Status status;
+};
+
+herr_t visitLink(hid_t root, const char* name, const H5L_info_t* link, void* data) {
+  auto* walk = static_cast<TreeWalk*>(data);
+  // Soft links name objects that are listed under their hard link; external
+  // and user-defined links lead out of the file, which the service never
+  // follows.
+  if (link->type != H5L_TYPE_HARD) {
+    return 0;
+  }
+  const std::string path = std::string("/") + name;
+  H5O_info_t object{};
+  if (H5Oget_info_by_name2(root, name, &object, H5O_INFO_BASIC, H5P_DEFAULT) < 0) {
+    walk->status =
+        failedPrecondition(fmt::format("cannot inspect {} ({})", path, h5::lastHdf5Error()));
+    return 1;
+  }
+  if (object.type != H5O_TYPE_GROUP && object.type != H5O_TYPE_DATASET) {
+    return 0;  // named datatypes
+  }
+  h5::Handle handle = {H5Oopen(root, name, H5P_DEFAULT), H5Oclose};
+  if (!handle.valid()) {
+    walk->status =
+        failedPrecondition(fmt::format("cannot open {} ({})", path, h5::lastHdf5Error()));
+    return 1;
+  }
+  auto attributes = readAttributes(handle.get(), path);
+  if (!attributes) {
+    walk->status = attributes.status();
+    return 1;
+  }
+  if (object.type == H5O_TYPE_GROUP) {
+    walk->description->groups.push_back({path, std::move(*attributes)});
+    return 0;
+  }
+  auto shape = h5::describeDataset(handle.get());
+  h5::Handle type = h5::datatypeHandle(H5Dget_type(handle.get()));
+  if (!shape || !type.valid()) {
+    walk->status = failedPrecondition(fmt::format(
+        "dataset {}: {}", path, shape ? h5::lastHdf5Error() : shape.status().message()));
+    return 1;
+  }
+  DatasetInfo dataset;
+  dataset.path = path;
+  dataset.dtype = classifyType(type.get());
+  if (dataset.dtype == DataType::kString) {
+    dataset.dtype = DataType::kUnspecified;  // Read sends numbers only
+  }
+  dataset.dtypeName = dataset.dtype != DataType::kUnspecified
+                          ? std::string(dataTypeName(dataset.dtype))
+                          : shape->typeName;
+  dataset.shape = shape->dims;
+  dataset.chunkShape = shape->chunkDims;
+  dataset.attributes = std::move(*attributes);
+  walk->description->datasets.push_back(std::move(dataset));
+  return 0;
+}
+
+const AttributeInfo* findAttribute(const std::vector<AttributeInfo>& attributes,
+                                   std::string_view name) {
+  for (const AttributeInfo& attribute : attributes) {
+    if (attribute.name == name) {
+      return &attribute;
+    }
+  }
+  return nullptr;
+}
+
+std::optional<std::int64_t> integerValue(const AttributeInfo* attribute) {
+  if (attribute != nullptr) {
+    if (const auto* values = std::get_if<std::vector<std::int64_t>>(&attribute->value);
+        values != nullptr && values->size() == 1) {
+      return values->front();
+    }
+  }
+  return std::nullopt;
+}
+
+// The format, version and complete steps of a crackvis-dem file, taken from
+// the attributes already collected.
+void fillDemSummary(FileDescription& description) {
+  const GroupInfo* root = description.findGroup("/");
+  if (root == nullptr) {
+    return;
+  }
+  if (const AttributeInfo* format = findAttribute(root->attributes, "format"); format != nullptr) {
+    if (const auto* text = std::get_if<std::string>(&format->value)) {
+      description.format = *text;
+    }
+  }
+  description.formatVersion =
+      static_cast<int>(integerValue(findAttribute(root->attributes, "version")).value_or(0));
+  if (description.format != dem::kFormatName) {
+    return;
+  }
+  const GroupInfo* steps = description.findGroup("/steps");
+  if (steps == nullptr) {
+    return;
+  }
+  const std::int64_t count = integerValue(findAttribute(steps->attributes, "count")).value_or(0);
+  for (std::int64_t k = 0; k < count; ++k) {
+    const std::string path = dem::stepGroupPath(static_cast<int>(k));
+    const GroupInfo* group = description.findGroup(path);
+    if (group == nullptr) {
+      break;  // a damaged file: report the steps that are there
+    }
+    StepEntry step{static_cast<int>(k), 0.0, path};
+    if (const AttributeInfo* time = findAttribute(group->attributes, "time"); time != nullptr) {
+      if (const auto* values = std::get_if<std::vector<double>>(&time->value);
+          values != nullptr && values->size() == 1) {
+        step.time = values->front();
+      }
+    }
+    description.steps.push_back(std::move(step));
+  }
+}
+
+// ----------------------------------------------------------------- Read --
+
+// Opens a dataset named by a client: the path must be absolute in the file,
+// every link on the way must exist and stay inside the file.
+Result<h5::Handle> openDataset(hid_t file, const std::string& fileName, const std::string& path) {
+  if (path.empty() || path.front() != '/' || path == "/") {
+    return invalidArgument(
+        fmt::format("dataset '{}' in {}: name a dataset by its absolute path in the file, like "
+                    "/steps/000000/positions",
+                    path, fileName));
+  }
+  std::string prefix;
+  size_t start = 1;
+  while (start <= path.size()) {
+    size_t end = path.find('/', start);
+    if (end == std::string::npos) {
+      end = path.size();
+    }
+    if (end == start) {
+      return invalidArgument(
+          fmt::format("dataset '{}' in {}: empty part in the path", path, fileName));
+    }
+    prefix += "/" + path.substr(start, end - start);
+    if (H5Lexists(file, prefix.c_str(), H5P_DEFAULT) <= 0) {
+      h5::lastHdf5Error();
+      return notFound(fmt::format("dataset {} missing in {}", path, fileName));
+    }
+    H5L_info_t link{};
+    if (H5Lget_info(file, prefix.c_str(), &link, H5P_DEFAULT) < 0) {
+      return failedPrecondition(fmt::format("dataset {} in {}: cannot inspect {} ({})", path,
+                                            fileName, prefix, h5::lastHdf5Error()));
+    }
+    if (link.type != H5L_TYPE_HARD && link.type != H5L_TYPE_SOFT) {
+      return permissionDenied(fmt::format(
+          "dataset {} in {}: {} is an external link; the service never follows links out of "
+          "a file",
+          path, fileName, prefix));
+    }
+    start = end + 1;
+  }
+  H5O_info_t object{};
+  if (H5Oget_info_by_name2(file, path.c_str(), &object, H5O_INFO_BASIC, H5P_DEFAULT) < 0) {
+    return notFound(fmt::format("dataset {} missing in {} (dangling link: {})", path, fileName,
+                                h5::lastHdf5Error()));
+  }
+  if (object.type != H5O_TYPE_DATASET) {
+    return invalidArgument(fmt::format("{} in {} is a {}, not a dataset", path, fileName,
+                                       object.type == H5O_TYPE_GROUP ? "group" : "named type"));
+  }
+  h5::Handle dataset = h5::datasetHandle(H5Dopen2(file, path.c_str(), H5P_DEFAULT));
+  if (!dataset.valid()) {
+    return failedPrecondition(
+        fmt::format("dataset {} in {}: cannot open ({})", path, fileName, h5::lastHdf5Error()));
+  }
+  return dataset;
+}
+
+// Raw data stored outside the file would let a file read beyond the root.
+Status checkStorage(hid_t dataset, const std::string& fileName, const std::string& path) {
+  h5::Handle plist = h5::propertyListHandle(H5Dget_create_plist(dataset));
+  if (!plist.valid()) {
+    return failedPrecondition(fmt::format("dataset {} in {}: unreadable header ({})", path,
+                                          fileName, h5::lastHdf5Error()));
+  }
+  if (H5Pget_layout(plist.get()) == H5D_VIRTUAL || H5Pget_external_count(plist.get()) > 0) {
+    return permissionDenied(fmt::format(
+        "dataset {} in {} keeps its data in other files; the service reads only data stored "
+        "in the file itself",
+        path, fileName));
+  }
+  return Status::ok();
+}
+
+std::string formatSigned(const std::vector<std::int64_t>& values) {
+  return fmt::format("[{}]", fmt::join(values, ","));
+}
+
+Result<SlabPlan> planSlab(hid_t file, const std::string& fileName, const Hyperslab& slab,
+                          size_t index) {
+  auto dataset = openDataset(file, fileName, slab.dataset);
+  if (!dataset) {
+    return dataset.status();
+  }
+  CRACKVIS_RETURN_IF_ERROR(checkStorage(dataset->get(), fileName, slab.dataset));
+  auto shape = h5::describeDataset(dataset->get());
+  h5::Handle type = h5::datatypeHandle(H5Dget_type(dataset->get()));
+  if (!shape || !type.valid()) {
+    return failedPrecondition(fmt::format("dataset {} in {}: {}", slab.dataset, fileName,
+                                          shape ? h5::lastHdf5Error() : shape.status().message()));
+  }
+  SlabPlan plan;
+  plan.dataset = slab.dataset;
+  plan.dtype = classifyType(type.get());
+  plan.datasetShape = shape->dims;
+  if (elementSize(plan.dtype) == 0) {
+    return invalidArgument(fmt::format("dataset {} in {} has type {}, which Read cannot send",
+                                       slab.dataset, fileName, shape->typeName));
+  }
+  const size_t rank = shape->dims.size();
+  const std::string where = fmt::format("hyperslab {} of {} in {}", index, slab.dataset, fileName);
+  if (slab.start.empty() && slab.count.empty()) {
+    plan.start.assign(rank, 0);
+    plan.count = shape->dims;
+  } else {
+    if (slab.start.size() != rank || slab.count.size() != rank) {
+      return invalidArgument(fmt::format(
+          "{}: start has {} and count has {} values, the dataset has rank {} (shape {})", where,
+          slab.start.size(), slab.count.size(), rank, h5::formatDims(shape->dims)));
+    }
+    for (size_t d = 0; d < rank; ++d) {
+      if (slab.start[d] < 0) {
+        return invalidArgument(fmt::format("{}: start[{}] = {} is negative (start {})", where, d,
+                                           slab.start[d], formatSigned(slab.start)));
+      }
+      if (slab.count[d] <= 0) {
+        return invalidArgument(fmt::format("{}: count[{}] = {} must be at least 1 (count {})",
+                                           where, d, slab.count[d], formatSigned(slab.count)));
+      }
+      const auto begin = static_cast<std::uint64_t>(slab.start[d]);
+      const auto extent = static_cast<std::uint64_t>(slab.count[d]);
+      if (begin >= shape->dims[d] || extent > shape->dims[d] - begin) {
+        return invalidArgument(fmt::format(
+            "{}: start {} count {} lies outside the dataset's shape {} (dimension {})", where,
+            formatSigned(slab.start), formatSigned(slab.count), h5::formatDims(shape->dims), d));
+      }
+      plan.start.push_back(begin);
+      plan.count.push_back(extent);
+    }
+  }
+  // The counts lie inside an existing dataset, but a sparse chunked one can
+  // still describe more bytes than fit in 64 bits.
+  std::uint64_t elements = 1;
+  std::uint64_t rowElements = 1;
+  for (size_t d = 0; d < rank; ++d) {
+    if (__builtin_mul_overflow(elements, plan.count[d], &elements)) {
+      return resourceExhausted(fmt::format("{}: too many elements", where));
+    }
+    if (d > 0 && __builtin_mul_overflow(rowElements, plan.count[d], &rowElements)) {
+      return resourceExhausted(fmt::format("{}: too many elements", where));
+    }
+  }
+  const std::uint64_t size = elementSize(plan.dtype);
+  if (__builtin_mul_overflow(elements, size, &plan.bytes)) {
+    return resourceExhausted(fmt::format("{}: too many bytes", where));
+  }
+  plan.rowBytes = rowElements * size;
+  return plan;
+}
+
+}  // namespace
+
+// --------------------------------------------------------------- Catalogue
+
+Result<std::vector<FileEntry>> Catalogue::listFiles(std::string_view folder, bool recursive,
+                                                    const AccessFilter& mayRead) const {
+  auto base = m_root.resolveFolder(folder);
+  if (!base) {
+    return base.status();
+  }
+  std::vector<FileEntry> entries;
+  std::error_code error;
+  auto consider = [&](const fs::directory_entry& entry) {
+    std::error_code entryError;
+    const fs::path real = fs::canonical(entry.path(), entryError);
+    if (entryError || !m_root.contains(real) || !fs::is_regular_file(real, entryError)) {
+      return;
+    }
+    const std::string relative = real.lexically_relative(m_root.path()).string();
+    if (mayRead && !mayRead(relative)) {
+      return;
+    }
+    FileEntry file;
+    file.path = entry.path().lexically_relative(m_root.path()).string();
+    file.sizeBytes = fs::file_size(real, entryError);
+    const auto modified = fs::last_write_time(real, entryError);
+    file.modifiedUnixSeconds = std::chrono::duration_cast<std::chrono::seconds>(
+                                   std::chrono::file_clock::to_sys(modified).time_since_epoch())
+                                   .count();
+    file.isHdf5 = hasHdf5Signature(real);
+    entries.push_back(std::move(file));
+  };
+  // Symlinked folders are not descended into: a link may not widen a listing.
+  if (recursive) {
+    for (fs::recursive_directory_iterator
+             it(base->absolute, fs::directory_options::skip_permission_denied, error),
+         end;
+         !error && it != end; it.increment(error)) {
+      consider(*it);
+    }
+  } else {
+    for (fs::directory_iterator
+             it(base->absolute, fs::directory_options::skip_permission_denied, error),
+         end;
+         !error && it != end; it.increment(error)) {
+      consider(*it);
+    }
+  }
+  if (error) {
+    return internalError(fmt::format("cannot list '{}': {}", base->requested, error.message()));
+  }
+  std::sort(entries.begin(), entries.end(),
+            [](const FileEntry& a, const FileEntry& b) { return a.path < b.path; });
+  return entries;
+}
+
+Result<FileDescription> Catalogue::describe(const ResolvedPath& file) const {
+  FileDescription description;
+  description.file = file.requested;
+  std::error_code error;
+  description.sizeBytes = fs::file_size(file.absolute, error);
+  std::lock_guard lock(hdf5Mutex());
+  h5::quietHdf5();
+  auto handle = openHdf5(file);
+  if (!handle) {
+    return handle.status();
+  }
+  auto rootAttributes = readAttributes(handle->get(), "/");
+  if (!rootAttributes) {
+    return Status(rootAttributes.status().code(),
+                  fmt::format("{}: {}", file.requested, rootAttributes.status().message()));
+  }
+  description.groups.push_back({"/", std::move(*rootAttributes)});
+  TreeWalk walk{&description, Status::ok()};
+  const herr_t visited = H5Lvisit(handle->get(), H5_INDEX_NAME, H5_ITER_INC, visitLink, &walk);
+  if (!walk.status) {
+    return Status(walk.status.code(), fmt::format("{}: {}", file.requested, walk.status.message()));
+  }
+  if (visited < 0) {
+    return failedPrecondition(
+        fmt::format("{}: cannot walk the file's tree ({})", file.requested, h5::lastHdf5Error()));
+  }
+  fillDemSummary(description);
+  return description;
+}
+
+// HDF5 handles of an open Read; closed under the lock.
+struct SlabReader::Handles {
+  h5::Handle file;
+  h5::Handle dataset;
+  size_t datasetSlab = std::numeric_limits<size_t>::max();
+};
+
+SlabReader::SlabReader() : m_handles(std::make_unique<Handles>()) {}
+
+SlabReader::~SlabReader() {
+  std::lock_guard lock(hdf5Mutex());
+  h5::quietHdf5();
+  m_handles.reset();
+}
+
+std::optional<Piece> SlabReader::nextPiece() {
+  while (m_cursorSlab < m_slabs.size()) {
+    const SlabPlan& slab = m_slabs[m_cursorSlab];
+    const std::uint64_t rowsTotal = slab.count.empty() ? 1 : slab.count[0];
+    if (m_cursorRow >= rowsTotal || slab.bytes == 0) {
+      ++m_cursorSlab;
+      m_cursorRow = 0;
+      continue;
+    }
+    const std::uint64_t rowsPerPiece = std::max<std::uint64_t>(1, kMaxChunkBytes / slab.rowBytes);
+    Piece piece;
+    piece.slab = m_cursorSlab;
+    piece.firstRow = m_cursorRow;
+    piece.rows = std::min(rowsPerPiece, rowsTotal - m_cursorRow);
+    piece.offset = m_cursorRow * slab.rowBytes;
+    piece.bytes = piece.rows * slab.rowBytes;
+    m_cursorRow += piece.rows;
+    return piece;
+  }
+  return std::nullopt;
+}
+
+Status SlabReader::read(const Piece& piece, void* out) {
+  const SlabPlan& slab = m_slabs.at(piece.slab);
+  std::lock_guard lock(hdf5Mutex());
+  h5::quietHdf5();
+  if (m_handles->datasetSlab != piece.slab) {
+    m_handles->dataset =
+        h5::datasetHandle(H5Dopen2(m_handles->file.get(), slab.dataset.c_str(), H5P_DEFAULT));
+    m_handles->datasetSlab = piece.slab;
+  }
+  if (!m_handles->dataset.valid()) {
+    return failedPrecondition(fmt::format("dataset {} in {}: cannot open ({})", slab.dataset,
+                                          m_file, h5::lastHdf5Error()));
+  }
+  herr_t result = 0;
+  if (slab.count.empty()) {  // a scalar
+    result = H5Dread(m_handles->dataset.get(), littleEndianType(slab.dtype), H5S_ALL, H5S_ALL,
+                     H5P_DEFAULT, out);
+  } else {
+    std::vector<hsize_t> start(slab.start.begin(), slab.start.end());
+    std::vector<hsize_t> count(slab.count.begin(), slab.count.end());
+    start[0] += piece.firstRow;
+    count[0] = piece.rows;
+    h5::Handle fileSpace = h5::dataspaceHandle(H5Dget_space(m_handles->dataset.get()));
+    h5::Handle memorySpace = h5::dataspaceHandle(
+        H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr));
+    if (!fileSpace.valid() || !memorySpace.valid() ||
+        H5Sselect_hyperslab(fileSpace.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(),
+                            nullptr) < 0) {
+      return internalError(fmt::format("dataset {} in {}: cannot select the hyperslab ({})",
+                                       slab.dataset, m_file, h5::lastHdf5Error()));
+    }
+    result = H5Dread(m_handles->dataset.get(), littleEndianType(slab.dtype), memorySpace.get(),
+                     fileSpace.get(), H5P_DEFAULT, out);
+  }
+  if (result < 0) {
+    return failedPrecondition(
+        fmt::format("dataset {} in {}: read failed, the file may be truncated or corrupt ({})",
+                    slab.dataset, m_file, h5::lastHdf5Error()));
+  }
+  return Status::ok();
+}
+
+Result<std::unique_ptr<SlabReader>> Catalogue::openRead(const ResolvedPath& file,
+                                                        const std::vector<Hyperslab>& slabs,
+                                                        std::uint64_t maxBytes) const {
+  if (slabs.empty()) {
+    return invalidArgument(fmt::format("Read of {}: no hyperslab requested", file.requested));
+  }
+  std::unique_ptr<SlabReader> reader(new SlabReader());
+  reader->m_file = file.requested;
+  std::lock_guard lock(hdf5Mutex());
+  h5::quietHdf5();
+  auto handle = openHdf5(file);
+  if (!handle) {
+    return handle.status();
+  }
+  for (size_t i = 0; i < slabs.size(); ++i) {
+    auto plan = planSlab(handle->get(), file.requested, slabs[i], i);
+    if (!plan) {
+      return plan.status();
+    }
+    if (__builtin_add_overflow(reader->m_totalBytes, plan->bytes, &reader->m_totalBytes) ||
+        reader->m_totalBytes > maxBytes) {
+      return resourceExhausted(fmt::format(
+          "Read of {} asks for more than {} (the server's limit per request) at hyperslab {} "
+          "({})",
+          file.requested, formatBytes(maxBytes), i, plan->dataset));
+    }
+    reader->m_slabs.push_back(std::move(*plan));
+  }
+  reader->m_handles->file = std::move(*handle);
+  return reader;
+}
+
+FileReader::~FileReader() {
+  if (m_fd >= 0) {
+    ::close(m_fd);
+  }
+}
+
+Result<std::size_t> FileReader::readAt(std::uint64_t offset, void* out, std::size_t bytes) {
+  for (;;) {
+    const ssize_t got = ::pread(m_fd, out, bytes, static_cast<off_t>(offset));
+    if (got >= 0) {
+      return static_cast<std::size_t>(got);
+    }
+    if (errno != EINTR) {
+      return internalError(
+          fmt::format("{}: read failed at offset {}: {}", m_name, offset, std::strerror(errno)));
+    }
+  }
+}
+
+Result<std::unique_ptr<FileReader>> Catalogue::openFetch(const ResolvedPath& file,
+                                                         std::uint64_t maxBytes) const {
+  if (!hasHdf5Signature(file.absolute)) {
+    return failedPrecondition(fmt::format("{}: not an HDF5 file", file.requested));
+  }
+  // The path is canonical, so O_NOFOLLOW only refuses a symlink swapped in
+  // since it was resolved.
+  const int fd = ::open(file.absolute.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+  if (fd < 0) {
+    return notFound(fmt::format("{}: cannot open: {}", file.requested, std::strerror(errno)));
+  }
+  struct stat info {};
+  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+    ::close(fd);
+    return invalidArgument(fmt::format("'{}' is not a regular file", file.requested));
+  }
+  const auto size = static_cast<std::uint64_t>(info.st_size);
+  if (size > maxBytes) {
+    ::close(fd);
+    return resourceExhausted(
+        fmt::format("Fetch of {} ({}) exceeds the server's limit of {} per request", file.requested,
+                    formatBytes(size), formatBytes(maxBytes)));
+  }
+  return std::unique_ptr<FileReader>(new FileReader(fd, size, file.requested));
+}
+
+}  // namespace crackvis::dataservice

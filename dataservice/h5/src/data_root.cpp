@@ -1,0 +1,160 @@
+#include <array>
+#include <cstring>
+#include <fstream>
+
+#include <fmt/format.h>
+
+#include <crackvis/dataservice/data_root.hpp>
+
+namespace crackvis::dataservice {
+namespace fs = std::filesystem;
+
+namespace {
+Status permissionDenied(std::string message) {
+  return {StatusCode::kPermissionDenied, std::move(message)};
+}
+}  // namespace
+
+Result<DataRoot> DataRoot::open(const std::string& root) {
+  std::error_code error;
+  if (root.empty()) {
+    return invalidArgument("no data root given");
+  }
+  const fs::path canonical = fs::canonical(root, error);
+  if (error) {
+    return notFound(fmt::format("data root '{}': {}", root, error.message()));
+  }
+  if (!fs::is_directory(canonical, error)) {
+    return invalidArgument(fmt::format("data root '{}' is not a directory", root));
+  }
+  return DataRoot(canonical);
+}
+
+Result<std::string> DataRoot::normalize(std::string_view path) {
+  if (path.find('\0') != std::string_view::npos) {
+    return invalidArgument("path contains a NUL character");
+  }
+  if (!path.empty() && path.front() == '/') {
+    return invalidArgument(
+        fmt::format("path '{}' is absolute; paths are relative to the data root", path));
+  }
+  std::string normalized;
+  size_t start = 0;
+  while (start <= path.size()) {
+    size_t end = path.find('/', start);
+    if (end == std::string_view::npos) {
+      end = path.size();
+    }
+    const std::string_view part = path.substr(start, end - start);
+    if (part == "..") {
+      return invalidArgument(
+          fmt::format("path '{}' contains '..'; paths must stay inside the data root", path));
+    }
+    if (!part.empty() && part != ".") {
+      if (!normalized.empty()) {
+        normalized += '/';
+      }
+      normalized += part;
+    }
+    start = end + 1;
+  }
+  return normalized;
+}
+
+bool DataRoot::contains(const fs::path& canonical) const {
+  auto rootIt = m_root.begin();
+  auto pathIt = canonical.begin();
+  for (; rootIt != m_root.end(); ++rootIt, ++pathIt) {
+    if (pathIt == canonical.end() || *rootIt != *pathIt) {
+      return false;
+    }
+  }
+  return true;
+}
+
+Result<ResolvedPath> DataRoot::resolve(std::string_view path, bool wantFolder) const {
+  auto normalized = normalize(path);
+  if (!normalized) {
+    return normalized.status();
+  }
+  if (normalized->empty() && !wantFolder) {
+    return invalidArgument("no file named (empty path)");
+  }
+  const fs::path joined = normalized->empty() ? m_root : m_root / *normalized;
+  std::error_code error;
+  // weakly_canonical follows every symlink that exists, so a link that
+  // leaves the root is caught even when its target does not exist.
+  const fs::path real = fs::weakly_canonical(joined, error);
+  if (error) {
+    return notFound(fmt::format("'{}': {}", *normalized, error.message()));
+  }
+  if (!contains(real)) {
+    return permissionDenied(
+        fmt::format("'{}' resolves outside the data root (a symlink leaves it)", *normalized));
+  }
+  const fs::file_status status = fs::status(real, error);
+  if (error || !fs::exists(status)) {
+    return notFound(fmt::format("{} '{}' not found under the data root",
+                                wantFolder ? "folder" : "file", *normalized));
+  }
+  if (wantFolder && !fs::is_directory(status)) {
+    return invalidArgument(fmt::format("'{}' is not a folder", *normalized));
+  }
+  if (!wantFolder && !fs::is_regular_file(status)) {
+    return invalidArgument(fmt::format("'{}' is not a regular file", *normalized));
+  }
+  ResolvedPath resolved;
+  resolved.requested = *normalized;
+  resolved.relative = real == m_root ? std::string() : real.lexically_relative(m_root).string();
+  resolved.absolute = real;
+  return resolved;
+}
+
+Result<ResolvedPath> DataRoot::resolveFile(std::string_view path) const {
+  return resolve(path, false);
+}
+
+Result<ResolvedPath> DataRoot::resolveFolder(std::string_view path) const {
+  return resolve(path, true);
+}
+
+bool isWithinFolder(std::string_view path, std::string_view folder) {
+  while (!folder.empty() && folder.back() == '/') {
+    folder.remove_suffix(1);
+  }
+  if (folder.empty() || folder == "*") {
+    return true;
+  }
+  if (path.size() < folder.size() || path.substr(0, folder.size()) != folder) {
+    return false;
+  }
+  return path.size() == folder.size() || path[folder.size()] == '/';
+}
+
+bool hasHdf5Signature(const fs::path& file) {
+  static constexpr std::array<char, 8> kSignature = {'\x89', 'H',  'D',    'F',
+                                                     '\r',   '\n', '\x1a', '\n'};
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    return false;
+  }
+  std::error_code error;
+  const std::uintmax_t size = fs::file_size(file, error);
+  if (error) {
+    return false;
+  }
+  for (std::uintmax_t offset = 0; offset + kSignature.size() <= size;
+       offset = offset == 0 ? 512 : offset * 2) {
+    std::array<char, 8> bytes{};
+    in.seekg(static_cast<std::streamoff>(offset));
+    if (!in.read(bytes.data(), bytes.size())) {
+      return false;
+    }
+    if (bytes == kSignature) {
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace crackvis::dataservice

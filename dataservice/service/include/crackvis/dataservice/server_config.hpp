@@ -1,0 +1,60 @@
+// Everything crackvis-data is configured with: where to listen, the data
+// root, TLS files, limits, users and logs. Read from a JSON file
+// (docs/security.md shows one) and overridden by command-line flags.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <crackvis/common/status.hpp>
+#include <crackvis/dataservice/tls_material.hpp>
+
+namespace crackvis::dataservice {
+
+struct Limits {
+  std::uint64_t maxReadBytes = std::uint64_t{1} << 30;   // per Read call (all slabs)
+  std::uint64_t maxFetchBytes = std::uint64_t{1} << 40;  // per Fetch call (the whole file)
+  int maxConcurrentStreams = 64;                         // Read and Fetch calls at once
+  int maxSlabsPerRead = 4096;
+  double maxCallSeconds = 600.0;  // a stream running longer is cancelled
+};
+
+// A user of the per-user layer on top of mutual TLS. A caller is this user
+// when it sends the token, the name and password, or (with neither) a client
+// certificate whose common name is `certificateName`.
+struct UserEntry {
+  std::string name;
+  std::string tokenHash;             // hashSecret() of the bearer token; empty: none
+  std::string passwordHash;          // hashSecret() of the password; empty: none
+  std::string certificateName;       // client certificate CN that identifies the user; empty: none
+  std::vector<std::string> folders;  // sub-folders of the root the user may read; "*": all
+};
+
+struct ServerConfig {
+  std::string listen = "127.0.0.1:50051";  // host:port; port 0 lets the OS choose
+  std::string dataRoot;
+  TlsFiles tls{"certs/generated/ca.pem", "certs/generated/server.pem",
+               "certs/generated/server.key"};
+  bool insecure = false;  // plaintext, loopback only
+  Limits limits;
+  std::vector<UserEntry> users;  // empty: every certified client reads the whole root
+  std::string accessLog = "-";   // file to append access lines to; "-": stderr; "": none
+  std::string rawTlsListen;      // host:port of the raw TLS baseline for benchmarks; "": off
+};
+
+// Reads a JSON configuration; unknown keys are errors (a typo must not
+// silently drop a limit). Relative paths are kept as written.
+Result<ServerConfig> loadServerConfig(const std::string& path);
+Result<ServerConfig> parseServerConfig(const std::string& json, const std::string& origin);
+
+// Splits "host:port" ("[::1]:50051" for IPv6); the port must be 0..65535.
+struct HostPort {
+  std::string host;
+  int port = 0;
+};
+Result<HostPort> parseHostPort(const std::string& address);
+// 127.0.0.0/8, ::1 and "localhost".
+bool isLoopbackHost(const std::string& host);
+
+}  // namespace crackvis::dataservice

@@ -1,0 +1,181 @@
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <crackvis/dataservice/server_config.hpp>
+
+namespace crackvis::dataservice {
+namespace {
+
+using nlohmann::json;
+
+Status checkKeys(const json& object, const std::string& where,
+                 std::initializer_list<const char*> known) {
+  if (!object.is_object()) {
+    return invalidArgument(fmt::format("{}: expected an object", where));
+  }
+  for (const auto& [key, value] : object.items()) {
+    bool found = false;
+    for (const char* name : known) {
+      found = found || key == name;
+    }
+    if (!found) {
+      return invalidArgument(fmt::format("{}: unknown key '{}'", where, key));
+    }
+  }
+  return Status::ok();
+}
+
+template <typename T>
+Status read(const json& object, const char* key, const std::string& where, T& out) {
+  if (!object.contains(key)) {
+    return Status::ok();
+  }
+  try {
+    out = object.at(key).get<T>();
+  } catch (const json::exception&) {
+    return invalidArgument(
+        fmt::format("{}: '{}' has the wrong type ({})", where, key, object.at(key).dump()));
+  }
+  return Status::ok();
+}
+
+Status readLimits(const json& object, const std::string& where, Limits& limits) {
+  CRACKVIS_RETURN_IF_ERROR(checkKeys(object, where,
+                                     {"max_read_bytes", "max_fetch_bytes", "max_concurrent_streams",
+                                      "max_slabs_per_read", "max_call_seconds"}));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_read_bytes", where, limits.maxReadBytes));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_fetch_bytes", where, limits.maxFetchBytes));
+  CRACKVIS_RETURN_IF_ERROR(
+      read(object, "max_concurrent_streams", where, limits.maxConcurrentStreams));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_slabs_per_read", where, limits.maxSlabsPerRead));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_call_seconds", where, limits.maxCallSeconds));
+  if (limits.maxConcurrentStreams < 1 || limits.maxSlabsPerRead < 1 ||
+      !(limits.maxCallSeconds > 0.0)) {
+    return invalidArgument(fmt::format(
+        "{}: max_concurrent_streams, max_slabs_per_read and max_call_seconds must be positive",
+        where));
+  }
+  return Status::ok();
+}
+
+Status readUser(const json& object, const std::string& where, UserEntry& user) {
+  CRACKVIS_RETURN_IF_ERROR(checkKeys(
+      object, where, {"name", "token_hash", "password_hash", "certificate_name", "folders"}));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "name", where, user.name));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "token_hash", where, user.tokenHash));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "password_hash", where, user.passwordHash));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "certificate_name", where, user.certificateName));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "folders", where, user.folders));
+  if (user.name.empty() || user.name.find_first_of(": \t\n") != std::string::npos) {
+    return invalidArgument(
+        fmt::format("{}: 'name' must be non-empty, without spaces or ':'", where));
+  }
+  if (user.tokenHash.empty() && user.passwordHash.empty() && user.certificateName.empty()) {
+    return invalidArgument(fmt::format(
+        "{}: user '{}' needs token_hash, password_hash or certificate_name", where, user.name));
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+Result<ServerConfig> parseServerConfig(const std::string& text, const std::string& origin) {
+  json root;
+  try {
+    root = json::parse(text);
+  } catch (const json::parse_error& e) {
+    return invalidArgument(
+        fmt::format("{}: not valid JSON (byte {}): {}", origin, e.byte, e.what()));
+  }
+  ServerConfig config;
+  CRACKVIS_RETURN_IF_ERROR(checkKeys(root, origin,
+                                     {"listen", "data_root", "tls", "insecure", "limits", "users",
+                                      "access_log", "raw_tls_listen"}));
+  CRACKVIS_RETURN_IF_ERROR(read(root, "listen", origin, config.listen));
+  CRACKVIS_RETURN_IF_ERROR(read(root, "data_root", origin, config.dataRoot));
+  CRACKVIS_RETURN_IF_ERROR(read(root, "insecure", origin, config.insecure));
+  CRACKVIS_RETURN_IF_ERROR(read(root, "access_log", origin, config.accessLog));
+  CRACKVIS_RETURN_IF_ERROR(read(root, "raw_tls_listen", origin, config.rawTlsListen));
+  if (root.contains("tls")) {
+    const std::string where = origin + ": tls";
+    const json& tls = root.at("tls");
+    CRACKVIS_RETURN_IF_ERROR(checkKeys(tls, where, {"ca", "cert", "key"}));
+    CRACKVIS_RETURN_IF_ERROR(read(tls, "ca", where, config.tls.ca));
+    CRACKVIS_RETURN_IF_ERROR(read(tls, "cert", where, config.tls.cert));
+    CRACKVIS_RETURN_IF_ERROR(read(tls, "key", where, config.tls.key));
+  }
+  if (root.contains("limits")) {
+    CRACKVIS_RETURN_IF_ERROR(readLimits(root.at("limits"), origin + ": limits", config.limits));
+  }
+  if (root.contains("users")) {
+    const json& users = root.at("users");
+    if (!users.is_array()) {
+      return invalidArgument(fmt::format("{}: 'users' must be an array", origin));
+    }
+    for (size_t i = 0; i < users.size(); ++i) {
+      UserEntry user;
+      CRACKVIS_RETURN_IF_ERROR(readUser(users[i], fmt::format("{}: users[{}]", origin, i), user));
+      for (const UserEntry& other : config.users) {
+        if (other.name == user.name) {
+          return invalidArgument(
+              fmt::format("{}: users[{}]: user '{}' appears twice", origin, i, user.name));
+        }
+      }
+      config.users.push_back(std::move(user));
+    }
+  }
+  return config;
+}
+
+Result<ServerConfig> loadServerConfig(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) {
+    return notFound(fmt::format("cannot read configuration file '{}'", path));
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  return parseServerConfig(text.str(), path);
+}
+
+Result<HostPort> parseHostPort(const std::string& address) {
+  HostPort result;
+  std::string portText;
+  if (!address.empty() && address.front() == '[') {
+    const size_t close = address.find(']');
+    if (close == std::string::npos || close + 1 >= address.size() || address[close + 1] != ':') {
+      return invalidArgument(fmt::format("address '{}': expected [host]:port", address));
+    }
+    result.host = address.substr(1, close - 1);
+    portText = address.substr(close + 2);
+  } else {
+    const size_t colon = address.rfind(':');
+    if (colon == std::string::npos || colon == 0) {
+      return invalidArgument(fmt::format("address '{}': expected host:port", address));
+    }
+    result.host = address.substr(0, colon);
+    portText = address.substr(colon + 1);
+  }
+  if (portText.empty() || portText.size() > 5 ||
+      portText.find_first_not_of("0123456789") != std::string::npos ||
+      std::stoi(portText) > 65535) {
+    return invalidArgument(fmt::format("address '{}': port must be 0..65535", address));
+  }
+  result.port = std::stoi(portText);
+  return result;
+}
+
+bool isLoopbackHost(const std::string& host) {
+  if (host == "localhost" || host == "::1") {
+    return true;
+  }
+  // 127.0.0.0/8, written as four decimal parts.
+  unsigned a = 0, b = 0, c = 0, d = 0;
+  char tail = 0;
+  return std::sscanf(host.c_str(), "%u.%u.%u.%u%c", &a, &b, &c, &d, &tail) == 4 && a == 127 &&
+         b < 256 && c < 256 && d < 256;
+}
+
+}  // namespace crackvis::dataservice

@@ -1,0 +1,239 @@
+#include <array>
+#include <charconv>
+#include <optional>
+
+#include <fmt/format.h>
+#include <openssl/crypto.h>
+#include <openssl/evp.h>
+#include <openssl/rand.h>
+#include <openssl/sha.h>
+
+#include <crackvis/dataservice/credentials.hpp>
+#include <crackvis/dataservice/data_root.hpp>
+
+namespace crackvis::dataservice {
+namespace {
+
+constexpr std::string_view kScheme = "pbkdf2-sha256";
+constexpr std::size_t kSaltBytes = 16;
+constexpr std::size_t kHashBytes = 32;
+constexpr std::size_t kMaxCachedCredentials = 4096;
+
+Status unauthenticated(std::string message) {
+  return {StatusCode::kUnauthenticated, std::move(message)};
+}
+
+std::string base64(const unsigned char* data, std::size_t size) {
+  std::string out(4 * ((size + 2) / 3) + 1, '\0');
+  const int length =
+      EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()), data, static_cast<int>(size));
+  out.resize(static_cast<std::size_t>(length));
+  return out;
+}
+
+// Decodes standard base64 (with padding); false on malformed input.
+bool unbase64(std::string_view text, std::string& out) {
+  if (text.empty() || text.size() % 4 != 0) {
+    return false;
+  }
+  out.assign(3 * text.size() / 4 + 1, '\0');
+  const int length = EVP_DecodeBlock(reinterpret_cast<unsigned char*>(out.data()),
+                                     reinterpret_cast<const unsigned char*>(text.data()),
+                                     static_cast<int>(text.size()));
+  if (length < 0) {
+    return false;
+  }
+  std::size_t size = static_cast<std::size_t>(length);
+  // EVP_DecodeBlock counts the padding as zero bytes.
+  for (std::size_t i = text.size(); i > 0 && text[i - 1] == '='; --i) {
+    --size;
+  }
+  out.resize(size);
+  return true;
+}
+
+bool pbkdf2(std::string_view secret, const std::string& salt, int iterations,
+            std::array<unsigned char, kHashBytes>& out) {
+  return PKCS5_PBKDF2_HMAC(secret.data(), static_cast<int>(secret.size()),
+                           reinterpret_cast<const unsigned char*>(salt.data()),
+                           static_cast<int>(salt.size()), iterations, EVP_sha256(),
+                           static_cast<int>(out.size()), out.data()) == 1;
+}
+
+std::string sha256Hex(std::string_view text) {
+  std::array<unsigned char, SHA256_DIGEST_LENGTH> digest{};
+  SHA256(reinterpret_cast<const unsigned char*>(text.data()), text.size(), digest.data());
+  std::string hex;
+  for (unsigned char byte : digest) {
+    hex += fmt::format("{:02x}", byte);
+  }
+  return hex;
+}
+
+bool startsWith(std::string_view text, std::string_view prefix) {
+  return text.size() >= prefix.size() && text.substr(0, prefix.size()) == prefix;
+}
+
+}  // namespace
+
+Result<std::string> hashSecret(std::string_view secret, int iterations) {
+  if (secret.empty()) {
+    return invalidArgument("refusing to hash an empty secret");
+  }
+  if (iterations < 1000) {
+    return invalidArgument("PBKDF2 needs at least 1000 iterations");
+  }
+  std::array<unsigned char, kSaltBytes> salt{};
+  if (RAND_bytes(salt.data(), static_cast<int>(salt.size())) != 1) {
+    return internalError("RAND_bytes failed");
+  }
+  std::array<unsigned char, kHashBytes> hash{};
+  const std::string saltText(reinterpret_cast<const char*>(salt.data()), salt.size());
+  if (!pbkdf2(secret, saltText, iterations, hash)) {
+    return internalError("PKCS5_PBKDF2_HMAC failed");
+  }
+  return fmt::format("{}${}${}${}", kScheme, iterations, base64(salt.data(), salt.size()),
+                     base64(hash.data(), hash.size()));
+}
+
+bool verifySecret(std::string_view secret, std::string_view hash) {
+  // scheme$iterations$salt$hash
+  std::array<std::string_view, 4> parts;
+  std::size_t start = 0;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    const std::size_t end = i + 1 < parts.size() ? hash.find('$', start) : hash.size();
+    if (end == std::string_view::npos) {
+      return false;
+    }
+    parts[i] = hash.substr(start, end - start);
+    start = end + 1;
+  }
+  int iterations = 0;
+  const auto [ptr, error] =
+      std::from_chars(parts[1].data(), parts[1].data() + parts[1].size(), iterations);
+  std::string salt;
+  std::string expected;
+  if (parts[0] != kScheme || error != std::errc() || ptr != parts[1].data() + parts[1].size() ||
+      iterations < 1000 || !unbase64(parts[2], salt) || !unbase64(parts[3], expected) ||
+      expected.size() != kHashBytes) {
+    return false;
+  }
+  std::array<unsigned char, kHashBytes> actual{};
+  return pbkdf2(secret, salt, iterations, actual) &&
+         CRYPTO_memcmp(actual.data(), expected.data(), kHashBytes) == 0;
+}
+
+Result<std::string> generateToken() {
+  std::array<unsigned char, 32> bytes{};
+  if (RAND_bytes(bytes.data(), static_cast<int>(bytes.size())) != 1) {
+    return internalError("RAND_bytes failed");
+  }
+  std::string token = base64(bytes.data(), bytes.size());
+  for (char& c : token) {
+    c = c == '+' ? '-' : (c == '/' ? '_' : c);
+  }
+  while (!token.empty() && token.back() == '=') {
+    token.pop_back();
+  }
+  return token;
+}
+
+bool Caller::mayRead(std::string_view relativePath) const {
+  if (!restricted) {
+    return true;
+  }
+  for (const std::string& folder : folders) {
+    if (isWithinFolder(relativePath, folder)) {
+      return true;
+    }
+  }
+  return false;
+}
+
+Result<std::size_t> Authenticator::findUser(std::string_view authorization) const {
+  const std::string key = sha256Hex(authorization);
+  {
+    std::lock_guard lock(m_cacheMutex);
+    if (auto it = m_verified.find(key); it != m_verified.end()) {
+      return it->second;
+    }
+  }
+  std::optional<std::size_t> match;
+  if (startsWith(authorization, "Bearer ")) {
+    const std::string_view token = authorization.substr(7);
+    for (std::size_t i = 0; i < m_users.size() && !match; ++i) {
+      if (!m_users[i].tokenHash.empty() && verifySecret(token, m_users[i].tokenHash)) {
+        match = i;
+      }
+    }
+    if (!match) {
+      return unauthenticated("invalid bearer token");
+    }
+  } else if (startsWith(authorization, "Basic ")) {
+    std::string decoded;
+    const std::size_t colon = [&] {
+      return unbase64(authorization.substr(6), decoded) ? decoded.find(':') : std::string::npos;
+    }();
+    if (colon == std::string::npos) {
+      return unauthenticated("malformed Basic credentials: expected base64 of name:password");
+    }
+    const std::string_view name(decoded.data(), colon);
+    const std::string_view password(decoded.data() + colon + 1, decoded.size() - colon - 1);
+    for (std::size_t i = 0; i < m_users.size() && !match; ++i) {
+      if (m_users[i].name == name && !m_users[i].passwordHash.empty() &&
+          verifySecret(password, m_users[i].passwordHash)) {
+        match = i;
+      }
+    }
+    if (!match) {
+      return unauthenticated("wrong user name or password");
+    }
+  } else {
+    return unauthenticated(
+        "unsupported authorization scheme: send 'Bearer <token>' or 'Basic <base64 "
+        "name:password>'");
+  }
+  std::lock_guard lock(m_cacheMutex);
+  if (m_verified.size() >= kMaxCachedCredentials) {
+    m_verified.clear();
+  }
+  m_verified.emplace(key, *match);
+  return *match;
+}
+
+Result<Caller> Authenticator::authenticate(std::string_view authorization,
+                                           std::string_view certificateName) const {
+  Caller caller;
+  caller.certificateName = certificateName;
+  if (m_users.empty()) {
+    caller.name = certificateName.empty() ? "anonymous" : std::string(certificateName);
+    return caller;
+  }
+  std::optional<std::size_t> index;
+  if (!authorization.empty()) {
+    auto found = findUser(authorization);
+    if (!found) {
+      return found.status();
+    }
+    index = *found;
+  } else {
+    for (std::size_t i = 0; i < m_users.size() && !index; ++i) {
+      if (!certificateName.empty() && m_users[i].certificateName == certificateName) {
+        index = i;
+      }
+    }
+    if (!index) {
+      return unauthenticated(
+          fmt::format("no credentials: send 'authorization: Bearer <token>' or Basic name:password "
+                      "(client certificate '{}' is no user's)",
+                      certificateName));
+    }
+  }
+  const UserEntry& user = m_users[*index];
+  caller.name = user.name;
+  caller.restricted = true;
+  caller.folders = user.folders;
+  return caller;
+}
+
+}  // namespace crackvis::dataservice

@@ -1,0 +1,594 @@
+#include "data_service.hpp"
+
+#include <cstring>
+
+#include <fmt/format.h>
+
+namespace crackvis::dataservice {
+namespace v1 = crackvis::v1;
+using Clock = std::chrono::steady_clock;
+
+grpc::Status toGrpcStatus(const Status& status) {
+  const auto code = [&] {
+    switch (status.code()) {
+      case StatusCode::kOk:
+        return grpc::StatusCode::OK;
+      case StatusCode::kInvalidArgument:
+        return grpc::StatusCode::INVALID_ARGUMENT;
+      case StatusCode::kNotFound:
+        return grpc::StatusCode::NOT_FOUND;
+      case StatusCode::kFailedPrecondition:
+        return grpc::StatusCode::FAILED_PRECONDITION;
+      case StatusCode::kPermissionDenied:
+        return grpc::StatusCode::PERMISSION_DENIED;
+      case StatusCode::kUnauthenticated:
+        return grpc::StatusCode::UNAUTHENTICATED;
+      case StatusCode::kResourceExhausted:
+        return grpc::StatusCode::RESOURCE_EXHAUSTED;
+      case StatusCode::kUnavailable:
+        return grpc::StatusCode::UNAVAILABLE;
+      case StatusCode::kInternal:
+        return grpc::StatusCode::INTERNAL;
+    }
+    return grpc::StatusCode::UNKNOWN;
+  }();
+  return code == grpc::StatusCode::OK ? grpc::Status::OK : grpc::Status(code, status.message());
+}
+
+namespace {
+
+Status permissionDenied(std::string message) {
+  return {StatusCode::kPermissionDenied, std::move(message)};
+}
+Status resourceExhausted(std::string message) {
+  return {StatusCode::kResourceExhausted, std::move(message)};
+}
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+Clock::time_point deadlineAfter(double seconds) {
+  return Clock::now() +
+         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+// ------------------------------------------------------------ conversion --
+
+v1::DataType toProto(DataType type) {
+  return static_cast<v1::DataType>(static_cast<int>(type));
+}
+
+void toProto(const AttributeInfo& in, v1::Attribute& out) {
+  out.set_name(in.name);
+  out.set_dtype(toProto(in.dtype));
+  for (auto d : in.shape) {
+    out.add_shape(d);
+  }
+  out.set_truncated(in.truncated);
+  if (const auto* text = std::get_if<std::string>(&in.value)) {
+    out.set_text(*text);
+  } else if (const auto* integers = std::get_if<std::vector<std::int64_t>>(&in.value)) {
+    out.mutable_integers()->mutable_values()->Add(integers->begin(), integers->end());
+  } else if (const auto* floats = std::get_if<std::vector<double>>(&in.value)) {
+    out.mutable_floats()->mutable_values()->Add(floats->begin(), floats->end());
+  }
+}
+
+void toProto(const FileDescription& in, v1::DescribeResponse& out) {
+  out.set_file(in.file);
+  out.set_size_bytes(in.sizeBytes);
+  for (const GroupInfo& group : in.groups) {
+    v1::Group* g = out.add_groups();
+    g->set_path(group.path);
+    for (const AttributeInfo& attribute : group.attributes) {
+      toProto(attribute, *g->add_attributes());
+    }
+  }
+  for (const DatasetInfo& dataset : in.datasets) {
+    v1::Dataset* d = out.add_datasets();
+    d->set_path(dataset.path);
+    d->set_dtype(toProto(dataset.dtype));
+    d->set_dtype_name(dataset.dtypeName);
+    d->mutable_shape()->Add(dataset.shape.begin(), dataset.shape.end());
+    d->mutable_chunk_shape()->Add(dataset.chunkShape.begin(), dataset.chunkShape.end());
+    for (const AttributeInfo& attribute : dataset.attributes) {
+      toProto(attribute, *d->add_attributes());
+    }
+  }
+  out.set_format(in.format);
+  out.set_format_version(in.formatVersion);
+  for (const StepEntry& step : in.steps) {
+    v1::Step* s = out.add_steps();
+    s->set_index(step.index);
+    s->set_time(step.time);
+    s->set_group(step.group);
+  }
+}
+
+std::vector<Hyperslab> fromProto(const v1::ReadRequest& request) {
+  std::vector<Hyperslab> slabs;
+  slabs.reserve(static_cast<size_t>(request.slabs_size()));
+  for (const v1::Hyperslab& slab : request.slabs()) {
+    slabs.push_back({slab.dataset(),
+                     {slab.start().begin(), slab.start().end()},
+                     {slab.count().begin(), slab.count().end()}});
+  }
+  return slabs;
+}
+
+std::string firstValue(const std::multimap<grpc::string_ref, grpc::string_ref>& metadata,
+                       const char* key) {
+  auto it = metadata.find(key);
+  return it == metadata.end() ? std::string() : std::string(it->second.data(), it->second.size());
+}
+
+std::string certificateName(grpc::CallbackServerContext* context) {
+  auto auth = context->auth_context();
+  if (!auth) {
+    return {};
+  }
+  auto names = auth->FindPropertyValues(GRPC_X509_CN_PROPERTY_NAME);
+  return names.empty() ? std::string() : std::string(names.front().data(), names.front().size());
+}
+
+void finishRecord(AccessRecord& record, Clock::time_point start, const Status& status) {
+  record.seconds = secondsSince(start);
+  record.status = std::string(toString(status.code()));
+  record.detail = status.isOk() ? std::string() : status.message();
+}
+
+// ------------------------------------------------------------- streaming --
+
+// The bulk bytes of one chunk, handed to gRPC inside a slice that frees
+// them when gRPC is done with them.
+class ChunkData {
+ public:
+  explicit ChunkData(std::size_t size) : m_data(new char[size]), m_size(size) {}
+  char* data() { return m_data.get(); }
+  std::size_t size() const { return m_size; }
+  void shrink(std::size_t size) { m_size = std::min(m_size, size); }
+  grpc::Slice release() {
+    return grpc::Slice(m_data.release(), m_size,
+                       [](void* data) { delete[] static_cast<char*>(data); });
+  }
+
+ private:
+  std::unique_ptr<char[]> m_data;
+  std::size_t m_size;
+};
+
+// A serialized chunk message: `header` is the message without its bytes
+// field, `field` that field's number; the data follows as the field's value.
+grpc::ByteBuffer chunkMessage(std::string header, int field, ChunkData data) {
+  header += static_cast<char>((field << 3) | 2);  // length-delimited
+  for (std::uint64_t length = data.size();; length >>= 7) {
+    if (length < 0x80) {
+      header += static_cast<char>(length);
+      break;
+    }
+    header += static_cast<char>((length & 0x7f) | 0x80);
+  }
+  grpc::Slice slices[2] = {grpc::Slice(header), data.release()};
+  return grpc::ByteBuffer(slices, 2);
+}
+
+template <typename Request>
+Status parseRequest(const grpc::ByteBuffer* buffer, Request& request) {
+  grpc::Slice joined;
+  if (!buffer->TrySingleSlice(&joined).ok() && !buffer->DumpToSingleSlice(&joined).ok()) {
+    return invalidArgument("unreadable request");
+  }
+  if (!request.ParseFromArray(joined.begin(), static_cast<int>(joined.size()))) {
+    return invalidArgument(fmt::format("malformed {}", request.GetTypeName()));
+  }
+  return Status::ok();
+}
+
+// Common to Read and Fetch: one stream slot, the time limit, the access
+// record, and the Finish-once bookkeeping of a write reactor.
+class StreamReactor : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
+ public:
+  StreamReactor(DataServiceImpl& service, grpc::CallbackServerContext* context, const char* method)
+      : m_service(service), m_context(context), m_start(Clock::now()) {
+    m_record.method = method;
+  }
+
+  void OnWriteDone(bool ok) override {
+    if (!ok) {
+      // The client went away or the call was cancelled (by the client's
+      // deadline or the server's time limit).
+      finish(Status(StatusCode::kUnavailable, cancelReason()), grpc::Status::CANCELLED);
+      return;
+    }
+    m_record.bytes += m_pendingBytes;
+    m_pendingBytes = 0;
+    if (secondsSince(m_start) > m_service.limits().maxCallSeconds) {
+      finish(resourceExhausted(fmt::format("{} of {} exceeded the server's limit of {} s per call",
+                                           m_record.method, m_record.file,
+                                           m_service.limits().maxCallSeconds)));
+      return;
+    }
+    writeNext();
+  }
+
+  void OnCancel() override { m_cancelled = true; }
+
+  void OnDone() override {
+    if (m_slot != 0) {
+      m_service.streams().release(m_slot);
+    }
+    delete this;
+  }
+
+ protected:
+  // Authenticates the caller and resolves the file; takes a stream slot.
+  Result<ResolvedPath> begin(const std::string& file) {
+    m_record.file = file;
+    auto caller = m_service.authenticate(m_context, m_record);
+    if (!caller) {
+      return caller.status();
+    }
+    auto resolved = m_service.resolveFor(*caller, file);
+    if (!resolved) {
+      return resolved.status();
+    }
+    auto slot =
+        m_service.streams().acquire(m_context, deadlineAfter(m_service.limits().maxCallSeconds));
+    if (!slot) {
+      return slot.status();
+    }
+    m_slot = *slot;
+    return resolved;
+  }
+
+  // Sends a chunk, counting its data bytes once the write completes.
+  void write(std::string header, int field, ChunkData data) {
+    m_pendingBytes = data.size();
+    m_message = chunkMessage(std::move(header), field, std::move(data));
+    this->StartWrite(&m_message);
+  }
+
+  void finish(const Status& status) { finish(status, toGrpcStatus(status)); }
+  void finish(const Status& logged, const grpc::Status& sent) {
+    finishRecord(m_record, m_start, logged);
+    if (!logged.isOk() && sent.error_code() == grpc::StatusCode::CANCELLED) {
+      m_record.status = "CANCELLED";
+    }
+    // Logged before the client sees the status, so a client's calls appear
+    // in the order it made them.
+    m_service.log().record(m_record);
+    this->Finish(sent);
+  }
+
+  virtual void writeNext() = 0;
+
+ private:
+  std::string cancelReason() const {
+    if (secondsSince(m_start) > m_service.limits().maxCallSeconds) {
+      return fmt::format("cancelled by the server's limit of {} s per call",
+                         m_service.limits().maxCallSeconds);
+    }
+    return m_cancelled ? "cancelled by the client or its deadline" : "client went away";
+  }
+
+  DataServiceImpl& m_service;
+  grpc::CallbackServerContext* m_context;
+  Clock::time_point m_start;
+  AccessRecord m_record;
+  std::uint64_t m_slot = 0;
+  std::uint64_t m_pendingBytes = 0;
+  grpc::ByteBuffer m_message;
+  std::atomic<bool> m_cancelled{false};
+};
+
+class ReadReactor final : public StreamReactor {
+ public:
+  ReadReactor(DataServiceImpl& service, grpc::CallbackServerContext* context,
+              const grpc::ByteBuffer& buffer)
+      : StreamReactor(service, context, "Read"), m_service(service) {
+    v1::ReadRequest request;
+    Status status = parseRequest(&buffer, request);
+    if (status) {
+      status = open(request);
+    }
+    if (!status) {
+      finish(status);
+      return;
+    }
+    writeNext();
+  }
+
+ private:
+  Status open(const v1::ReadRequest& request) {
+    if (request.slabs_size() > m_service.limits().maxSlabsPerRead) {
+      return invalidArgument(fmt::format("Read of {}: {} hyperslabs, the server's limit is {}",
+                                         request.file(), request.slabs_size(),
+                                         m_service.limits().maxSlabsPerRead));
+    }
+    auto resolved = begin(request.file());
+    if (!resolved) {
+      return resolved.status();
+    }
+    auto reader = m_service.catalogue().openRead(*resolved, fromProto(request),
+                                                 m_service.limits().maxReadBytes);
+    if (!reader) {
+      return reader.status();
+    }
+    m_reader = std::move(*reader);
+    return Status::ok();
+  }
+
+  // The chunk's fields but its data (field 6).
+  std::string header(std::uint64_t offset) {
+    const SlabPlan& slab = m_reader->slabs()[m_piece.slab];
+    v1::ReadChunk chunk;
+    chunk.set_slab_index(static_cast<std::uint32_t>(m_piece.slab));
+    chunk.set_dtype(toProto(slab.dtype));
+    chunk.mutable_shape()->Add(slab.count.begin(), slab.count.end());
+    chunk.set_slab_bytes(slab.bytes);
+    chunk.set_offset(offset);
+    return chunk.SerializeAsString();
+  }
+
+  void writeNext() override {
+    // A piece larger than a chunk (a single huge row) is sent in slices.
+    if (m_sliceOffset >= m_buffer.size()) {
+      auto piece = m_reader->nextPiece();
+      if (!piece) {
+        finish(Status::ok());
+        return;
+      }
+      m_piece = *piece;
+      if (m_piece.bytes <= kMaxChunkBytes) {
+        ChunkData data(m_piece.bytes);
+        if (Status status = m_reader->read(m_piece, data.data()); !status) {
+          finish(status);
+          return;
+        }
+        write(header(m_piece.offset), 6, std::move(data));
+        return;
+      }
+      m_buffer.resize(m_piece.bytes);
+      m_sliceOffset = 0;
+      if (Status status = m_reader->read(m_piece, m_buffer.data()); !status) {
+        finish(status);
+        return;
+      }
+    }
+    const size_t slice = std::min(kMaxChunkBytes, m_buffer.size() - m_sliceOffset);
+    ChunkData data(slice);
+    std::memcpy(data.data(), m_buffer.data() + m_sliceOffset, slice);
+    const std::uint64_t offset = m_piece.offset + m_sliceOffset;
+    m_sliceOffset += slice;
+    if (m_sliceOffset >= m_buffer.size()) {
+      m_buffer.clear();
+      m_sliceOffset = 0;
+    }
+    write(header(offset), 6, std::move(data));
+  }
+
+  DataServiceImpl& m_service;
+  std::unique_ptr<SlabReader> m_reader;
+  Piece m_piece;
+  std::vector<char> m_buffer;
+  size_t m_sliceOffset = 0;
+};
+
+class FetchReactor final : public StreamReactor {
+ public:
+  FetchReactor(DataServiceImpl& service, grpc::CallbackServerContext* context,
+               const grpc::ByteBuffer& buffer)
+      : StreamReactor(service, context, "Fetch"), m_service(service) {
+    v1::FetchRequest request;
+    Status status = parseRequest(&buffer, request);
+    if (status) {
+      status = open(request);
+    }
+    if (!status) {
+      finish(status);
+      return;
+    }
+    writeNext();
+  }
+
+ private:
+  Status open(const v1::FetchRequest& request) {
+    auto resolved = begin(request.file());
+    if (!resolved) {
+      return resolved.status();
+    }
+    auto reader = m_service.catalogue().openFetch(*resolved, m_service.limits().maxFetchBytes);
+    if (!reader) {
+      return reader.status();
+    }
+    m_reader = std::move(*reader);
+    return Status::ok();
+  }
+
+  void writeNext() override {
+    if (m_offset >= m_reader->size()) {
+      finish(Status::ok());
+      return;
+    }
+    ChunkData data(
+        static_cast<size_t>(std::min<std::uint64_t>(kMaxChunkBytes, m_reader->size() - m_offset)));
+    auto got = m_reader->readAt(m_offset, data.data(), data.size());
+    if (!got) {
+      finish(got.status());
+      return;
+    }
+    if (*got == 0) {
+      finish(failedPrecondition("the file shrank while it was being sent"));
+      return;
+    }
+    data.shrink(*got);
+    v1::FetchChunk chunk;  // the fields but data (field 3)
+    chunk.set_file_bytes(m_reader->size());
+    chunk.set_offset(m_offset);
+    m_offset += *got;
+    write(chunk.SerializeAsString(), 3, std::move(data));
+  }
+
+  DataServiceImpl& m_service;
+  std::unique_ptr<FileReader> m_reader;
+  std::uint64_t m_offset = 0;
+};
+
+}  // namespace
+
+// --------------------------------------------------------- StreamRegistry
+
+Result<std::uint64_t> StreamRegistry::acquire(grpc::CallbackServerContext* context,
+                                              Clock::time_point deadline) {
+  std::lock_guard lock(m_mutex);
+  if (static_cast<int>(m_entries.size()) >= m_limit) {
+    return resourceExhausted(fmt::format(
+        "the server is already serving {} streams, its limit (max_concurrent_streams); retry "
+        "later",
+        m_limit));
+  }
+  const std::uint64_t id = m_nextId++;
+  m_entries.emplace(id, Entry{context, deadline, false});
+  return id;
+}
+
+void StreamRegistry::release(std::uint64_t id) {
+  std::lock_guard lock(m_mutex);
+  m_entries.erase(id);
+}
+
+int StreamRegistry::cancelOverdue(Clock::time_point now) {
+  std::lock_guard lock(m_mutex);
+  int cancelled = 0;
+  for (auto& [id, entry] : m_entries) {
+    if (!entry.cancelled && now > entry.deadline) {
+      // The context stays valid until the reactor's OnDone, which releases
+      // its entry under this same lock.
+      entry.context->TryCancel();
+      entry.cancelled = true;
+      ++cancelled;
+    }
+  }
+  return cancelled;
+}
+
+int StreamRegistry::active() const {
+  std::lock_guard lock(m_mutex);
+  return static_cast<int>(m_entries.size());
+}
+
+// -------------------------------------------------------- DataServiceImpl
+
+Result<Caller> DataServiceImpl::authenticate(grpc::CallbackServerContext* context,
+                                             AccessRecord& record) const {
+  record.peer = context->peer();
+  record.certificateName = certificateName(context);
+  auto caller = m_authenticator.authenticate(
+      firstValue(context->client_metadata(), "authorization"), record.certificateName);
+  if (caller) {
+    record.user = caller->name;
+  }
+  return caller;
+}
+
+Result<ResolvedPath> DataServiceImpl::resolveFor(const Caller& caller,
+                                                 const std::string& path) const {
+  // The folders are checked on the path as named (so a user cannot probe
+  // which files exist in another's folder) and on the real path (so a
+  // symlink cannot lend another's folder).
+  auto normalized = DataRoot::normalize(path);
+  if (!normalized) {
+    return normalized.status();
+  }
+  if (!caller.mayRead(*normalized)) {
+    return permissionDenied(fmt::format("user '{}' may not read '{}'", caller.name, *normalized));
+  }
+  auto resolved = m_catalogue.root().resolveFile(*normalized);
+  if (!resolved) {
+    return resolved.status();
+  }
+  if (!caller.mayRead(resolved->relative)) {
+    return permissionDenied(fmt::format("user '{}' may not read '{}' (it links to '{}')",
+                                        caller.name, *normalized, resolved->relative));
+  }
+  return resolved;
+}
+
+grpc::ServerUnaryReactor* DataServiceImpl::ListFiles(grpc::CallbackServerContext* context,
+                                                     const v1::ListFilesRequest* request,
+                                                     v1::ListFilesResponse* response) {
+  const auto start = Clock::now();
+  AccessRecord record;
+  record.method = "ListFiles";
+  record.file = request->folder();
+  const Status status = [&]() -> Status {
+    auto caller = authenticate(context, record);
+    if (!caller) {
+      return caller.status();
+    }
+    auto files = m_catalogue.listFiles(
+        request->folder(), request->recursive(),
+        [&](const std::string& relative) { return caller->mayRead(relative); });
+    if (!files) {
+      return files.status();
+    }
+    for (const FileEntry& file : *files) {
+      v1::FileEntry* entry = response->add_files();
+      entry->set_path(file.path);
+      entry->set_size_bytes(file.sizeBytes);
+      entry->set_modified_unix_seconds(file.modifiedUnixSeconds);
+      entry->set_is_hdf5(file.isHdf5);
+    }
+    return Status::ok();
+  }();
+  record.bytes = status.isOk() ? response->ByteSizeLong() : 0;
+  finishRecord(record, start, status);
+  m_log.record(record);
+  auto* reactor = context->DefaultReactor();
+  reactor->Finish(toGrpcStatus(status));
+  return reactor;
+}
+
+grpc::ServerUnaryReactor* DataServiceImpl::Describe(grpc::CallbackServerContext* context,
+                                                    const v1::DescribeRequest* request,
+                                                    v1::DescribeResponse* response) {
+  const auto start = Clock::now();
+  AccessRecord record;
+  record.method = "Describe";
+  record.file = request->file();
+  const Status status = [&]() -> Status {
+    auto caller = authenticate(context, record);
+    if (!caller) {
+      return caller.status();
+    }
+    auto resolved = resolveFor(*caller, request->file());
+    if (!resolved) {
+      return resolved.status();
+    }
+    auto description = m_catalogue.describe(*resolved);
+    if (!description) {
+      return description.status();
+    }
+    toProto(*description, *response);
+    return Status::ok();
+  }();
+  record.bytes = status.isOk() ? response->ByteSizeLong() : 0;
+  finishRecord(record, start, status);
+  m_log.record(record);
+  auto* reactor = context->DefaultReactor();
+  reactor->Finish(toGrpcStatus(status));
+  return reactor;
+}
+
+grpc::ServerWriteReactor<grpc::ByteBuffer>* DataServiceImpl::Read(
+    grpc::CallbackServerContext* context, const grpc::ByteBuffer* request) {
+  return new ReadReactor(*this, context, *request);
+}
+
+grpc::ServerWriteReactor<grpc::ByteBuffer>* DataServiceImpl::Fetch(
+    grpc::CallbackServerContext* context, const grpc::ByteBuffer* request) {
+  return new FetchReactor(*this, context, *request);
+}
+
+}  // namespace crackvis::dataservice

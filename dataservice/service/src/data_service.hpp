@@ -1,0 +1,100 @@
+// The DataService handlers (private to the service library). Each handler
+// checks the caller, validates the request, converts it to catalogue types,
+// calls the catalogue and converts the result back; toGrpcStatus() is the one
+// place where a crackvis Status becomes a grpc::Status.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <mutex>
+
+#include <grpcpp/grpcpp.h>
+
+#include "crackvis/v1/data.grpc.pb.h"
+#include <crackvis/dataservice/access_log.hpp>
+#include <crackvis/dataservice/catalogue.hpp>
+#include <crackvis/dataservice/credentials.hpp>
+#include <crackvis/dataservice/server_config.hpp>
+
+namespace crackvis::dataservice {
+
+grpc::Status toGrpcStatus(const Status& status);
+
+// The streams in progress: counts them against the limit, and cancels those
+// that run past their time limit even when the client has stopped reading
+// (a stalled client never triggers another write callback).
+class StreamRegistry {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  explicit StreamRegistry(int limit) : m_limit(limit) {}
+
+  Result<std::uint64_t> acquire(grpc::CallbackServerContext* context, Clock::time_point deadline);
+  void release(std::uint64_t id);
+  // Cancels every stream past its deadline; returns how many.
+  int cancelOverdue(Clock::time_point now);
+  int active() const;
+
+ private:
+  struct Entry {
+    grpc::CallbackServerContext* context = nullptr;
+    Clock::time_point deadline;
+    bool cancelled = false;
+  };
+  const int m_limit;
+  mutable std::mutex m_mutex;
+  std::map<std::uint64_t, Entry> m_entries;
+  std::uint64_t m_nextId = 1;
+};
+
+// Read and Fetch are raw methods: their chunks are written as a small
+// serialized header followed by the data in a slice gRPC takes over, so the
+// bulk bytes are not copied once more by protobuf serialization.
+using DataServiceBase = crackvis::v1::DataService::WithRawCallbackMethod_Read<
+    crackvis::v1::DataService::WithRawCallbackMethod_Fetch<
+        crackvis::v1::DataService::CallbackService>>;
+
+class DataServiceImpl final : public DataServiceBase {
+ public:
+  DataServiceImpl(Catalogue catalogue, Authenticator& authenticator, const Limits& limits,
+                  AccessLog& log)
+      : m_catalogue(std::move(catalogue)),
+        m_authenticator(authenticator),
+        m_limits(limits),
+        m_log(log),
+        m_streams(limits.maxConcurrentStreams) {}
+
+  grpc::ServerUnaryReactor* ListFiles(grpc::CallbackServerContext* context,
+                                      const crackvis::v1::ListFilesRequest* request,
+                                      crackvis::v1::ListFilesResponse* response) override;
+  grpc::ServerUnaryReactor* Describe(grpc::CallbackServerContext* context,
+                                     const crackvis::v1::DescribeRequest* request,
+                                     crackvis::v1::DescribeResponse* response) override;
+  using DataServiceBase::Fetch;
+  using DataServiceBase::Read;
+  grpc::ServerWriteReactor<grpc::ByteBuffer>* Read(grpc::CallbackServerContext* context,
+                                                   const grpc::ByteBuffer* request) override;
+  grpc::ServerWriteReactor<grpc::ByteBuffer>* Fetch(grpc::CallbackServerContext* context,
+                                                    const grpc::ByteBuffer* request) override;
+
+  // Shared by the handlers and the stream reactors.
+  const Catalogue& catalogue() const { return m_catalogue; }
+  const Limits& limits() const { return m_limits; }
+  AccessLog& log() { return m_log; }
+  StreamRegistry& streams() { return m_streams; }
+  // Checks the caller's credentials; fills the record's user and peer.
+  Result<Caller> authenticate(grpc::CallbackServerContext* context, AccessRecord& record) const;
+  // Resolves a file for a caller: path rules, then the caller's folders.
+  Result<ResolvedPath> resolveFor(const Caller& caller, const std::string& path) const;
+
+ private:
+  Catalogue m_catalogue;
+  Authenticator& m_authenticator;
+  Limits m_limits;
+  AccessLog& m_log;
+  StreamRegistry m_streams;
+};
+
+}  // namespace crackvis::dataservice

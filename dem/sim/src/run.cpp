@@ -1,0 +1,57 @@
+#include <chrono>
+
+#include <fmt/format.h>
+
+#include <crackvis/sim/run.hpp>
+
+namespace crackvis::sim {
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+Result<RunSummary> runToFile(SimulationSetup setup, const RunOptions& options) {
+  if (options.savedSteps < 1 || options.stepsPerSave < 1) {
+    return invalidArgument(
+        fmt::format("need at least 1 saved step and 1 step per save, got {} and {}",
+                    options.savedSteps, options.stepsPerSave));
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const dem::Lattice lattice = setup.lattice;
+  auto simulator = Simulator::create(std::move(setup));
+  if (!simulator) {
+    return simulator.status();
+  }
+  auto writer = dem::DemFileWriter::create(options.path, lattice, options.metadata);
+  if (!writer) {
+    return writer.status();
+  }
+  RunSummary summary;
+  summary.particles = simulator->particleCount();
+  summary.bonds = simulator->bondCount();
+  for (int saved = 0; saved < options.savedSteps; ++saved) {
+    if (saved > 0) {
+      simulator->advance(options.stepsPerSave);
+    }
+    const auto writeStart = std::chrono::steady_clock::now();
+    CRACKVIS_RETURN_IF_ERROR(
+        writer->appendStep(simulator->snapshot(options.writeVelocities, options.writeBondForce)));
+    summary.writeSeconds += secondsSince(writeStart);
+    summary.brokenPerSavedStep.push_back(simulator->brokenBondCount());
+    if (options.onSaved) {
+      options.onSaved({saved, options.savedSteps, simulator->stepIndex(), simulator->time(),
+                       summary.brokenPerSavedStep.back()});
+    }
+  }
+  CRACKVIS_RETURN_IF_ERROR(writer->close());
+  summary.savedSteps = options.savedSteps;
+  summary.steps = simulator->stepIndex();
+  summary.simulatedTime = simulator->time();
+  summary.wallSeconds = secondsSince(start);
+  return summary;
+}
+
+}  // namespace crackvis::sim

@@ -1,0 +1,78 @@
+// crackvis bench transfer against a real server with the raw TLS baseline
+// on: one run prints the table and JSON whose byte counts are the file's
+// and the view's.
+#include <filesystem>
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include "service_fixture.hpp"
+#include "support/process.hpp"
+
+namespace crackvis::testing {
+namespace {
+
+TEST_CASE("crackvis bench transfer measures Fetch, the view's Read and raw TLS in one run",
+          "[dataservice][integration]") {
+  auto config = baseConfig();
+  config.rawTlsListen = "127.0.0.1:0";
+  auto server = startServer(config);
+  REQUIRE(server->rawTlsPort() != 0);
+  const auto tls = clientTls();
+  const std::vector<std::string> common = {CRACKVIS_CLI,
+                                           "bench",
+                                           "transfer",
+                                           "--server",
+                                           server->address(),
+                                           "--raw",
+                                           fmt::format("127.0.0.1:{}", server->rawTlsPort()),
+                                           "--file",
+                                           "run.h5",
+                                           "--step",
+                                           "1",
+                                           "--repeat",
+                                           "2",
+                                           "--ca",
+                                           tls.ca,
+                                           "--cert",
+                                           tls.cert,
+                                           "--key",
+                                           tls.key};
+
+  const ProcessResult table = runProcess(common);
+  INFO(table.err);
+  REQUIRE(table.exitCode == 0);
+  CHECK_THAT(table.out, Catch::Contains("(a) full file, gRPC Fetch") &&
+                            Catch::Contains("(b) view of step 1, gRPC Read") &&
+                            Catch::Contains("raw TLS") && Catch::Contains("target >= 100x"));
+
+  std::vector<std::string> jsonArgs = common;
+  jsonArgs.push_back("--json");
+  const ProcessResult json = runProcess(jsonArgs);
+  REQUIRE(json.exitCode == 0);
+  const auto report = nlohmann::json::parse(json.out);
+  const SampleData& sample = sampleRoot().sample3d;
+  const std::uint64_t viewBytes =
+      sample.lattice.particleCount() * 24 + sample.lattice.bondCount() * (1 + 8);
+  CHECK(report.at("step") == 1);
+  CHECK(report.at("grpc_fetch_full").at("bytes") ==
+        std::filesystem::file_size(sampleRoot().file("run.h5")));
+  CHECK(report.at("raw_tls_full").at("bytes") == report.at("grpc_fetch_full").at("bytes"));
+  CHECK(report.at("grpc_read_view").at("bytes") == viewBytes);
+  CHECK(report.at("raw_tls_view").at("bytes") == viewBytes);
+  CHECK(report.at("grpc_read_view").at("seconds_all").size() == 2);
+  CHECK(report.at("describe").at("round_trips") == 1);
+  CHECK(report.at("ratios").at("time_full_fetch_over_view_read").get<double>() > 0.0);
+
+  SECTION("without the raw TLS baseline: one clear line") {
+    std::vector<std::string> args = common;
+    args[6] = "127.0.0.1:1";  // --raw: nothing listens there
+    const ProcessResult failed = runProcess(args);
+    CHECK(failed.exitCode == 1);
+    CHECK(lines(failed.err).size() == 1);
+    CHECK_THAT(failed.err, Catch::StartsWith("crackvis bench transfer: raw TLS baseline"));
+  }
+}
+
+}  // namespace
+}  // namespace crackvis::testing

@@ -1,0 +1,193 @@
+// Limits and concurrency: streams at once, time per call, clients that stall
+// or vanish mid-stream, and 16 clients reading different steps at the same
+// time. The asan preset runs these too: a cancelled stream must leave
+// nothing behind.
+#include <atomic>
+#include <thread>
+
+#include <catch2/catch.hpp>
+#include <grpcpp/grpcpp.h>
+
+#include "crackvis/v1/data.grpc.pb.h"
+#include "service_fixture.hpp"
+#include <crackvis/dataservice/remote_dem_file.hpp>
+
+namespace crackvis::testing {
+namespace {
+
+namespace v1 = crackvis::v1;
+using dataservice::Hyperslab;
+
+std::unique_ptr<v1::DataService::Stub> rawStub(const dataservice::DataServer& server) {
+  const auto tls = dataservice::loadTlsMaterial(clientTls()).value();
+  grpc::SslCredentialsOptions ssl;
+  ssl.pem_root_certs = tls.caPem;
+  ssl.pem_cert_chain = tls.certPem;
+  ssl.pem_private_key = tls.keyPem;
+  grpc::ChannelArguments arguments;
+  arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
+  return v1::DataService::NewStub(
+      grpc::CreateCustomChannel(server.address(), grpc::SslCredentials(ssl), arguments));
+}
+
+v1::ReadRequest bigRead() {
+  v1::ReadRequest request;
+  request.set_file("big.h5");
+  request.add_slabs()->set_dataset("/ramp");
+  request.add_slabs()->set_dataset("/ramp");
+  request.add_slabs()->set_dataset("/ramp");  // 48 MiB: more than flow control lets through
+  return request;
+}
+
+bool waitUntil(const std::function<bool()>& condition, double seconds = 10.0) {
+  const auto end = std::chrono::steady_clock::now() +
+                   std::chrono::milliseconds(static_cast<int>(seconds * 1000));
+  while (std::chrono::steady_clock::now() < end) {
+    if (condition()) {
+      return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return condition();
+}
+
+TEST_CASE("Streams over the limit are refused with RESOURCE_EXHAUSTED until one ends",
+          "[dataservice][integration]") {
+  auto config = baseConfig();
+  config.limits.maxConcurrentStreams = 1;
+  auto server = startServer(config);
+  auto stub = rawStub(*server);
+
+  // A client that reads one chunk and stalls holds its stream.
+  grpc::ClientContext stalled;
+  auto reader = stub->Read(&stalled, bigRead());
+  v1::ReadChunk chunk;
+  REQUIRE(reader->Read(&chunk));
+  REQUIRE(server->activeStreams() == 1);
+
+  auto client = connect(clientOptions(*server));
+  const Status refused = client.read("run.h5", {Hyperslab::whole("/bonds/pairs")}).status();
+  CHECK(refused.code() == StatusCode::kResourceExhausted);
+  CHECK_THAT(refused.message(), Catch::Contains("max_concurrent_streams"));
+  CHECK(client.fetch("run.h5", {}).status().code() == StatusCode::kResourceExhausted);
+  // Unary calls are not streams.
+  CHECK(client.describe("run.h5").isOk());
+
+  stalled.TryCancel();
+  while (reader->Read(&chunk)) {
+  }
+  CHECK(reader->Finish().error_code() == grpc::StatusCode::CANCELLED);
+  REQUIRE(waitUntil([&] { return server->activeStreams() == 0; }));
+  requireServerHealthy(*server);
+}
+
+TEST_CASE("A stream that runs past the time limit is cancelled by the server",
+          "[dataservice][integration]") {
+  auto config = baseConfig();
+  config.limits.maxCallSeconds = 0.5;
+  auto server = startServer(config);
+  auto stub = rawStub(*server);
+  grpc::ClientContext context;
+  auto reader = stub->Read(&context, bigRead());
+  v1::ReadChunk chunk;
+  REQUIRE(reader->Read(&chunk));
+  // Stall past the limit: the server cancels even though no write completes.
+  REQUIRE(waitUntil([&] { return server->activeStreams() == 0; }, 5.0));
+  std::uint64_t more = 0;
+  while (reader->Read(&chunk)) {
+    more += chunk.data().size();
+  }
+  CHECK(more < 3 * (std::uint64_t{16} << 20));
+  const grpc::Status status = reader->Finish();
+  CHECK(status.error_code() == grpc::StatusCode::CANCELLED);
+  // A short call still fits.
+  requireServerHealthy(*server);
+}
+
+TEST_CASE("A client that disconnects mid-stream leaves no stream behind",
+          "[dataservice][integration]") {
+  auto server = startServer(baseConfig());
+  for (int round = 0; round < 3; ++round) {
+    auto stub = rawStub(*server);
+    {
+      grpc::ClientContext context;
+      v1::FetchRequest request;
+      request.set_file("big.h5");
+      auto fetch = stub->Fetch(&context, request);
+      v1::FetchChunk chunk;
+      REQUIRE(fetch->Read(&chunk));
+      REQUIRE(fetch->Read(&chunk));
+      context.TryCancel();
+    }
+    {
+      grpc::ClientContext context;
+      auto read = stub->Read(&context, bigRead());
+      v1::ReadChunk chunk;
+      REQUIRE(read->Read(&chunk));
+    }              // the context goes without Finish: the call is cancelled
+    stub.reset();  // and the connection closed
+    REQUIRE(waitUntil([&] { return server->activeStreams() == 0; }));
+  }
+  requireServerHealthy(*server);
+}
+
+TEST_CASE("16 concurrent clients reading different steps get correct data",
+          "[dataservice][integration]") {
+  const SampleRoot& sample = sampleRoot();
+  auto server = startServer(baseConfig());
+  constexpr int kClients = 16;
+  constexpr int kRounds = 3;
+  std::vector<std::string> failures(kClients);
+  std::atomic<int> reads{0};
+  std::vector<std::thread> threads;
+  for (int c = 0; c < kClients; ++c) {
+    threads.emplace_back([&, c] {
+      auto client = dataservice::DataClient::connect(clientOptions(*server));
+      if (!client) {
+        failures[c] = client.status().message();
+        return;
+      }
+      auto file = dataservice::RemoteDemFile::open(*client, "many.h5");
+      if (!file) {
+        failures[c] = file.status().message();
+        return;
+      }
+      for (int round = 0; round < kRounds; ++round) {
+        const int step = (c + round * 5) % kClients;
+        auto state = file->readStep(step);
+        if (!state) {
+          failures[c] = state.status().message();
+          return;
+        }
+        const dem::StepState& expected = sample.sample16.steps[static_cast<size_t>(step)];
+        if (state->positions.size() != expected.positions.size() ||
+            std::memcmp(state->positions.data(), expected.positions.data(),
+                        expected.positions.size() * sizeof(dem::Vec3)) != 0 ||
+            state->bondState != expected.bondState) {
+          failures[c] = fmt::format("step {} differs", step);
+          return;
+        }
+        ++reads;
+      }
+      auto bonds = file->bonds();
+      if (!bonds || **bonds != sample.sample16.lattice.bonds) {
+        failures[c] = "bond list differs";
+      }
+    });
+  }
+  for (auto& thread : threads) {
+    thread.join();
+  }
+  for (int c = 0; c < kClients; ++c) {
+    INFO("client " << c << ": " << failures[c]);
+    CHECK(failures[c].empty());
+  }
+  CHECK(reads == kClients * kRounds);
+  // A stream's slot is released once gRPC is done with the call, a moment
+  // after the client has its status.
+  CHECK(waitUntil([&] { return server->activeStreams() == 0; }));
+  requireServerHealthy(*server);
+}
+
+}  // namespace
+}  // namespace crackvis::testing

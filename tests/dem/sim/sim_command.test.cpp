@@ -1,0 +1,91 @@
+#include <catch2/catch.hpp>
+
+#include "support/process.hpp"
+#include "support/temp_dir.hpp"
+#include <crackvis/dem/dem_file.hpp>
+
+using namespace crackvis;
+using crackvis::testing::runProcess;
+using crackvis::testing::TempDir;
+
+namespace {
+const std::string kCli = CRACKVIS_CLI;
+}
+
+TEST_CASE("crackvis sim writes a crackvis-dem file with its command line as source", "[sim][cli]") {
+  TempDir dir;
+  const std::string path = dir.file("plate.h5");
+  const std::vector<std::string> argv{kCli,      "sim", "plate2d", "--scale", "0.2",
+                                      "--steps", "25",  "--seed",  "9",       "--threads",
+                                      "2",       "-o",  path};
+  auto run = runProcess(argv);
+  REQUIRE(run.exitCode == 0);
+  CHECK_THAT(run.out, Catch::Contains("wrote " + path + ": 25 saved steps"));
+  CHECK_THAT(run.err, Catch::Contains("plate2d, scale 0.2"));
+  auto reader = dem::DemFileReader::open(path);
+  REQUIRE(reader.isOk());
+  CHECK(reader->info().dimension == 2);
+  CHECK(reader->stepCount() == 25);
+  CHECK(reader->info().source ==
+        "crackvis sim plate2d --scale 0.2 --steps 25 --seed 9 --threads 2 -o " + path);
+  auto first = reader->readStep(0);
+  REQUIRE(first.isOk());
+  CHECK(first->brokenBondCount() == 1);  // 3 bonds at full size, round(3 * 0.2) = 1
+  CHECK(first->velocities.size() == first->positions.size());
+  CHECK(first->bondForce.size() == first->bondState.size());
+  auto last = reader->readStep(24);
+  REQUIRE(last.isOk());
+  CHECK(last->time > 0.0);
+  // The ends moved apart.
+  CHECK(last->positions.back().x > first->positions.back().x);
+  CHECK(last->positions.front().x < first->positions.front().x);
+}
+
+TEST_CASE("crackvis sim --quiet and the optional arrays", "[sim][cli]") {
+  TempDir dir;
+  const std::string path = dir.file("cube.h5");
+  auto run = runProcess({kCli, "sim", "cuboid3d", "--set", "C", "--scale", "0.2", "--steps", "3",
+                         "--no-velocities", "--no-bond-force", "-q", "-o", path});
+  REQUIRE(run.exitCode == 0);
+  CHECK(run.out.empty());
+  CHECK(run.err.empty());
+  auto reader = dem::DemFileReader::open(path);
+  REQUIRE(reader.isOk());
+  auto step = reader->readStep(2);
+  REQUIRE(step.isOk());
+  CHECK(step->velocities.empty());
+  CHECK(step->bondForce.empty());
+}
+
+TEST_CASE("crackvis sim rejects bad input with one clear line", "[sim][cli]") {
+  TempDir dir;
+  auto setOnPlate = runProcess({kCli, "sim", "plate2d", "--set", "B", "-o", dir.file("x.h5")});
+  CHECK(setOnPlate.exitCode == 1);
+  CHECK(setOnPlate.err ==
+        "crackvis sim: --set applies to cuboid3d only (plate2d has one defect)\n");
+  auto unwritable =
+      runProcess({kCli, "sim", "plate2d", "--scale", "0.2", "-o", "/nonexistent/dir/x.h5"});
+  CHECK(unwritable.exitCode == 1);
+  CHECK(testing::lines(unwritable.err).size() == 1);
+  CHECK_THAT(unwritable.err, Catch::StartsWith("crackvis sim: /nonexistent/dir/x.h5"));
+  auto badMaterial = runProcess({kCli, "sim", "plate2d", "--scale", "0.2", "--strain-threshold",
+                                 "-1", "-o", dir.file("x.h5")});
+  CHECK(badMaterial.exitCode == 2);
+  auto unknown = runProcess({kCli, "sim", "sphere", "-o", dir.file("x.h5")});
+  CHECK(unknown.exitCode == 2);
+  CHECK_THAT(unknown.err, Catch::Contains("sphere"));
+  auto badScale = runProcess({kCli, "sim", "plate2d", "--scale", "2", "-o", dir.file("x.h5")});
+  CHECK(badScale.exitCode == 2);
+  auto noOutput = runProcess({kCli, "sim", "plate2d"});
+  CHECK(noOutput.exitCode == 2);
+  CHECK_THAT(noOutput.err, Catch::Contains("--output"));
+}
+
+TEST_CASE("crackvis sim --help explains presets and options", "[sim][cli]") {
+  auto help = runProcess({kCli, "sim", "--help"});
+  CHECK(help.exitCode == 0);
+  for (const char* text : {"plate2d", "cuboid3d", "--set", "--scale", "--threads", "--seed",
+                           "--steps", "docs/simulator.md"}) {
+    CHECK_THAT(help.out, Catch::Contains(text));
+  }
+}

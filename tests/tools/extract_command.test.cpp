@@ -1,0 +1,125 @@
+#include <filesystem>
+#include <fstream>
+
+#include <catch2/catch.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <vtkPolyData.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLPolyDataReader.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
+#include "support/process.hpp"
+#include "support/sample_files.hpp"
+#include "support/temp_dir.hpp"
+
+using crackvis::testing::runProcess;
+using crackvis::testing::TempDir;
+
+namespace {
+const std::string kCli = CRACKVIS_CLI;
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+}  // namespace
+
+TEST_CASE("crackvis extract writes a ParaView time series", "[cli][extract]") {
+  TempDir dir;
+  const std::string data = dir.file("run.h5");
+  const auto sample = crackvis::testing::writeSampleFile(data, 3, 4);
+  const std::string pvd = dir.file("out/lv.pvd");
+  auto run =
+      runProcess({kCli, "extract", data, "-m", "local-voronoi", "-s", "1:3", "-o", pvd, "-q"});
+  REQUIRE(run.exitCode == 0);
+  const std::string collection = slurp(pvd);
+  for (int step = 1; step <= 3; ++step) {
+    const std::string relative = fmt::format("lv/lv_{:06d}.vtp", step);
+    CHECK_THAT(collection, Catch::Contains(fmt::format(R"(file="{}")", relative)));
+    vtkNew<vtkXMLPolyDataReader> reader;
+    reader->SetFileName(dir.file("out/" + relative).c_str());
+    reader->Update();
+    // One face or inconsistency mark per broken bond.
+    CHECK(reader->GetOutput()->GetNumberOfCells() ==
+          static_cast<vtkIdType>(sample.steps[static_cast<std::size_t>(step)].brokenBondCount()));
+  }
+  CHECK_THAT(collection,
+             Catch::Contains(fmt::format(R"(timestep="{:.17g}")", sample.steps[2].time)));
+}
+
+TEST_CASE("crackvis extract: cell attribute series are .vtu, single steps go where asked",
+          "[cli][extract]") {
+  TempDir dir;
+  const std::string data = dir.file("run.h5");
+  crackvis::testing::writeSampleFile(data, 3, 3);
+  auto cells = runProcess(
+      {kCli, "extract", data, "-m", "cell-attribute", "-o", dir.file("cells.pvd"), "-q"});
+  REQUIRE(cells.exitCode == 0);
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName(dir.file("cells/cells_000002.vtu").c_str());
+  reader->Update();
+  CHECK(reader->GetOutput()->GetNumberOfCells() > 0);
+  auto stl = runProcess(
+      {kCli, "extract", data, "-m", "cell-cut", "-s", "-1", "-o", dir.file("last.stl"), "-q"});
+  REQUIRE(stl.exitCode == 0);
+  CHECK(std::filesystem::file_size(dir.file("last.stl")) > 84);
+  auto obj = runProcess(
+      {kCli, "extract", data, "-m", "cell-centre", "-s", "0:2:2", "-o", dir.file("cc.obj"), "-q"});
+  REQUIRE(obj.exitCode == 0);
+  CHECK(std::filesystem::exists(dir.file("cc_000000.obj")));
+  CHECK(std::filesystem::exists(dir.file("cc_000002.obj")));
+  CHECK_FALSE(std::filesystem::exists(dir.file("cc_000001.obj")));
+}
+
+TEST_CASE("crackvis extract --metrics prints a row per step, or JSON", "[cli][extract]") {
+  TempDir dir;
+  const std::string data = dir.file("run.h5");
+  const auto sample = crackvis::testing::writeSampleFile(data, 3, 3);
+  auto json = runProcess({kCli, "extract", data, "-m", "cell-cut", "--metrics", "--json", "-q"});
+  REQUIRE(json.exitCode == 0);
+  const auto parsed = nlohmann::json::parse(json.out);
+  REQUIRE(parsed["steps"].size() == 3);
+  CHECK(parsed["steps"][0]["broken_bonds"] == 0);
+  CHECK(parsed["steps"][2]["broken_bonds"] == sample.steps[2].brokenBondCount());
+  CHECK(parsed["steps"][2]["points"] == sample.steps[2].brokenBondCount());  // one per broken bond
+  auto table = runProcess({kCli, "extract", data, "-m", "local-voronoi", "--metrics", "-q"});
+  REQUIRE(table.exitCode == 0);
+  CHECK(crackvis::testing::lines(table.out).size() == 4);  // header + 3 steps
+}
+
+TEST_CASE("crackvis extract refuses bad requests with one line", "[cli][extract]") {
+  TempDir dir;
+  const std::string data = dir.file("run.h5");
+  crackvis::testing::writeSampleFile(data, 3, 3);
+  auto range = runProcess({kCli, "extract", data, "-s", "2:9", "--metrics"});
+  CHECK(range.exitCode == 1);
+  CHECK(range.err == "crackvis extract: step range '2:9' is outside the file's steps 0..2\n");
+  auto format = runProcess({kCli, "extract", data, "-o", dir.file("x.ply")});
+  CHECK(format.exitCode == 1);
+  CHECK_THAT(format.err, Catch::Contains("unknown output format '.ply'"));
+  auto nothing = runProcess({kCli, "extract", data});
+  CHECK(nothing.exitCode == 2);
+  CHECK_THAT(nothing.err, Catch::Contains("nothing to do"));
+  auto method = runProcess({kCli, "extract", data, "-m", "marching-cubes", "--metrics"});
+  CHECK(method.exitCode == 2);
+  auto missing = runProcess({kCli, "extract", dir.file("none.h5"), "--metrics"});
+  CHECK(missing.exitCode == 1);
+  CHECK(missing.err == "crackvis extract: " + dir.file("none.h5") + ": no such file\n");
+}
+
+TEST_CASE("crackvis bench methods prints per-step times and ratios as JSON", "[cli][bench]") {
+  TempDir dir;
+  const std::string data = dir.file("run.h5");
+  crackvis::testing::writeSampleFile(data, 3, 3);
+  auto run = runProcess({kCli, "bench", "methods", data, "--json", "-q"});
+  REQUIRE(run.exitCode == 0);
+  const auto json = nlohmann::json::parse(run.out);
+  CHECK(json["per_step"].size() == 3);
+  for (const char* method : {"cell-attribute", "cell-cut", "local-voronoi", "cell-centre"}) {
+    CHECK(json["methods"][method]["total_s"].get<double>() > 0.0);
+    CHECK(json["methods"][method]["state_bytes_per_particle"].get<double>() > 0.0);
+  }
+  CHECK(json["voro++"]["steps_measured"] == 3);
+  CHECK(json["ratios"]["local_voronoi_over_voro++_last_step"].get<double>() > 0.0);
+}

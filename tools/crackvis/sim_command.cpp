@@ -1,0 +1,201 @@
+// crackvis sim: runs the lattice DEM solver on a benchmark preset of the
+// dissertation's chapter 3.1 and writes the crackvis-dem file as it goes.
+#include <algorithm>
+#include <memory>
+#include <optional>
+
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include "commands.hpp"
+#include <crackvis/common/progress.hpp>
+#include <crackvis/sim/presets.hpp>
+#include <crackvis/sim/run.hpp>
+
+namespace crackvis::cli {
+namespace {
+
+struct SimOptions {
+  std::string preset;
+  std::string output;
+  std::string defectSet = "A";
+  std::uint64_t seed = 1;
+  int threads = 0;
+  double scale = 1.0;
+  int steps = 0;
+  double duration = 0.0;
+  bool quiet = false;
+  bool noVelocities = false;
+  bool noBondForce = false;
+  // Material overrides; unset keeps the calibrated default.
+  std::optional<double> youngsModulus;
+  std::optional<double> strainThreshold;
+  std::optional<double> strainScale;
+  std::optional<double> weibullShape;
+  std::optional<double> bondDamping;
+};
+
+Result<sim::PresetOptions> presetOptions(const SimOptions& options, bool setGiven) {
+  sim::PresetOptions preset;
+  preset.name = options.preset;
+  if (preset.name == "plate2d" && setGiven) {
+    return invalidArgument("--set applies to cuboid3d only (plate2d has one defect)");
+  }
+  preset.defectSet = options.defectSet.front();
+  preset.scale = options.scale;
+  preset.seed = options.seed;
+  preset.duration = options.duration;
+  preset.savedSteps = options.steps;
+  sim::MaterialModel material = sim::defaultMaterial(preset.name == "plate2d" ? 2 : 3);
+  const bool custom = options.youngsModulus || options.strainThreshold || options.strainScale ||
+                      options.weibullShape || options.bondDamping;
+  material.youngsModulus = options.youngsModulus.value_or(material.youngsModulus);
+  material.strength.minStrain = options.strainThreshold.value_or(material.strength.minStrain);
+  material.strength.scaleStrain = options.strainScale.value_or(material.strength.scaleStrain);
+  material.strength.shape = options.weibullShape.value_or(material.strength.shape);
+  material.bondDamping = options.bondDamping.value_or(material.bondDamping);
+  preset.material = material;
+  preset.customMaterial = custom;
+  return preset;
+}
+
+int runSim(const SimOptions& options, bool setGiven) {
+  auto presetOpts = presetOptions(options, setGiven);
+  if (!presetOpts) {
+    printError("sim", presetOpts.status().message());
+    return kExitFailure;
+  }
+  auto preset = sim::makePreset(*presetOpts);
+  if (!preset) {
+    printError("sim", preset.status().message());
+    return kExitFailure;
+  }
+  const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                            static_cast<std::size_t>(threads));
+
+  const std::size_t particles = preset->setup.lattice.particleCount();
+  const std::size_t bonds = preset->setup.lattice.bondCount();
+  const double dt = preset->setup.timeStep;
+  const std::string description = preset->description;
+  const std::size_t defectBonds = preset->defectBonds;
+  const std::int64_t stepsPerSave = preset->stepsPerSave;
+  const int savedSteps = preset->savedSteps;
+  ProgressBar progress("sim", preset->savedSteps - 1);
+  progress.setEnabled(!options.quiet);
+  sim::RunOptions run;
+  run.path = options.output;
+  run.metadata = {invocation(), "SI"};
+  run.stepsPerSave = preset->stepsPerSave;
+  run.savedSteps = preset->savedSteps;
+  run.writeVelocities = !options.noVelocities;
+  run.writeBondForce = !options.noBondForce;
+  // The header waits for the first saved step, so that a run that cannot
+  // start (unwritable output) prints nothing but its error line.
+  run.onSaved = [&](const sim::RunProgress& at) {
+    if (at.savedStep == 0 && !options.quiet) {
+      std::fprintf(stderr,
+                   "%s: %zu particles, %zu bonds, %zu pre-broken; dt %.4g s, %lld steps per save, "
+                   "%d saved steps, %d threads\n",
+                   description.c_str(), particles, bonds, defectBonds, dt,
+                   static_cast<long long>(stepsPerSave), savedSteps, threads);
+    }
+    progress.update(at.savedStep, fmt::format("step {}, t={:.4g} s, broken {}", at.step, at.time,
+                                              at.brokenBonds));
+  };
+  auto summary = sim::runToFile(std::move(preset->setup), run);
+  if (!summary) {
+    progress.setEnabled(false);
+    printError("sim", summary.status().message());
+    return kExitFailure;
+  }
+  if (!options.quiet) {
+    progress.finish();
+    const std::size_t broken = summary->brokenPerSavedStep.back();
+    std::printf(
+        "wrote %s: %d saved steps, %lld time steps, t = %.6g s, broken %zu of %zu bonds "
+        "(%.2f %%)\n"
+        "wall %.1f s (writing %.1f s): %.0f steps/s, %.3g bond updates/s\n",
+        options.output.c_str(), summary->savedSteps, static_cast<long long>(summary->steps),
+        summary->simulatedTime, broken, bonds,
+        100.0 * static_cast<double>(broken) / static_cast<double>(bonds), summary->wallSeconds,
+        summary->writeSeconds, static_cast<double>(summary->steps) / summary->wallSeconds,
+        static_cast<double>(summary->steps) * static_cast<double>(bonds) / summary->wallSeconds);
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+Command addSimCommand(CLI::App& parent) {
+  auto options = std::make_shared<SimOptions>();
+  auto* command = parent.add_subcommand(
+      "sim",
+      "Run the lattice DEM solver on a benchmark of the dissertation's chapter 3.1 (uniaxial "
+      "tension of a notched specimen) and write a crackvis-dem file, step by step.");
+  command
+      ->add_option("preset", options->preset,
+                   "plate2d: 2D plate, 4,680 particles, 1,284 saved steps; cuboid3d: 3D cuboid, "
+                   "46,875 particles, 200 saved steps")
+      ->required()
+      ->check(CLI::IsMember({"plate2d", "cuboid3d"}));
+  command->add_option("-o,--output", options->output, "Output HDF5 file")->required();
+  auto* set = command
+                  ->add_option("--set", options->defectSet,
+                               "cuboid3d initial defect: A (125 bonds), B (245) or C (121)")
+                  ->check(CLI::IsMember({"A", "B", "C"}))
+                  ->capture_default_str();
+  command->add_option("--seed", options->seed, "Seed of the bond strengths")->capture_default_str();
+  command->add_option("--threads", options->threads, "Worker threads (0: all cores)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command
+      ->add_option("--scale", options->scale,
+                   "Shrink the preset: S times the spheres per axis, radius / S, same geometry "
+                   "(0 < S <= 1)")
+      ->check(CLI::Range(1e-3, 1.0))
+      ->capture_default_str();
+  command
+      ->add_option("--steps", options->steps,
+                   "Saved steps to write (default: the preset's 1,284 or 200), same time between "
+                   "saves")
+      ->check(CLI::PositiveNumber);
+  command
+      ->add_option("--duration", options->duration,
+                   "Simulated time of the preset's last saved step, s (default: calibrated)")
+      ->check(CLI::PositiveNumber);
+  command->add_flag("--no-velocities", options->noVelocities,
+                    "Do not write the optional per-step velocities");
+  command->add_flag("--no-bond-force", options->noBondForce,
+                    "Do not write the optional per-step bond forces");
+  command->add_flag("-q,--quiet", options->quiet, "No progress bar and no summary");
+  const char* material = "Material (overrides the calibrated defaults)";
+  command->add_option("--youngs-modulus", options->youngsModulus, "Lattice Young's modulus E, Pa")
+      ->check(CLI::PositiveNumber)
+      ->group(material);
+  command
+      ->add_option("--strain-threshold", options->strainThreshold,
+                   "Bond strain below which no bond breaks")
+      ->check(CLI::NonNegativeNumber)
+      ->group(material);
+  command
+      ->add_option("--strain-scale", options->strainScale,
+                   "Weibull scale of the bond strain at break above the threshold")
+      ->check(CLI::PositiveNumber)
+      ->group(material);
+  command->add_option("--weibull-shape", options->weibullShape, "Weibull modulus m")
+      ->check(CLI::PositiveNumber)
+      ->group(material);
+  command->add_option("--bond-damping", options->bondDamping, "Damping ratio of the bonds")
+      ->check(CLI::NonNegativeNumber)
+      ->group(material);
+  command->footer(
+      "Examples:\n"
+      "  crackvis sim cuboid3d --set A -o cuboidA.h5\n"
+      "  crackvis sim plate2d --scale 0.25 --seed 7 -o plate-small.h5\n"
+      "The model, its parameters and their calibration: docs/simulator.md.");
+  return {command, [options, set] { return runSim(*options, set->count() > 0); }};
+}
+
+}  // namespace crackvis::cli
