@@ -1,0 +1,114 @@
+// The crack methods over a real simulated fracture series (a scaled cuboid A
+// from crackvis::sim), step by step as a viewer runs them.
+#include <set>
+
+#include <catch2/catch.hpp>
+
+#include "support/temp_dir.hpp"
+#include <crackvis/cracks/dem_series.hpp>
+#include <crackvis/sim/presets.hpp>
+#include <crackvis/sim/run.hpp>
+
+using namespace crackvis;
+using namespace crackvis::cracks;
+
+namespace {
+
+// One scaled run shared by the test cases of this process.
+const std::string& simulatedFile() {
+  static testing::TempDir dir;
+  static const std::string path = [&] {
+    sim::PresetOptions options;
+    options.name = "cuboid3d";
+    options.defectSet = 'A';
+    options.scale = 0.3;
+    auto preset = sim::makePreset(options);
+    REQUIRE(preset.isOk());
+    sim::RunOptions run;
+    run.path = dir.file("cuboidA-scaled.h5");
+    run.metadata.source = "crackvis tests: cuboid3d A, scale 0.3";
+    run.stepsPerSave = preset->stepsPerSave;
+    run.savedSteps = preset->savedSteps;
+    REQUIRE(sim::runToFile(std::move(preset->setup), run).isOk());
+    return run.path;
+  }();
+  return path;
+}
+
+std::set<std::vector<int>> cellSet(const LatticeDecomposition& decomposition) {
+  std::set<std::vector<int>> cells;
+  for (const LatticeCell& cell : decomposition.cells()) {
+    std::vector<int> key(cell.nodes.begin(), cell.nodes.begin() + cell.nodeCount());
+    key.push_back(static_cast<int>(cell.type));
+    cells.insert(key);
+  }
+  return cells;
+}
+
+std::set<int> brokenBonds(const StepInput& step) {
+  std::set<int> broken;
+  for (std::size_t b = 0; b < step.bondState.size(); ++b) {
+    if (step.bondState[b] != 0) {
+      broken.insert(static_cast<int>(b));
+    }
+  }
+  return broken;
+}
+
+}  // namespace
+
+TEST_CASE("simulated series: incremental and from-scratch decompositions agree at every step",
+          "[cracks][decomposition][sim]") {
+  auto series = DemSeries::open(simulatedFile());
+  REQUIRE(series.isOk());
+  LatticeDecomposition incremental((*series)->graph(), 3);
+  std::size_t finalBroken = 0;
+  for (int step = 0; step < (*series)->stepCount(); step += 5) {
+    auto input = (*series)->load(step);
+    REQUIRE(input.isOk());
+    incremental.update(input->bondState);
+    LatticeDecomposition scratch((*series)->graph(), 3);
+    scratch.update(input->bondState);
+    REQUIRE(cellSet(incremental) == cellSet(scratch));
+    finalBroken = brokenBonds(*input).size();
+  }
+  CHECK(finalBroken > 50);  // the series did fracture
+}
+
+TEST_CASE("simulated series: every primitive maps to a broken bond and no broken bond is missed",
+          "[cracks][sim]") {
+  auto series = DemSeries::open(simulatedFile());
+  REQUIRE(series.isOk());
+  const int steps = (*series)->stepCount();
+  for (Method method : {Method::kCellCut, Method::kLocalVoronoi, Method::kCellCentre}) {
+    auto extractor = makeExtractor(method, (*series)->graph(), 3);
+    CrackMesh mesh;
+    for (int step : {0, steps / 2, steps - 1}) {
+      auto input = (*series)->load(step);
+      REQUIRE(input.isOk());
+      REQUIRE(extractor->extract(*input, mesh).isOk());
+      const std::set<int> broken = brokenBonds(*input);
+      INFO(toString(method) << " at step " << step);
+      if (method == Method::kCellCut) {
+        // One point per broken bond, each used by some primitive.
+        const AttributeArray* bondId = mesh.findPointData("bond_id");
+        REQUIRE(bondId != nullptr);
+        CHECK(std::set<int>(bondId->values.begin(), bondId->values.end()) == broken);
+        std::vector<char> used(mesh.points.size(), 0);
+        for (auto id : mesh.vertices)
+          used[static_cast<std::size_t>(id)] = 1;
+        for (auto id : mesh.lines.connectivity)
+          used[static_cast<std::size_t>(id)] = 1;
+        for (auto id : mesh.polygons.connectivity)
+          used[static_cast<std::size_t>(id)] = 1;
+        CHECK(std::count(used.begin(), used.end(), 1) == static_cast<std::ptrdiff_t>(used.size()));
+      } else {
+        // Exactly one primitive (face, or inconsistency mark) per broken bond.
+        const AttributeArray* bondId = mesh.findCellData("bond_id");
+        REQUIRE(bondId != nullptr);
+        CHECK(mesh.primitiveCount() == broken.size());
+        CHECK(std::set<int>(bondId->values.begin(), bondId->values.end()) == broken);
+      }
+    }
+  }
+}
