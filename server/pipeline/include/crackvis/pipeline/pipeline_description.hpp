@@ -1,0 +1,125 @@
+// Pipeline descriptions: what a render session shows and how it streams, as
+// an XML document valid against pipeline-schemas/pipeline.xsd (the contract
+// between the client and the render server; docs/pipeline.md is the
+// reference). parsePipeline validates with libxml2 and returns the typed
+// description; toXml writes one back, every attribute explicit.
+//
+// The struct's defaults are the schema's defaults (a test parses the minimal
+// document and compares).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include <crackvis/common/status.hpp>
+#include <crackvis/cracks/extractor.hpp>
+
+namespace crackvis::pipeline {
+
+using dem::Vec3;
+
+struct Colour {
+  std::uint8_t r = 0;
+  std::uint8_t g = 0;
+  std::uint8_t b = 0;
+  friend bool operator==(const Colour&, const Colour&) = default;
+};
+
+enum class ParticleRepresentation { kImpostors, kPoints };
+enum class ParticleColourBy { kSolid, kRadius, kDisplacement, kVelocity, kDamage };
+enum class CrackColourBy { kSolid, kBondId, kForce, kBreakStep, kState };
+enum class BondSelection { kNone, kBroken, kAll };
+enum class BondRepresentation { kLines, kTubes };
+enum class BondColourBy { kSolid, kState, kForce, kBreakStep };
+enum class ColourMap { kViridis, kCoolWarm, kRainbow, kGrayscale };
+
+struct ClipPlane {
+  Vec3 origin;
+  Vec3 normal;
+  friend bool operator==(const ClipPlane&, const ClipPlane&) = default;
+};
+
+struct ParticlesDescription {
+  bool visible = true;
+  ParticleRepresentation representation = ParticleRepresentation::kImpostors;
+  ParticleColourBy colourBy = ParticleColourBy::kSolid;
+  Colour colour{0xb0, 0xb0, 0xb0};
+  double opacity = 1.0;
+  std::optional<ClipPlane> clip;
+  friend bool operator==(const ParticlesDescription&, const ParticlesDescription&) = default;
+};
+
+struct CracksDescription {
+  bool visible = true;
+  cracks::Method method = cracks::Method::kLocalVoronoi;
+  bool validation = true;
+  double validationTolerance = 0.1;
+  bool mergeOctahedra = false;
+  CrackColourBy colourBy = CrackColourBy::kSolid;
+  Colour colour{0xe0, 0x3c, 0x31};
+  double opacity = 1.0;
+  friend bool operator==(const CracksDescription&, const CracksDescription&) = default;
+};
+
+struct BondsDescription {
+  BondSelection show = BondSelection::kNone;
+  BondRepresentation representation = BondRepresentation::kLines;
+  BondColourBy colourBy = BondColourBy::kState;
+  Colour colour{0x40, 0x40, 0x40};
+  double tubeRadius = 0.15;  // fraction of the particle radius
+  friend bool operator==(const BondsDescription&, const BondsDescription&) = default;
+};
+
+struct CameraDescription {
+  Vec3 position;
+  Vec3 focalPoint;
+  Vec3 viewUp{0, 0, 1};
+  double viewAngle = 30.0;  // degrees
+  friend bool operator==(const CameraDescription&, const CameraDescription&) = default;
+};
+
+struct ViewDescription {
+  int width = 1280;
+  int height = 720;
+  Colour background{0x1e, 0x1e, 0x28};
+  ColourMap colourMap = ColourMap::kViridis;
+  bool scalarBar = true;
+  std::optional<CameraDescription> camera;  // none: reset to show the specimen
+  friend bool operator==(const ViewDescription&, const ViewDescription&) = default;
+};
+
+struct StreamDescription {
+  int fps = 30;
+  int bitrate = 4'000'000;  // bits per second
+  friend bool operator==(const StreamDescription&, const StreamDescription&) = default;
+};
+
+struct PipelineDescription {
+  std::string file;  // under the data service's root
+  std::int64_t step = 0;
+  ParticlesDescription particles;
+  CracksDescription cracks;
+  BondsDescription bonds;
+  bool showDecomposition = false;
+  bool showInconsistent = false;
+  ViewDescription view;
+  StreamDescription stream;
+  friend bool operator==(const PipelineDescription&, const PipelineDescription&) = default;
+};
+
+// Documents larger than this are refused before parsing.
+inline constexpr std::size_t kMaxPipelineBytes = 1 << 20;
+
+// Validates `xml` against the schema and converts it. INVALID_ARGUMENT naming
+// the line and the element for a malformed or invalid document.
+Result<PipelineDescription> parsePipeline(std::string_view xml);
+
+// A document valid against the schema that parses back to `description`.
+std::string toXml(const PipelineDescription& description);
+
+// The schema's text (pipeline-schemas/pipeline.xsd, built in).
+std::string_view pipelineSchema();
+
+}  // namespace crackvis::pipeline
