@@ -123,3 +123,26 @@ TEST_CASE("crackvis bench methods prints per-step times and ratios as JSON", "[c
   CHECK(json["voro++"]["steps_measured"] == 3);
   CHECK(json["ratios"]["local_voronoi_over_voro++_last_step"].get<double>() > 0.0);
 }
+
+TEST_CASE("crackvis snapshot renders a step to PNG off screen", "[cli][snapshot]") {
+  TempDir dir;
+  const std::string data = dir.file("run.h5");
+  crackvis::testing::writeSampleFile(data, 3, 3);
+  auto run = runProcess({kCli, "snapshot", data, "-s", "-1", "--width", "96", "--height", "64",
+                         "-o", dir.file("last.png")});
+  REQUIRE(run.exitCode == 0);
+  CHECK_THAT(run.out, Catch::Contains("llvmpipe"));
+  const std::string png = slurp(dir.file("last.png"));
+  REQUIRE(png.size() > 8);
+  CHECK(png.substr(1, 3) == "PNG");
+
+  std::ofstream(dir.file("bad.xml"))
+      << "<pipeline version=\"1\">\n  <data file=\"x\"/>\n  <cracks method=\"x\"/>\n</pipeline>\n";
+  auto bad =
+      runProcess({kCli, "snapshot", data, "-p", dir.file("bad.xml"), "-o", dir.file("x.png")});
+  CHECK(bad.exitCode == 1);
+  CHECK_THAT(bad.err, Catch::Contains("pipeline line 3, element <cracks>"));
+  auto range = runProcess({kCli, "snapshot", data, "-s", "7", "-o", dir.file("x.png")});
+  CHECK(range.exitCode == 1);
+  CHECK_THAT(range.err, Catch::Contains("step 7 out of range (the file has steps 0..2)"));
+}

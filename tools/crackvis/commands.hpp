@@ -30,6 +30,7 @@ void printError(const char* command, const std::string& message);
 Command addGenerateCommand(CLI::App& parent);
 Command addInfoCommand(CLI::App& parent);
 Command addExtractCommand(CLI::App& parent);
+Command addSnapshotCommand(CLI::App& parent);
 Command addBenchMethodsCommand(CLI::App& bench);
 Command addSimCommand(CLI::App& parent);
 // Under `crackvis bench`: transfer | methods | render

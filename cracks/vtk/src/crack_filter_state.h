@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "crackvis_vtk_conversion.h"
 #include <crackvis/cracks/extractor.hpp>
 
 class vtkPolyData;
@@ -38,9 +39,6 @@ class CrackFilterState {
   ExtractOptions m_options;
   int m_dimension = 3;
 };
-
-void toPolyData(const CrackMesh& mesh, vtkPolyData* output);
-void toUnstructuredGrid(const CrackMesh& mesh, vtkUnstructuredGrid* output);
 
 }  // namespace crackvis::cracks::vtkadapter
 

@@ -1,0 +1,35 @@
+// An off-screen OpenGL context through EGL, with no X server and no window:
+// Mesa's surfaceless platform (llvmpipe on CPU nodes) or, failing that, the
+// EGL device platform (NVIDIA GPUs). Every EGL call is checked; failures name
+// the call and the EGL error. The context and display are released in the
+// destructor (a server must terminate what it initializes).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <crackvis/common/status.hpp>
+
+namespace crackvis::render {
+
+class EglContext {
+ public:
+  // A desktop OpenGL 3.2 core context with a pbuffer of width x height.
+  static Result<std::unique_ptr<EglContext>> create(int width, int height);
+  EglContext(const EglContext&) = delete;
+  EglContext& operator=(const EglContext&) = delete;
+  ~EglContext();
+
+  Status makeCurrent();
+  // "EGL 1.5 (Mesa Project, surfaceless)" and the like, for start-up logs.
+  const std::string& description() const { return m_description; }
+
+ private:
+  EglContext() = default;
+  void* m_display = nullptr;  // EGLDisplay
+  void* m_surface = nullptr;  // EGLSurface
+  void* m_context = nullptr;  // EGLContext
+  std::string m_description;
+};
+
+}  // namespace crackvis::render
