@@ -1,0 +1,73 @@
+// H.264 for the render server's stream: FrameEncoder turns RGB frames into
+// H.264 access units with libavcodec + libx264 (ultrafast, zerolatency,
+// capped bitrate, periodic intra refresh off, keyframes on demand: a new
+// client, a resize, a reconnect); FrameDecoder turns them back into RGB (the
+// client's path, and the tests' check of the round trip).
+//
+// Every FFmpeg call is checked and its error text (av_strerror) is in the
+// Status; codec contexts, frames and packets are owned by unique_ptrs.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include <crackvis/common/status.hpp>
+
+namespace crackvis::encode {
+
+struct RgbFrame {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> rgb;  // rows top to bottom, 3 bytes per pixel
+};
+
+struct EncodedFrame {
+  std::vector<std::uint8_t> data;  // one H.264 access unit (Annex B)
+  bool keyframe = false;
+  std::int64_t index = 0;  // frame number in the stream
+};
+
+struct EncoderSettings {
+  int width = 1280;  // even
+  int height = 720;  // even
+  int fps = 30;
+  int bitrate = 4'000'000;  // bits per second, capped (VBV)
+};
+
+class FrameEncoder {
+ public:
+  static Result<std::unique_ptr<FrameEncoder>> create(const EncoderSettings& settings);
+  ~FrameEncoder();
+
+  // Encodes one frame of the settings' size; `keyframe` forces an IDR frame.
+  // With zerolatency every frame yields its access unit at once.
+  Result<EncodedFrame> encode(const RgbFrame& frame, bool keyframe);
+  const EncoderSettings& settings() const { return m_settings; }
+
+ private:
+  FrameEncoder() = default;
+  struct Impl;
+  std::unique_ptr<Impl> m_impl;
+  EncoderSettings m_settings;
+};
+
+class FrameDecoder {
+ public:
+  static Result<std::unique_ptr<FrameDecoder>> create();
+  ~FrameDecoder();
+
+  // Decodes one access unit; an RGB frame when the decoder has one.
+  Result<std::optional<RgbFrame>> decode(const EncodedFrame& frame);
+
+ private:
+  FrameDecoder() = default;
+  struct Impl;
+  std::unique_ptr<Impl> m_impl;
+};
+
+// Peak signal-to-noise ratio of two frames of the same size, dB.
+double psnr(const RgbFrame& a, const RgbFrame& b);
+
+}  // namespace crackvis::encode

@@ -1,0 +1,213 @@
+#include <cmath>
+#include <cstring>
+
+#include <fmt/format.h>
+
+#include <crackvis/encode/frame_codec.hpp>
+
+extern "C" {
+#include <libavcodec/avcodec.h>
+#include <libavutil/imgutils.h>
+#include <libavutil/opt.h>
+#include <libswscale/swscale.h>
+}
+
+namespace crackvis::encode {
+namespace {
+
+std::string avError(int code) {
+  char text[AV_ERROR_MAX_STRING_SIZE] = {};
+  av_strerror(code, text, sizeof text);
+  return text;
+}
+
+struct CodecContextFree {
+  void operator()(AVCodecContext* context) const { avcodec_free_context(&context); }
+};
+struct FrameFree {
+  void operator()(AVFrame* frame) const { av_frame_free(&frame); }
+};
+struct PacketFree {
+  void operator()(AVPacket* packet) const { av_packet_free(&packet); }
+};
+struct ScaleFree {
+  void operator()(SwsContext* context) const { sws_freeContext(context); }
+};
+
+using CodecContext = std::unique_ptr<AVCodecContext, CodecContextFree>;
+using Frame = std::unique_ptr<AVFrame, FrameFree>;
+using Packet = std::unique_ptr<AVPacket, PacketFree>;
+using Scaler = std::unique_ptr<SwsContext, ScaleFree>;
+
+Status check(int code, const char* call) {
+  if (code < 0) {
+    return failedPrecondition(fmt::format("{}: {}", call, avError(code)));
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+struct FrameEncoder::Impl {
+  CodecContext context;
+  Frame yuv;
+  Packet packet;
+  Scaler toYuv;
+  std::int64_t next = 0;
+};
+
+Result<std::unique_ptr<FrameEncoder>> FrameEncoder::create(const EncoderSettings& settings) {
+  if (settings.width < 16 || settings.height < 16 || settings.width % 2 != 0 ||
+      settings.height % 2 != 0) {
+    return invalidArgument(fmt::format("frame size {}x{}: H.264 needs even sizes of at least 16",
+                                       settings.width, settings.height));
+  }
+  const AVCodec* codec = avcodec_find_encoder_by_name("libx264");
+  if (codec == nullptr) {
+    return failedPrecondition("libavcodec has no libx264 encoder (install libavcodec59 with x264)");
+  }
+  std::unique_ptr<FrameEncoder> encoder(new FrameEncoder());
+  encoder->m_settings = settings;
+  encoder->m_impl = std::make_unique<Impl>();
+  Impl& impl = *encoder->m_impl;
+  impl.context.reset(avcodec_alloc_context3(codec));
+  AVCodecContext* c = impl.context.get();
+  c->width = settings.width;
+  c->height = settings.height;
+  c->time_base = AVRational{1, settings.fps};
+  c->framerate = AVRational{settings.fps, 1};
+  c->pix_fmt = AV_PIX_FMT_YUV420P;
+  c->bit_rate = settings.bitrate;
+  c->rc_max_rate = settings.bitrate;                        // capped
+  c->rc_buffer_size = settings.bitrate / settings.fps * 2;  // about two frames of VBV
+  c->gop_size = 10 * settings.fps;                          // keyframes come on demand
+  c->max_b_frames = 0;
+  c->thread_count = 2;
+  av_opt_set(c->priv_data, "preset", "ultrafast", 0);
+  av_opt_set(c->priv_data, "tune", "zerolatency", 0);
+  CRACKVIS_RETURN_IF_ERROR(check(avcodec_open2(c, codec, nullptr), "avcodec_open2(libx264)"));
+  impl.yuv.reset(av_frame_alloc());
+  impl.yuv->format = c->pix_fmt;
+  impl.yuv->width = c->width;
+  impl.yuv->height = c->height;
+  CRACKVIS_RETURN_IF_ERROR(check(av_frame_get_buffer(impl.yuv.get(), 0), "av_frame_get_buffer"));
+  impl.packet.reset(av_packet_alloc());
+  impl.toYuv.reset(sws_getContext(c->width, c->height, AV_PIX_FMT_RGB24, c->width, c->height,
+                                  AV_PIX_FMT_YUV420P, SWS_BILINEAR, nullptr, nullptr, nullptr));
+  if (!impl.toYuv) {
+    return failedPrecondition("sws_getContext: RGB24 to YUV420P not available");
+  }
+  return encoder;
+}
+
+FrameEncoder::~FrameEncoder() = default;
+
+Result<EncodedFrame> FrameEncoder::encode(const RgbFrame& frame, bool keyframe) {
+  Impl& impl = *m_impl;
+  if (frame.width != m_settings.width || frame.height != m_settings.height ||
+      frame.rgb.size() !=
+          static_cast<std::size_t>(frame.width) * static_cast<std::size_t>(frame.height) * 3) {
+    return invalidArgument(fmt::format("frame {}x{} for an encoder of {}x{}", frame.width,
+                                       frame.height, m_settings.width, m_settings.height));
+  }
+  CRACKVIS_RETURN_IF_ERROR(check(av_frame_make_writable(impl.yuv.get()), "av_frame_make_writable"));
+  const std::uint8_t* source[1] = {frame.rgb.data()};
+  const int stride[1] = {frame.width * 3};
+  sws_scale(impl.toYuv.get(), source, stride, 0, frame.height, impl.yuv->data, impl.yuv->linesize);
+  impl.yuv->pts = impl.next;
+  impl.yuv->pict_type = keyframe ? AV_PICTURE_TYPE_I : AV_PICTURE_TYPE_NONE;
+  impl.yuv->key_frame = keyframe ? 1 : 0;
+  CRACKVIS_RETURN_IF_ERROR(
+      check(avcodec_send_frame(impl.context.get(), impl.yuv.get()), "avcodec_send_frame"));
+  EncodedFrame out;
+  out.index = impl.next++;
+  for (;;) {
+    const int received = avcodec_receive_packet(impl.context.get(), impl.packet.get());
+    if (received == AVERROR(EAGAIN) || received == AVERROR_EOF) {
+      break;
+    }
+    CRACKVIS_RETURN_IF_ERROR(check(received, "avcodec_receive_packet"));
+    out.data.insert(out.data.end(), impl.packet->data, impl.packet->data + impl.packet->size);
+    out.keyframe = out.keyframe || (impl.packet->flags & AV_PKT_FLAG_KEY) != 0;
+    av_packet_unref(impl.packet.get());
+  }
+  if (out.data.empty()) {
+    return internalError("libx264 returned no access unit for a frame (zerolatency should)");
+  }
+  return out;
+}
+
+struct FrameDecoder::Impl {
+  CodecContext context;
+  Frame yuv;
+  Packet packet;
+  Scaler toRgb;
+  int scalerWidth = 0;
+  int scalerHeight = 0;
+};
+
+Result<std::unique_ptr<FrameDecoder>> FrameDecoder::create() {
+  const AVCodec* codec = avcodec_find_decoder(AV_CODEC_ID_H264);
+  if (codec == nullptr) {
+    return failedPrecondition("libavcodec has no H.264 decoder");
+  }
+  std::unique_ptr<FrameDecoder> decoder(new FrameDecoder());
+  decoder->m_impl = std::make_unique<Impl>();
+  Impl& impl = *decoder->m_impl;
+  impl.context.reset(avcodec_alloc_context3(codec));
+  impl.context->flags |= AV_CODEC_FLAG_LOW_DELAY;
+  CRACKVIS_RETURN_IF_ERROR(
+      check(avcodec_open2(impl.context.get(), codec, nullptr), "avcodec_open2(h264)"));
+  impl.yuv.reset(av_frame_alloc());
+  impl.packet.reset(av_packet_alloc());
+  return decoder;
+}
+
+FrameDecoder::~FrameDecoder() = default;
+
+Result<std::optional<RgbFrame>> FrameDecoder::decode(const EncodedFrame& frame) {
+  Impl& impl = *m_impl;
+  impl.packet->data = const_cast<std::uint8_t*>(frame.data.data());
+  impl.packet->size = static_cast<int>(frame.data.size());
+  const int sent = avcodec_send_packet(impl.context.get(), impl.packet.get());
+  impl.packet->data = nullptr;
+  impl.packet->size = 0;
+  CRACKVIS_RETURN_IF_ERROR(check(sent, "avcodec_send_packet"));
+  const int received = avcodec_receive_frame(impl.context.get(), impl.yuv.get());
+  if (received == AVERROR(EAGAIN)) {
+    return std::optional<RgbFrame>{};
+  }
+  CRACKVIS_RETURN_IF_ERROR(check(received, "avcodec_receive_frame"));
+  const int width = impl.yuv->width;
+  const int height = impl.yuv->height;
+  if (!impl.toRgb || width != impl.scalerWidth || height != impl.scalerHeight) {
+    impl.toRgb.reset(sws_getContext(width, height, static_cast<AVPixelFormat>(impl.yuv->format),
+                                    width, height, AV_PIX_FMT_RGB24, SWS_BILINEAR, nullptr, nullptr,
+                                    nullptr));
+    impl.scalerWidth = width;
+    impl.scalerHeight = height;
+  }
+  RgbFrame rgb{width, height,
+               std::vector<std::uint8_t>(static_cast<std::size_t>(width) *
+                                         static_cast<std::size_t>(height) * 3)};
+  std::uint8_t* target[1] = {rgb.rgb.data()};
+  const int stride[1] = {width * 3};
+  sws_scale(impl.toRgb.get(), impl.yuv->data, impl.yuv->linesize, 0, height, target, stride);
+  av_frame_unref(impl.yuv.get());
+  return std::optional<RgbFrame>(std::move(rgb));
+}
+
+double psnr(const RgbFrame& a, const RgbFrame& b) {
+  if (a.rgb.size() != b.rgb.size() || a.rgb.empty()) {
+    return 0.0;
+  }
+  double sum = 0.0;
+  for (std::size_t k = 0; k < a.rgb.size(); ++k) {
+    const double d = static_cast<double>(a.rgb[k]) - static_cast<double>(b.rgb[k]);
+    sum += d * d;
+  }
+  const double mse = sum / static_cast<double>(a.rgb.size());
+  return mse == 0.0 ? 99.0 : 10.0 * std::log10(255.0 * 255.0 / mse);
+}
+
+}  // namespace crackvis::encode

@@ -1,0 +1,68 @@
+// Rendered frames through libx264 and back: the stream's picture quality.
+#include <cmath>
+
+#include <catch2/catch.hpp>
+
+#include "cracks/crack_fixtures.hpp"
+#include <crackvis/encode/frame_codec.hpp>
+#include <crackvis/render/scene_renderer.hpp>
+
+using namespace crackvis;
+
+TEST_CASE("rendered frames survive H.264 encode and decode at >= 35 dB PSNR",
+          "[encode][render][egl]") {
+  constexpr int kWidth = 640;
+  constexpr int kHeight = 360;
+  auto renderer = render::SceneRenderer::create(kWidth, kHeight);
+  REQUIRE(renderer.isOk());
+  const auto crack = testing::fccPlaneCrack(4, {1, 1, 1}, 13 / std::sqrt(2.0) + 1.5, 0.02);
+  auto extractor = cracks::makeExtractor(cracks::Method::kLocalVoronoi, *crack.graph, 3);
+  cracks::CrackMesh mesh;
+  REQUIRE(extractor->extract(crack.input(), mesh).isOk());
+  pipeline::PipelineDescription description;
+  description.view.width = kWidth;
+  description.view.height = kHeight;
+  description.particles.opacity = 1.0;
+  description.particles.colourBy = pipeline::ParticleColourBy::kDamage;
+  const render::SceneInput input{&crack.block.lattice, crack.input(), {}, {}, &mesh};
+
+  auto encoder = encode::FrameEncoder::create({kWidth, kHeight, 30, 4'000'000});
+  REQUIRE(encoder.isOk());
+  auto decoder = encode::FrameDecoder::create();
+  REQUIRE(decoder.isOk());
+  const dem::Vec3 centre = 0.5 * crack.block.extent;
+  double worst = 1e9;
+  int decoded = 0;
+  for (int frame = 0; frame < 30; ++frame) {
+    // The camera orbits the block, as during a rotate interaction.
+    const double angle = 0.05 * frame;
+    description.view.camera = pipeline::CameraDescription{
+        centre + dem::Vec3{25 * std::cos(angle), 25 * std::sin(angle), 8}, centre, {0, 0, 1}, 30};
+    render::Image image;
+    REQUIRE((*renderer)->render(description, input, image).isOk());
+    const encode::RgbFrame rgb{image.width, image.height, image.rgb};
+    const bool keyframe = frame == 0 || frame == 12;  // a new client at frame 12
+    auto encoded = (*encoder)->encode(rgb, keyframe);
+    REQUIRE(encoded.isOk());
+    CHECK(encoded->keyframe == keyframe);
+    CHECK(encoded->index == frame);
+    auto back = (*decoder)->decode(*encoded);
+    REQUIRE(back.isOk());
+    REQUIRE(back->has_value());  // zero latency: every access unit decodes at once
+    ++decoded;
+    worst = std::min(worst, encode::psnr(rgb, **back));
+  }
+  INFO("lowest PSNR over 30 frames: " << worst << " dB");
+  CHECK(decoded == 30);
+  CHECK(worst >= 35.0);
+}
+
+TEST_CASE("the encoder refuses odd sizes and frames of another size", "[encode]") {
+  CHECK(encode::FrameEncoder::create({641, 360, 30, 4'000'000}).status().message() ==
+        "frame size 641x360: H.264 needs even sizes of at least 16");
+  auto encoder = encode::FrameEncoder::create({64, 48, 30, 1'000'000});
+  REQUIRE(encoder.isOk());
+  const encode::RgbFrame wrong{32, 32, std::vector<std::uint8_t>(32 * 32 * 3, 0)};
+  CHECK(encoder.value()->encode(wrong, false).status().message() ==
+        "frame 32x32 for an encoder of 64x48");
+}
