@@ -1,3 +1,5 @@
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include <crackvis/dataservice/remote_dem_file.hpp>
@@ -39,6 +41,37 @@ std::string positionsPath(int step) {
 }
 std::string bondStatePath(int step) {
   return dem::stepGroupPath(step) + "/bond_state";
+}
+
+// Every bond must join two existing particles. The common case, all in
+// range, is one branch-free (vectorized) pass over the indices; only a bad
+// file pays for finding the first offending bond.
+Status checkBonds(const std::vector<dem::Bond>& bonds, std::int64_t particles,
+                  const std::string& file) {
+  std::int64_t low = 0;
+  std::int64_t high = -1;
+  if (!bonds.empty()) {
+    dem::ParticleIndex lo = bonds.front().first;
+    dem::ParticleIndex hi = lo;
+    for (const dem::Bond& bond : bonds) {
+      lo = std::min(lo, std::min(bond.first, bond.second));
+      hi = std::max(hi, std::max(bond.first, bond.second));
+    }
+    low = lo;
+    high = hi;
+  }
+  if (low >= 0 && high < particles) {
+    return Status::ok();
+  }
+  for (size_t b = 0; b < bonds.size(); ++b) {
+    if (bonds[b].first < 0 || bonds[b].first >= particles || bonds[b].second < 0 ||
+        bonds[b].second >= particles) {
+      return failedPrecondition(
+          fmt::format("{}: bond {} joins particles {} and {}: index out of range (N = {})", file, b,
+                      bonds[b].first, bonds[b].second, particles));
+    }
+  }
+  return Status::ok();
 }
 
 }  // namespace
@@ -110,14 +143,7 @@ Result<std::vector<dem::Bond>> RemoteDemFile::toBonds(const TypedArray& array) c
   if (!bonds.empty()) {
     std::memcpy(bonds.data(), array.bytes.data(), array.bytes.size());
   }
-  for (size_t b = 0; b < bonds.size(); ++b) {
-    if (bonds[b].first < 0 || bonds[b].first >= m_particles || bonds[b].second < 0 ||
-        bonds[b].second >= m_particles) {
-      return failedPrecondition(
-          fmt::format("{}: bond {} joins particles {} and {}: index out of range (N = {})", m_file,
-                      b, bonds[b].first, bonds[b].second, m_particles));
-    }
-  }
+  CRACKVIS_RETURN_IF_ERROR(checkBonds(bonds, m_particles, m_file));
   return bonds;
 }
 
@@ -216,14 +242,7 @@ Result<RemoteStep> RemoteDemFile::readStep(int step) {
     }
   }
   if (withBonds) {
-    for (size_t b = 0; b < bonds.size(); ++b) {
-      if (bonds[b].first < 0 || bonds[b].first >= m_particles || bonds[b].second < 0 ||
-          bonds[b].second >= m_particles) {
-        return failedPrecondition(
-            fmt::format("{}: bond {} joins particles {} and {}: index out of range (N = {})",
-                        m_file, b, bonds[b].first, bonds[b].second, m_particles));
-      }
-    }
+    CRACKVIS_RETURN_IF_ERROR(checkBonds(bonds, m_particles, m_file));
     m_bondList = std::make_shared<const std::vector<dem::Bond>>(std::move(bonds));
   }
   return result;
