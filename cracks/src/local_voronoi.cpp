@@ -9,6 +9,7 @@
 
 #include "methods.hpp"
 #include <crackvis/cracks/local_voronoi.hpp>
+#include <crackvis/cracks/particle_grid.hpp>
 
 namespace crackvis::cracks {
 
@@ -17,14 +18,8 @@ Box defaultDomain(std::span<const Vec3> positions, std::span<const double> radiu
   // particle's local cell then stops where its missing neighbours would have
   // cut it, so it is its true Voronoi cell and validation stays quiet on the
   // specimen's faces.
-  Box box{{1e300, 1e300, 1e300}, {-1e300, -1e300, -1e300}};
-  double largest = 0.0;
-  for (std::size_t i = 0; i < positions.size(); ++i) {
-    const Vec3 p = positions[i];
-    box.lo = {std::min(box.lo.x, p.x), std::min(box.lo.y, p.y), std::min(box.lo.z, p.z)};
-    box.hi = {std::max(box.hi.x, p.x), std::max(box.hi.y, p.y), std::max(box.hi.z, p.z)};
-    largest = std::max(largest, radius[i]);
-  }
+  Box box = dem::boundingBox(positions);
+  const double largest = radius.empty() ? 0.0 : *std::max_element(radius.begin(), radius.end());
   if (dimension == 2) {
     box.lo.z = -largest;
     box.hi.z = largest;
@@ -136,21 +131,6 @@ void computeLocalVoronoiFace(const BondGraph& graph, std::span<const Vec3> posit
       return;
     }
   }
-}
-
-bool vertexIsValid(const ParticleGrid& grid, std::span<const Vec3> positions, dem::ParticleIndex i,
-                   Vec3 vertex, double tolerance) {
-  const double radius = dem::norm(vertex - positions[static_cast<std::size_t>(i)]);
-  const double inner = radius * (1.0 - tolerance);
-  const double inner2 = inner * inner;
-  bool valid = true;
-  grid.forEachNear(vertex, inner, [&](std::int32_t k) {
-    if (k != i && valid) {
-      const Vec3 d = positions[static_cast<std::size_t>(k)] - vertex;
-      valid = dem::dot(d, d) >= inner2;
-    }
-  });
-  return valid;
 }
 
 namespace {

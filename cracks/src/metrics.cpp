@@ -114,12 +114,7 @@ void topology(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
   if (primitives.empty()) {
     return;
   }
-  Vec3 lo = mesh.points.front();
-  Vec3 hi = lo;
-  for (const Vec3& p : mesh.points) {
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-  }
+  const auto [lo, hi] = dem::boundingBox(mesh.points);
   const double size = std::max(dem::norm(hi - lo), 1e-300);
   const std::vector<std::int32_t> welded = weld(mesh.points, 1e-9 * size);
   std::vector<std::int32_t> parent(

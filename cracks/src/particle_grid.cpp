@@ -4,24 +4,9 @@
 #include <crackvis/cracks/particle_grid.hpp>
 
 namespace crackvis::cracks {
-namespace {
-double component(Vec3 p, int axis) {
-  return axis == 0 ? p.x : (axis == 1 ? p.y : p.z);
-}
-}  // namespace
-
 void ParticleGrid::build(std::span<const Vec3> positions, double cellSize) {
   m_positions = positions;
-  Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
-          std::numeric_limits<double>::max()};
-  Vec3 hi{-lo.x, -lo.y, -lo.z};
-  for (const Vec3& p : positions) {
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-  }
-  if (positions.empty()) {
-    lo = hi = Vec3{};
-  }
+  const auto [lo, hi] = dem::boundingBox(positions);
   // Never more cells than about 2 per particle: a deformed specimen that
   // flies apart must not make the grid explode.
   double size = cellSize;

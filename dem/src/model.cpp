@@ -57,6 +57,18 @@ Status checkDuplicateBonds(const Lattice& lattice) {
 
 }  // namespace
 
+Bounds boundingBox(std::span<const Vec3> points) {
+  if (points.empty()) {
+    return {};
+  }
+  Bounds box{points.front(), points.front()};
+  for (const Vec3& p : points) {
+    box.lo = {std::min(box.lo.x, p.x), std::min(box.lo.y, p.y), std::min(box.lo.z, p.z)};
+    box.hi = {std::max(box.hi.x, p.x), std::max(box.hi.y, p.y), std::max(box.hi.z, p.z)};
+  }
+  return box;
+}
+
 std::size_t StepState::brokenBondCount() const {
   return static_cast<std::size_t>(std::count(bondState.begin(), bondState.end(),
                                              static_cast<std::uint8_t>(BondState::kBroken)));

@@ -6,27 +6,12 @@
 #include <crackvis/dem/neighbour_grid.hpp>
 
 namespace crackvis::dem {
-namespace {
-double component(Vec3 p, int axis) {
-  return axis == 0 ? p.x : (axis == 1 ? p.y : p.z);
-}
-}  // namespace
-
 NeighbourGrid::NeighbourGrid(const std::vector<Vec3>& positions, double cellSize)
     : m_positions(positions), m_cellSize(cellSize) {
   if (!(cellSize > 0.0)) {
     throw std::invalid_argument("NeighbourGrid: cell size must be positive");
   }
-  Vec3 lo{std::numeric_limits<double>::max(), std::numeric_limits<double>::max(),
-          std::numeric_limits<double>::max()};
-  Vec3 hi{-lo.x, -lo.y, -lo.z};
-  for (const Vec3& p : positions) {
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-  }
-  if (positions.empty()) {
-    lo = hi = Vec3{};
-  }
+  const auto [lo, hi] = boundingBox(positions);
   m_origin = lo;
   for (int axis = 0; axis < 3; ++axis) {
     const double span = component(hi, axis) - component(lo, axis);

@@ -100,22 +100,6 @@ Geometry cuboidGeometry(double scale) {
   return g;
 }
 
-Vec3 lowCorner(const std::vector<Vec3>& positions) {
-  Vec3 lo = positions.front();
-  for (const Vec3& p : positions) {
-    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-  }
-  return lo;
-}
-
-Vec3 highCorner(const std::vector<Vec3>& positions) {
-  Vec3 hi = positions.front();
-  for (const Vec3& p : positions) {
-    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-  }
-  return hi;
-}
-
 Vec3 midpoint(const std::vector<Vec3>& positions, dem::Bond bond) {
   return 0.5 * (positions[static_cast<std::size_t>(bond.first)] +
                 positions[static_cast<std::size_t>(bond.second)]);
@@ -138,7 +122,8 @@ std::vector<std::size_t> bondsCrossing(const Geometry& g, const std::vector<dem:
 // 2D: the `count` bonds across the vertical mid-line nearest the lower edge.
 std::vector<std::size_t> plateDefect(const Geometry& g, const std::vector<dem::Bond>& bonds,
                                      int count) {
-  const double cut = 0.5 * (lowCorner(g.positions).x + highCorner(g.positions).x);
+  const auto [lo, hi] = dem::boundingBox(g.positions);
+  const double cut = 0.5 * (lo.x + hi.x);
   std::vector<std::size_t> crossing = bondsCrossing(g, bonds, cut);
   std::stable_sort(crossing.begin(), crossing.end(), [&](std::size_t a, std::size_t b) {
     return midpoint(g.positions, bonds[a]).y < midpoint(g.positions, bonds[b]).y;
@@ -165,9 +150,9 @@ std::map<long, int> gridRanks(const std::vector<double>& values, double step) {
 // reaching up from the bottom face (z minimum).
 std::vector<std::size_t> cuboidDefect(const Geometry& g, const std::vector<dem::Bond>& bonds,
                                       DefectShape shape) {
-  const double x0 = lowCorner(g.positions).x;
-  const int layers =
-      static_cast<int>(std::lround((highCorner(g.positions).x - x0) / g.layerSpacing)) + 1;
+  const auto [lo, hi] = dem::boundingBox(g.positions);
+  const double x0 = lo.x;
+  const int layers = static_cast<int>(std::lround((hi.x - x0) / g.layerSpacing)) + 1;
   const double cut = x0 + ((layers - 1) / 2 + 0.5) * g.layerSpacing;
   const std::vector<std::size_t> crossing = bondsCrossing(g, bonds, cut);
   std::vector<double> ys;
@@ -307,8 +292,7 @@ Result<Preset> makePreset(const PresetOptions& options) {
   preset.defectCentre =
       defect.empty() ? centre : (1.0 / static_cast<double>(defect.size())) * centre;
 
-  const Vec3 lo = lowCorner(g.positions);
-  const Vec3 hi = highCorner(g.positions);
+  const auto [lo, hi] = dem::boundingBox(g.positions);
   preset.extent = {hi.x - lo.x + 2.0 * g.radius, hi.y - lo.y + 2.0 * g.radius,
                    plate ? 0.0 : hi.z - lo.z + 2.0 * g.radius};
   preset.pullVelocity = plate ? kPlatePull : kCuboidPull;

@@ -26,10 +26,7 @@ std::string_view toString(Method method);
 Result<Method> parseMethod(std::string_view name);
 
 // An axis-aligned box (the domain that clips local Voronoi cells).
-struct Box {
-  Vec3 lo;
-  Vec3 hi;
-};
+using Box = dem::Bounds;
 
 // Everything one step provides; optional arrays may be empty.
 struct StepInput {

@@ -10,7 +10,6 @@
 #include <crackvis/cracks/bond_graph.hpp>
 #include <crackvis/cracks/convex_cell.hpp>
 #include <crackvis/cracks/extractor.hpp>
-#include <crackvis/cracks/particle_grid.hpp>
 
 namespace crackvis::cracks {
 
@@ -31,11 +30,5 @@ void computeLocalVoronoiCell(const BondGraph& graph, std::span<const Vec3> posit
 void computeLocalVoronoiFace(const BondGraph& graph, std::span<const Vec3> positions,
                              dem::ParticleIndex i, dem::BondIndex b, const Box& box,
                              std::vector<Vec3>& polygon, std::vector<Vec3>& scratch);
-
-// The empty-sphere test of one vertex of particle i's cell: false when some
-// particle lies inside the sphere centred at the vertex through particle i,
-// by more than tolerance times its radius.
-bool vertexIsValid(const ParticleGrid& grid, std::span<const Vec3> positions, dem::ParticleIndex i,
-                   Vec3 vertex, double tolerance);
 
 }  // namespace crackvis::cracks

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,17 @@ inline double dot(Vec3 a, Vec3 b) {
 inline double norm(Vec3 a) {
   return std::sqrt(dot(a, a));
 }
+inline double component(Vec3 p, int axis) {
+  return axis == 0 ? p.x : (axis == 1 ? p.y : p.z);
+}
+
+// An axis-aligned box.
+struct Bounds {
+  Vec3 lo;
+  Vec3 hi;
+};
+// The smallest box holding the points; a zero box at the origin when empty.
+Bounds boundingBox(std::span<const Vec3> points);
 
 // A bond (spring) of the lattice between two particles; first < second in
 // files written by crackvis, but readers accept either order.
