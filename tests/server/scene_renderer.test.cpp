@@ -82,9 +82,108 @@ TEST_CASE("a snapshot shows the crack surface where the crack is", "[render][egl
     CHECK(count(image, red) == 0);
     CHECK(count(image, notBlack) > kWidth * kHeight / 5);
   }
-  SECTION("a view of another size is refused") {
+  SECTION("a view larger than the renderer is refused") {
     scene.description.view.width = 200;
     CHECK((*renderer)->render(scene.description, scene.input(), image).message() ==
-          "view 200x120 does not match the renderer's 160x120");
+          "frame 200x120 does not fit the renderer's 160x120");
+  }
+  SECTION("a reduced-resolution frame comes from the same scene") {
+    render::Image small;
+    REQUIRE((*renderer)->renderFrame(kWidth / 2, kHeight / 2, small).isOk());
+    REQUIRE(small.width == kWidth / 2);
+    CHECK(red(small.pixel(kWidth / 4, kHeight / 4)));
+    CHECK(std::abs(count(small, red) * 4 - count(image, red)) < count(image, red) / 5);
+    render::Image upscaled;
+    render::resample(small, kWidth, kHeight, upscaled);
+    CHECK(upscaled.width == kWidth);
+    CHECK(std::abs(count(upscaled, red) - count(image, red)) < count(image, red) / 5);
+  }
+  SECTION("rotating the camera turns the crack plane away; reset brings it back") {
+    const int faceOn = count(image, red);
+    (*renderer)->moveCamera(render::CameraMove::kRotate, 0.35, 0.0);  // 70 degrees
+    REQUIRE((*renderer)->renderFrame(kWidth, kHeight, image).isOk());
+    CHECK(count(image, red) < faceOn * 2 / 3);
+    (*renderer)->moveCamera(render::CameraMove::kZoom, 0.5, 0.0);
+    const auto zoomed = (*renderer)->camera();
+    CHECK(dem::norm(zoomed.position - zoomed.focalPoint) < 30.0 * std::exp(-0.4));
+    (*renderer)->setCamera(*scene.description.view.camera);
+    REQUIRE((*renderer)->renderFrame(kWidth, kHeight, image).isOk());
+    CHECK(count(image, red) == faceOn);
+  }
+  SECTION("a pan moves the picture with the drag") {
+    (*renderer)->moveCamera(render::CameraMove::kPan, 0.25, 0.0);
+    REQUIRE((*renderer)->renderFrame(kWidth, kHeight, image).isOk());
+    int left = 0;
+    int right = 0;
+    for (int y = 0; y < kHeight; ++y) {
+      for (int x = 0; x < kWidth; ++x) {
+        if (red(image.pixel(x, y))) {
+          (x < kWidth / 2 ? left : right) += 1;
+        }
+      }
+    }
+    CHECK(right > left);
+  }
+}
+
+TEST_CASE("bonds as tubes, the decomposition and the scalar bar are drawn", "[render][egl]") {
+  auto renderer = render::SceneRenderer::create(kWidth, kHeight);
+  REQUIRE(renderer.isOk());
+  Scene scene;
+  scene.description.cracks.visible = false;
+  render::Image image;
+  auto green = [](const std::uint8_t* p) { return p[1] > 120 && p[0] < 60 && p[2] < 60; };
+
+  SECTION("bonds as lines and as tubes of the described radius") {
+    // The broken bonds seen from the side: short segments across the crack.
+    scene.description.bonds.show = pipeline::BondSelection::kBroken;
+    scene.description.bonds.colourBy = pipeline::BondColourBy::kSolid;
+    scene.description.bonds.colour = {0, 255, 0};
+    auto& camera = *scene.description.view.camera;
+    camera.position = camera.focalPoint + dem::Vec3{0, 30, 0};
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    const int lines = count(image, notBlack);
+    CHECK(lines > 0);
+    CHECK(count(image, green) > lines / 2);
+    scene.description.bonds.representation = pipeline::BondRepresentation::kTubes;
+    scene.description.bonds.tubeRadius = 0.1;
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    const int thin = count(image, notBlack);
+    CHECK(thin > 0);
+    scene.description.bonds.tubeRadius = 0.8;
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    CHECK(count(image, notBlack) > thin * 3 / 2);
+  }
+  SECTION("the decomposition's edges show around the crack") {
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    CHECK(count(image, notBlack) == 0);
+    auto extractor = cracks::makeExtractor(cracks::Method::kCellCut, *scene.crack.graph, 3);
+    REQUIRE(extractor->extract(scene.crack.input(), scene.mesh).isOk());
+    auto input = scene.input();
+    input.decomposition = extractor->decomposition();
+    REQUIRE(input.decomposition != nullptr);
+    scene.description.showDecomposition = true;
+    REQUIRE((*renderer)->render(scene.description, input, image).isOk());
+    CHECK(count(image, notBlack) > kWidth * kHeight / 20);
+  }
+  SECTION("a scalar bar appears at the right when something is coloured by a value") {
+    scene.description.cracks.visible = true;
+    scene.description.cracks.colourBy = pipeline::CrackColourBy::kBondId;
+    scene.description.view.camera->position.x += 200;  // the crack small in the middle
+    scene.description.view.scalarBar = false;
+    auto rightStrip = [&] {
+      int n = 0;
+      for (int y = 0; y < kHeight; ++y) {
+        for (int x = kWidth * 7 / 8; x < kWidth; ++x) {
+          n += notBlack(image.pixel(x, y)) ? 1 : 0;
+        }
+      }
+      return n;
+    };
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    CHECK(rightStrip() == 0);
+    scene.description.view.scalarBar = true;
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    CHECK(rightStrip() > 100);
   }
 }

@@ -1,6 +1,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <numbers>
+#include <optional>
 
 #include <crackvis_vtk_conversion.h>
 #include <fmt/format.h>
@@ -8,6 +10,7 @@
 #include <vtkCamera.h>
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
+#include <vtkDataSetMapper.h>
 #include <vtkDoubleArray.h>
 #include <vtkFloatArray.h>
 #include <vtkGenericOpenGLRenderWindow.h>
@@ -24,8 +27,13 @@
 #include <vtkProperty.h>
 #include <vtkRenderer.h>
 #include <vtkRendererCollection.h>
+#include <vtkScalarBarActor.h>
+#include <vtkTextProperty.h>
+#include <vtkTubeFilter.h>
 #include <vtkUnsignedCharArray.h>
+#include <vtkUnstructuredGrid.h>
 
+#include <crackvis/cracks/lattice_cells.hpp>
 #include <crackvis/render/egl_context.hpp>
 #include <crackvis/render/scene_renderer.hpp>
 
@@ -72,11 +80,22 @@ vtkSmartPointer<vtkLookupTable> lookupTable(ColourMap map, double lo, double hi)
   return table;
 }
 
-void colourByScalars(vtkPolyDataMapper* mapper, vtkDataArray* scalars, bool cellData,
-                     ColourMap map) {
+// The lookup table and title of the first coloured layer, for the scalar bar.
+struct Legend {
+  vtkSmartPointer<vtkLookupTable> table;
+  std::string title;
+};
+
+void colourByScalars(vtkMapper* mapper, vtkDataArray* scalars, bool cellData, ColourMap map,
+                     Legend* legend) {
   double range[2] = {0, 1};
   scalars->GetRange(range);
-  mapper->SetLookupTable(lookupTable(map, range[0], range[1]));
+  auto table = lookupTable(map, range[0], range[1]);
+  mapper->SetLookupTable(table);
+  if (legend != nullptr && legend->table == nullptr) {
+    legend->table = table;
+    legend->title = scalars->GetName() != nullptr ? scalars->GetName() : "";
+  }
   mapper->SetScalarRange(range[0], range[1] > range[0] ? range[1] : range[0] + 1.0);
   mapper->SetScalarModeToUsePointFieldData();
   if (cellData) {
@@ -84,6 +103,44 @@ void colourByScalars(vtkPolyDataMapper* mapper, vtkDataArray* scalars, bool cell
   }
   mapper->SelectColorArray(scalars->GetName());
   mapper->ScalarVisibilityOn();
+}
+
+vtkSmartPointer<vtkPoints> positionPoints(std::span<const dem::Vec3> positions) {
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(static_cast<vtkIdType>(positions.size()));
+  std::memcpy(vtkDoubleArray::SafeDownCast(points->GetData())->GetPointer(0), positions.data(),
+              positions.size() * sizeof(dem::Vec3));
+  return points;
+}
+
+const char* particleArrayName(pipeline::ParticleColourBy by) {
+  switch (by) {
+    case pipeline::ParticleColourBy::kRadius:
+      return "radius";
+    case pipeline::ParticleColourBy::kDisplacement:
+      return "displacement";
+    case pipeline::ParticleColourBy::kVelocity:
+      return "velocity";
+    case pipeline::ParticleColourBy::kDamage:
+      return "damage";
+    case pipeline::ParticleColourBy::kSolid:
+      break;
+  }
+  return "value";
+}
+
+const char* bondArrayName(pipeline::BondColourBy by) {
+  switch (by) {
+    case pipeline::BondColourBy::kForce:
+      return "bond_force";
+    case pipeline::BondColourBy::kBreakStep:
+      return "break_step";
+    case pipeline::BondColourBy::kState:
+    case pipeline::BondColourBy::kSolid:
+      break;
+  }
+  return "bond_state";
 }
 
 // The per-particle value a colour-by names.
@@ -128,16 +185,11 @@ std::vector<double> particleValues(const pipeline::ParticlesDescription& particl
 }
 
 vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
-                                        const SceneInput& input) {
+                                        const SceneInput& input, Legend* legend) {
   const auto& particles = d.particles;
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
   const auto n = static_cast<vtkIdType>(input.step.positions.size());
-  points->SetNumberOfPoints(n);
-  std::memcpy(vtkDoubleArray::SafeDownCast(points->GetData())->GetPointer(0),
-              input.step.positions.data(), static_cast<std::size_t>(n) * sizeof(dem::Vec3));
   auto data = vtkSmartPointer<vtkPolyData>::New();
-  data->SetPoints(points);
+  data->SetPoints(positionPoints(input.step.positions));
   // The impostor mapper draws vertex cells: one per particle.
   vtkNew<vtkCellArray> vertices;
   for (vtkIdType i = 0; i < n; ++i) {
@@ -145,14 +197,14 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   }
   data->SetVerts(vertices);
   vtkNew<vtkFloatArray> radius;
-  radius->SetName("radius");
+  radius->SetName("sphere_radius");
   radius->SetNumberOfValues(n);
   for (vtkIdType i = 0; i < n; ++i) {
     radius->SetValue(i, static_cast<float>(input.step.radius[static_cast<std::size_t>(i)]));
   }
   data->GetPointData()->AddArray(radius);
   vtkNew<vtkDoubleArray> values;
-  values->SetName("value");
+  values->SetName(particleArrayName(particles.colourBy));
   const auto perParticle = particleValues(particles, input);
   values->SetNumberOfValues(n);
   for (vtkIdType i = 0; i < n; ++i) {
@@ -163,7 +215,7 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   vtkSmartPointer<vtkPolyDataMapper> mapper;
   if (particles.representation == pipeline::ParticleRepresentation::kImpostors) {
     auto spheres = vtkSmartPointer<vtkOpenGLSphereMapper>::New();
-    spheres->SetScaleArray("radius");
+    spheres->SetScaleArray("sphere_radius");
     mapper = spheres;
   } else {
     mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
@@ -171,7 +223,7 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   mapper->SetInputData(data);
   mapper->ScalarVisibilityOff();
   if (particles.colourBy != pipeline::ParticleColourBy::kSolid) {
-    colourByScalars(mapper, values, false, d.view.colourMap);
+    colourByScalars(mapper, values, false, d.view.colourMap, legend);
   }
   if (particles.clip) {
     vtkNew<vtkPlane> plane;
@@ -207,41 +259,175 @@ const char* crackArrayName(pipeline::CrackColourBy by) {
   return nullptr;
 }
 
-// Crack primitives, and (separately) the local Voronoi inconsistency marks.
-void addCracks(const pipeline::PipelineDescription& d, const cracks::CrackMesh& mesh,
-               vtkRenderer* renderer) {
-  auto data = vtkSmartPointer<vtkPolyData>::New();
-  cracks::vtkadapter::toPolyData(mesh, data);
-  vtkNew<vtkPolyDataMapper> mapper;
-  mapper->SetInputData(data);
+// The primitives of `mesh` that `keep(k)` selects (k in VTK order: vertices,
+// lines, polygons, volume cells), with their cell data; points are shared.
+template <typename Keep>
+cracks::CrackMesh selectPrimitives(const cracks::CrackMesh& mesh, Keep keep) {
+  cracks::CrackMesh out;
+  out.dimension = mesh.dimension;
+  out.points = mesh.points;
+  out.pointData = mesh.pointData;
+  std::vector<std::size_t> kept;
+  std::size_t k = 0;
+  for (std::int32_t v : mesh.vertices) {
+    if (keep(k)) {
+      out.vertices.push_back(v);
+      kept.push_back(k);
+    }
+    ++k;
+  }
+  auto copyList = [&](const cracks::PrimitiveList& from, cracks::PrimitiveList& to,
+                      const std::vector<std::uint8_t>* types) {
+    for (std::size_t i = 0; i < from.size(); ++i, ++k) {
+      if (!keep(k)) {
+        continue;
+      }
+      to.addRange(from.connectivity.begin() + from.offsets[i],
+                  from.connectivity.begin() + from.offsets[i + 1]);
+      if (types != nullptr) {
+        out.volumeCellTypes.push_back((*types)[i]);
+      }
+      kept.push_back(k);
+    }
+  };
+  copyList(mesh.lines, out.lines, nullptr);
+  copyList(mesh.polygons, out.polygons, nullptr);
+  copyList(mesh.volumeCells, out.volumeCells, &mesh.volumeCellTypes);
+  for (const cracks::AttributeArray& array : mesh.cellData) {
+    cracks::AttributeArray selected{array.name, array.type, array.components, {}};
+    const auto c = static_cast<std::size_t>(array.components);
+    for (std::size_t i : kept) {
+      selected.values.insert(selected.values.end(), array.values.begin() + i * c,
+                             array.values.begin() + (i + 1) * c);
+    }
+    out.cellData.push_back(std::move(selected));
+  }
+  return out;
+}
+
+// A flag of primitive k from a cell array (absent array: `otherwise`).
+bool flagOf(const cracks::AttributeArray* array, std::size_t k, bool otherwise) {
+  if (array == nullptr || k >= array->values.size()) {
+    return otherwise;
+  }
+  return array->values[k] != 0.0;
+}
+
+// One actor of crack primitives: surfaces (or lines in 2D) through an
+// ordinary mapper; volume cells (cell attribute, 3D) through a data set mapper.
+vtkSmartPointer<vtkActor> meshActor(const cracks::CrackMesh& mesh, const char* colourArray,
+                                    ColourMap map, Legend* legend) {
+  vtkSmartPointer<vtkDataSet> data;
+  vtkSmartPointer<vtkMapper> mapper;
+  if (mesh.hasVolumeCells()) {
+    auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+    cracks::vtkadapter::toUnstructuredGrid(mesh, grid);
+    auto gridMapper = vtkSmartPointer<vtkDataSetMapper>::New();
+    gridMapper->SetInputData(grid);
+    data = grid;
+    mapper = gridMapper;
+  } else {
+    auto poly = vtkSmartPointer<vtkPolyData>::New();
+    cracks::vtkadapter::toPolyData(mesh, poly);
+    auto polyMapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+    polyMapper->SetInputData(poly);
+    data = poly;
+    mapper = polyMapper;
+  }
   mapper->ScalarVisibilityOff();
-  if (const char* name = crackArrayName(d.cracks.colourBy)) {
-    if (vtkDataArray* cells = data->GetCellData()->GetArray(name)) {
-      colourByScalars(mapper, cells, true, d.view.colourMap);
-    } else if (vtkDataArray* points = data->GetPointData()->GetArray(name)) {
-      colourByScalars(mapper, points, false, d.view.colourMap);
+  if (colourArray != nullptr) {
+    if (vtkDataArray* cells = data->GetCellData()->GetArray(colourArray)) {
+      colourByScalars(mapper, cells, true, map, legend);
+    } else if (vtkDataArray* points = data->GetPointData()->GetArray(colourArray)) {
+      colourByScalars(mapper, points, false, map, legend);
     }
   }
-  vtkNew<vtkActor> actor;
+  auto actor = vtkSmartPointer<vtkActor>::New();
   actor->SetMapper(mapper);
-  setColour(actor->GetProperty(), d.cracks.colour);
-  actor->GetProperty()->SetOpacity(d.cracks.opacity);
   actor->GetProperty()->SetLineWidth(2.0);
   actor->GetProperty()->SetPointSize(4.0);
   actor->GetProperty()->BackfaceCullingOff();
+  return actor;
+}
+
+// Crack primitives of broken, consistent bonds; the local Voronoi
+// inconsistency marks (lines between the particle centres) and intact faces
+// (the local decomposition) as separate actors when the description shows them.
+void addCracks(const pipeline::PipelineDescription& d, const cracks::CrackMesh& mesh,
+               vtkRenderer* renderer, Legend* legend) {
+  const cracks::AttributeArray* state = mesh.findCellData("bond_state");
+  const cracks::AttributeArray* inconsistent = mesh.findCellData("inconsistent");
+  const auto crack = selectPrimitives(mesh, [&](std::size_t k) {
+    return flagOf(state, k, true) && !flagOf(inconsistent, k, false);
+  });
+  auto actor = meshActor(crack, crackArrayName(d.cracks.colourBy), d.view.colourMap, legend);
+  setColour(actor->GetProperty(), d.cracks.colour);
+  actor->GetProperty()->SetOpacity(d.cracks.opacity);
+  renderer->AddActor(actor);
+  if (d.showInconsistent && inconsistent != nullptr) {
+    const auto marks =
+        selectPrimitives(mesh, [&](std::size_t k) { return flagOf(inconsistent, k, false); });
+    auto marksActor = meshActor(marks, nullptr, d.view.colourMap, nullptr);
+    marksActor->GetProperty()->SetColor(1.0, 0.85, 0.0);  // yellow: stands out on every map
+    marksActor->GetProperty()->SetLineWidth(3.0);
+    renderer->AddActor(marksActor);
+  }
+  if (d.showDecomposition && state != nullptr) {
+    const auto intact = selectPrimitives(mesh, [&](std::size_t k) {
+      return !flagOf(state, k, true) && !flagOf(inconsistent, k, false);
+    });
+    if (intact.primitiveCount() > 0) {
+      auto intactActor = meshActor(intact, nullptr, d.view.colourMap, nullptr);
+      intactActor->GetProperty()->SetColor(0.75, 0.8, 0.9);
+      intactActor->GetProperty()->SetOpacity(0.25);
+      renderer->AddActor(intactActor);
+    }
+  }
+}
+
+// The cell methods' local decomposition: the edges of its cells, faint.
+void addDecompositionEdges(const SceneInput& input, vtkRenderer* renderer) {
+  const cracks::LatticeDecomposition& decomposition = *input.decomposition;
+  std::vector<std::uint8_t> used(input.lattice->bonds.size(), 0);
+  for (const cracks::LatticeCell& cell : decomposition.cells()) {
+    const auto& shape = cracks::shapeOf(cell.type);
+    for (std::size_t e = 0; e < shape.edges.size(); ++e) {
+      used[static_cast<std::size_t>(decomposition.bondOf(cell, static_cast<int>(e)))] = 1;
+    }
+  }
+  vtkNew<vtkCellArray> lines;
+  for (std::size_t b = 0; b < used.size(); ++b) {
+    if (used[b] != 0) {
+      const vtkIdType ids[2] = {input.lattice->bonds[b].first, input.lattice->bonds[b].second};
+      lines->InsertNextCell(2, ids);
+    }
+  }
+  vtkNew<vtkPolyData> data;
+  data->SetPoints(positionPoints(input.step.positions));
+  data->SetLines(lines);
+  vtkNew<vtkPolyDataMapper> mapper;
+  mapper->SetInputData(data);
+  mapper->ScalarVisibilityOff();
+  vtkNew<vtkActor> actor;
+  actor->SetMapper(mapper);
+  actor->GetProperty()->SetColor(0.75, 0.8, 0.9);
+  actor->GetProperty()->SetOpacity(0.3);
   renderer->AddActor(actor);
 }
 
-void addBonds(const pipeline::PipelineDescription& d, const SceneInput& input,
-              vtkRenderer* renderer) {
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  for (const dem::Vec3& p : input.step.positions) {
-    points->InsertNextPoint(p.x, p.y, p.z);
+double meanRadius(std::span<const double> radius) {
+  double sum = 0.0;
+  for (double r : radius) {
+    sum += r;
   }
+  return radius.empty() ? 1.0 : sum / static_cast<double>(radius.size());
+}
+
+void addBonds(const pipeline::PipelineDescription& d, const SceneInput& input,
+              vtkRenderer* renderer, Legend* legend) {
   vtkNew<vtkCellArray> lines;
   vtkNew<vtkDoubleArray> values;
-  values->SetName("value");
+  values->SetName(bondArrayName(d.bonds.colourBy));
   for (std::size_t b = 0; b < input.lattice->bonds.size(); ++b) {
     const bool broken = input.step.bondState[b] != 0;
     if (d.bonds.show == pipeline::BondSelection::kBroken && !broken) {
@@ -258,15 +444,25 @@ void addBonds(const pipeline::PipelineDescription& d, const SceneInput& input,
     }
     values->InsertNextValue(value);
   }
-  vtkNew<vtkPolyData> data;
-  data->SetPoints(points);
+  auto data = vtkSmartPointer<vtkPolyData>::New();
+  data->SetPoints(positionPoints(input.step.positions));
   data->SetLines(lines);
   data->GetCellData()->AddArray(values);
   vtkNew<vtkPolyDataMapper> mapper;
-  mapper->SetInputData(data);
+  if (d.bonds.representation == pipeline::BondRepresentation::kTubes) {
+    vtkNew<vtkTubeFilter> tubes;
+    tubes->SetInputData(data);
+    tubes->SetRadius(d.bonds.tubeRadius * meanRadius(input.step.radius));
+    tubes->SetNumberOfSides(8);
+    tubes->CappingOff();
+    tubes->Update();
+    mapper->SetInputData(tubes->GetOutput());
+  } else {
+    mapper->SetInputData(data);
+  }
   mapper->ScalarVisibilityOff();
   if (d.bonds.colourBy != pipeline::BondColourBy::kSolid) {
-    colourByScalars(mapper, values, true, d.view.colourMap);
+    colourByScalars(mapper, values, true, d.view.colourMap, legend);
   }
   vtkNew<vtkActor> actor;
   actor->SetMapper(mapper);
@@ -275,14 +471,40 @@ void addBonds(const pipeline::PipelineDescription& d, const SceneInput& input,
   renderer->AddActor(actor);
 }
 
+// A scalar bar for the first coloured layer, in a colour readable on the background.
+void addScalarBar(const pipeline::PipelineDescription& d, const Legend& legend,
+                  vtkRenderer* renderer) {
+  if (!d.view.scalarBar || legend.table == nullptr) {
+    return;
+  }
+  vtkNew<vtkScalarBarActor> bar;
+  bar->SetLookupTable(legend.table);
+  bar->SetTitle(legend.title.c_str());
+  bar->SetNumberOfLabels(5);
+  bar->SetMaximumWidthInPixels(110);
+  bar->SetPosition(0.88, 0.1);
+  bar->SetWidth(0.1);
+  bar->SetHeight(0.8);
+  const auto& bg = d.view.background;
+  const double light = (0.299 * bg.r + 0.587 * bg.g + 0.114 * bg.b) / 255.0 > 0.5 ? 0.0 : 1.0;
+  for (vtkTextProperty* text : {bar->GetTitleTextProperty(), bar->GetLabelTextProperty()}) {
+    text->SetColor(light, light, light);
+    text->ShadowOff();
+    text->ItalicOff();
+  }
+  renderer->AddActor2D(bar);
+}
+
 }  // namespace
 
 struct SceneRenderer::Impl {
   std::unique_ptr<EglContext> egl;
   vtkSmartPointer<vtkGenericOpenGLRenderWindow> window;
-  vtkSmartPointer<vtkRenderer> renderer;  // the scene on the window now
-  int width = 0;
+  vtkSmartPointer<vtkRenderer> renderer;  // kept across scenes: it owns the camera
+  int width = 0;                          // capacity
   int height = 0;
+  bool cameraSet = false;
+  std::optional<pipeline::CameraDescription> requestedCamera;
 };
 
 SceneRenderer::SceneRenderer() : m_impl(std::make_unique<Impl>()) {}
@@ -294,7 +516,17 @@ SceneRenderer::~SceneRenderer() {
   }
 }
 
+int SceneRenderer::capacityWidth() const {
+  return m_impl->width;
+}
+int SceneRenderer::capacityHeight() const {
+  return m_impl->height;
+}
+
 Result<std::unique_ptr<SceneRenderer>> SceneRenderer::create(int width, int height) {
+  if (width < 16 || height < 16 || width > 8192 || height > 8192) {
+    return invalidArgument(fmt::format("view size {}x{} outside 16..8192", width, height));
+  }
   auto egl = EglContext::create(width, height);
   if (!egl) {
     return egl.status();
@@ -322,84 +554,215 @@ Result<std::unique_ptr<SceneRenderer>> SceneRenderer::create(int width, int heig
         fmt::format("{}: VTK could not initialize OpenGL on it", impl.egl->description()));
   }
   std::string glRenderer = "unknown";
-  if (capabilities != nullptr) {
-    const std::string text = capabilities;
-    const auto at = text.find("OpenGL renderer string:");
-    if (at != std::string::npos) {
-      glRenderer = text.substr(at + 24, text.find('\n', at) - at - 24);
-    }
+  const std::string text = capabilities;
+  if (const auto at = text.find("OpenGL renderer string:"); at != std::string::npos) {
+    glRenderer = text.substr(at + 24, text.find('\n', at) - at - 24);
   }
   renderer->m_backend = fmt::format("{}; OpenGL renderer: {}", impl.egl->description(), glRenderer);
   return renderer;
 }
 
-Status SceneRenderer::render(const pipeline::PipelineDescription& d, const SceneInput& input,
-                             Image& out) {
+Status SceneRenderer::setScene(const pipeline::PipelineDescription& d, const SceneInput& input,
+                               bool resetCamera) {
   Impl& impl = *m_impl;
-  if (d.view.width != impl.width || d.view.height != impl.height) {
-    return invalidArgument(fmt::format("view {}x{} does not match the renderer's {}x{}",
-                                       d.view.width, d.view.height, impl.width, impl.height));
+  if (input.lattice == nullptr) {
+    return invalidArgument("a scene needs the lattice");
   }
   CRACKVIS_RETURN_IF_ERROR(impl.egl->makeCurrent());
-  auto renderer = vtkSmartPointer<vtkRenderer>::New();
+  vtkRenderer* renderer = impl.renderer;
+  renderer->RemoveAllViewProps();
   renderer->SetBackground(d.view.background.r / 255.0, d.view.background.g / 255.0,
                           d.view.background.b / 255.0);
+  Legend legend;
   if (d.particles.visible) {
-    renderer->AddActor(particleActor(d, input));
+    renderer->AddActor(particleActor(d, input, &legend));
   }
   if (d.cracks.visible && input.cracks != nullptr) {
-    addCracks(d, *input.cracks, renderer);
+    addCracks(d, *input.cracks, renderer, &legend);
+  }
+  if (d.showDecomposition && input.decomposition != nullptr) {
+    addDecompositionEdges(input, renderer);
   }
   if (d.bonds.show != pipeline::BondSelection::kNone) {
-    addBonds(d, input, renderer);
+    addBonds(d, input, renderer, &legend);
   }
-  impl.window->RemoveRenderer(impl.renderer);
-  impl.renderer = renderer;
-  impl.window->AddRenderer(renderer);
-  if (d.view.camera) {
-    vtkCamera* camera = renderer->GetActiveCamera();
-    const auto& c = *d.view.camera;
-    camera->SetPosition(c.position.x, c.position.y, c.position.z);
-    camera->SetFocalPoint(c.focalPoint.x, c.focalPoint.y, c.focalPoint.z);
-    camera->SetViewUp(c.viewUp.x, c.viewUp.y, c.viewUp.z);
-    camera->SetViewAngle(c.viewAngle);
-    renderer->ResetCameraClippingRange();
-  } else {
-    renderer->ResetCamera();
+  addScalarBar(d, legend, renderer);
+  if (resetCamera || !impl.cameraSet) {
+    if (d.view.camera) {
+      setCamera(*d.view.camera);
+    } else {
+      renderer->ResetCamera();
+    }
+    impl.cameraSet = true;
   }
+  renderer->ResetCameraClippingRange();
+  return Status::ok();
+}
+
+Status SceneRenderer::renderFrame(int width, int height, Image& out) {
+  Impl& impl = *m_impl;
+  if (width < 1 || height < 1 || width > impl.width || height > impl.height) {
+    return invalidArgument(fmt::format("frame {}x{} does not fit the renderer's {}x{}", width,
+                                       height, impl.width, impl.height));
+  }
+  CRACKVIS_RETURN_IF_ERROR(impl.egl->makeCurrent());
+  // A frame smaller than the pbuffer renders into its lower-left corner.
+  impl.window->SetSize(width, height);
+  impl.renderer->ResetCameraClippingRange();
   impl.window->Render();
   vtkNew<vtkUnsignedCharArray> pixels;
-  impl.window->GetPixelData(0, 0, impl.width - 1, impl.height - 1, 0, pixels, 0);
-  out.width = impl.width;
-  out.height = impl.height;
-  out.rgb.resize(static_cast<std::size_t>(impl.width) * static_cast<std::size_t>(impl.height) * 3);
+  impl.window->GetPixelData(0, 0, width - 1, height - 1, 0, pixels, 0);
+  out.width = width;
+  out.height = height;
+  const std::size_t row = static_cast<std::size_t>(width) * 3;
+  out.rgb.resize(row * static_cast<std::size_t>(height));
   // OpenGL's rows run bottom to top.
-  const std::size_t row = static_cast<std::size_t>(impl.width) * 3;
-  for (int y = 0; y < impl.height; ++y) {
+  for (int y = 0; y < height; ++y) {
     std::memcpy(out.rgb.data() + static_cast<std::size_t>(y) * row,
-                pixels->GetPointer(0) + static_cast<std::size_t>(impl.height - 1 - y) * row, row);
+                pixels->GetPointer(0) + static_cast<std::size_t>(height - 1 - y) * row, row);
   }
   return Status::ok();
 }
 
-Status writePng(const Image& image, const std::string& path) {
-  vtkNew<vtkImageData> data;
+Status SceneRenderer::render(const pipeline::PipelineDescription& d, const SceneInput& input,
+                             Image& out) {
+  CRACKVIS_RETURN_IF_ERROR(setScene(d, input, true));
+  return renderFrame(d.view.width, d.view.height, out);
+}
+
+void SceneRenderer::moveCamera(CameraMove move, double dx, double dy) {
+  vtkRenderer* renderer = m_impl->renderer;
+  vtkCamera* camera = renderer->GetActiveCamera();
+  switch (move) {
+    case CameraMove::kRotate:
+      // VTK's trackball style turns 200 degrees per window of drag.
+      camera->Azimuth(-200.0 * dx);
+      camera->Elevation(200.0 * dy);
+      camera->OrthogonalizeViewUp();
+      break;
+    case CameraMove::kPan: {
+      double position[3];
+      double focal[3];
+      double up[3];
+      double direction[3];
+      camera->GetPosition(position);
+      camera->GetFocalPoint(focal);
+      camera->GetViewUp(up);
+      camera->GetDirectionOfProjection(direction);
+      const double right[3] = {direction[1] * up[2] - direction[2] * up[1],
+                               direction[2] * up[0] - direction[0] * up[2],
+                               direction[0] * up[1] - direction[1] * up[0]};
+      // The view's extent at the focal point, so the scene follows the mouse.
+      const double height =
+          2.0 * camera->GetDistance() * std::tan(camera->GetViewAngle() * std::numbers::pi / 360.0);
+      const double aspect =
+          static_cast<double>(m_impl->window->GetSize()[0]) / m_impl->window->GetSize()[1];
+      const double sx = -dx * height * aspect;
+      const double sy = dy * height;
+      for (int k = 0; k < 3; ++k) {
+        const double shift = sx * right[k] + sy * up[k];
+        position[k] += shift;
+        focal[k] += shift;
+      }
+      camera->SetPosition(position);
+      camera->SetFocalPoint(focal);
+      break;
+    }
+    case CameraMove::kZoom:
+      camera->Dolly(std::exp(dx));
+      break;
+    case CameraMove::kReset:
+      renderer->ResetCamera();
+      break;
+  }
+  renderer->ResetCameraClippingRange();
+}
+
+pipeline::CameraDescription SceneRenderer::camera() const {
+  vtkCamera* camera = m_impl->renderer->GetActiveCamera();
+  pipeline::CameraDescription c;
+  double v[3];
+  camera->GetPosition(v);
+  c.position = {v[0], v[1], v[2]};
+  camera->GetFocalPoint(v);
+  c.focalPoint = {v[0], v[1], v[2]};
+  camera->GetViewUp(v);
+  c.viewUp = {v[0], v[1], v[2]};
+  c.viewAngle = camera->GetViewAngle();
+  return c;
+}
+
+void SceneRenderer::setCamera(const pipeline::CameraDescription& c) {
+  vtkCamera* camera = m_impl->renderer->GetActiveCamera();
+  camera->SetPosition(c.position.x, c.position.y, c.position.z);
+  camera->SetFocalPoint(c.focalPoint.x, c.focalPoint.y, c.focalPoint.z);
+  camera->SetViewUp(c.viewUp.x, c.viewUp.y, c.viewUp.z);
+  camera->SetViewAngle(c.viewAngle);
+  m_impl->renderer->ResetCameraClippingRange();
+  m_impl->cameraSet = true;
+}
+
+void resample(const Image& in, int width, int height, Image& out) {
+  out.width = width;
+  out.height = height;
+  out.rgb.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3);
+  std::vector<int> sourceX(static_cast<std::size_t>(width));
+  for (int x = 0; x < width; ++x) {
+    sourceX[static_cast<std::size_t>(x)] = std::min(in.width - 1, x * in.width / width);
+  }
+  for (int y = 0; y < height; ++y) {
+    const int sy = std::min(in.height - 1, y * in.height / height);
+    const std::uint8_t* source = in.pixel(0, sy);
+    std::uint8_t* target = out.rgb.data() + static_cast<std::size_t>(y) * width * 3;
+    for (int x = 0; x < width; ++x) {
+      std::memcpy(target + 3 * x, source + 3 * sourceX[static_cast<std::size_t>(x)], 3);
+    }
+  }
+}
+
+namespace {
+
+// VTK's images run bottom to top.
+vtkSmartPointer<vtkImageData> toImageData(const Image& image) {
+  auto data = vtkSmartPointer<vtkImageData>::New();
   data->SetDimensions(image.width, image.height, 1);
   data->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
   auto* target = static_cast<std::uint8_t*>(data->GetScalarPointer());
   const std::size_t row = static_cast<std::size_t>(image.width) * 3;
-  for (int y = 0; y < image.height; ++y) {  // VTK images also run bottom to top
+  for (int y = 0; y < image.height; ++y) {
     std::memcpy(target + static_cast<std::size_t>(y) * row,
                 image.rgb.data() + static_cast<std::size_t>(image.height - 1 - y) * row, row);
   }
+  return data;
+}
+
+}  // namespace
+
+Status writePng(const Image& image, const std::string& path) {
   vtkNew<vtkPNGWriter> writer;
   writer->SetFileName(path.c_str());
-  writer->SetInputData(data);
+  writer->SetInputData(toImageData(image));
   writer->Write();
   if (writer->GetErrorCode() != 0) {
     return failedPrecondition(fmt::format("{}: cannot write the PNG", path));
   }
   return Status::ok();
+}
+
+Result<std::vector<std::uint8_t>> encodePng(const Image& image) {
+  if (image.width < 1 || image.height < 1) {
+    return invalidArgument("an empty image has no PNG");
+  }
+  vtkNew<vtkPNGWriter> writer;
+  writer->WriteToMemoryOn();
+  writer->SetInputData(toImageData(image));
+  writer->Write();
+  vtkUnsignedCharArray* bytes = writer->GetResult();
+  if (writer->GetErrorCode() != 0 || bytes == nullptr) {
+    return internalError("the PNG encoder failed");
+  }
+  const auto* first = bytes->GetPointer(0);
+  return std::vector<std::uint8_t>(first, first + bytes->GetNumberOfValues());
 }
 
 }  // namespace crackvis::render

@@ -18,6 +18,7 @@ enum class StatusCode {
   kOk,
   kInvalidArgument,
   kNotFound,
+  kOutOfRange,
   kFailedPrecondition,
   kPermissionDenied,
   kUnauthenticated,
@@ -49,6 +50,9 @@ inline Status invalidArgument(std::string message) {
 }
 inline Status notFound(std::string message) {
   return {StatusCode::kNotFound, std::move(message)};
+}
+inline Status outOfRange(std::string message) {
+  return {StatusCode::kOutOfRange, std::move(message)};
 }
 inline Status failedPrecondition(std::string message) {
   return {StatusCode::kFailedPrecondition, std::move(message)};
@@ -93,6 +97,8 @@ inline std::string_view toString(StatusCode code) {
       return "INVALID_ARGUMENT";
     case StatusCode::kNotFound:
       return "NOT_FOUND";
+    case StatusCode::kOutOfRange:
+      return "OUT_OF_RANGE";
     case StatusCode::kFailedPrecondition:
       return "FAILED_PRECONDITION";
     case StatusCode::kPermissionDenied:

@@ -1,16 +1,20 @@
 // Renders one step of a DEM data set as a pipeline description says, off
 // screen (EglContext), into an RGB image: particles as GLSL sphere impostors
-// (vtkOpenGLSphereMapper), crack surfaces from any of the four methods,
-// broken or all bonds as lines, inconsistency marks, background, colour map
-// and camera. The building block of the render server's sessions and of
-// `crackvis snapshot`.
+// (vtkOpenGLSphereMapper), crack surfaces from any of the four methods, broken
+// or all bonds as lines or tubes, inconsistency marks, the local
+// decomposition, background, colour map, scalar bar and camera. The building
+// block of the render server's sessions and of `crackvis snapshot`.
 //
-// Not yet from the description: bonds as tubes, the decomposition display
-// and the scalar bar (the render-server issue's remaining points).
+// A session sets a scene once per step or description (setScene) and then
+// renders it as often as the camera moves (renderFrame), at full or reduced
+// resolution: frames of any size up to the capacity given at creation come
+// from the same context.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -31,6 +35,10 @@ struct Image {
   }
 };
 
+// Scales `in` up (pixel replication, ParaView's reduced-resolution look) or
+// down (nearest pixel) to width x height.
+void resample(const Image& in, int width, int height, Image& out);
+
 // What one step needs besides the description: the lattice, the step, the
 // reference positions (step 0, for displacement) and the extracted cracks.
 struct SceneInput {
@@ -39,16 +47,42 @@ struct SceneInput {
   std::span<const dem::Vec3> initialPositions;       // may be empty
   std::span<const std::array<float, 3>> velocities;  // may be empty
   const cracks::CrackMesh* cracks = nullptr;         // may be null
+  // The cell methods' decomposition, drawn as its edges when the description
+  // shows the decomposition (local Voronoi shows its intact faces instead).
+  const cracks::LatticeDecomposition* decomposition = nullptr;
 };
+
+// Camera moves in view units, so that a client's mouse deltas map the same
+// way at any window size: dx, dy are fractions of the view's width and height,
+// x to the right and y downwards (screen convention).
+enum class CameraMove { kRotate, kPan, kZoom, kReset };
 
 class SceneRenderer {
  public:
-  // An off-screen context and render window of the description's size.
+  // An off-screen context that holds frames up to width x height.
   static Result<std::unique_ptr<SceneRenderer>> create(int width, int height);
   ~SceneRenderer();
 
+  // Builds the scene's actors. The camera is kept across calls; it is set
+  // from the description's camera (or reset to show everything) on the first
+  // call, when `resetCamera` is true, and by moveCamera(kReset).
+  Status setScene(const pipeline::PipelineDescription& description, const SceneInput& input,
+                  bool resetCamera = false);
+  // Renders the scene at width x height (at most the capacity).
+  Status renderFrame(int width, int height, Image& out);
+  // setScene(description, input, true) then renderFrame at the description's
+  // view size: a snapshot.
   Status render(const pipeline::PipelineDescription& description, const SceneInput& input,
                 Image& out);
+
+  // kRotate: dx, dy drag the scene (trackball); kPan: the scene follows the
+  // drag; kZoom: dx > 0 zooms in (factor exp(dx)); kReset: fit the scene.
+  void moveCamera(CameraMove move, double dx, double dy);
+  pipeline::CameraDescription camera() const;
+  void setCamera(const pipeline::CameraDescription& camera);
+
+  int capacityWidth() const;
+  int capacityHeight() const;
   // "EGL 1.5 (Mesa Project, surfaceless); OpenGL renderer: llvmpipe ..."
   const std::string& backend() const { return m_backend; }
 
@@ -60,5 +94,7 @@ class SceneRenderer {
 };
 
 Status writePng(const Image& image, const std::string& path);
+// The PNG file's bytes (for the render service's Snapshot).
+Result<std::vector<std::uint8_t>> encodePng(const Image& image);
 
 }  // namespace crackvis::render
