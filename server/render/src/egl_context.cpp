@@ -1,3 +1,5 @@
+#include <map>
+#include <mutex>
 #include <vector>
 
 #include <EGL/egl.h>
@@ -46,11 +48,32 @@ EGLDisplay openDisplay(std::string& platform) {
   return EGL_NO_DISPLAY;
 }
 
+// EGL displays are per process and eglTerminate is not reference-counted:
+// one session ending must not terminate the display the others render on.
+std::mutex& displayMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+std::map<EGLDisplay, int>& displayUsers() {
+  static std::map<EGLDisplay, int> users;
+  return users;
+}
+
 }  // namespace
+
+int EglContext::liveCount() {
+  std::lock_guard lock(displayMutex());
+  int count = 0;
+  for (const auto& [display, users] : displayUsers()) {
+    count += users;
+  }
+  return count;
+}
 
 Result<std::unique_ptr<EglContext>> EglContext::create(int width, int height) {
   std::unique_ptr<EglContext> egl(new EglContext());
   std::string platform;
+  std::unique_lock displayLock(displayMutex());  // no eglTerminate between the two
   EGLDisplay display = openDisplay(platform);
   if (display == EGL_NO_DISPLAY) {
     return failedPrecondition(fmt::format(
@@ -58,6 +81,8 @@ Result<std::unique_ptr<EglContext>> EglContext::create(int width, int height) {
         "libegl-mesa0 and libgl1-mesa-dri, or the NVIDIA driver's EGL",
         eglErrorText()));
   }
+  ++displayUsers()[display];
+  displayLock.unlock();
   egl->m_display = display;
   const EGLint configAttributes[] = {EGL_SURFACE_TYPE,
                                      EGL_PBUFFER_BIT,
@@ -125,7 +150,12 @@ EglContext::~EglContext() {
   if (m_surface != nullptr) {
     eglDestroySurface(m_display, m_surface);
   }
-  eglTerminate(m_display);
+  std::lock_guard lock(displayMutex());
+  auto& users = displayUsers();
+  if (--users[m_display] == 0) {
+    users.erase(m_display);
+    eglTerminate(m_display);
+  }
 }
 
 }  // namespace crackvis::render

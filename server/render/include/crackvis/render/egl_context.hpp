@@ -1,8 +1,9 @@
 // An off-screen OpenGL context through EGL, with no X server and no window:
 // Mesa's surfaceless platform (llvmpipe on CPU nodes) or, failing that, the
 // EGL device platform (NVIDIA GPUs). Every EGL call is checked; failures name
-// the call and the EGL error. The context and display are released in the
-// destructor (a server must terminate what it initializes).
+// the call and the EGL error. The context is released in the destructor, and
+// the display with the last context on it (a server must terminate what it
+// initializes, but only once no other session renders on it).
 #pragma once
 
 #include <memory>
@@ -21,6 +22,9 @@ class EglContext {
   ~EglContext();
 
   Status makeCurrent();
+  // Contexts alive in this process (a test checks that a closed session
+  // leaves none behind).
+  static int liveCount();
   // "EGL 1.5 (Mesa Project, surfaceless)" and the like, for start-up logs.
   const std::string& description() const { return m_description; }
 

@@ -1,0 +1,223 @@
+// crackvis-render: remote rendering sessions of DEM data and their crack
+// surfaces, streamed as H.264 over gRPC with mutual TLS, reading through
+// crackvis-data. Parses options, wires a RenderServer, waits for SIGINT or
+// SIGTERM. With --snapshot it renders one picture and exits (no client, no
+// server: for scripts and tests). docs/protocol.md describes the service.
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <crackvis/dataservice/data_root.hpp>
+#include <crackvis/dataservice/server_config.hpp>
+#include <crackvis/service/render_server.hpp>
+
+namespace {
+
+using crackvis::Result;
+using crackvis::Status;
+using crackvis::service::RenderServerConfig;
+
+enum ExitCode : int { kExitOk = 0, kExitFailure = 1, kExitUsage = 2 };
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "crackvis-render: %s\n", message.c_str());
+  return kExitFailure;
+}
+
+struct Flags {
+  std::string usersFrom;
+  std::string snapshot;
+  std::string output;
+  std::string dataRoot;
+  std::int64_t step = -2;  // -2: the description's
+  int width = 0;
+  int height = 0;
+};
+
+Result<std::string> readText(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) {
+    return crackvis::notFound(fmt::format("{}: cannot read the file", path));
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// One picture through the same session code the service runs.
+int snapshot(const Flags& flags, const RenderServerConfig& config) {
+  using namespace crackvis;
+  auto xml = readText(flags.snapshot);
+  if (!xml) {
+    return fail(xml.status().message());
+  }
+  auto description = pipeline::parsePipeline(*xml);
+  if (!description) {
+    return fail(fmt::format("{}: {}", flags.snapshot, description.status().message()));
+  }
+  if (flags.step != -2) {
+    description->step = flags.step;
+  }
+  if (flags.width > 0) {
+    description->view.width = flags.width;
+  }
+  if (flags.height > 0) {
+    description->view.height = flags.height;
+  }
+  service::Session::SourceOpener opener;
+  std::optional<dataservice::DataClient> client;
+  if (!flags.dataRoot.empty()) {
+    auto root = dataservice::DataRoot::open(flags.dataRoot);
+    if (!root) {
+      return fail(root.status().message());
+    }
+    opener = [root = std::move(root).value()](
+                 const std::string& file) -> Result<std::unique_ptr<source::StepSource>> {
+      auto resolved = root.resolveFile(file);
+      if (!resolved) {
+        return resolved.status();
+      }
+      return source::openLocalSource(resolved->absolute);
+    };
+  } else {
+    auto connected = dataservice::DataClient::connect(config.data);
+    if (!connected) {
+      return fail(connected.status().message());
+    }
+    opener = [client = std::move(connected).value()](const std::string& file) {
+      return source::openRemoteSource(client, file);
+    };
+  }
+  auto session = service::Session::open("snapshot", *description, opener, config.limits);
+  if (!session) {
+    return fail(session.status().message());
+  }
+  int step = 0;
+  auto image = (*session)->snapshot(0, 0, &step);
+  if (!image) {
+    return fail(image.status().message());
+  }
+  if (Status status = render::writePng(*image, flags.output); !status) {
+    return fail(status.message());
+  }
+  std::printf("wrote %s: %s step %d, %dx%d, %s\n", flags.output.c_str(), description->file.c_str(),
+              step, image->width, image->height, (*session)->info().backend.c_str());
+  return kExitOk;
+}
+
+int serve(const RenderServerConfig& config) {
+  // Signals go to the thread that waits for them, not to gRPC's threads.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+
+  auto server = crackvis::service::RenderServer::start(config);
+  if (!server) {
+    return fail(server.status().message());
+  }
+  std::printf("crackvis-render: serving on %s (%s), data from %s\n", (*server)->address().c_str(),
+              config.insecure ? "INSECURE: plaintext, loopback only" : "mutual TLS",
+              config.data.target.c_str());
+  std::fflush(stdout);
+  int signal = 0;
+  sigwait(&signals, &signal);
+  std::fprintf(stderr, "crackvis-render: signal %d, closing %d sessions and shutting down\n",
+               signal, (*server)->sessionCount());
+  (*server)->shutdown();
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "crackvis-render: remote rendering of DEM data and crack surfaces over gRPC with mutual\n"
+      "TLS. Sessions assemble a pipeline description (pipeline-schemas/pipeline.xsd), read\n"
+      "steps through crackvis-data (partial reads, step cache, prefetch), extract cracks,\n"
+      "render off screen under EGL (Mesa llvmpipe or an NVIDIA GPU) and stream H.264.\n"
+      "Certificates: certs/make-dev-certs.sh --client crackvis-render; docs/protocol.md.",
+      "crackvis-render"};
+  RenderServerConfig config;
+  Flags flags;
+  app.add_option("--listen", config.listen, "host:port to listen on (port 0 lets the OS choose)")
+      ->capture_default_str();
+  app.add_option("--ca", config.tls.ca, "CA certificate that signs client certificates")
+      ->capture_default_str();
+  app.add_option("--cert", config.tls.cert, "this server's certificate")->capture_default_str();
+  app.add_option("--key", config.tls.key, "this server's private key")->capture_default_str();
+  app.add_flag("--insecure", config.insecure,
+               "plaintext without certificates; refuses any address but loopback");
+  app.add_option("--users-from", flags.usersFrom,
+                 "a crackvis-data JSON configuration whose users (tokens, passwords, folders) "
+                 "apply here too");
+  app.add_option("--data-server", config.data.target, "crackvis-data's host:port")
+      ->capture_default_str();
+  app.add_option("--data-ca", config.data.tls.ca, "CA that signs crackvis-data's certificate")
+      ->capture_default_str();
+  app.add_option("--data-cert", config.data.tls.cert,
+                 "this server's client certificate for crackvis-data")
+      ->capture_default_str();
+  app.add_option("--data-key", config.data.tls.key, "its private key")->capture_default_str();
+  app.add_option("--data-token", config.data.token,
+                 "bearer token for crackvis-data, if it has users");
+  app.add_flag("--data-insecure", config.data.insecure,
+               "crackvis-data runs with --insecure (plaintext, loopback)");
+  app.add_option("--max-sessions", config.maxSessions, "sessions open at once")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 256));
+  app.add_option("--session-grace", config.sessionGraceSeconds,
+                 "seconds a session without a stream is kept for a reconnect")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 86400.0));
+  app.add_option("--refine-after-ms", config.limits.refineAfterMs,
+                 "full-resolution frame this long after the last event")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 5000.0));
+  app.add_option("--interactive-frame-ms", config.limits.interactiveFrameMs,
+                 "render-time budget of a reduced-resolution frame while interacting")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1000.0));
+  app.add_option("--access-log", config.accessLog, "file for access lines; - stderr; empty none")
+      ->capture_default_str();
+  auto* snapshotOption =
+      app.add_option("--snapshot", flags.snapshot,
+                     "render PIPELINE.xml once, write -o OUT.png and exit (no server)");
+  app.add_option("-o,--output", flags.output, "PNG file of --snapshot")->needs(snapshotOption);
+  app.add_option("--data-root", flags.dataRoot,
+                 "with --snapshot: read files from this folder instead of crackvis-data")
+      ->needs(snapshotOption);
+  app.add_option("--step", flags.step, "with --snapshot: the step (-1 the last)")
+      ->needs(snapshotOption);
+  app.add_option("--width", flags.width, "with --snapshot: image width")
+      ->needs(snapshotOption)
+      ->check(CLI::Range(16, 3840));
+  app.add_option("--height", flags.height, "with --snapshot: image height")
+      ->needs(snapshotOption)
+      ->check(CLI::Range(16, 2160));
+  app.footer(
+      "Example: crackvis-render --listen 127.0.0.1:50052 --data-server localhost:50051\n"
+      "         crackvis-render --snapshot view.xml --data-root /data -o view.png");
+  CLI11_PARSE(app, argc, argv);
+  if (!flags.usersFrom.empty()) {
+    auto users = crackvis::dataservice::loadServerConfig(flags.usersFrom);
+    if (!users) {
+      return fail(users.status().message());
+    }
+    config.users = users->users;
+  }
+  if (!flags.snapshot.empty()) {
+    if (flags.output.empty()) {
+      return fail("--snapshot needs -o OUT.png");
+    }
+    return snapshot(flags, config);
+  }
+  return serve(config);
+}

@@ -1,0 +1,61 @@
+// crackvis-render's server: the RenderService over gRPC with mutual TLS (the
+// same per-user credentials as crackvis-data), the standard grpc.health.v1
+// service and server reflection. Sessions read their data through
+// crackvis-data, the render server being a TLS client of it with its own
+// certificate. This header has no gRPC types; crackvis-render's main and the
+// tests start a server through it.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <crackvis/common/status.hpp>
+#include <crackvis/dataservice/data_client.hpp>
+#include <crackvis/dataservice/server_config.hpp>
+#include <crackvis/service/session.hpp>
+
+namespace crackvis::service {
+
+// localhost:50051 with certs/generated/crackvis-render.pem and .key.
+dataservice::ClientOptions defaultDataOptions();
+
+struct RenderServerConfig {
+  std::string listen = "127.0.0.1:50052";  // host:port; port 0 lets the OS choose
+  dataservice::TlsFiles tls{"certs/generated/ca.pem", "certs/generated/server.pem",
+                            "certs/generated/server.key"};
+  bool insecure = false;                      // plaintext, loopback only
+  std::vector<dataservice::UserEntry> users;  // empty: every certified client
+  // crackvis-data, reached with the render server's own client certificate.
+  dataservice::ClientOptions data = defaultDataOptions();
+  int maxSessions = 8;
+  double sessionGraceSeconds = 30.0;  // a session without a stream lives this long
+  SessionLimits limits;
+  std::string accessLog = "-";  // "-": stderr; "": none
+};
+
+class RenderServer {
+ public:
+  // Checks the configuration (TLS files, loopback for --insecure, the data
+  // service's TLS files), binds and starts serving. A data service that is
+  // down is not an error here: sessions report it when they open.
+  static Result<std::unique_ptr<RenderServer>> start(const RenderServerConfig& config);
+  RenderServer(const RenderServer&) = delete;
+  RenderServer& operator=(const RenderServer&) = delete;
+  ~RenderServer();
+
+  const std::string& address() const;
+  int port() const;
+  int sessionCount() const;
+
+  // Closes every session, ends the streams, stops serving; idempotent.
+  void shutdown(double graceSeconds = 2.0);
+  void wait();
+
+ private:
+  struct Impl;
+  explicit RenderServer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace crackvis::service

@@ -1,0 +1,201 @@
+// One render session: a pipeline description, its data source with a step
+// cache, the crack extractor (incremental across steps), and an off-screen
+// renderer with its own GL context, all owned by the session's own thread (a
+// GL context is current on one thread). No gRPC types: the render service
+// turns a stream's messages into SessionEvents and RenderedFrames into
+// encoded frames.
+//
+// Interactivity first: while events arrive (or while playing) frames are
+// rendered at a reduced resolution chosen to hold a frame-time budget and
+// scaled up; a full-resolution frame follows `refineAfterMs` after the last
+// event. Rendering never waits for the network: the outbox holds the newest
+// frame only, and a frame the stream has not taken yet is replaced (dropped).
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <future>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <variant>
+#include <vector>
+
+#include <crackvis/common/status.hpp>
+#include <crackvis/pipeline/pipeline_description.hpp>
+#include <crackvis/render/scene_renderer.hpp>
+#include <crackvis/source/step_source.hpp>
+
+namespace crackvis::service {
+
+using Clock = std::chrono::steady_clock;
+
+struct SessionLimits {
+  int maxWidth = 3840;
+  int maxHeight = 2160;
+  double refineAfterMs = 150.0;      // full resolution this long after the last event
+  double interactiveFrameMs = 35.0;  // render budget of a reduced frame
+  int maxReduction = 8;
+  std::size_t cacheSteps = 8;
+};
+
+struct CameraEvent {
+  render::CameraMove move = render::CameraMove::kRotate;
+  double dx = 0.0;
+  double dy = 0.0;
+};
+struct ResizeEvent {
+  int width = 0;
+  int height = 0;
+};
+struct SetStepEvent {
+  int step = 0;  // -1: the last
+};
+struct PlayEvent {
+  bool playing = false;
+  double fps = 0.0;  // 0: the description's stream fps
+  bool loop = false;
+};
+struct ReplacePipelineEvent {
+  std::string xml;
+};
+struct StillEvent {};
+struct KeyframeEvent {};
+
+struct SessionEvent {
+  std::uint64_t id = 0;
+  Clock::time_point received = Clock::now();
+  std::variant<CameraEvent, ResizeEvent, SetStepEvent, PlayEvent, ReplacePipelineEvent, StillEvent,
+               KeyframeEvent>
+      what;
+};
+
+struct FrameTimings {
+  double loadMs = 0.0;
+  double extractMs = 0.0;
+  double sceneMs = 0.0;
+  double renderMs = 0.0;
+};
+
+struct RenderedFrame {
+  std::uint64_t frameId = 0;
+  std::uint64_t lastEventId = 0;
+  std::optional<Clock::time_point> lastEventReceived;  // set when it reflects a new event
+  int step = 0;
+  bool fullResolution = true;
+  int reduction = 1;
+  bool keyframe = false;  // the client asked for one
+  int bitrate = 0;        // the description's stream bitrate
+  int fps = 30;
+  render::Image image;  // the view's size
+  FrameTimings timings;
+};
+
+struct SessionState {
+  int step = 0;
+  int stepCount = 0;
+  bool playing = false;
+  int width = 0;
+  int height = 0;
+  std::string pipelineXml;
+};
+
+// What a stream sends besides frames: an event the session could not apply,
+// or its state after a change.
+struct SessionNotice {
+  std::uint64_t eventId = 0;
+  Status error;                       // not OK: an event error
+  std::optional<SessionState> state;  // set: a state message
+};
+
+struct SessionInfo {
+  int stepCount = 0;
+  std::int64_t particleCount = 0;
+  std::int64_t bondCount = 0;
+  std::string backend;
+  std::string file;
+};
+
+class Session {
+ public:
+  // Opens the data source of a file (the render server's: through
+  // crackvis-data, with the caller's folder rules applied).
+  using SourceOpener =
+      std::function<Result<std::unique_ptr<source::StepSource>>(const std::string& file)>;
+
+  // Starts the session's thread, which creates the GL context, opens the
+  // file, loads and extracts the description's step and builds the scene;
+  // returns once that has succeeded or with its error (NOT_FOUND for an
+  // unknown file, OUT_OF_RANGE for a step outside the file, ...).
+  static Result<std::shared_ptr<Session>> open(std::string id,
+                                               pipeline::PipelineDescription description,
+                                               SourceOpener opener, SessionLimits limits);
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+  ~Session();  // closes and joins the thread (the GL context goes with it)
+
+  const std::string& id() const { return m_id; }
+  const SessionInfo& info() const { return m_info; }
+
+  void post(SessionEvent event);
+  // An event the stream could not even turn into a SessionEvent.
+  void reportEventError(std::uint64_t eventId, Status error);
+
+  // A stream attaches: the previous one (if any) is superseded, the next
+  // frame is rendered at once and is a keyframe. Returns the attachment.
+  std::uint64_t attach();
+  void detach(std::uint64_t attachment);
+  // Since when no stream is attached (the open time if none ever was);
+  // nullopt while one is.
+  std::optional<Clock::time_point> detachedSince() const;
+
+  enum class Next { kFrame, kNotice, kTimeout, kSuperseded, kClosed };
+  // What `attachment`'s stream sends next: notices first, then the newest frame.
+  Next next(std::uint64_t attachment, std::chrono::milliseconds timeout, RenderedFrame& frame,
+            SessionNotice& notice);
+
+  // A full-resolution picture of the current state (width/height 0: the
+  // view's), rendered on the session's thread.
+  Result<render::Image> snapshot(int width, int height, int* step = nullptr);
+
+  void close();
+  bool closed() const;
+  std::uint64_t framesDropped() const;
+
+ private:
+  Session(std::string id, pipeline::PipelineDescription description, SourceOpener opener,
+          SessionLimits limits);
+  struct Worker;  // the thread's state: renderer, cache, extractor
+
+  void run(std::promise<Status> started);
+  void publish(RenderedFrame frame);
+  void notify(SessionNotice notice);
+
+  const std::string m_id;
+  const SessionLimits m_limits;
+  SessionInfo m_info;
+  pipeline::PipelineDescription m_initial;
+  SourceOpener m_opener;
+
+  mutable std::mutex m_mutex;
+  std::condition_variable m_wake;      // the session thread
+  std::condition_variable m_outgoing;  // the attached stream
+  std::deque<SessionEvent> m_events;
+  std::deque<std::function<void(Worker&)>> m_tasks;
+  std::optional<RenderedFrame> m_latest;
+  std::deque<SessionNotice> m_notices;
+  std::uint64_t m_attachment = 0;  // current; 0: none
+  std::uint64_t m_nextAttachment = 1;
+  std::optional<Clock::time_point> m_detachedSince;
+  bool m_needFrame = false;  // a stream attached and wants a keyframe now
+  bool m_closing = false;
+  std::uint64_t m_dropped = 0;
+  std::thread m_thread;
+};
+
+}  // namespace crackvis::service

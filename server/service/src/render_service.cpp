@@ -1,0 +1,780 @@
+// The RenderService over gRPC (synchronous API: a stream's writer loop and
+// its reader thread each block on their own side of the call, so a slow
+// client holds up neither the session's rendering nor other calls) and the
+// RenderServer that hosts it.
+#include <atomic>
+#include <cmath>
+#include <condition_variable>
+#include <map>
+#include <random>
+
+#include <fmt/format.h>
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+
+#include "crackvis/v1/data.grpc.pb.h"
+#include "crackvis/v1/render.grpc.pb.h"
+#include <crackvis/dataservice/access_log.hpp>
+#include <crackvis/dataservice/credentials.hpp>
+#include <crackvis/dataservice/data_root.hpp>
+#include <crackvis/dataservice/tls_material.hpp>
+#include <crackvis/encode/frame_codec.hpp>
+#include <crackvis/rpc/grpc_status.hpp>
+#include <crackvis/service/render_server.hpp>
+
+namespace crackvis::service {
+namespace {
+
+namespace v1 = crackvis::v1;
+using dataservice::AccessRecord;
+using dataservice::Caller;
+using rpc::toGrpcStatus;
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::string newSessionId() {
+  static std::mutex mutex;
+  static std::mt19937_64 generator{std::random_device{}()};
+  std::lock_guard lock(mutex);
+  return fmt::format("{:016x}{:016x}", generator(), generator());
+}
+
+AccessRecord recordOf(const char* method) {
+  AccessRecord record;
+  record.method = method;
+  return record;
+}
+
+Status permissionDenied(std::string message) {
+  return {StatusCode::kPermissionDenied, std::move(message)};
+}
+
+// The caller's folder rules on a path as named (the data service applies its
+// own rules to the render server's identity).
+Status checkMayRead(const Caller& caller, const std::string& file) {
+  auto normalized = dataservice::DataRoot::normalize(file);
+  if (!normalized) {
+    return normalized.status();
+  }
+  if (!caller.mayRead(*normalized)) {
+    return permissionDenied(fmt::format("user '{}' may not read '{}'", caller.name, *normalized));
+  }
+  return Status::ok();
+}
+
+bool finite(double value) {
+  return std::isfinite(value);
+}
+
+Result<SessionEvent> toSessionEvent(const v1::ClientEvent& in) {
+  SessionEvent out;
+  out.id = in.event_id();
+  out.received = Clock::now();
+  switch (in.event_case()) {
+    case v1::ClientEvent::kCamera: {
+      const auto& camera = in.camera();
+      if (!finite(camera.dx()) || !finite(camera.dy()) || std::abs(camera.dx()) > 100 ||
+          std::abs(camera.dy()) > 100) {
+        return invalidArgument(
+            fmt::format("camera event {}: dx, dy must be finite view fractions", in.event_id()));
+      }
+      CameraEvent event{render::CameraMove::kRotate, camera.dx(), camera.dy()};
+      switch (camera.kind()) {
+        case v1::CameraEvent::ROTATE:
+          break;
+        case v1::CameraEvent::PAN:
+          event.move = render::CameraMove::kPan;
+          break;
+        case v1::CameraEvent::ZOOM:
+          event.move = render::CameraMove::kZoom;
+          break;
+        case v1::CameraEvent::RESET:
+          event.move = render::CameraMove::kReset;
+          break;
+        default:
+          return invalidArgument(fmt::format(
+              "camera event {}: kind must be ROTATE, PAN, ZOOM or RESET", in.event_id()));
+      }
+      out.what = event;
+      return out;
+    }
+    case v1::ClientEvent::kResize:
+      out.what = ResizeEvent{in.resize().width(), in.resize().height()};
+      return out;
+    case v1::ClientEvent::kSetStep:
+      out.what = SetStepEvent{in.set_step().step()};
+      return out;
+    case v1::ClientEvent::kPlay:
+      out.what = PlayEvent{in.play().playing(), in.play().fps(), in.play().loop()};
+      return out;
+    case v1::ClientEvent::kReplacePipeline:
+      if (in.replace_pipeline().pipeline_xml().size() > pipeline::kMaxPipelineBytes) {
+        return invalidArgument(fmt::format("event {}: the pipeline is over {} bytes", in.event_id(),
+                                           pipeline::kMaxPipelineBytes));
+      }
+      out.what = ReplacePipelineEvent{in.replace_pipeline().pipeline_xml()};
+      return out;
+    case v1::ClientEvent::kStill:
+      out.what = StillEvent{};
+      return out;
+    case v1::ClientEvent::kRequestKeyframe:
+      out.what = KeyframeEvent{};
+      return out;
+    case v1::ClientEvent::kAttachSessionId:
+      return invalidArgument(
+          fmt::format("event {}: a stream attaches once, in its first message", in.event_id()));
+    case v1::ClientEvent::EVENT_NOT_SET:
+      break;
+  }
+  return invalidArgument(fmt::format("event {}: no event set", in.event_id()));
+}
+
+// The sessions of a server, with their owners; closes those whose stream
+// has been gone longer than the grace period.
+class SessionRegistry {
+ public:
+  SessionRegistry(int limit, double graceSeconds) : m_limit(limit), m_grace(graceSeconds) {}
+
+  Status reserve() {
+    std::lock_guard lock(m_mutex);
+    if (static_cast<int>(m_sessions.size()) + m_opening >= m_limit) {
+      return {StatusCode::kResourceExhausted,
+              fmt::format("the server has its maximum of {} sessions open", m_limit)};
+    }
+    ++m_opening;
+    return Status::ok();
+  }
+  void add(std::shared_ptr<Session> session, std::string owner) {
+    std::lock_guard lock(m_mutex);
+    --m_opening;
+    if (session) {
+      const std::string id = session->id();
+      m_sessions[id] = {std::move(session), std::move(owner)};
+    }
+  }
+
+  Result<std::shared_ptr<Session>> find(const std::string& id, const Caller& caller) const {
+    std::lock_guard lock(m_mutex);
+    auto it = m_sessions.find(id);
+    if (it == m_sessions.end()) {
+      return notFound(fmt::format("no session '{}' (closed, expired or never opened)", id));
+    }
+    if (it->second.owner != caller.name) {
+      return permissionDenied(
+          fmt::format("session '{}' belongs to another user than '{}'", id, caller.name));
+    }
+    return it->second.session;
+  }
+
+  Status close(const std::string& id, const Caller& caller) {
+    auto session = find(id, caller);
+    if (!session) {
+      return session.status();
+    }
+    (*session)->close();
+    std::shared_ptr<Session> last;
+    {
+      std::lock_guard lock(m_mutex);
+      auto it = m_sessions.find(id);
+      if (it != m_sessions.end()) {
+        last = std::move(it->second.session);
+        m_sessions.erase(it);
+      }
+    }
+    return Status::ok();  // `last` joins the session's thread here, outside the lock
+  }
+
+  // Closes sessions whose stream has been gone longer than the grace.
+  void reap() {
+    std::vector<std::shared_ptr<Session>> expired;
+    {
+      std::lock_guard lock(m_mutex);
+      const auto now = Clock::now();
+      for (auto it = m_sessions.begin(); it != m_sessions.end();) {
+        auto since = it->second.session->detachedSince();
+        if (it->second.session->closed() ||
+            (since && std::chrono::duration<double>(now - *since).count() > m_grace)) {
+          it->second.session->close();
+          expired.push_back(std::move(it->second.session));
+          it = m_sessions.erase(it);
+        } else {
+          ++it;
+        }
+      }
+    }
+    for (auto& session : expired) {
+      std::fprintf(stderr, "crackvis-render: session %s closed: no stream for %.1f s\n",
+                   session->id().c_str(), m_grace);
+    }
+  }
+
+  void closeAll() {
+    std::map<std::string, Entry> all;
+    {
+      std::lock_guard lock(m_mutex);
+      all.swap(m_sessions);
+    }
+    for (auto& [id, entry] : all) {
+      entry.session->close();
+    }
+  }
+
+  int count() const {
+    std::lock_guard lock(m_mutex);
+    return static_cast<int>(m_sessions.size());
+  }
+
+ private:
+  struct Entry {
+    std::shared_ptr<Session> session;
+    std::string owner;
+  };
+  const int m_limit;
+  const double m_grace;
+  mutable std::mutex m_mutex;
+  std::map<std::string, Entry> m_sessions;
+  int m_opening = 0;
+};
+
+// Encodes a stream's frames and keeps its per-second statistics. One per
+// stream: a new stream starts a new encoder, so its first frame is a keyframe.
+class StreamEncoder {
+ public:
+  Result<v1::Frame> encode(RenderedFrame& frame) {
+    const auto& image = frame.image;
+    if (!m_encoder || m_encoder->settings().width != image.width ||
+        m_encoder->settings().height != image.height ||
+        m_encoder->settings().bitrate != frame.bitrate) {
+      auto created = encode::FrameEncoder::create(
+          {image.width, image.height, std::max(1, frame.fps), frame.bitrate});
+      if (!created) {
+        return created.status();
+      }
+      m_encoder = std::move(created).value();
+      frame.keyframe = true;
+    }
+    const auto start = Clock::now();
+    encode::RgbFrame rgb{image.width, image.height, std::move(frame.image.rgb)};
+    auto encoded = m_encoder->encode(rgb, frame.keyframe);
+    if (!encoded) {
+      return encoded.status();
+    }
+    const double encodeMs = secondsSince(start) * 1000.0;
+    v1::Frame out;
+    out.set_frame_id(frame.frameId);
+    out.set_last_event_id(frame.lastEventId);
+    out.set_width(image.width);
+    out.set_height(image.height);
+    out.set_keyframe(encoded->keyframe);
+    out.set_full_resolution(frame.fullResolution);
+    out.set_reduction(frame.reduction);
+    out.set_step(frame.step);
+    out.set_h264(encoded->data.data(), encoded->data.size());
+    auto* timings = out.mutable_timings();
+    timings->set_load_ms(frame.timings.loadMs);
+    timings->set_extract_ms(frame.timings.extractMs);
+    timings->set_scene_ms(frame.timings.sceneMs);
+    timings->set_render_ms(frame.timings.renderMs);
+    timings->set_encode_ms(encodeMs);
+    if (frame.lastEventReceived) {
+      timings->set_event_to_send_ms(secondsSince(*frame.lastEventReceived) * 1000.0);
+    }
+    m_window.frames += 1;
+    m_window.bytes += encoded->data.size();
+    m_window.renderMs += frame.timings.renderMs;
+    m_window.encodeMs += encodeMs;
+    return out;
+  }
+
+  // A stats message once a second.
+  std::optional<v1::StreamStats> stats(std::uint64_t dropped) {
+    const double seconds = secondsSince(m_windowStart);
+    if (seconds < 1.0) {
+      return std::nullopt;
+    }
+    v1::StreamStats out;
+    out.set_fps(m_window.frames / seconds);
+    out.set_bitrate_bps(8.0 * static_cast<double>(m_window.bytes) / seconds);
+    out.set_frames_dropped(dropped);
+    if (m_window.frames > 0) {
+      out.set_render_ms_mean(m_window.renderMs / m_window.frames);
+      out.set_encode_ms_mean(m_window.encodeMs / m_window.frames);
+    }
+    m_window = {};
+    m_windowStart = Clock::now();
+    return out;
+  }
+
+  std::uint64_t bytes() const { return m_totalBytes; }
+
+ private:
+  struct Window {
+    double frames = 0;
+    std::uint64_t bytes = 0;
+    double renderMs = 0;
+    double encodeMs = 0;
+  };
+  std::unique_ptr<encode::FrameEncoder> m_encoder;
+  Window m_window;
+  Clock::time_point m_windowStart = Clock::now();
+  std::uint64_t m_totalBytes = 0;
+};
+
+v1::ServerMessage toMessage(const SessionNotice& notice) {
+  v1::ServerMessage message;
+  if (!notice.error.isOk()) {
+    auto* error = message.mutable_error();
+    error->set_event_id(notice.eventId);
+    error->set_code(static_cast<int>(toGrpcStatus(notice.error).error_code()));
+    error->set_message(notice.error.message());
+    return message;
+  }
+  if (notice.state) {
+    auto* state = message.mutable_state();
+    state->set_step(notice.state->step);
+    state->set_step_count(notice.state->stepCount);
+    state->set_playing(notice.state->playing);
+    state->set_width(notice.state->width);
+    state->set_height(notice.state->height);
+    state->set_pipeline_xml(notice.state->pipelineXml);
+  }
+  return message;
+}
+
+class RenderServiceImpl final : public v1::RenderService::Service {
+ public:
+  RenderServiceImpl(const RenderServerConfig& config, dataservice::DataClient data,
+                    std::shared_ptr<grpc::Channel> dataChannel, dataservice::AccessLog& log)
+      : m_config(config),
+        m_authenticator(config.users),
+        m_data(std::move(data)),
+        m_dataStub(v1::DataService::NewStub(std::move(dataChannel))),
+        m_log(log),
+        m_sessions(config.maxSessions, config.sessionGraceSeconds) {}
+
+  SessionRegistry& sessions() { return m_sessions; }
+
+  grpc::Status OpenSession(grpc::ServerContext* context, const v1::OpenSessionRequest* request,
+                           v1::OpenSessionResponse* response) override {
+    AccessRecord record = recordOf("OpenSession");
+    const auto start = Clock::now();
+    Status status = openSession(context, *request, *response, record);
+    return finish(record, start, status);
+  }
+
+  grpc::Status Stream(
+      grpc::ServerContext* context,
+      grpc::ServerReaderWriter<v1::ServerMessage, v1::ClientEvent>* stream) override {
+    AccessRecord record = recordOf("Stream");
+    const auto start = Clock::now();
+    Status status = runStream(context, stream, record);
+    return finish(record, start, status);
+  }
+
+  grpc::Status Snapshot(grpc::ServerContext* context, const v1::SnapshotRequest* request,
+                        v1::SnapshotResponse* response) override {
+    AccessRecord record = recordOf("Snapshot");
+    const auto start = Clock::now();
+    Status status = snapshot(context, *request, *response, record);
+    return finish(record, start, status);
+  }
+
+  grpc::Status CloseSession(grpc::ServerContext* context, const v1::CloseSessionRequest* request,
+                            v1::CloseSessionResponse* /*response*/) override {
+    AccessRecord record = recordOf("CloseSession");
+    const auto start = Clock::now();
+    auto caller = authenticate(context, record);
+    Status status = caller ? m_sessions.close(request->session_id(), *caller) : caller.status();
+    return finish(record, start, status);
+  }
+
+  grpc::Status ListFiles(grpc::ServerContext* context, const v1::ListFilesRequest* request,
+                         v1::ListFilesResponse* response) override {
+    AccessRecord record = recordOf("ListFiles");
+    const auto start = Clock::now();
+    auto caller = authenticate(context, record);
+    if (!caller) {
+      return finish(record, start, caller.status());
+    }
+    record.file = request->folder();
+    v1::ListFilesResponse all;
+    Status status = forward(context, "ListFiles", [&](grpc::ClientContext* client) {
+      return m_dataStub->ListFiles(client, *request, &all);
+    });
+    if (status) {
+      for (const auto& file : all.files()) {
+        if (caller->mayRead(file.path())) {
+          *response->add_files() = file;
+        }
+      }
+    }
+    return finish(record, start, status);
+  }
+
+  grpc::Status Describe(grpc::ServerContext* context, const v1::DescribeRequest* request,
+                        v1::DescribeResponse* response) override {
+    AccessRecord record = recordOf("Describe");
+    const auto start = Clock::now();
+    auto caller = authenticate(context, record);
+    record.file = request->file();
+    Status status = caller ? checkMayRead(*caller, request->file()) : caller.status();
+    if (status) {
+      status = forward(context, "Describe", [&](grpc::ClientContext* client) {
+        return m_dataStub->Describe(client, *request, response);
+      });
+    }
+    return finish(record, start, status);
+  }
+
+ private:
+  Result<Caller> authenticate(grpc::ServerContext* context, AccessRecord& record) const {
+    record.peer = context->peer();
+    record.certificateName = rpc::certificateName(*context);
+    auto caller = m_authenticator.authenticate(rpc::metadataValue(*context, "authorization"),
+                                               record.certificateName);
+    if (caller) {
+      record.user = caller->name;
+    }
+    return caller;
+  }
+
+  grpc::Status finish(AccessRecord& record, Clock::time_point start, const Status& status) {
+    record.seconds = secondsSince(start);
+    record.status = std::string(toString(status.code()));
+    record.detail = status.isOk() ? std::string() : status.message();
+    m_log.record(record);
+    return toGrpcStatus(status);
+  }
+
+  // A call to crackvis-data on the caller's behalf, with the render server's
+  // certificate (and its token, if it has one) and the caller's deadline.
+  template <typename Call>
+  Status forward(grpc::ServerContext* context, const char* name, Call call) {
+    grpc::ClientContext client;
+    client.set_deadline(std::min(
+        context->deadline(),
+        std::chrono::system_clock::now() + std::chrono::milliseconds(static_cast<std::int64_t>(
+                                               m_config.data.timeoutSeconds * 1000))));
+    if (!m_config.data.token.empty()) {
+      client.AddMetadata("authorization", "Bearer " + m_config.data.token);
+    }
+    return rpc::fromGrpcStatus(call(&client), fmt::format("crackvis-data {}", name));
+  }
+
+  Session::SourceOpener opener(const Caller& caller) const {
+    return [data = m_data,
+            caller](const std::string& file) -> Result<std::unique_ptr<source::StepSource>> {
+      CRACKVIS_RETURN_IF_ERROR(checkMayRead(caller, file));
+      return source::openRemoteSource(data, file);
+    };
+  }
+
+  Status openSession(grpc::ServerContext* context, const v1::OpenSessionRequest& request,
+                     v1::OpenSessionResponse& response, AccessRecord& record) {
+    auto caller = authenticate(context, record);
+    if (!caller) {
+      return caller.status();
+    }
+    if (request.pipeline_xml().size() > pipeline::kMaxPipelineBytes) {
+      return invalidArgument(
+          fmt::format("the pipeline is over {} bytes", pipeline::kMaxPipelineBytes));
+    }
+    auto description = pipeline::parsePipeline(request.pipeline_xml());
+    if (!description) {
+      return description.status();
+    }
+    record.file = description->file;
+    CRACKVIS_RETURN_IF_ERROR(m_sessions.reserve());
+    auto session = Session::open(newSessionId(), *description, opener(*caller), m_config.limits);
+    m_sessions.add(session ? *session : nullptr, caller->name);
+    if (!session) {
+      return session.status();
+    }
+    const SessionInfo& info = (*session)->info();
+    response.set_session_id((*session)->id());
+    response.set_step_count(info.stepCount);
+    response.set_particle_count(info.particleCount);
+    response.set_bond_count(info.bondCount);
+    response.set_backend(info.backend);
+    return Status::ok();
+  }
+
+  Status runStream(grpc::ServerContext* context,
+                   grpc::ServerReaderWriter<v1::ServerMessage, v1::ClientEvent>* stream,
+                   AccessRecord& record) {
+    auto caller = authenticate(context, record);
+    if (!caller) {
+      return caller.status();
+    }
+    v1::ClientEvent first;
+    if (!stream->Read(&first)) {
+      return {StatusCode::kUnavailable, "the stream ended before attaching to a session"};
+    }
+    if (first.event_case() != v1::ClientEvent::kAttachSessionId) {
+      return invalidArgument(
+          "the first message of a stream attaches to a session (attach_session_id)");
+    }
+    auto found = m_sessions.find(first.attach_session_id(), *caller);
+    if (!found) {
+      return found.status();
+    }
+    std::shared_ptr<Session> session = std::move(found).value();
+    record.file = session->info().file;
+    const std::uint64_t attachment = session->attach();
+    std::atomic<bool> readerDone{false};
+    std::thread reader([&] {
+      v1::ClientEvent event;
+      while (stream->Read(&event)) {
+        auto converted = toSessionEvent(event);
+        if (converted) {
+          session->post(std::move(converted).value());
+        } else {
+          session->reportEventError(event.event_id(), converted.status());
+        }
+      }
+      readerDone = true;
+    });
+    StreamEncoder encoder;
+    Status ended = Status::ok();
+    bool open = true;
+    while (open && !readerDone && !context->IsCancelled()) {
+      RenderedFrame frame;
+      SessionNotice notice;
+      v1::ServerMessage message;
+      switch (session->next(attachment, std::chrono::milliseconds(100), frame, notice)) {
+        case Session::Next::kFrame: {
+          auto encoded = encoder.encode(frame);
+          if (!encoded) {
+            ended = encoded.status();
+            open = false;
+            continue;
+          }
+          record.bytes += encoded->h264().size();
+          *message.mutable_frame() = std::move(encoded).value();
+          open = stream->Write(message);
+          break;
+        }
+        case Session::Next::kNotice:
+          open = stream->Write(toMessage(notice));
+          break;
+        case Session::Next::kTimeout:
+          break;
+        case Session::Next::kSuperseded:
+          ended = {StatusCode::kUnavailable,
+                   fmt::format("session {}: another stream attached", session->id())};
+          open = false;
+          continue;
+        case Session::Next::kClosed:
+          ended = {StatusCode::kUnavailable, fmt::format("session {} closed", session->id())};
+          open = false;
+          continue;
+      }
+      if (auto stats = encoder.stats(session->framesDropped())) {
+        v1::ServerMessage statsMessage;
+        *statsMessage.mutable_stats() = *stats;
+        open = open && stream->Write(statsMessage);
+      }
+    }
+    session->detach(attachment);
+    if (!readerDone) {
+      context->TryCancel();  // ends the reader's blocking Read
+    }
+    reader.join();
+    return ended;
+  }
+
+  Status snapshot(grpc::ServerContext* context, const v1::SnapshotRequest& request,
+                  v1::SnapshotResponse& response, AccessRecord& record) {
+    auto caller = authenticate(context, record);
+    if (!caller) {
+      return caller.status();
+    }
+    auto session = m_sessions.find(request.session_id(), *caller);
+    if (!session) {
+      return session.status();
+    }
+    record.file = (*session)->info().file;
+    int step = 0;
+    auto image = (*session)->snapshot(request.width(), request.height(), &step);
+    if (!image) {
+      return image.status();
+    }
+    auto png = render::encodePng(*image);
+    if (!png) {
+      return png.status();
+    }
+    record.bytes = png->size();
+    response.set_png(png->data(), png->size());
+    response.set_width(image->width);
+    response.set_height(image->height);
+    response.set_step(step);
+    return Status::ok();
+  }
+
+  const RenderServerConfig& m_config;
+  dataservice::Authenticator m_authenticator;
+  dataservice::DataClient m_data;
+  std::unique_ptr<v1::DataService::Stub> m_dataStub;
+  dataservice::AccessLog& m_log;
+  SessionRegistry m_sessions;
+};
+
+Result<std::shared_ptr<grpc::Channel>> dataChannel(const dataservice::ClientOptions& options) {
+  grpc::ChannelArguments arguments;
+  arguments.SetMaxReceiveMessageSize(64 << 20);
+  if (options.insecure) {
+    return grpc::CreateCustomChannel(options.target, grpc::InsecureChannelCredentials(), arguments);
+  }
+  auto material = dataservice::loadTlsMaterial(options.tls);
+  if (!material) {
+    return material.status();
+  }
+  if (!options.serverName.empty()) {
+    arguments.SetSslTargetNameOverride(options.serverName);
+  }
+  grpc::SslCredentialsOptions ssl{material->caPem, material->keyPem, material->certPem};
+  return grpc::CreateCustomChannel(options.target, grpc::SslCredentials(ssl), arguments);
+}
+
+}  // namespace
+
+dataservice::ClientOptions defaultDataOptions() {
+  dataservice::ClientOptions options;
+  options.target = "localhost:50051";
+  options.tls = {"certs/generated/ca.pem", "certs/generated/crackvis-render.pem",
+                 "certs/generated/crackvis-render.key"};
+  return options;
+}
+
+struct RenderServer::Impl {
+  RenderServerConfig config;
+  std::unique_ptr<dataservice::AccessLog> log;
+  std::unique_ptr<RenderServiceImpl> service;
+  std::unique_ptr<grpc::Server> server;
+  std::string address;
+  int port = 0;
+
+  std::mutex mutex;
+  std::condition_variable stopped;
+  bool stopping = false;
+  std::thread reaper;
+
+  void reap() {
+    std::unique_lock lock(mutex);
+    while (!stopping) {
+      stopped.wait_for(lock, std::chrono::milliseconds(200));
+      lock.unlock();
+      service->sessions().reap();
+      lock.lock();
+    }
+  }
+};
+
+RenderServer::RenderServer(std::unique_ptr<Impl> impl) : m_impl(std::move(impl)) {}
+
+RenderServer::~RenderServer() {
+  shutdown(0.5);
+}
+
+Result<std::unique_ptr<RenderServer>> RenderServer::start(const RenderServerConfig& config) {
+  auto impl = std::make_unique<Impl>();
+  impl->config = config;
+  auto listen = dataservice::parseHostPort(config.listen);
+  if (!listen) {
+    return listen.status();
+  }
+  if (config.insecure && !dataservice::isLoopbackHost(listen->host)) {
+    return failedPrecondition(fmt::format(
+        "--insecure refuses to listen on '{}': without TLS only a loopback address (127.0.0.1, "
+        "::1, localhost) may be bound",
+        config.listen));
+  }
+  if (config.maxSessions < 1) {
+    return invalidArgument("max sessions must be at least 1");
+  }
+  std::shared_ptr<grpc::ServerCredentials> credentials;
+  if (config.insecure) {
+    std::fprintf(stderr,
+                 "crackvis-render: WARNING: --insecure: no TLS, no client certificates; "
+                 "listening on loopback only (%s)\n",
+                 config.listen.c_str());
+    credentials = grpc::InsecureServerCredentials();
+  } else {
+    auto material = dataservice::loadTlsMaterial(config.tls);
+    if (!material) {
+      return material.status();
+    }
+    grpc::SslServerCredentialsOptions options(
+        GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY);
+    options.pem_root_certs = material->caPem;
+    options.pem_key_cert_pairs.push_back({material->keyPem, material->certPem});
+    credentials = grpc::SslServerCredentials(options);
+  }
+  auto data = dataservice::DataClient::connect(impl->config.data);
+  if (!data) {
+    return Status(data.status().code(),
+                  fmt::format("the data service client: {}", data.status().message()));
+  }
+  auto channel = dataChannel(impl->config.data);
+  if (!channel) {
+    return channel.status();
+  }
+  auto log = dataservice::AccessLog::open(config.accessLog);
+  if (!log) {
+    return log.status();
+  }
+  impl->log = std::move(log).value();
+  impl->service = std::make_unique<RenderServiceImpl>(impl->config, std::move(data).value(),
+                                                      std::move(channel).value(), *impl->log);
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(config.listen, credentials, &impl->port);
+  builder.RegisterService(impl->service.get());
+  builder.SetMaxReceiveMessageSize(static_cast<int>(pipeline::kMaxPipelineBytes) + 4096);
+  impl->server = builder.BuildAndStart();
+  if (!impl->server || impl->port == 0) {
+    return Status(StatusCode::kUnavailable,
+                  fmt::format("cannot listen on {} (address in use or not local?)", config.listen));
+  }
+  impl->address = fmt::format("{}:{}", listen->host, impl->port);
+  Impl* raw = impl.get();
+  impl->reaper = std::thread([raw] { raw->reap(); });
+  return std::unique_ptr<RenderServer>(new RenderServer(std::move(impl)));
+}
+
+const std::string& RenderServer::address() const {
+  return m_impl->address;
+}
+int RenderServer::port() const {
+  return m_impl->port;
+}
+int RenderServer::sessionCount() const {
+  return m_impl->service->sessions().count();
+}
+
+void RenderServer::shutdown(double graceSeconds) {
+  {
+    std::lock_guard lock(m_impl->mutex);
+    if (m_impl->stopping) {
+      return;
+    }
+    m_impl->stopping = true;
+  }
+  m_impl->stopped.notify_all();
+  // Closing the sessions ends their streams (next() returns kClosed).
+  m_impl->service->sessions().closeAll();
+  m_impl->server->Shutdown(std::chrono::system_clock::now() +
+                           std::chrono::milliseconds(static_cast<int>(graceSeconds * 1000)));
+  m_impl->reaper.join();
+}
+
+void RenderServer::wait() {
+  std::unique_lock lock(m_impl->mutex);
+  m_impl->stopped.wait(lock, [&] { return m_impl->stopping; });
+}
+
+}  // namespace crackvis::service

@@ -1,0 +1,674 @@
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include <crackvis/cracks/bond_graph.hpp>
+#include <crackvis/cracks/extractor.hpp>
+#include <crackvis/service/session.hpp>
+
+namespace crackvis::service {
+namespace {
+
+double millisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+cracks::ExtractOptions extractOptions(const pipeline::PipelineDescription& d) {
+  cracks::ExtractOptions options;
+  options.validate = d.cracks.validation;
+  options.validationTolerance = d.cracks.validationTolerance;
+  options.mergeOctahedra = d.cracks.mergeOctahedra;
+  options.includeIntactFaces = d.showDecomposition;
+  return options;
+}
+
+// Whether two descriptions need different extractors.
+bool sameExtraction(const pipeline::PipelineDescription& a,
+                    const pipeline::PipelineDescription& b) {
+  return a.file == b.file && a.cracks.method == b.cracks.method &&
+         a.cracks.validation == b.cracks.validation &&
+         a.cracks.validationTolerance == b.cracks.validationTolerance &&
+         a.cracks.mergeOctahedra == b.cracks.mergeOctahedra &&
+         a.showDecomposition == b.showDecomposition;
+}
+
+Status checkViewSize(int width, int height, const SessionLimits& limits) {
+  if (width < 16 || height < 16 || width > limits.maxWidth || height > limits.maxHeight ||
+      width % 2 != 0 || height % 2 != 0) {
+    return invalidArgument(
+        fmt::format("view size {}x{}: width and height must be even and within "
+                    "16x16..{}x{}",
+                    width, height, limits.maxWidth, limits.maxHeight));
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+// Everything the session's thread owns. Member order is destruction order
+// in reverse: the extractor goes before the graph, the graph before the
+// cache whose source holds the bonds it views.
+struct Session::Worker {
+  Session& session;
+  pipeline::PipelineDescription description;
+  std::unique_ptr<source::StepCache> cache;
+  std::unique_ptr<cracks::BondGraph> graph;
+  std::unique_ptr<cracks::CrackExtractor> extractor;
+  std::unique_ptr<render::SceneRenderer> renderer;
+  std::shared_ptr<const source::SourceStep> initial;  // step 0: displacements
+  std::shared_ptr<const source::SourceStep> current;
+  cracks::CrackMesh mesh;
+  FrameTimings stepTimings;  // of the last step change (reported with the next frame)
+
+  int width = 0;
+  int height = 0;
+  bool playing = false;
+  bool loop = false;
+  double playFps = 0.0;
+  Clock::time_point nextTick;
+  bool dirty = true;
+  bool forceFull = true;
+  bool keyframe = true;
+  std::optional<Clock::time_point> refineAt;
+  Clock::time_point lastInteraction = Clock::now() - std::chrono::hours(1);
+  int reduction = 2;
+  std::uint64_t lastEventId = 0;
+  std::optional<Clock::time_point> lastEventReceived;
+  std::uint64_t frameId = 0;
+
+  explicit Worker(Session& owner) : session(owner) {}
+
+  int stepCount() const { return cache->source().stepCount(); }
+
+  Status openFile(const pipeline::PipelineDescription& d) {
+    auto source = session.m_opener(d.file);
+    if (!source) {
+      return source.status();
+    }
+    if ((*source)->stepCount() < 1) {
+      return failedPrecondition(fmt::format("{}: the file has no steps", d.file));
+    }
+    auto newCache =
+        std::make_unique<source::StepCache>(std::move(source).value(), session.m_limits.cacheSteps);
+    auto first = newCache->get(0);
+    if (!first) {
+      return first.status();
+    }
+    extractor.reset();
+    graph.reset();
+    cache = std::move(newCache);
+    initial = first->step;
+    const dem::Lattice& lattice = cache->source().lattice();
+    graph = std::make_unique<cracks::BondGraph>(lattice.particleCount(), lattice.bonds);
+    return Status::ok();
+  }
+
+  void makeExtractor(const pipeline::PipelineDescription& d) {
+    extractor = cracks::makeExtractor(d.cracks.method, *graph, cache->source().lattice().dimension,
+                                      extractOptions(d));
+  }
+
+  Status ensureRenderer(int w, int h) {
+    if (renderer && renderer->capacityWidth() >= w && renderer->capacityHeight() >= h) {
+      return Status::ok();
+    }
+    std::optional<pipeline::CameraDescription> camera;
+    if (renderer) {
+      camera = renderer->camera();
+    }
+    renderer.reset();  // one GL context per session at a time
+    auto created = render::SceneRenderer::create(w, h);
+    if (!created) {
+      return created.status();
+    }
+    renderer = std::move(created).value();
+    if (camera) {
+      renderer->setCamera(*camera);
+    }
+    return current ? buildScene(false) : Status::ok();
+  }
+
+  // Extracts the current step's cracks and builds the scene.
+  Status extractAndBuild(bool resetCamera) {
+    const auto& lattice = cache->source().lattice();
+    cracks::StepInput input{current->positions, current->bondState, lattice.radius, {}, {}};
+    const auto extractStart = Clock::now();
+    CRACKVIS_RETURN_IF_ERROR(extractor->extract(input, mesh));
+    stepTimings.extractMs = millisecondsSince(extractStart);
+    return buildScene(resetCamera);
+  }
+
+  Status buildScene(bool resetCamera) {
+    const auto& lattice = cache->source().lattice();
+    cracks::StepInput input{current->positions, current->bondState, lattice.radius, {}, {}};
+    render::SceneInput scene{&lattice, input, initial->positions,
+                             {},       &mesh, extractor->decomposition()};
+    const auto start = Clock::now();
+    CRACKVIS_RETURN_IF_ERROR(renderer->setScene(description, scene, resetCamera));
+    stepTimings.sceneMs = millisecondsSince(start);
+    dirty = true;
+    return Status::ok();
+  }
+
+  Status showStep(int step) {
+    CRACKVIS_RETURN_IF_ERROR(source::checkStepInRange(description.file, step, stepCount()));
+    auto loaded = cache->get(step);
+    if (!loaded) {
+      return loaded.status();
+    }
+    stepTimings = {};
+    stepTimings.loadMs = loaded->loadMs;
+    current = loaded->step;
+    return extractAndBuild(false);
+  }
+
+  Status start() {
+    const auto& d = session.m_initial;
+    CRACKVIS_RETURN_IF_ERROR(checkViewSize(d.view.width, d.view.height, session.m_limits));
+    description = d;
+    CRACKVIS_RETURN_IF_ERROR(openFile(d));
+    const int step = d.step < 0 ? stepCount() - 1 : static_cast<int>(d.step);
+    CRACKVIS_RETURN_IF_ERROR(source::checkStepInRange(d.file, step, stepCount()));
+    width = d.view.width;
+    height = d.view.height;
+    auto created = render::SceneRenderer::create(width, height);
+    if (!created) {
+      return created.status();
+    }
+    renderer = std::move(created).value();
+    makeExtractor(d);
+    CRACKVIS_RETURN_IF_ERROR(showStep(step));
+    session.m_info.stepCount = stepCount();
+    session.m_info.particleCount =
+        static_cast<std::int64_t>(cache->source().lattice().particleCount());
+    session.m_info.bondCount = static_cast<std::int64_t>(cache->source().lattice().bondCount());
+    session.m_info.backend = renderer->backend();
+    session.m_info.file = d.file;
+    return Status::ok();
+  }
+
+  SessionState state() const {
+    return {current ? current->index : 0, stepCount(), playing, width, height,
+            pipeline::toXml(description)};
+  }
+
+  void interacted(const SessionEvent& event) {
+    lastInteraction = event.received;
+    lastEventReceived = event.received;
+    dirty = true;
+  }
+
+  void reject(const SessionEvent& event, const Status& status) {
+    session.notify({event.id, status, std::nullopt});
+  }
+
+  void apply(const SessionEvent& event) {
+    lastEventId = std::max(lastEventId, event.id);
+    std::visit([&](const auto& what) { handle(event, what); }, event.what);
+  }
+
+  void handle(const SessionEvent& event, const CameraEvent& camera) {
+    renderer->moveCamera(camera.move, camera.dx, camera.dy);
+    interacted(event);
+  }
+
+  void handle(const SessionEvent& event, const ResizeEvent& resize) {
+    if (Status status = checkViewSize(resize.width, resize.height, session.m_limits); !status) {
+      reject(event, status);
+      return;
+    }
+    if (Status status = ensureRenderer(resize.width, resize.height); !status) {
+      reject(event, status);
+      return;
+    }
+    width = resize.width;
+    height = resize.height;
+    description.view.width = width;
+    description.view.height = height;
+    interacted(event);
+    session.notify({event.id, Status::ok(), state()});
+  }
+
+  void handle(const SessionEvent& event, const SetStepEvent& set) {
+    const int step = set.step == -1 ? stepCount() - 1 : set.step;
+    if (Status status = showStep(step); !status) {
+      reject(event, status);
+      return;
+    }
+    cache->prefetch(step + 1);
+    interacted(event);
+    session.notify({event.id, Status::ok(), state()});
+  }
+
+  void handle(const SessionEvent& event, const PlayEvent& play) {
+    if (play.fps < 0.0 || play.fps > 240.0) {
+      reject(event, invalidArgument(fmt::format("play fps {} outside 0..240", play.fps)));
+      return;
+    }
+    playing = play.playing;
+    loop = play.loop;
+    playFps = play.fps > 0.0 ? play.fps : description.stream.fps;
+    nextTick = Clock::now();
+    if (playing && current) {
+      cache->prefetch(current->index + 1);
+    }
+    lastEventReceived = event.received;
+    dirty = true;
+    session.notify({event.id, Status::ok(), state()});
+  }
+
+  void handle(const SessionEvent& event, const ReplacePipelineEvent& replace) {
+    auto parsed = pipeline::parsePipeline(replace.xml);
+    if (!parsed) {
+      reject(event, parsed.status());
+      return;
+    }
+    if (Status status = replaceDescription(std::move(parsed).value()); !status) {
+      reject(event, status);
+      return;
+    }
+    interacted(event);
+    session.notify({event.id, Status::ok(), state()});
+  }
+
+  Status replaceDescription(pipeline::PipelineDescription next) {
+    CRACKVIS_RETURN_IF_ERROR(checkViewSize(next.view.width, next.view.height, session.m_limits));
+    const bool newFile = next.file != description.file;
+    const bool newExtractor = !sameExtraction(next, description);
+    const bool stepChanged = next.step != description.step;
+    if (newFile) {
+      // The old file stays in force if the new one cannot be opened.
+      auto previous = std::move(cache);
+      auto previousGraph = std::move(graph);
+      auto previousExtractor = std::move(extractor);
+      auto previousInitial = initial;
+      if (Status status = openFile(next); !status) {
+        cache = std::move(previous);
+        graph = std::move(previousGraph);
+        extractor = std::move(previousExtractor);
+        initial = previousInitial;
+        return status;
+      }
+      current.reset();
+    }
+    const int step = next.step < 0 ? stepCount() - 1 : static_cast<int>(next.step);
+    const int target = newFile || stepChanged ? step : current->index;
+    CRACKVIS_RETURN_IF_ERROR(source::checkStepInRange(next.file, target, stepCount()));
+    CRACKVIS_RETURN_IF_ERROR(ensureRenderer(next.view.width, next.view.height));
+    const bool cameraGiven =
+        next.view.camera.has_value() && next.view.camera != description.view.camera;
+    description = std::move(next);
+    width = description.view.width;
+    height = description.view.height;
+    if (newExtractor || !extractor) {
+      makeExtractor(description);
+    }
+    if (newFile || target != current->index) {
+      CRACKVIS_RETURN_IF_ERROR(showStep(target));
+    } else if (newExtractor) {
+      CRACKVIS_RETURN_IF_ERROR(extractAndBuild(false));
+    } else {
+      CRACKVIS_RETURN_IF_ERROR(buildScene(false));
+    }
+    if (cameraGiven) {
+      renderer->setCamera(*description.view.camera);
+    } else if (newFile) {
+      renderer->moveCamera(render::CameraMove::kReset, 0, 0);
+    }
+    return Status::ok();
+  }
+
+  void handle(const SessionEvent& event, const StillEvent&) {
+    forceFull = true;
+    lastEventReceived = event.received;
+    dirty = true;
+  }
+
+  void handle(const SessionEvent& event, const KeyframeEvent&) {
+    keyframe = true;
+    lastEventReceived = event.received;
+    dirty = true;
+  }
+
+  // Advances a playing session by one step when its tick is due.
+  void tick() {
+    if (!playing || Clock::now() < nextTick) {
+      return;
+    }
+    const auto period = std::chrono::duration_cast<Clock::duration>(
+        std::chrono::duration<double>(1.0 / std::max(playFps, 0.1)));
+    nextTick = std::max(nextTick + period, Clock::now());
+    int step = current->index + 1;
+    if (step >= stepCount()) {
+      if (!loop) {
+        playing = false;
+        session.notify({0, Status::ok(), state()});
+        forceFull = true;
+        dirty = true;
+        return;
+      }
+      step = 0;
+    }
+    if (Status status = showStep(step); !status) {
+      playing = false;
+      session.notify({0, status, state()});
+      return;
+    }
+    cache->prefetch(step + 1 < stepCount() ? step + 1 : 0);
+  }
+
+  // Renders a frame when something changed: reduced while interacting or
+  // playing, full resolution otherwise.
+  void renderIfDirty() {
+    const auto now = Clock::now();
+    if (refineAt && now >= *refineAt) {
+      refineAt.reset();
+      forceFull = true;
+      dirty = true;
+    }
+    if (!dirty) {
+      return;
+    }
+    const bool interacting =
+        playing || std::chrono::duration<double, std::milli>(now - lastInteraction).count() <
+                       session.m_limits.refineAfterMs;
+    const int factor = interacting && !forceFull ? reduction : 1;
+    RenderedFrame frame;
+    frame.step = current->index;
+    frame.reduction = factor;
+    frame.fullResolution = factor == 1;
+    frame.keyframe = keyframe;
+    frame.bitrate = description.stream.bitrate;
+    frame.fps = description.stream.fps;
+    frame.lastEventId = lastEventId;
+    frame.lastEventReceived = lastEventReceived;
+    frame.timings = stepTimings;
+    render::Image image;
+    const int w = std::max(16, width / factor);
+    const int h = std::max(16, height / factor);
+    const auto start = Clock::now();
+    if (Status status = renderer->renderFrame(w, h, image); !status) {
+      session.notify({lastEventId, status, std::nullopt});
+      dirty = false;
+      return;
+    }
+    frame.timings.renderMs = millisecondsSince(start);
+    if (factor > 1) {
+      render::resample(image, width, height, frame.image);
+      refineAt = lastInteraction +
+                 std::chrono::duration_cast<Clock::duration>(
+                     std::chrono::duration<double, std::milli>(session.m_limits.refineAfterMs));
+    } else {
+      frame.image = std::move(image);
+    }
+    if (interacting && !forceFull) {
+      adaptReduction(frame.timings.renderMs);
+    }
+    frame.frameId = ++frameId;
+    session.publish(std::move(frame));
+    stepTimings = {};
+    lastEventReceived.reset();
+    dirty = false;
+    forceFull = false;
+    keyframe = false;
+  }
+
+  // ParaView's image reduction factor, adapted so that a reduced frame fits
+  // the budget: rendering cost grows with the pixels drawn.
+  void adaptReduction(double renderMs) {
+    const double budget = session.m_limits.interactiveFrameMs;
+    if (renderMs > budget && reduction < session.m_limits.maxReduction) {
+      ++reduction;
+    } else if (renderMs < budget * 0.35 && reduction > 1) {
+      --reduction;
+    }
+  }
+
+  std::optional<Clock::time_point> wakeTime() const {
+    std::optional<Clock::time_point> at = refineAt;
+    if (playing && (!at || nextTick < *at)) {
+      at = nextTick;
+    }
+    return at;
+  }
+};
+
+Session::Session(std::string id, pipeline::PipelineDescription description, SourceOpener opener,
+                 SessionLimits limits)
+    : m_id(std::move(id)),
+      m_limits(limits),
+      m_initial(std::move(description)),
+      m_opener(std::move(opener)),
+      m_detachedSince(Clock::now()) {}
+
+Result<std::shared_ptr<Session>> Session::open(std::string id,
+                                               pipeline::PipelineDescription description,
+                                               SourceOpener opener, SessionLimits limits) {
+  std::shared_ptr<Session> session(
+      new Session(std::move(id), std::move(description), std::move(opener), limits));
+  std::promise<Status> started;
+  auto result = started.get_future();
+  session->m_thread = std::thread(
+      [raw = session.get(), p = std::move(started)]() mutable { raw->run(std::move(p)); });
+  Status status = result.get();
+  if (!status) {
+    session->close();
+    session->m_thread.join();
+    return status;
+  }
+  return session;
+}
+
+Session::~Session() {
+  close();
+  if (m_thread.joinable()) {
+    m_thread.join();
+  }
+}
+
+void Session::run(std::promise<Status> started) {
+  Worker worker(*this);
+  if (Status status = worker.start(); !status) {
+    started.set_value(status);
+    return;
+  }
+  started.set_value(Status::ok());
+  std::unique_lock lock(m_mutex);
+  while (!m_closing) {
+    auto ready = [&] {
+      return m_closing || !m_events.empty() || !m_tasks.empty() ||
+             (m_attachment != 0 && (worker.dirty || m_needFrame));
+    };
+    if (auto at = worker.wakeTime()) {
+      m_wake.wait_until(lock, *at, ready);
+    } else {
+      m_wake.wait(lock, ready);
+    }
+    if (m_closing) {
+      break;
+    }
+    auto events = std::move(m_events);
+    m_events.clear();
+    auto tasks = std::move(m_tasks);
+    m_tasks.clear();
+    if (m_needFrame) {
+      m_needFrame = false;
+      worker.keyframe = true;
+      worker.forceFull = true;
+      worker.dirty = true;
+    }
+    const bool attached = m_attachment != 0;
+    lock.unlock();
+    for (const SessionEvent& event : events) {
+      worker.apply(event);
+    }
+    for (auto& task : tasks) {
+      task(worker);
+    }
+    worker.tick();
+    if (attached) {
+      worker.renderIfDirty();
+    }
+    lock.lock();
+  }
+  // Tasks that will not run break their promises: a waiting snapshot
+  // returns UNAVAILABLE.
+  m_tasks.clear();
+}
+
+void Session::post(SessionEvent event) {
+  {
+    std::lock_guard lock(m_mutex);
+    m_events.push_back(std::move(event));
+  }
+  m_wake.notify_one();
+}
+
+std::uint64_t Session::attach() {
+  std::uint64_t attachment = 0;
+  {
+    std::lock_guard lock(m_mutex);
+    attachment = m_nextAttachment++;
+    m_attachment = attachment;
+    m_detachedSince.reset();
+    m_latest.reset();  // a frame encoded for another stream's decoder
+    m_needFrame = true;
+  }
+  m_wake.notify_one();
+  m_outgoing.notify_all();  // the superseded stream ends
+  return attachment;
+}
+
+void Session::detach(std::uint64_t attachment) {
+  std::lock_guard lock(m_mutex);
+  if (m_attachment == attachment) {
+    m_attachment = 0;
+    m_detachedSince = Clock::now();
+    m_latest.reset();
+  }
+}
+
+std::optional<Clock::time_point> Session::detachedSince() const {
+  std::lock_guard lock(m_mutex);
+  return m_detachedSince;
+}
+
+Session::Next Session::next(std::uint64_t attachment, std::chrono::milliseconds timeout,
+                            RenderedFrame& frame, SessionNotice& notice) {
+  std::unique_lock lock(m_mutex);
+  m_outgoing.wait_for(lock, timeout, [&] {
+    return m_closing || m_attachment != attachment || !m_notices.empty() || m_latest.has_value();
+  });
+  if (m_closing) {
+    return Next::kClosed;
+  }
+  if (m_attachment != attachment) {
+    return Next::kSuperseded;
+  }
+  if (!m_notices.empty()) {
+    notice = std::move(m_notices.front());
+    m_notices.pop_front();
+    return Next::kNotice;
+  }
+  if (m_latest) {
+    frame = std::move(*m_latest);
+    m_latest.reset();
+    return Next::kFrame;
+  }
+  return Next::kTimeout;
+}
+
+void Session::publish(RenderedFrame frame) {
+  {
+    std::lock_guard lock(m_mutex);
+    if (m_latest) {
+      ++m_dropped;  // the stream has not taken the previous frame: stale
+      // A dropped frame's keyframe request and newer event id carry over.
+      frame.keyframe = frame.keyframe || m_latest->keyframe;
+    }
+    m_latest = std::move(frame);
+  }
+  m_outgoing.notify_all();
+}
+
+void Session::reportEventError(std::uint64_t eventId, Status error) {
+  notify({eventId, std::move(error), std::nullopt});
+}
+
+void Session::notify(SessionNotice notice) {
+  {
+    std::lock_guard lock(m_mutex);
+    m_notices.push_back(std::move(notice));
+  }
+  m_outgoing.notify_all();
+}
+
+Result<render::Image> Session::snapshot(int width, int height, int* step) {
+  auto promise = std::make_shared<std::promise<Result<render::Image>>>();
+  auto future = promise->get_future();
+  auto stepOut = std::make_shared<int>(0);
+  {
+    std::lock_guard lock(m_mutex);
+    if (m_closing) {
+      return failedPrecondition(fmt::format("session {} is closed", m_id));
+    }
+    m_tasks.push_back([promise, width, height, stepOut, this](Worker& worker) {
+      const int w = width > 0 ? width : worker.width;
+      const int h = height > 0 ? height : worker.height;
+      if (Status status = checkViewSize(w, h, m_limits); !status) {
+        promise->set_value(status);
+        return;
+      }
+      if (Status status = worker.ensureRenderer(w, h); !status) {
+        promise->set_value(status);
+        return;
+      }
+      render::Image image;
+      if (Status status = worker.renderer->renderFrame(w, h, image); !status) {
+        promise->set_value(status);
+        return;
+      }
+      *stepOut = worker.current->index;
+      worker.dirty = true;  // the stream's next frame is rendered again at its own size
+      promise->set_value(std::move(image));
+    });
+  }
+  m_wake.notify_one();
+  if (future.wait_for(std::chrono::seconds(60)) != std::future_status::ready) {
+    return Status(StatusCode::kUnavailable,
+                  fmt::format("session {}: the snapshot did not finish within 60 s", m_id));
+  }
+  Result<render::Image> result = Status(StatusCode::kUnavailable, "");
+  try {
+    result = future.get();
+  } catch (const std::future_error&) {
+    return Status(StatusCode::kUnavailable,
+                  fmt::format("session {} closed before the snapshot was rendered", m_id));
+  }
+  if (result && step != nullptr) {
+    *step = *stepOut;
+  }
+  return result;
+}
+
+void Session::close() {
+  {
+    std::lock_guard lock(m_mutex);
+    m_closing = true;
+  }
+  m_wake.notify_all();
+  m_outgoing.notify_all();
+}
+
+bool Session::closed() const {
+  std::lock_guard lock(m_mutex);
+  return m_closing;
+}
+
+std::uint64_t Session::framesDropped() const {
+  std::lock_guard lock(m_mutex);
+  return m_dropped;
+}
+
+}  // namespace crackvis::service

@@ -1,0 +1,100 @@
+// Where a render session's data comes from: the lattice once, then the
+// positions and bond states of one step at a time. RemoteSource reads through
+// crackvis-data with partial reads only (the bond list and radii once per
+// file, then one Read per step of its positions and bond states); LocalSource
+// reads a file beside the process (crackvis-render --snapshot --data-root,
+// tests). StepCache keeps recent steps and prefetches the next one on its own
+// thread while a session plays.
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <crackvis/common/status.hpp>
+#include <crackvis/dataservice/data_client.hpp>
+#include <crackvis/dem/model.hpp>
+
+namespace crackvis::source {
+
+// One step as a scene needs it.
+struct SourceStep {
+  int index = 0;
+  double time = 0.0;
+  std::vector<dem::Vec3> positions;     // [N]
+  std::vector<std::uint8_t> bondState;  // [M]
+  double loadMs = 0.0;                  // time the read took
+};
+
+// A step from the cache: the data and what getting it cost now.
+struct CachedStep {
+  std::shared_ptr<const SourceStep> step;
+  double loadMs = 0.0;  // 0 for a cache hit
+};
+
+// Not thread-safe; StepCache serialises its calls.
+class StepSource {
+ public:
+  virtual ~StepSource() = default;
+  virtual const std::string& file() const = 0;
+  // Radii and bonds (strengths may be empty: a view does not need them).
+  virtual const dem::Lattice& lattice() const = 0;
+  virtual int stepCount() const = 0;
+  // OUT_OF_RANGE naming the file's steps for a step outside them.
+  virtual Result<SourceStep> read(int step) = 0;
+};
+
+// `file` relative to the data service's root.
+Result<std::unique_ptr<StepSource>> openRemoteSource(const dataservice::DataClient& client,
+                                                     const std::string& file);
+// `path` on this machine.
+Result<std::unique_ptr<StepSource>> openLocalSource(const std::string& path);
+
+// OUT_OF_RANGE "FILE: step K out of range (the file has steps 0..N-1)".
+Status checkStepInRange(const std::string& file, int step, int stepCount);
+
+class StepCache {
+ public:
+  StepCache(std::unique_ptr<StepSource> source, std::size_t capacity = 8);
+  StepCache(const StepCache&) = delete;
+  StepCache& operator=(const StepCache&) = delete;
+  ~StepCache();  // stops and joins the prefetch thread
+
+  const StepSource& source() const { return *m_source; }
+  // The step from the cache, or read now (a prefetch in progress of the same
+  // step is waited for rather than read twice).
+  Result<CachedStep> get(int step);
+  // Reads `step` in the background unless cached or out of range.
+  void prefetch(int step);
+
+  struct Stats {
+    std::uint64_t hits = 0;
+    std::uint64_t misses = 0;
+    std::uint64_t prefetched = 0;
+  };
+  Stats stats() const;
+
+ private:
+  std::shared_ptr<const SourceStep> lookup(int step);   // under m_mutex
+  void insert(std::shared_ptr<const SourceStep> step);  // under m_mutex
+  void prefetchLoop();
+
+  std::unique_ptr<StepSource> m_source;
+  std::size_t m_capacity;
+  mutable std::mutex m_mutex;
+  std::condition_variable m_changed;
+  std::list<std::shared_ptr<const SourceStep>> m_steps;  // most recent first
+  std::mutex m_readMutex;                                // one read at a time
+  int m_reading = -1;                                    // step being read, under m_mutex
+  int m_wanted = -1;                                     // next prefetch, under m_mutex
+  bool m_stopping = false;
+  Stats m_stats;
+  std::thread m_prefetcher;
+};
+
+}  // namespace crackvis::source

@@ -1,0 +1,108 @@
+#include <crackvis/source/step_source.hpp>
+
+namespace crackvis::source {
+
+StepCache::StepCache(std::unique_ptr<StepSource> source, std::size_t capacity)
+    : m_source(std::move(source)),
+      m_capacity(capacity < 1 ? 1 : capacity),
+      m_prefetcher([this] { prefetchLoop(); }) {}
+
+StepCache::~StepCache() {
+  {
+    std::lock_guard lock(m_mutex);
+    m_stopping = true;
+  }
+  m_changed.notify_all();
+  m_prefetcher.join();
+}
+
+std::shared_ptr<const SourceStep> StepCache::lookup(int step) {
+  for (auto it = m_steps.begin(); it != m_steps.end(); ++it) {
+    if ((*it)->index == step) {
+      auto found = *it;
+      m_steps.splice(m_steps.begin(), m_steps, it);  // most recently used first
+      return found;
+    }
+  }
+  return nullptr;
+}
+
+void StepCache::insert(std::shared_ptr<const SourceStep> step) {
+  if (lookup(step->index) != nullptr) {
+    return;
+  }
+  m_steps.push_front(std::move(step));
+  while (m_steps.size() > m_capacity) {
+    m_steps.pop_back();
+  }
+}
+
+Result<CachedStep> StepCache::get(int step) {
+  {
+    std::unique_lock lock(m_mutex);
+    // A prefetch of this very step is under way: wait for it instead of
+    // reading the same bytes twice.
+    m_changed.wait(lock, [&] { return m_reading != step || m_stopping; });
+    if (auto cached = lookup(step)) {
+      ++m_stats.hits;
+      return CachedStep{std::move(cached), 0.0};
+    }
+    ++m_stats.misses;
+  }
+  std::lock_guard reading(m_readMutex);
+  auto loaded = m_source->read(step);
+  if (!loaded) {
+    return loaded.status();
+  }
+  auto shared = std::make_shared<const SourceStep>(std::move(loaded).value());
+  std::lock_guard lock(m_mutex);
+  insert(shared);
+  return CachedStep{shared, shared->loadMs};
+}
+
+void StepCache::prefetch(int step) {
+  {
+    std::lock_guard lock(m_mutex);
+    if (step < 0 || step >= m_source->stepCount()) {
+      return;
+    }
+    m_wanted = step;
+  }
+  m_changed.notify_all();
+}
+
+StepCache::Stats StepCache::stats() const {
+  std::lock_guard lock(m_mutex);
+  return m_stats;
+}
+
+void StepCache::prefetchLoop() {
+  std::unique_lock lock(m_mutex);
+  while (true) {
+    m_changed.wait(lock, [&] { return m_stopping || m_wanted >= 0; });
+    if (m_stopping) {
+      return;
+    }
+    const int step = m_wanted;
+    m_wanted = -1;
+    if (lookup(step) != nullptr) {
+      continue;
+    }
+    m_reading = step;
+    lock.unlock();
+    Result<SourceStep> loaded = [&] {
+      std::lock_guard reading(m_readMutex);
+      return m_source->read(step);
+    }();
+    lock.lock();
+    m_reading = -1;
+    // A failed prefetch is not an error: get() reads again and reports it.
+    if (loaded) {
+      insert(std::make_shared<const SourceStep>(std::move(loaded).value()));
+      ++m_stats.prefetched;
+    }
+    m_changed.notify_all();
+  }
+}
+
+}  // namespace crackvis::source

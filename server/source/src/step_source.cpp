@@ -1,0 +1,133 @@
+#include <chrono>
+
+#include <fmt/format.h>
+
+#include <crackvis/dataservice/remote_dem_file.hpp>
+#include <crackvis/dem/dem_file.hpp>
+#include <crackvis/source/step_source.hpp>
+
+namespace crackvis::source {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double millisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+class RemoteSource final : public StepSource {
+ public:
+  explicit RemoteSource(dataservice::RemoteDemFile remote) : m_remote(std::move(remote)) {}
+
+  Status load() {
+    auto bonds = m_remote.bonds();
+    if (!bonds) {
+      return bonds.status();
+    }
+    auto radii = m_remote.radii();
+    if (!radii) {
+      return radii.status();
+    }
+    m_lattice.dimension = m_remote.dimension();
+    m_lattice.bonds = **bonds;
+    m_lattice.radius = std::move(radii).value();
+    return Status::ok();
+  }
+
+  const std::string& file() const override { return m_remote.file(); }
+  const dem::Lattice& lattice() const override { return m_lattice; }
+  int stepCount() const override { return m_remote.stepCount(); }
+
+  Result<SourceStep> read(int step) override {
+    CRACKVIS_RETURN_IF_ERROR(checkStepInRange(file(), step, stepCount()));
+    const auto start = Clock::now();
+    auto remote = m_remote.readStep(step);
+    if (!remote) {
+      return remote.status();
+    }
+    SourceStep out;
+    out.index = remote->index;
+    out.time = remote->time;
+    out.positions = std::move(remote->positions);
+    out.bondState = std::move(remote->bondState);
+    out.loadMs = millisecondsSince(start);
+    return out;
+  }
+
+ private:
+  dataservice::RemoteDemFile m_remote;
+  dem::Lattice m_lattice;
+};
+
+class LocalSource final : public StepSource {
+ public:
+  LocalSource(std::string path, dem::DemFileReader reader)
+      : m_path(std::move(path)), m_reader(std::move(reader)) {}
+
+  Status load() {
+    auto lattice = m_reader.readLattice();
+    if (!lattice) {
+      return lattice.status();
+    }
+    m_lattice = std::move(lattice).value();
+    return Status::ok();
+  }
+
+  const std::string& file() const override { return m_path; }
+  const dem::Lattice& lattice() const override { return m_lattice; }
+  int stepCount() const override { return m_reader.stepCount(); }
+
+  Result<SourceStep> read(int step) override {
+    CRACKVIS_RETURN_IF_ERROR(checkStepInRange(file(), step, stepCount()));
+    const auto start = Clock::now();
+    auto state = m_reader.readStep(step);
+    if (!state) {
+      return state.status();
+    }
+    SourceStep out;
+    out.index = step;
+    out.time = state->time;
+    out.positions = std::move(state->positions);
+    out.bondState = std::move(state->bondState);
+    out.loadMs = millisecondsSince(start);
+    return out;
+  }
+
+ private:
+  std::string m_path;
+  dem::DemFileReader m_reader;
+  dem::Lattice m_lattice;
+};
+
+}  // namespace
+
+Status checkStepInRange(const std::string& file, int step, int stepCount) {
+  if (step < 0 || step >= stepCount) {
+    return outOfRange(fmt::format("{}: step {} out of range (the file has steps 0..{})", file, step,
+                                  stepCount - 1));
+  }
+  return Status::ok();
+}
+
+Result<std::unique_ptr<StepSource>> openRemoteSource(const dataservice::DataClient& client,
+                                                     const std::string& file) {
+  auto remote = dataservice::RemoteDemFile::open(client, file);
+  if (!remote) {
+    return remote.status();
+  }
+  auto source = std::make_unique<RemoteSource>(std::move(remote).value());
+  CRACKVIS_RETURN_IF_ERROR(source->load());
+  return std::unique_ptr<StepSource>(std::move(source));
+}
+
+Result<std::unique_ptr<StepSource>> openLocalSource(const std::string& path) {
+  auto reader = dem::DemFileReader::open(path);
+  if (!reader) {
+    return reader.status();
+  }
+  auto source = std::make_unique<LocalSource>(path, std::move(reader).value());
+  CRACKVIS_RETURN_IF_ERROR(source->load());
+  return std::unique_ptr<StepSource>(std::move(source));
+}
+
+}  // namespace crackvis::source

@@ -1,0 +1,543 @@
+// The render service end to end: a real crackvis-data and a real
+// crackvis-render (in process, loopback ports, mutual TLS with certificates
+// from certs/make-dev-certs.sh), real EGL rendering on llvmpipe, real H.264
+// decoded on the test's side. The data is a scaled simulated cuboid A.
+#include <atomic>
+#include <cmath>
+#include <condition_variable>
+#include <fstream>
+#include <mutex>
+#include <thread>
+
+#include <catch2/catch.hpp>
+#include <grpcpp/grpcpp.h>
+
+#include "crackvis/v1/render.grpc.pb.h"
+#include "dataservice/service_fixture.hpp"
+#include "support/process.hpp"
+#include "support/temp_dir.hpp"
+#include <crackvis/encode/frame_codec.hpp>
+#include <crackvis/pipeline/pipeline_description.hpp>
+#include <crackvis/render/egl_context.hpp>
+#include <crackvis/service/render_server.hpp>
+#include <crackvis/sim/presets.hpp>
+#include <crackvis/sim/run.hpp>
+
+using namespace crackvis;
+namespace v1 = crackvis::v1;
+
+namespace {
+
+// A data root with a scaled simulated cuboid A and a file that is not HDF5.
+const testing::TempDir& crackRoot() {
+  static testing::TempDir dir;
+  static std::once_flag once;
+  std::call_once(once, [] {
+    sim::PresetOptions options;
+    options.name = "cuboid3d";
+    options.defectSet = 'A';
+    options.scale = 0.3;
+    auto preset = sim::makePreset(options);
+    REQUIRE(preset.isOk());
+    sim::RunOptions run;
+    run.path = dir.file("cuboidA.h5");
+    run.metadata.source = "crackvis render service tests: cuboid3d A, scale 0.3";
+    run.stepsPerSave = preset->stepsPerSave;
+    run.savedSteps = preset->savedSteps;
+    REQUIRE(sim::runToFile(std::move(preset->setup), run).isOk());
+    std::ofstream(dir.file("notes.txt")) << "not HDF5\n";
+  });
+  return dir;
+}
+
+struct Services {
+  std::unique_ptr<dataservice::DataServer> data;
+  std::unique_ptr<service::RenderServer> render;
+};
+
+Services startServices(double graceSeconds = 30.0, int maxSessions = 8) {
+  Services services;
+  auto dataConfig = testing::baseConfig();
+  dataConfig.dataRoot = crackRoot().path().string();
+  services.data = testing::startServer(dataConfig);
+  service::RenderServerConfig config;
+  config.listen = "127.0.0.1:0";
+  config.tls = testing::serverTls();
+  config.data.target = services.data->address();
+  config.data.tls = testing::clientTls("crackvis-render");
+  config.sessionGraceSeconds = graceSeconds;
+  config.maxSessions = maxSessions;
+  config.accessLog = "";
+  auto render = service::RenderServer::start(config);
+  INFO(render.status().message());
+  REQUIRE(render.isOk());
+  services.render = std::move(render).value();
+  return services;
+}
+
+std::unique_ptr<v1::RenderService::Stub> connect(const service::RenderServer& server,
+                                                 const std::string& certificate = "client") {
+  const auto tls = testing::clientTls(certificate);
+  auto read = [](const std::string& path) {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  grpc::SslCredentialsOptions ssl{read(tls.ca), read(tls.key), read(tls.cert)};
+  return v1::RenderService::NewStub(
+      grpc::CreateChannel(fmt::format("localhost:{}", server.port()), grpc::SslCredentials(ssl)));
+}
+
+// A small view of the file's last step: particles hidden, cracks red.
+pipeline::PipelineDescription crackView() {
+  pipeline::PipelineDescription d;
+  d.file = "cuboidA.h5";
+  d.step = -1;
+  d.view.width = 320;
+  d.view.height = 240;
+  d.view.background = {0, 0, 0};
+  d.view.scalarBar = false;
+  d.particles.visible = false;
+  d.cracks.colour = {255, 0, 0};
+  return d;
+}
+
+std::string openSession(v1::RenderService::Stub& stub, const pipeline::PipelineDescription& d,
+                        v1::OpenSessionResponse* response = nullptr) {
+  grpc::ClientContext context;
+  v1::OpenSessionRequest request;
+  request.set_pipeline_xml(pipeline::toXml(d));
+  v1::OpenSessionResponse local;
+  auto* out = response != nullptr ? response : &local;
+  const grpc::Status status = stub.OpenSession(&context, request, out);
+  INFO(status.error_message());
+  REQUIRE(status.ok());
+  return out->session_id();
+}
+
+grpc::Status openStatus(v1::RenderService::Stub& stub, const std::string& xml) {
+  grpc::ClientContext context;
+  v1::OpenSessionRequest request;
+  request.set_pipeline_xml(xml);
+  v1::OpenSessionResponse response;
+  return stub.OpenSession(&context, request, &response);
+}
+
+struct ReceivedFrame {
+  v1::Frame frame;
+  encode::RgbFrame picture;
+};
+
+// A stream attached to a session: a reader thread decodes every frame.
+class StreamClient {
+ public:
+  StreamClient(v1::RenderService::Stub& stub, const std::string& session) {
+    m_stream = stub.Stream(&m_context);
+    v1::ClientEvent attach;
+    attach.set_event_id(0);
+    attach.set_attach_session_id(session);
+    REQUIRE(m_stream->Write(attach));
+    auto decoder = encode::FrameDecoder::create();
+    REQUIRE(decoder.isOk());
+    m_decoder = std::move(decoder).value();
+    m_reader = std::thread([this] { readLoop(); });
+  }
+  ~StreamClient() {
+    if (!m_finished) {
+      m_context.TryCancel();
+    }
+    m_reader.join();
+  }
+
+  std::uint64_t send(v1::ClientEvent event) {
+    event.set_event_id(++m_lastEvent);
+    REQUIRE(m_stream->Write(event));
+    return m_lastEvent;
+  }
+  std::uint64_t rotate(double dx, double dy = 0.0) {
+    v1::ClientEvent event;
+    event.mutable_camera()->set_kind(v1::CameraEvent::ROTATE);
+    event.mutable_camera()->set_dx(dx);
+    event.mutable_camera()->set_dy(dy);
+    return send(event);
+  }
+  std::uint64_t setStep(int step) {
+    v1::ClientEvent event;
+    event.mutable_set_step()->set_step(step);
+    return send(event);
+  }
+
+  // Waits until `done(frames, errors)` holds; false after `seconds`.
+  template <typename Done>
+  bool waitFor(Done done, double seconds = 30.0) {
+    std::unique_lock lock(m_mutex);
+    return m_changed.wait_for(lock, std::chrono::duration<double>(seconds), [&] {
+      return done(m_frames, m_errors) || m_ended;
+    }) && done(m_frames, m_errors);
+  }
+  std::vector<ReceivedFrame> frames() {
+    std::lock_guard lock(m_mutex);
+    return m_frames;
+  }
+  std::vector<v1::EventError> errors() {
+    std::lock_guard lock(m_mutex);
+    return m_errors;
+  }
+  std::vector<v1::SessionState> states() {
+    std::lock_guard lock(m_mutex);
+    return m_states;
+  }
+  // Ends the stream like a vanished client: no goodbye, the call just dies.
+  void vanish() { m_context.TryCancel(); }
+  grpc::Status finish() {
+    m_stream->WritesDone();
+    m_reader.join();
+    m_reader = std::thread([] {});
+    m_finished = true;
+    return m_status;
+  }
+
+ private:
+  void readLoop() {
+    v1::ServerMessage message;
+    while (m_stream->Read(&message)) {
+      std::lock_guard lock(m_mutex);
+      if (message.has_frame()) {
+        ReceivedFrame received{message.frame(), {}};
+        encode::EncodedFrame unit;
+        const auto& bytes = message.frame().h264();
+        unit.data.assign(bytes.begin(), bytes.end());
+        unit.keyframe = message.frame().keyframe();
+        auto picture = m_decoder->decode(unit);
+        if (picture.isOk() && picture->has_value()) {
+          received.picture = std::move(**picture);
+        }
+        m_frames.push_back(std::move(received));
+      } else if (message.has_error()) {
+        m_errors.push_back(message.error());
+      } else if (message.has_state()) {
+        m_states.push_back(message.state());
+      }
+      m_changed.notify_all();
+    }
+    std::lock_guard lock(m_mutex);
+    m_status = m_stream->Finish();
+    m_ended = true;
+    m_changed.notify_all();
+  }
+
+  grpc::ClientContext m_context;
+  std::unique_ptr<grpc::ClientReaderWriter<v1::ClientEvent, v1::ServerMessage>> m_stream;
+  std::unique_ptr<encode::FrameDecoder> m_decoder;
+  std::thread m_reader;
+  std::mutex m_mutex;
+  std::condition_variable m_changed;
+  std::vector<ReceivedFrame> m_frames;
+  std::vector<v1::EventError> m_errors;
+  std::vector<v1::SessionState> m_states;
+  grpc::Status m_status;
+  bool m_ended = false;
+  bool m_finished = false;
+  std::uint64_t m_lastEvent = 0;
+};
+
+bool reddish(const std::uint8_t* p) {
+  return p[0] > 120 && p[1] < 80 && p[2] < 80;
+}
+
+int redPixels(const encode::RgbFrame& picture) {
+  int n = 0;
+  for (std::size_t i = 0; i + 2 < picture.rgb.size(); i += 3) {
+    n += reddish(&picture.rgb[i]) ? 1 : 0;
+  }
+  return n;
+}
+
+double meanDifference(const encode::RgbFrame& a, const encode::RgbFrame& b) {
+  if (a.rgb.size() != b.rgb.size() || a.rgb.empty()) {
+    return 255.0;
+  }
+  double sum = 0.0;
+  for (std::size_t i = 0; i < a.rgb.size(); ++i) {
+    sum += std::abs(static_cast<int>(a.rgb[i]) - static_cast<int>(b.rgb[i]));
+  }
+  return sum / static_cast<double>(a.rgb.size());
+}
+
+bool waitUntil(const std::function<bool()>& done, double seconds) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (std::chrono::steady_clock::now() < end) {
+    if (done()) {
+      return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return done();
+}
+
+}  // namespace
+
+TEST_CASE("a session streams frames that follow the client's events",
+          "[render][service][integration]") {
+  auto services = startServices();
+  auto stub = connect(*services.render);
+  v1::OpenSessionResponse opened;
+  const std::string id = openSession(*stub, crackView(), &opened);
+  CHECK(opened.step_count() > 10);
+  CHECK(opened.backend().find("EGL") != std::string::npos);
+  StreamClient stream(*stub, id);
+
+  // The first frame: a full-resolution keyframe of the cracks, in red.
+  REQUIRE(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+  const ReceivedFrame first = stream.frames().front();
+  CHECK(first.frame.keyframe());
+  CHECK(first.frame.full_resolution());
+  CHECK(first.frame.width() == 320);
+  CHECK(first.frame.step() == opened.step_count() - 1);
+  REQUIRE(first.picture.width == 320);
+  CHECK(redPixels(first.picture) > 200);
+
+  // A drag: 40 rotate events; every one is reflected by some frame, frames
+  // come at reduced resolution while the drag goes on, then a full one.
+  std::uint64_t last = 0;
+  for (int k = 0; k < 40; ++k) {
+    last = stream.rotate(0.01);
+    std::this_thread::sleep_for(std::chrono::milliseconds(15));
+  }
+  REQUIRE(stream.waitFor([&](const auto& frames, const auto&) {
+    return frames.size() >= 30 && frames.back().frame.last_event_id() == last &&
+           frames.back().frame.full_resolution();
+  }));
+  const auto frames = stream.frames();
+  CHECK(frames.size() >= 30);
+  bool reduced = false;
+  for (std::size_t k = 1; k < frames.size(); ++k) {
+    CHECK(frames[k].frame.frame_id() > frames[k - 1].frame.frame_id());
+    CHECK(frames[k].frame.last_event_id() >= frames[k - 1].frame.last_event_id());
+    reduced = reduced || !frames[k].frame.full_resolution();
+    CHECK(frames[k].picture.width == 320);  // every frame decodes
+  }
+  CHECK(reduced);
+  // 40 x 0.01 of the view's width is 80 degrees of azimuth: another picture.
+  CHECK(meanDifference(first.picture, frames.back().picture) > 2.0);
+  CHECK(frames.back().frame.timings().render_ms() > 0.0);
+  CHECK(frames.back().frame.timings().encode_ms() > 0.0);
+  CHECK(stream.errors().empty());
+}
+
+TEST_CASE("a session steps and plays through the fracture", "[render][service][integration]") {
+  auto services = startServices();
+  auto stub = connect(*services.render);
+  auto view = crackView();
+  view.step = 0;
+  const std::string id = openSession(*stub, view);
+  StreamClient stream(*stub, id);
+  REQUIRE(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+  // Step 0 shows only the notch (pre-broken bonds); the fracture grows from it.
+  const int notch = redPixels(stream.frames().front().picture);
+
+  SECTION("set step shows the step's cracks") {
+    const auto event = stream.setStep(-1);
+    REQUIRE(stream.waitFor([&](const auto& frames, const auto&) {
+      return frames.back().frame.last_event_id() == event && frames.back().frame.full_resolution();
+    }));
+    CHECK(redPixels(stream.frames().back().picture) > notch * 3 / 2);
+    CHECK(stream.frames().back().frame.step() > 0);
+  }
+  SECTION("play advances the steps") {
+    v1::ClientEvent play;
+    play.mutable_play()->set_playing(true);
+    play.mutable_play()->set_fps(25);
+    stream.send(play);
+    REQUIRE(stream.waitFor(
+        [](const auto& frames, const auto&) { return frames.back().frame.step() >= 5; }));
+    const auto frames = stream.frames();
+    for (std::size_t k = 1; k < frames.size(); ++k) {
+      CHECK(frames[k].frame.step() >= frames[k - 1].frame.step());
+    }
+    CHECK(!stream.states().empty());
+    CHECK(stream.states().back().playing());
+  }
+}
+
+TEST_CASE("bad requests get a clear status and the server keeps serving",
+          "[render][service][integration]") {
+  auto services = startServices();
+  auto stub = connect(*services.render);
+
+  SECTION("an invalid pipeline names the line and the element") {
+    const grpc::Status status = openStatus(*stub, "<pipeline>\n  <data/>\n</pipeline>");
+    CHECK(status.error_code() == grpc::StatusCode::INVALID_ARGUMENT);
+    CHECK(status.error_message().find("line") != std::string::npos);
+  }
+  SECTION("an unknown file") {
+    auto view = crackView();
+    view.file = "missing.h5";
+    const grpc::Status status = openStatus(*stub, pipeline::toXml(view));
+    CHECK(status.error_code() == grpc::StatusCode::NOT_FOUND);
+    CHECK(status.error_message().find("missing.h5") != std::string::npos);
+  }
+  SECTION("a file that is not HDF5, and a path out of the root") {
+    auto view = crackView();
+    view.file = "notes.txt";
+    CHECK(openStatus(*stub, pipeline::toXml(view)).error_code() ==
+          grpc::StatusCode::FAILED_PRECONDITION);
+    view.file = "../etc/passwd";
+    CHECK(openStatus(*stub, pipeline::toXml(view)).error_code() ==
+          grpc::StatusCode::INVALID_ARGUMENT);
+  }
+  SECTION("a step out of range, when opening and in a stream") {
+    auto view = crackView();
+    view.step = 100000;
+    const grpc::Status status = openStatus(*stub, pipeline::toXml(view));
+    CHECK(status.error_code() == grpc::StatusCode::OUT_OF_RANGE);
+    CHECK(status.error_message().find("step 100000 out of range") != std::string::npos);
+
+    StreamClient stream(*stub, openSession(*stub, crackView()));
+    const auto bad = stream.setStep(100000);
+    REQUIRE(stream.waitFor([](const auto&, const auto& errors) { return !errors.empty(); }));
+    CHECK(stream.errors().front().event_id() == bad);
+    CHECK(stream.errors().front().code() == static_cast<int>(grpc::StatusCode::OUT_OF_RANGE));
+    // The session goes on: the next event is reflected by a frame.
+    const auto good = stream.rotate(0.05);
+    REQUIRE(stream.waitFor([&](const auto& frames, const auto&) {
+      return !frames.empty() && frames.back().frame.last_event_id() == good;
+    }));
+  }
+  SECTION("an invalid replacement pipeline and an invalid resize are event errors") {
+    StreamClient stream(*stub, openSession(*stub, crackView()));
+    v1::ClientEvent replace;
+    replace.mutable_replace_pipeline()->set_pipeline_xml("<pipeline><nonsense/></pipeline>");
+    stream.send(replace);
+    v1::ClientEvent resize;
+    resize.mutable_resize()->set_width(7);
+    resize.mutable_resize()->set_height(100000);
+    stream.send(resize);
+    REQUIRE(stream.waitFor([](const auto&, const auto& errors) { return errors.size() >= 2; }));
+    CHECK(stream.errors()[0].code() == static_cast<int>(grpc::StatusCode::INVALID_ARGUMENT));
+    CHECK(stream.errors()[1].message().find("7x100000") != std::string::npos);
+  }
+  SECTION("a stream to an unknown session, and one that does not attach first") {
+    StreamClient unknown(*stub, "no-such-session");
+    const grpc::Status status = unknown.finish();
+    CHECK(status.error_code() == grpc::StatusCode::NOT_FOUND);
+  }
+  SECTION("a client certificate from another CA is refused") {
+    auto other = connect(*services.render, "other-client");
+    CHECK(openStatus(*other, pipeline::toXml(crackView())).error_code() ==
+          grpc::StatusCode::UNAVAILABLE);
+  }
+  // Whatever happened, a new session opens and streams.
+  StreamClient stream(*stub, openSession(*stub, crackView()));
+  CHECK(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+}
+
+TEST_CASE("a vanished client's session and GL context are freed",
+          "[render][service][integration]") {
+  auto services = startServices(0.3);
+  auto stub = connect(*services.render);
+  {
+    StreamClient stream(*stub, openSession(*stub, crackView()));
+    REQUIRE(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+    CHECK(services.render->sessionCount() == 1);
+    CHECK(render::EglContext::liveCount() >= 1);
+    stream.rotate(0.1);
+    stream.vanish();
+  }
+  CHECK(waitUntil([&] { return services.render->sessionCount() == 0; }, 10.0));
+  CHECK(waitUntil([] { return render::EglContext::liveCount() == 0; }, 10.0));
+  // A session opened and never streamed expires too.
+  openSession(*stub, crackView());
+  CHECK(waitUntil([&] { return services.render->sessionCount() == 0; }, 10.0));
+}
+
+TEST_CASE("snapshots, several sessions, close, and the data service passed through",
+          "[render][service][integration]") {
+  auto services = startServices(30.0, 2);
+  auto stub = connect(*services.render);
+  const std::string a = openSession(*stub, crackView());
+  auto other = crackView();
+  other.cracks.method = cracks::Method::kCellCut;
+  const std::string b = openSession(*stub, other);
+  CHECK(services.render->sessionCount() == 2);
+  // The limit is two sessions.
+  CHECK(openStatus(*stub, pipeline::toXml(crackView())).error_code() ==
+        grpc::StatusCode::RESOURCE_EXHAUSTED);
+  {
+    StreamClient first(*stub, a);
+    StreamClient second(*stub, b);
+    for (auto* stream : {&first, &second}) {
+      // Frames superseded before the stream took them are dropped: wait for
+      // the one that reflects the event.
+      const auto event = stream->rotate(0.02);
+      CHECK(stream->waitFor([&](const auto& frames, const auto&) {
+        return !frames.empty() && frames.back().frame.last_event_id() == event;
+      }));
+      CHECK(redPixels(stream->frames().back().picture) > 100);
+    }
+  }
+  grpc::ClientContext snapshotContext;
+  v1::SnapshotRequest request;
+  request.set_session_id(a);
+  request.set_width(640);
+  request.set_height(480);
+  v1::SnapshotResponse png;
+  const grpc::Status snapshot = stub->Snapshot(&snapshotContext, request, &png);
+  INFO(snapshot.error_message());
+  REQUIRE(snapshot.ok());
+  CHECK(png.width() == 640);
+  CHECK(png.png().substr(0, 8) == std::string("\x89PNG\r\n\x1a\n", 8));
+
+  grpc::ClientContext listContext;
+  v1::ListFilesRequest list;
+  v1::ListFilesResponse files;
+  REQUIRE(stub->ListFiles(&listContext, list, &files).ok());
+  bool listed = false;
+  for (const auto& file : files.files()) {
+    listed = listed || file.path() == "cuboidA.h5";
+  }
+  CHECK(listed);
+  grpc::ClientContext describeContext;
+  v1::DescribeRequest describe;
+  describe.set_file("cuboidA.h5");
+  v1::DescribeResponse description;
+  REQUIRE(stub->Describe(&describeContext, describe, &description).ok());
+  CHECK(description.steps_size() > 10);
+  grpc::ClientContext missingContext;
+  describe.set_file("../outside.h5");
+  CHECK(stub->Describe(&missingContext, describe, &description).error_code() ==
+        grpc::StatusCode::INVALID_ARGUMENT);
+
+  for (const std::string& id : {a, b}) {
+    grpc::ClientContext context;
+    v1::CloseSessionRequest close;
+    close.set_session_id(id);
+    v1::CloseSessionResponse closed;
+    CHECK(stub->CloseSession(&context, close, &closed).ok());
+  }
+  CHECK(services.render->sessionCount() == 0);
+  grpc::ClientContext again;
+  v1::CloseSessionRequest close;
+  close.set_session_id(a);
+  v1::CloseSessionResponse closed;
+  CHECK(stub->CloseSession(&again, close, &closed).error_code() == grpc::StatusCode::NOT_FOUND);
+}
+
+TEST_CASE("crackvis-render --snapshot draws the cracks of a generated series",
+          "[render][service][integration]") {
+  testing::TempDir out;
+  auto view = crackView();
+  std::ofstream(out.file("view.xml")) << pipeline::toXml(view);
+  const auto result =
+      testing::runProcess({CRACKVIS_RENDER, "--snapshot", out.file("view.xml"), "--data-root",
+                           crackRoot().path().string(), "-o", out.file("cracks.png")});
+  INFO(result.err);
+  REQUIRE(result.exitCode == 0);
+  CHECK(result.out.find("cuboidA.h5 step") != std::string::npos);
+  CHECK(std::filesystem::file_size(out.file("cracks.png")) > 1000);
+
+  const auto bad =
+      testing::runProcess({CRACKVIS_RENDER, "--snapshot", out.file("view.xml"), "--data-root",
+                           crackRoot().path().string(), "--step", "9999", "-o", out.file("x.png")});
+  CHECK(bad.exitCode == 1);
+  CHECK(bad.err.find("step 9999 out of range") != std::string::npos);
+}
