@@ -1,5 +1,7 @@
 // Real off-screen rendering under EGL (Mesa llvmpipe here): pictures checked
 // by colour, with the crack surface in a colour nothing else has.
+#include <cstring>
+
 #include <catch2/catch.hpp>
 
 #include "cracks/crack_fixtures.hpp"
@@ -186,4 +188,37 @@ TEST_CASE("bonds as tubes, the decomposition and the scalar bar are drawn", "[re
     REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
     CHECK(rightStrip() > 100);
   }
+}
+
+TEST_CASE("hidden particles are culled without changing the picture", "[render][egl]") {
+  auto renderer = render::SceneRenderer::create(kWidth, kHeight);
+  REQUIRE(renderer.isOk());
+  // A block with an interior: particles three layers below the surface and
+  // away from the crack are culled; the picture must not show it.
+  testing::PlantedCrack crack = testing::fccPlaneCrack(9, {1, 0, 0}, 0.5 + 8.5 / std::sqrt(2.0));
+  auto extractor = cracks::makeExtractor(cracks::Method::kCellCut, *crack.graph, 3);
+  cracks::CrackMesh mesh;
+  REQUIRE(extractor->extract(crack.input(), mesh).isOk());
+  pipeline::PipelineDescription d;
+  d.view.width = kWidth;
+  d.view.height = kHeight;
+  d.view.scalarBar = false;
+  d.cracks.visible = false;
+  d.particles.colourBy = pipeline::ParticleColourBy::kDamage;
+  const dem::Vec3 centre = 0.5 * crack.block.extent;
+  d.view.camera =
+      pipeline::CameraDescription{centre + dem::Vec3{40, 25, 15}, centre, {0, 0, 1}, 30};
+  render::SceneInput input{&crack.block.lattice, crack.input(), {}, {}, &mesh};
+  render::Image culled;
+  REQUIRE((*renderer)->render(d, input, culled).isOk());
+  // A clip plane far outside the block keeps every particle (no culling).
+  d.particles.clip = pipeline::ClipPlane{centre + dem::Vec3{1000, 0, 0}, {1, 0, 0}};
+  render::Image all;
+  REQUIRE((*renderer)->render(d, input, all).isOk());
+  int differing = 0;
+  for (std::size_t i = 0; i < all.rgb.size(); i += 3) {
+    differing += std::memcmp(&all.rgb[i], &culled.rgb[i], 3) != 0 ? 1 : 0;
+  }
+  CHECK(count(all, notBlack) > kWidth * kHeight / 10);
+  CHECK(differing < kWidth * kHeight / 500);
 }

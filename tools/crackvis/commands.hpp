@@ -36,5 +36,6 @@ Command addSimCommand(CLI::App& parent);
 // Under `crackvis bench`: transfer | methods | render
 // (Declared here as each lands; main.cpp wires them.)
 Command addBenchTransferCommand(CLI::App& bench);
+Command addBenchRenderCommand(CLI::App& bench);
 
 }  // namespace crackvis::cli

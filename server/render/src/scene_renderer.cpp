@@ -87,9 +87,14 @@ struct Legend {
 };
 
 void colourByScalars(vtkMapper* mapper, vtkDataArray* scalars, bool cellData, ColourMap map,
-                     Legend* legend) {
+                     Legend* legend, const double* givenRange = nullptr) {
   double range[2] = {0, 1};
-  scalars->GetRange(range);
+  if (givenRange != nullptr) {
+    range[0] = givenRange[0];
+    range[1] = givenRange[1];
+  } else {
+    scalars->GetRange(range);
+  }
   auto table = lookupTable(map, range[0], range[1]);
   mapper->SetLookupTable(table);
   if (legend != nullptr && legend->table == nullptr) {
@@ -184,12 +189,73 @@ std::vector<double> particleValues(const pipeline::ParticlesDescription& particl
   return values;
 }
 
+// The particles a viewer can see when they are opaque and unclipped: those
+// on the lattice's boundary (fewer bonds than the most) or at a broken bond,
+// and two more layers of bonded neighbours below them (in FCC, the third
+// layer shows through the gaps of the first two along <111>). Deeper ones
+// are hidden; impostors write their depth, so the GPU's early depth test
+// cannot skip them and every hidden sphere would cost its fragments.
+std::vector<vtkIdType> visibleParticles(const pipeline::ParticlesDescription& particles,
+                                        const SceneInput& input) {
+  const std::size_t n = input.step.positions.size();
+  std::vector<vtkIdType> all(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    all[i] = static_cast<vtkIdType>(i);
+  }
+  const auto& bonds = input.lattice->bonds;
+  if (particles.opacity < 1.0 || particles.clip || bonds.empty() ||
+      input.step.bondState.size() != bonds.size()) {
+    return all;
+  }
+  std::vector<int> degree(n, 0);
+  std::vector<std::uint8_t> keep(n, 0);
+  for (std::size_t b = 0; b < bonds.size(); ++b) {
+    const auto i = static_cast<std::size_t>(bonds[b].first);
+    const auto j = static_cast<std::size_t>(bonds[b].second);
+    ++degree[i];
+    ++degree[j];
+    if (input.step.bondState[b] != 0) {
+      keep[i] = keep[j] = 1;
+    }
+  }
+  const int most = *std::max_element(degree.begin(), degree.end());
+  for (std::size_t i = 0; i < n; ++i) {
+    keep[i] = keep[i] != 0 || degree[i] < most ? 1 : 0;
+  }
+  for (std::uint8_t layer = 2; layer <= 3; ++layer) {
+    for (const dem::Bond& bond : bonds) {
+      auto& a = keep[static_cast<std::size_t>(bond.first)];
+      auto& c = keep[static_cast<std::size_t>(bond.second)];
+      if (a != 0 && a < layer && c == 0) {
+        c = layer;
+      } else if (c != 0 && c < layer && a == 0) {
+        a = layer;
+      }
+    }
+  }
+  std::vector<vtkIdType> visible;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (keep[i] != 0) {
+      visible.push_back(static_cast<vtkIdType>(i));
+    }
+  }
+  return visible;
+}
+
 vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
                                         const SceneInput& input, Legend* legend) {
   const auto& particles = d.particles;
-  const auto n = static_cast<vtkIdType>(input.step.positions.size());
+  const std::vector<vtkIdType> visible = visibleParticles(particles, input);
+  const auto n = static_cast<vtkIdType>(visible.size());
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(n);
+  for (vtkIdType k = 0; k < n; ++k) {
+    const dem::Vec3& p = input.step.positions[static_cast<std::size_t>(visible[k])];
+    points->SetPoint(k, p.x, p.y, p.z);
+  }
   auto data = vtkSmartPointer<vtkPolyData>::New();
-  data->SetPoints(positionPoints(input.step.positions));
+  data->SetPoints(points);
   // The impostor mapper draws vertex cells: one per particle.
   vtkNew<vtkCellArray> vertices;
   for (vtkIdType i = 0; i < n; ++i) {
@@ -199,18 +265,27 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   vtkNew<vtkFloatArray> radius;
   radius->SetName("sphere_radius");
   radius->SetNumberOfValues(n);
-  for (vtkIdType i = 0; i < n; ++i) {
-    radius->SetValue(i, static_cast<float>(input.step.radius[static_cast<std::size_t>(i)]));
+  for (vtkIdType k = 0; k < n; ++k) {
+    radius->SetValue(k,
+                     static_cast<float>(input.step.radius[static_cast<std::size_t>(visible[k])]));
   }
   data->GetPointData()->AddArray(radius);
   vtkNew<vtkDoubleArray> values;
   values->SetName(particleArrayName(particles.colourBy));
   const auto perParticle = particleValues(particles, input);
   values->SetNumberOfValues(n);
-  for (vtkIdType i = 0; i < n; ++i) {
-    values->SetValue(i, perParticle[static_cast<std::size_t>(i)]);
+  for (vtkIdType k = 0; k < n; ++k) {
+    values->SetValue(k, perParticle[static_cast<std::size_t>(visible[k])]);
   }
   data->GetPointData()->AddArray(values);
+  // The colour range of all particles, hidden ones included, so that it
+  // does not change with what is culled.
+  double range[2] = {0.0, 0.0};
+  if (!perParticle.empty()) {
+    const auto [lo, hi] = std::minmax_element(perParticle.begin(), perParticle.end());
+    range[0] = *lo;
+    range[1] = *hi;
+  }
 
   vtkSmartPointer<vtkPolyDataMapper> mapper;
   if (particles.representation == pipeline::ParticleRepresentation::kImpostors) {
@@ -223,7 +298,7 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   mapper->SetInputData(data);
   mapper->ScalarVisibilityOff();
   if (particles.colourBy != pipeline::ParticleColourBy::kSolid) {
-    colourByScalars(mapper, values, false, d.view.colourMap, legend);
+    colourByScalars(mapper, values, false, d.view.colourMap, legend, range);
   }
   if (particles.clip) {
     vtkNew<vtkPlane> plane;

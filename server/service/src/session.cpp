@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -73,6 +74,8 @@ struct Session::Worker {
   std::optional<Clock::time_point> refineAt;
   Clock::time_point lastInteraction = Clock::now() - std::chrono::hours(1);
   int reduction = 2;
+  static constexpr int kMaxReduction = 8;
+  std::array<double, kMaxReduction + 1> timeAt{};  // render ms by factor (moving average)
   std::uint64_t lastEventId = 0;
   std::optional<Clock::time_point> lastEventReceived;
   std::uint64_t frameId = 0;
@@ -415,12 +418,21 @@ struct Session::Worker {
   }
 
   // ParaView's image reduction factor, adapted so that a reduced frame fits
-  // the budget: rendering cost grows with the pixels drawn.
+  // the budget. Part of a frame's cost does not shrink with its pixels
+  // (vertex and geometry work), so a larger factor is taken only while the
+  // last larger one paid off, and a smaller one as soon as it fits: the
+  // sharpest picture that holds the frame rate.
   void adaptReduction(double renderMs) {
+    auto& known = timeAt[static_cast<std::size_t>(reduction)];
+    known = known > 0.0 ? 0.7 * known + 0.3 * renderMs : renderMs;
     const double budget = session.m_limits.interactiveFrameMs;
-    if (renderMs > budget && reduction < session.m_limits.maxReduction) {
+    const int most = std::min(session.m_limits.maxReduction, kMaxReduction);
+    const double larger = reduction < most ? timeAt[static_cast<std::size_t>(reduction + 1)] : 0.0;
+    const double smaller = reduction > 1 ? timeAt[static_cast<std::size_t>(reduction - 1)] : 0.0;
+    if (known > budget && reduction < most && (larger == 0.0 || larger < 0.95 * known)) {
       ++reduction;
-    } else if (renderMs < budget * 0.35 && reduction > 1) {
+    } else if (reduction > 1 && ((smaller > 0.0 && (smaller <= budget || smaller < 1.15 * known)) ||
+                                 (smaller == 0.0 && known < 0.5 * budget))) {
       --reduction;
     }
   }

@@ -1,0 +1,439 @@
+// crackvis bench render: what a user of a remote session feels, measured in
+// one run against a running crackvis-render. Opens a session on a file's
+// step (particles as sphere impostors + crack surfaces) at a given size,
+// drags the camera with rotate events at a mouse's rate, and reports from
+// the frames that come back: event-to-frame latency percentiles (each event
+// until the first frame that reflects it, as the client receives it), frame
+// rate while interacting, render and encode times, the reduction factors
+// used, and how long after the last event the full-resolution frame came.
+#include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <fstream>
+#include <mutex>
+#include <thread>
+
+#include <fmt/format.h>
+#include <grpcpp/grpcpp.h>
+#include <nlohmann/json.hpp>
+
+#include "commands.hpp"
+#include "crackvis/v1/render.grpc.pb.h"
+#include <crackvis/encode/frame_codec.hpp>
+#include <crackvis/pipeline/pipeline_description.hpp>
+#include <crackvis/rpc/grpc_status.hpp>
+
+namespace crackvis::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+namespace v1 = crackvis::v1;
+
+struct RenderBenchOptions {
+  std::string server;
+  std::string file;
+  int step = -1;
+  std::string size = "1280x720";
+  std::string method = "local-voronoi";
+  double seconds = 5.0;
+  double eventRate = 60.0;  // events per second, a mouse drag's rate
+  std::string ca = "certs/generated/ca.pem";
+  std::string cert = "certs/generated/client.pem";
+  std::string key = "certs/generated/client.key";
+  std::string token;
+  bool jsonOnly = false;
+};
+
+struct FrameRecord {
+  Clock::time_point received;
+  v1::Frame frame;  // without its bytes
+  std::size_t bytes = 0;
+  double decodeMs = 0.0;
+};
+
+double ms(Clock::duration d) {
+  return std::chrono::duration<double, std::milli>(d).count();
+}
+
+double percentile(std::vector<double> values, double p) {
+  if (values.empty()) {
+    return 0.0;
+  }
+  std::sort(values.begin(), values.end());
+  const double at = p / 100.0 * static_cast<double>(values.size() - 1);
+  const auto lo = static_cast<std::size_t>(at);
+  const auto hi = std::min(lo + 1, values.size() - 1);
+  return values[lo] + (values[hi] - values[lo]) * (at - static_cast<double>(lo));
+}
+
+double mean(const std::vector<double>& values) {
+  double sum = 0.0;
+  for (double v : values) {
+    sum += v;
+  }
+  return values.empty() ? 0.0 : sum / static_cast<double>(values.size());
+}
+
+Result<std::string> readFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) {
+    return failedPrecondition(fmt::format("{}: cannot read", path));
+  }
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+Result<std::pair<int, int>> parseSize(const std::string& text) {
+  int width = 0;
+  int height = 0;
+  char x = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d", &width, &x, &height) != 3 || x != 'x' || width < 16 ||
+      height < 16 || width % 2 != 0 || height % 2 != 0) {
+    return invalidArgument(fmt::format("--size '{}': expected WIDTHxHEIGHT, even, >= 16", text));
+  }
+  return std::pair{width, height};
+}
+
+// The session's frames as they arrive, decoded as a client would.
+class FrameCollector {
+ public:
+  explicit FrameCollector(grpc::ClientReaderWriter<v1::ClientEvent, v1::ServerMessage>* stream)
+      : m_stream(stream), m_thread([this] { run(); }) {}
+  ~FrameCollector() { m_thread.join(); }
+
+  template <typename Done>
+  bool waitFor(Done done, double seconds) {
+    std::unique_lock lock(m_mutex);
+    return m_changed.wait_for(lock, std::chrono::duration<double>(seconds), [&] {
+      return m_ended || done(m_frames);
+    }) && done(m_frames);
+  }
+  std::vector<FrameRecord> frames() {
+    std::lock_guard lock(m_mutex);
+    return m_frames;
+  }
+  std::vector<std::string> errors() {
+    std::lock_guard lock(m_mutex);
+    return m_errors;
+  }
+
+ private:
+  void run() {
+    auto decoder = encode::FrameDecoder::create();
+    v1::ServerMessage message;
+    while (m_stream->Read(&message)) {
+      const auto received = Clock::now();
+      if (message.has_frame()) {
+        FrameRecord record{received, message.frame(), message.frame().h264().size(), 0.0};
+        if (decoder) {
+          encode::EncodedFrame unit;
+          unit.data.assign(message.frame().h264().begin(), message.frame().h264().end());
+          const auto start = Clock::now();
+          (void)(*decoder)->decode(unit);
+          record.decodeMs = ms(Clock::now() - start);
+        }
+        record.frame.clear_h264();
+        std::lock_guard lock(m_mutex);
+        m_frames.push_back(std::move(record));
+      } else if (message.has_error()) {
+        std::lock_guard lock(m_mutex);
+        m_errors.push_back(message.error().message());
+      }
+      m_changed.notify_all();
+    }
+    std::lock_guard lock(m_mutex);
+    m_ended = true;
+    m_changed.notify_all();
+  }
+
+  grpc::ClientReaderWriter<v1::ClientEvent, v1::ServerMessage>* m_stream;
+  std::mutex m_mutex;
+  std::condition_variable m_changed;
+  std::vector<FrameRecord> m_frames;
+  std::vector<std::string> m_errors;
+  bool m_ended = false;
+  std::thread m_thread;
+};
+
+struct Report {
+  std::string backend;
+  int width = 0;
+  int height = 0;
+  std::int64_t particles = 0;
+  int step = 0;
+  double firstFrameMs = 0.0;
+  std::size_t events = 0;
+  std::vector<double> latencies;  // per event
+  std::size_t interactiveFrames = 0;
+  double interactionSeconds = 0.0;
+  std::vector<double> reducedRenderMs;
+  std::vector<double> fullRenderMs;
+  std::vector<double> encodeMs;
+  std::vector<double> decodeMs;
+  std::vector<int> reductions;
+  double refineAfterIdleMs = -1.0;
+  double bitsPerSecond = 0.0;
+};
+
+std::unique_ptr<v1::RenderService::Stub> makeStub(const RenderBenchOptions& options) {
+  grpc::SslCredentialsOptions ssl;
+  if (auto ca = readFile(options.ca)) {
+    ssl.pem_root_certs = *ca;
+  }
+  if (auto key = readFile(options.key)) {
+    ssl.pem_private_key = *key;
+  }
+  if (auto cert = readFile(options.cert)) {
+    ssl.pem_cert_chain = *cert;
+  }
+  grpc::ChannelArguments arguments;
+  arguments.SetMaxReceiveMessageSize(64 << 20);
+  return v1::RenderService::NewStub(
+      grpc::CreateCustomChannel(options.server, grpc::SslCredentials(ssl), arguments));
+}
+
+void authorize(grpc::ClientContext& context, const RenderBenchOptions& options) {
+  if (!options.token.empty()) {
+    context.AddMetadata("authorization", "Bearer " + options.token);
+  }
+}
+
+Result<Report> run(const RenderBenchOptions& options) {
+  for (const std::string* path : {&options.ca, &options.cert, &options.key}) {
+    if (auto text = readFile(*path); !text) {
+      return text.status();
+    }
+  }
+  auto size = parseSize(options.size);
+  if (!size) {
+    return size.status();
+  }
+  auto method = cracks::parseMethod(options.method);
+  if (!method) {
+    return method.status();
+  }
+  pipeline::PipelineDescription d;
+  d.file = options.file;
+  d.step = options.step;
+  d.view.width = size->first;
+  d.view.height = size->second;
+  d.cracks.method = *method;
+  auto stub = makeStub(options);
+
+  grpc::ClientContext openContext;
+  authorize(openContext, options);
+  v1::OpenSessionRequest open;
+  open.set_pipeline_xml(pipeline::toXml(d));
+  v1::OpenSessionResponse opened;
+  CRACKVIS_RETURN_IF_ERROR(
+      rpc::fromGrpcStatus(stub->OpenSession(&openContext, open, &opened), "OpenSession"));
+  Report report;
+  report.backend = opened.backend();
+  report.width = d.view.width;
+  report.height = d.view.height;
+  report.particles = opened.particle_count();
+
+  grpc::ClientContext streamContext;
+  authorize(streamContext, options);
+  auto stream = stub->Stream(&streamContext);
+  v1::ClientEvent attach;
+  attach.set_attach_session_id(opened.session_id());
+  const auto attached = Clock::now();
+  stream->Write(attach);
+  FrameCollector collector(stream.get());
+  auto finish = [&](Status status) -> Result<Report> {
+    stream->WritesDone();
+    (void)stream->Finish();
+    grpc::ClientContext closeContext;
+    authorize(closeContext, options);
+    v1::CloseSessionRequest close;
+    close.set_session_id(opened.session_id());
+    v1::CloseSessionResponse closed;
+    (void)stub->CloseSession(&closeContext, close, &closed);
+    if (!status) {
+      return status;
+    }
+    return report;
+  };
+  if (!collector.waitFor([](const auto& frames) { return !frames.empty(); }, 120.0)) {
+    return finish(Status(StatusCode::kUnavailable, "no first frame within 120 s"));
+  }
+  const auto firstFrames = collector.frames();
+  report.firstFrameMs = ms(firstFrames.front().received - attached);
+  report.step = firstFrames.front().frame.step();
+  const std::size_t before = firstFrames.size();
+
+  // The drag: rotate events at the mouse's rate, a full turn per 4 s.
+  std::vector<Clock::time_point> sent;
+  const auto period = std::chrono::duration<double>(1.0 / options.eventRate);
+  const auto start = Clock::now();
+  auto next = start;
+  while (ms(Clock::now() - start) < options.seconds * 1000.0) {
+    v1::ClientEvent event;
+    event.set_event_id(sent.size() + 1);
+    event.mutable_camera()->set_kind(v1::CameraEvent::ROTATE);
+    event.mutable_camera()->set_dx(1.8 / options.eventRate);  // 360 degrees / 200 per view / 4 s
+    event.mutable_camera()->set_dy(0.0);
+    sent.push_back(Clock::now());
+    if (!stream->Write(event)) {
+      return finish(Status(StatusCode::kUnavailable, "the stream ended during the drag"));
+    }
+    next += std::chrono::duration_cast<Clock::duration>(period);
+    std::this_thread::sleep_until(next);
+  }
+  const auto lastEvent = sent.back();
+  report.interactionSeconds = ms(lastEvent - start) / 1000.0;
+  const std::uint64_t lastId = sent.size();
+  if (!collector.waitFor(
+          [&](const auto& frames) {
+            return frames.back().frame.last_event_id() >= lastId &&
+                   frames.back().frame.full_resolution();
+          },
+          30.0)) {
+    return finish(
+        Status(StatusCode::kUnavailable, "no full-resolution frame within 30 s of the last event"));
+  }
+  const auto frames = collector.frames();
+  report.events = sent.size();
+  // Each event until the first frame that reflects it.
+  std::size_t f = before;
+  for (std::size_t e = 0; e < sent.size(); ++e) {
+    while (f < frames.size() && frames[f].frame.last_event_id() < e + 1) {
+      ++f;
+    }
+    if (f < frames.size()) {
+      report.latencies.push_back(ms(frames[f].received - sent[e]));
+    }
+  }
+  std::uint64_t bytes = 0;
+  for (std::size_t k = before; k < frames.size(); ++k) {
+    const auto& frame = frames[k].frame;
+    if (frames[k].received <= lastEvent) {
+      ++report.interactiveFrames;
+      bytes += frames[k].bytes;
+    }
+    (frame.full_resolution() ? report.fullRenderMs : report.reducedRenderMs)
+        .push_back(frame.timings().render_ms());
+    report.encodeMs.push_back(frame.timings().encode_ms());
+    report.decodeMs.push_back(frames[k].decodeMs);
+    report.reductions.push_back(frame.reduction());
+    if (frame.full_resolution() && frame.last_event_id() >= lastId &&
+        report.refineAfterIdleMs < 0.0) {
+      report.refineAfterIdleMs = ms(frames[k].received - lastEvent);
+    }
+  }
+  report.bitsPerSecond = report.interactionSeconds > 0
+                             ? 8.0 * static_cast<double>(bytes) / report.interactionSeconds
+                             : 0.0;
+  return finish(Status::ok());
+}
+
+nlohmann::json toJson(const Report& r) {
+  auto stats = [](const std::vector<double>& v) {
+    return nlohmann::json{{"count", v.size()},
+                          {"mean", mean(v)},
+                          {"p50", percentile(v, 50)},
+                          {"p90", percentile(v, 90)},
+                          {"p99", percentile(v, 99)}};
+  };
+  std::vector<double> reductions(r.reductions.begin(), r.reductions.end());
+  const double fps = r.interactionSeconds > 0
+                         ? static_cast<double>(r.interactiveFrames) / r.interactionSeconds
+                         : 0;
+  return nlohmann::json{{"backend", r.backend},
+                        {"size", fmt::format("{}x{}", r.width, r.height)},
+                        {"particles", r.particles},
+                        {"step", r.step},
+                        {"first_frame_ms", r.firstFrameMs},
+                        {"events", r.events},
+                        {"event_to_frame_ms", stats(r.latencies)},
+                        {"interactive_fps", fps},
+                        {"interactive_bitrate_mbps", r.bitsPerSecond / 1e6},
+                        {"render_reduced_ms", stats(r.reducedRenderMs)},
+                        {"render_full_ms", stats(r.fullRenderMs)},
+                        {"encode_ms", stats(r.encodeMs)},
+                        {"client_decode_ms", stats(r.decodeMs)},
+                        {"reduction", stats(reductions)},
+                        {"full_frame_after_idle_ms", r.refineAfterIdleMs},
+                        {"targets",
+                         {{"event_to_frame_p50_le_60ms", percentile(r.latencies, 50) <= 60.0},
+                          {"interactive_fps_ge_15", fps >= 15.0},
+                          {"encode_p50_le_5ms", percentile(r.encodeMs, 50) <= 5.0},
+                          {"full_frame_within_300ms_of_idle",
+                           r.refineAfterIdleMs >= 0.0 && r.refineAfterIdleMs <= 300.0}}}};
+}
+
+void printTable(const nlohmann::json& j) {
+  std::printf("crackvis bench render: %s, %lld particles, step %d\n%s\n\n",
+              j["size"].get<std::string>().c_str(), j["particles"].get<long long>(),
+              j["step"].get<int>(), j["backend"].get<std::string>().c_str());
+  std::printf("%-34s %10s %10s %10s %10s\n", "", "mean", "p50", "p90", "p99");
+  for (const char* key : {"event_to_frame_ms", "render_reduced_ms", "render_full_ms", "encode_ms",
+                          "client_decode_ms", "reduction"}) {
+    const auto& s = j[key];
+    std::printf("%-34s %10.2f %10.2f %10.2f %10.2f\n", key, s["mean"].get<double>(),
+                s["p50"].get<double>(), s["p90"].get<double>(), s["p99"].get<double>());
+  }
+  std::printf("\nfirst frame after attaching       %10.1f ms\n", j["first_frame_ms"].get<double>());
+  std::printf("frames per second while dragging  %10.1f\n", j["interactive_fps"].get<double>());
+  std::printf("bitrate while dragging            %10.2f Mbit/s\n",
+              j["interactive_bitrate_mbps"].get<double>());
+  std::printf("full-resolution frame after idle  %10.1f ms\n",
+              j["full_frame_after_idle_ms"].get<double>());
+  std::printf("targets:");
+  for (const auto& [name, met] : j["targets"].items()) {
+    std::printf(" %s=%s", name.c_str(), met.get<bool>() ? "met" : "MISSED");
+  }
+  std::printf("\n\n");
+}
+
+int runBenchRender(const RenderBenchOptions& options) {
+  auto report = run(options);
+  if (!report) {
+    printError("bench render", report.status().message());
+    return kExitFailure;
+  }
+  const auto json = toJson(*report);
+  if (!options.jsonOnly) {
+    printTable(json);
+  }
+  std::printf("%s\n", json.dump(2).c_str());
+  return kExitOk;
+}
+
+}  // namespace
+
+Command addBenchRenderCommand(CLI::App& bench) {
+  auto options = std::make_shared<RenderBenchOptions>();
+  auto* command = bench.add_subcommand(
+      "render",
+      "Interactive rendering against a running crackvis-render: opens a session (particles as "
+      "sphere impostors + crack surfaces), drags the camera with rotate events, and prints "
+      "event-to-frame latency percentiles, frames per second, render and encode times, and the "
+      "time to the full-resolution frame after the last event, as a table and as JSON.");
+  command->add_option("--server", options->server, "crackvis-render address, HOST:PORT")
+      ->required();
+  command->add_option("--file", options->file, "crackvis-dem file under the data service's root")
+      ->required();
+  command->add_option("--step", options->step, "step to show (default: the last)");
+  command->add_option("--size", options->size, "view size WIDTHxHEIGHT")->capture_default_str();
+  command->add_option("-m,--method", options->method, "crack method")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"cell-attribute", "cell-cut", "local-voronoi", "cell-centre"}));
+  command->add_option("--seconds", options->seconds, "length of the drag")
+      ->capture_default_str()
+      ->check(CLI::Range(0.5, 600.0));
+  command->add_option("--event-rate", options->eventRate, "rotate events per second")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1000.0));
+  command->add_option("--ca", options->ca, "CA certificate that signed the server's (PEM)")
+      ->capture_default_str();
+  command->add_option("--cert", options->cert, "client certificate (PEM)")->capture_default_str();
+  command->add_option("--key", options->key, "client private key (PEM)")->capture_default_str();
+  command->add_option("--token", options->token, "bearer token, when the server has users");
+  command->add_flag("--json", options->jsonOnly, "print only the JSON");
+  command->footer(
+      "Example: crackvis bench render --server localhost:50052 --file cuboidA.h5 --size 1280x720");
+  return {command, [options] { return runBenchRender(*options); }};
+}
+
+}  // namespace crackvis::cli
