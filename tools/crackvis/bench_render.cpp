@@ -35,6 +35,7 @@ struct RenderBenchOptions {
   int step = -1;
   std::string size = "1280x720";
   std::string method = "local-voronoi";
+  std::string pipelinePath;
   double seconds = 5.0;
   double eventRate = 60.0;  // events per second, a mouse drag's rate
   std::string ca = "certs/generated/ca.pem";
@@ -42,6 +43,7 @@ struct RenderBenchOptions {
   std::string key = "certs/generated/client.key";
   std::string token;
   bool jsonOnly = false;
+  bool methodGiven = false;
 };
 
 struct FrameRecord {
@@ -212,11 +214,26 @@ Result<Report> run(const RenderBenchOptions& options) {
     return method.status();
   }
   pipeline::PipelineDescription d;
+  if (!options.pipelinePath.empty()) {
+    auto xml = readFile(options.pipelinePath);
+    if (!xml) {
+      return xml.status();
+    }
+    auto parsed = pipeline::parsePipeline(*xml);
+    if (!parsed) {
+      return Status(parsed.status().code(),
+                    fmt::format("{}: {}", options.pipelinePath, parsed.status().message()));
+    }
+    d = std::move(parsed).value();
+    d.view.camera.reset();
+  }
   d.file = options.file;
   d.step = options.step;
   d.view.width = size->first;
   d.view.height = size->second;
-  d.cracks.method = *method;
+  if (options.pipelinePath.empty() || options.methodGiven) {
+    d.cracks.method = *method;
+  }
   auto stub = makeStub(options);
 
   grpc::ClientContext openContext;
@@ -416,6 +433,9 @@ Command addBenchRenderCommand(CLI::App& bench) {
       ->required();
   command->add_option("--step", options->step, "step to show (default: the last)");
   command->add_option("--size", options->size, "view size WIDTHxHEIGHT")->capture_default_str();
+  command->add_option("-p,--pipeline", options->pipelinePath,
+                      "pipeline description to render (its file, step and size are replaced by "
+                      "--file, --step and --size; default: particles as impostors + cracks)");
   command->add_option("-m,--method", options->method, "crack method")
       ->capture_default_str()
       ->check(CLI::IsMember({"cell-attribute", "cell-cut", "local-voronoi", "cell-centre"}));
@@ -433,7 +453,10 @@ Command addBenchRenderCommand(CLI::App& bench) {
   command->add_flag("--json", options->jsonOnly, "print only the JSON");
   command->footer(
       "Example: crackvis bench render --server localhost:50052 --file cuboidA.h5 --size 1280x720");
-  return {command, [options] { return runBenchRender(*options); }};
+  return {command, [options, command] {
+            options->methodGiven = command->count("--method") > 0;
+            return runBenchRender(*options);
+          }};
 }
 
 }  // namespace crackvis::cli

@@ -318,6 +318,28 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   return actor;
 }
 
+// The interactive stand-in for impostor particles: the same points drawn
+// as flat GL points (no geometry shader, which llvmpipe runs on one thread),
+// sized at each frame to the spheres' projected diameter. At a reduced
+// resolution the spheres are a few pixels wide and look the same.
+vtkSmartPointer<vtkActor> pointsStandIn(vtkActor* impostors) {
+  auto* source = vtkPolyDataMapper::SafeDownCast(impostors->GetMapper());
+  auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+  mapper->SetInputData(vtkPolyData::SafeDownCast(source->GetInputDataObject(0, 0)));
+  mapper->SetScalarVisibility(source->GetScalarVisibility());
+  mapper->SetLookupTable(source->GetLookupTable());
+  mapper->SetScalarRange(source->GetScalarRange());
+  mapper->SetScalarMode(source->GetScalarMode());
+  mapper->SelectColorArray(source->GetArrayName());
+  mapper->SetClippingPlanes(source->GetClippingPlanes());
+  auto actor = vtkSmartPointer<vtkActor>::New();
+  actor->SetMapper(mapper);
+  actor->GetProperty()->DeepCopy(impostors->GetProperty());
+  actor->GetProperty()->LightingOff();
+  actor->VisibilityOff();
+  return actor;
+}
+
 const char* crackArrayName(pipeline::CrackColourBy by) {
   switch (by) {
     case pipeline::CrackColourBy::kBondId:
@@ -580,6 +602,9 @@ struct SceneRenderer::Impl {
   int height = 0;
   bool cameraSet = false;
   std::optional<pipeline::CameraDescription> requestedCamera;
+  vtkSmartPointer<vtkActor> impostors;  // null unless particles are impostors
+  vtkSmartPointer<vtkActor> standIn;    // their interactive level of detail
+  double meanRadius = 0.0;
 };
 
 SceneRenderer::SceneRenderer() : m_impl(std::make_unique<Impl>()) {}
@@ -649,8 +674,17 @@ Status SceneRenderer::setScene(const pipeline::PipelineDescription& d, const Sce
   renderer->SetBackground(d.view.background.r / 255.0, d.view.background.g / 255.0,
                           d.view.background.b / 255.0);
   Legend legend;
+  impl.impostors = nullptr;
+  impl.standIn = nullptr;
   if (d.particles.visible) {
-    renderer->AddActor(particleActor(d, input, &legend));
+    auto particles = particleActor(d, input, &legend);
+    renderer->AddActor(particles);
+    if (d.particles.representation == pipeline::ParticleRepresentation::kImpostors) {
+      impl.impostors = particles;
+      impl.standIn = pointsStandIn(particles);
+      impl.meanRadius = meanRadius(input.step.radius);
+      renderer->AddActor(impl.standIn);
+    }
   }
   if (d.cracks.visible && input.cracks != nullptr) {
     addCracks(d, *input.cracks, renderer, &legend);
@@ -674,7 +708,7 @@ Status SceneRenderer::setScene(const pipeline::PipelineDescription& d, const Sce
   return Status::ok();
 }
 
-Status SceneRenderer::renderFrame(int width, int height, Image& out) {
+Status SceneRenderer::renderFrame(int width, int height, Image& out, bool interactive) {
   Impl& impl = *m_impl;
   if (width < 1 || height < 1 || width > impl.width || height > impl.height) {
     return invalidArgument(fmt::format("frame {}x{} does not fit the renderer's {}x{}", width,
@@ -684,6 +718,19 @@ Status SceneRenderer::renderFrame(int width, int height, Image& out) {
   // A frame smaller than the pbuffer renders into its lower-left corner.
   impl.window->SetSize(width, height);
   impl.renderer->ResetCameraClippingRange();
+  if (impl.impostors) {
+    impl.impostors->SetVisibility(!interactive);
+    impl.standIn->SetVisibility(interactive);
+    if (interactive) {
+      vtkCamera* camera = impl.renderer->GetActiveCamera();
+      const double pixelsPerUnit =
+          height / (2.0 * camera->GetDistance() *
+                    std::tan(camera->GetViewAngle() * std::numbers::pi / 360.0));
+      const double diameter = 2.0 * impl.meanRadius * pixelsPerUnit;
+      impl.standIn->GetProperty()->SetPointSize(
+          static_cast<float>(std::clamp(diameter, 1.0, 64.0)));
+    }
+  }
   impl.window->Render();
   vtkNew<vtkUnsignedCharArray> pixels;
   impl.window->GetPixelData(0, 0, width - 1, height - 1, 0, pixels, 0);

@@ -391,7 +391,7 @@ struct Session::Worker {
     const int w = std::max(16, width / factor);
     const int h = std::max(16, height / factor);
     const auto start = Clock::now();
-    if (Status status = renderer->renderFrame(w, h, image); !status) {
+    if (Status status = renderer->renderFrame(w, h, image, factor > 1); !status) {
       session.notify({lastEventId, status, std::nullopt});
       dirty = false;
       return;

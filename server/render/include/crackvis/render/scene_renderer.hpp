@@ -69,7 +69,9 @@ class SceneRenderer {
   Status setScene(const pipeline::PipelineDescription& description, const SceneInput& input,
                   bool resetCamera = false);
   // Renders the scene at width x height (at most the capacity).
-  Status renderFrame(int width, int height, Image& out);
+  // `interactive`: a level of detail for frames while the user interacts
+  // (impostor particles drawn as flat points of their projected size).
+  Status renderFrame(int width, int height, Image& out, bool interactive = false);
   // setScene(description, input, true) then renderFrame at the description's
   // view size: a snapshot.
   Status render(const pipeline::PipelineDescription& description, const SceneInput& input,
