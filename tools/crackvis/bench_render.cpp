@@ -117,6 +117,12 @@ class FrameCollector {
     std::lock_guard lock(m_mutex);
     return m_errors;
   }
+  // The last decoded pictures, for timing the encoder on real frames alone.
+  std::vector<encode::RgbFrame> pictures() {
+    std::lock_guard lock(m_mutex);
+    return m_pictures;
+  }
+  static constexpr std::size_t kKeptPictures = 30;
 
  private:
   void run() {
@@ -130,8 +136,15 @@ class FrameCollector {
           encode::EncodedFrame unit;
           unit.data.assign(message.frame().h264().begin(), message.frame().h264().end());
           const auto start = Clock::now();
-          (void)(*decoder)->decode(unit);
+          auto picture = (*decoder)->decode(unit);
           record.decodeMs = ms(Clock::now() - start);
+          if (picture && picture->has_value()) {
+            std::lock_guard lock(m_mutex);
+            m_pictures.push_back(std::move(**picture));
+            if (m_pictures.size() > kKeptPictures) {
+              m_pictures.erase(m_pictures.begin());
+            }
+          }
         }
         record.frame.clear_h264();
         std::lock_guard lock(m_mutex);
@@ -152,6 +165,7 @@ class FrameCollector {
   std::condition_variable m_changed;
   std::vector<FrameRecord> m_frames;
   std::vector<std::string> m_errors;
+  std::vector<encode::RgbFrame> m_pictures;
   bool m_ended = false;
   std::thread m_thread;
 };
@@ -170,6 +184,7 @@ struct Report {
   std::vector<double> reducedRenderMs;
   std::vector<double> fullRenderMs;
   std::vector<double> encodeMs;
+  std::vector<double> isolatedEncodeMs;  // the same frames encoded here, nothing else running
   std::vector<double> decodeMs;
   std::vector<int> reductions;
   double refineAfterIdleMs = -1.0;
@@ -338,6 +353,21 @@ Result<Report> run(const RenderBenchOptions& options) {
       report.refineAfterIdleMs = ms(frames[k].received - lastEvent);
     }
   }
+  // The session's encoder shares the cores with its renderer; the same
+  // frames encoded here with the same settings, alone, time the encoder.
+  const auto pictures = collector.pictures();
+  if (!pictures.empty()) {
+    auto encoder = encode::FrameEncoder::create(
+        {pictures.front().width, pictures.front().height, d.stream.fps, d.stream.bitrate});
+    if (encoder) {
+      for (std::size_t k = 0; k < pictures.size(); ++k) {
+        const auto start = Clock::now();
+        if ((*encoder)->encode(pictures[k], k == 0)) {
+          report.isolatedEncodeMs.push_back(ms(Clock::now() - start));
+        }
+      }
+    }
+  }
   report.bitsPerSecond = report.interactionSeconds > 0
                              ? 8.0 * static_cast<double>(bytes) / report.interactionSeconds
                              : 0.0;
@@ -368,6 +398,7 @@ nlohmann::json toJson(const Report& r) {
                         {"render_reduced_ms", stats(r.reducedRenderMs)},
                         {"render_full_ms", stats(r.fullRenderMs)},
                         {"encode_ms", stats(r.encodeMs)},
+                        {"encode_alone_ms", stats(r.isolatedEncodeMs)},
                         {"client_decode_ms", stats(r.decodeMs)},
                         {"reduction", stats(reductions)},
                         {"full_frame_after_idle_ms", r.refineAfterIdleMs},
@@ -385,7 +416,7 @@ void printTable(const nlohmann::json& j) {
               j["step"].get<int>(), j["backend"].get<std::string>().c_str());
   std::printf("%-34s %10s %10s %10s %10s\n", "", "mean", "p50", "p90", "p99");
   for (const char* key : {"event_to_frame_ms", "render_reduced_ms", "render_full_ms", "encode_ms",
-                          "client_decode_ms", "reduction"}) {
+                          "encode_alone_ms", "client_decode_ms", "reduction"}) {
     const auto& s = j[key];
     std::printf("%-34s %10.2f %10.2f %10.2f %10.2f\n", key, s["mean"].get<double>(),
                 s["p50"].get<double>(), s["p90"].get<double>(), s["p99"].get<double>());

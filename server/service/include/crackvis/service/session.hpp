@@ -38,7 +38,7 @@ using Clock = std::chrono::steady_clock;
 struct SessionLimits {
   int maxWidth = 3840;
   int maxHeight = 2160;
-  double refineAfterMs = 150.0;      // full resolution this long after the last event
+  double refineAfterMs = 50.0;       // full resolution this long after the last event
   double interactiveFrameMs = 35.0;  // render budget of a reduced frame
   int maxReduction = 8;
   std::size_t cacheSteps = 8;
