@@ -1,4 +1,3 @@
-#include <map>
 #include <mutex>
 #include <vector>
 
@@ -48,40 +47,45 @@ EGLDisplay openDisplay(std::string& platform) {
   return EGL_NO_DISPLAY;
 }
 
-// EGL displays are per process and eglTerminate is not reference-counted:
-// one session ending must not terminate the display the others render on.
-std::mutex& displayMutex() {
-  static std::mutex mutex;
-  return mutex;
-}
-std::map<EGLDisplay, int>& displayUsers() {
-  static std::map<EGLDisplay, int> users;
-  return users;
+// The EGL display is the process's, initialized once and kept: sessions
+// come and go, and eglTerminate (which is not reference-counted) would pull
+// the display from under the others and unload the driver only for the next
+// session to load it again. Contexts and surfaces are per session.
+struct ProcessDisplay {
+  std::mutex mutex;
+  EGLDisplay display = EGL_NO_DISPLAY;
+  std::string platform;
+  int contexts = 0;
+};
+ProcessDisplay& processDisplay() {
+  static ProcessDisplay shared;
+  return shared;
 }
 
 }  // namespace
 
 int EglContext::liveCount() {
-  std::lock_guard lock(displayMutex());
-  int count = 0;
-  for (const auto& [display, users] : displayUsers()) {
-    count += users;
-  }
-  return count;
+  auto& shared = processDisplay();
+  std::lock_guard lock(shared.mutex);
+  return shared.contexts;
 }
 
 Result<std::unique_ptr<EglContext>> EglContext::create(int width, int height) {
   std::unique_ptr<EglContext> egl(new EglContext());
-  std::string platform;
-  std::unique_lock displayLock(displayMutex());  // no eglTerminate between the two
-  EGLDisplay display = openDisplay(platform);
+  auto& shared = processDisplay();
+  std::unique_lock displayLock(shared.mutex);
+  if (shared.display == EGL_NO_DISPLAY) {
+    shared.display = openDisplay(shared.platform);
+  }
+  EGLDisplay display = shared.display;
+  const std::string platform = shared.platform;
   if (display == EGL_NO_DISPLAY) {
     return failedPrecondition(fmt::format(
         "no EGL display: neither Mesa's surfaceless platform nor an EGL device works ({}); install "
         "libegl-mesa0 and libgl1-mesa-dri, or the NVIDIA driver's EGL",
         eglErrorText()));
   }
-  ++displayUsers()[display];
+  ++shared.contexts;
   displayLock.unlock();
   egl->m_display = display;
   const EGLint configAttributes[] = {EGL_SURFACE_TYPE,
@@ -150,12 +154,10 @@ EglContext::~EglContext() {
   if (m_surface != nullptr) {
     eglDestroySurface(m_display, m_surface);
   }
-  std::lock_guard lock(displayMutex());
-  auto& users = displayUsers();
-  if (--users[m_display] == 0) {
-    users.erase(m_display);
-    eglTerminate(m_display);
-  }
+  eglReleaseThread();
+  auto& shared = processDisplay();
+  std::lock_guard lock(shared.mutex);
+  --shared.contexts;
 }
 
 }  // namespace crackvis::render

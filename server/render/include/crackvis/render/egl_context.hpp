@@ -1,9 +1,9 @@
 // An off-screen OpenGL context through EGL, with no X server and no window:
 // Mesa's surfaceless platform (llvmpipe on CPU nodes) or, failing that, the
 // EGL device platform (NVIDIA GPUs). Every EGL call is checked; failures name
-// the call and the EGL error. The context is released in the destructor, and
-// the display with the last context on it (a server must terminate what it
-// initializes, but only once no other session renders on it).
+// the call and the EGL error. The context and its surface are released in
+// the destructor; the display is the process's, initialized by the first
+// context and kept for the next sessions.
 #pragma once
 
 #include <memory>
