@@ -16,6 +16,7 @@
 #include "dataservice/service_fixture.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
+#include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/egl_context.hpp>
@@ -55,7 +56,8 @@ struct Services {
   std::unique_ptr<service::RenderServer> render;
 };
 
-Services startServices(double graceSeconds = 30.0, int maxSessions = 8) {
+Services startServices(double graceSeconds = 30.0, int maxSessions = 8,
+                       std::vector<dataservice::UserEntry> users = {}) {
   Services services;
   auto dataConfig = testing::baseConfig();
   dataConfig.dataRoot = crackRoot().path().string();
@@ -67,6 +69,7 @@ Services startServices(double graceSeconds = 30.0, int maxSessions = 8) {
   config.data.tls = testing::clientTls("crackvis-render");
   config.sessionGraceSeconds = graceSeconds;
   config.maxSessions = maxSessions;
+  config.users = std::move(users);
   config.accessLog = "";
   auto render = service::RenderServer::start(config);
   INFO(render.status().message());
@@ -540,4 +543,40 @@ TEST_CASE("crackvis-render --snapshot draws the cracks of a generated series",
                            crackRoot().path().string(), "--step", "9999", "-o", out.file("x.png")});
   CHECK(bad.exitCode == 1);
   CHECK(bad.err.find("step 9999 out of range") != std::string::npos);
+}
+
+TEST_CASE("the render server applies crackvis-data's users: tokens and folders",
+          "[render][service][integration]") {
+  dataservice::UserEntry alice;
+  alice.name = "alice";
+  alice.tokenHash = dataservice::hashSecret("alice-token", 1000).value();
+  alice.folders = {"*"};
+  dataservice::UserEntry bob;
+  bob.name = "bob";
+  bob.tokenHash = dataservice::hashSecret("bob-token", 1000).value();
+  bob.folders = {"bob"};
+  auto services = startServices(30.0, 8, {alice, bob});
+  auto stub = connect(*services.render);
+  auto open = [&](const std::string& token) {
+    grpc::ClientContext context;
+    if (!token.empty()) {
+      context.AddMetadata("authorization", "Bearer " + token);
+    }
+    v1::OpenSessionRequest request;
+    request.set_pipeline_xml(pipeline::toXml(crackView()));
+    v1::OpenSessionResponse response;
+    return stub->OpenSession(&context, request, &response);
+  };
+  CHECK(open("").error_code() == grpc::StatusCode::UNAUTHENTICATED);
+  CHECK(open("wrong").error_code() == grpc::StatusCode::UNAUTHENTICATED);
+  const grpc::Status denied = open("bob-token");
+  CHECK(denied.error_code() == grpc::StatusCode::PERMISSION_DENIED);
+  CHECK(denied.error_message().find("user 'bob' may not read 'cuboidA.h5'") != std::string::npos);
+  CHECK(open("alice-token").ok());
+
+  grpc::ClientContext listContext;
+  listContext.AddMetadata("authorization", "Bearer bob-token");
+  v1::ListFilesResponse files;
+  REQUIRE(stub->ListFiles(&listContext, v1::ListFilesRequest(), &files).ok());
+  CHECK(files.files_size() == 0);  // bob's folder holds nothing here
 }
