@@ -14,6 +14,7 @@
 
 #include "crackvis/v1/render.grpc.pb.h"
 #include "dataservice/service_fixture.hpp"
+#include "server/render_fixture.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/dataservice/credentials.hpp>
@@ -25,58 +26,10 @@
 #include <crackvis/sim/run.hpp>
 
 using namespace crackvis;
+using namespace crackvis::testing;
 namespace v1 = crackvis::v1;
 
 namespace {
-
-// A data root with a scaled simulated cuboid A and a file that is not HDF5.
-const testing::TempDir& crackRoot() {
-  static testing::TempDir dir;
-  static std::once_flag once;
-  std::call_once(once, [] {
-    sim::PresetOptions options;
-    options.name = "cuboid3d";
-    options.defectSet = 'A';
-    options.scale = 0.3;
-    auto preset = sim::makePreset(options);
-    REQUIRE(preset.isOk());
-    sim::RunOptions run;
-    run.path = dir.file("cuboidA.h5");
-    run.metadata.source = "crackvis render service tests: cuboid3d A, scale 0.3";
-    run.stepsPerSave = preset->stepsPerSave;
-    run.savedSteps = preset->savedSteps;
-    REQUIRE(sim::runToFile(std::move(preset->setup), run).isOk());
-    std::ofstream(dir.file("notes.txt")) << "not HDF5\n";
-  });
-  return dir;
-}
-
-struct Services {
-  std::unique_ptr<dataservice::DataServer> data;
-  std::unique_ptr<service::RenderServer> render;
-};
-
-Services startServices(double graceSeconds = 30.0, int maxSessions = 8,
-                       std::vector<dataservice::UserEntry> users = {}) {
-  Services services;
-  auto dataConfig = testing::baseConfig();
-  dataConfig.dataRoot = crackRoot().path().string();
-  services.data = testing::startServer(dataConfig);
-  service::RenderServerConfig config;
-  config.listen = "127.0.0.1:0";
-  config.tls = testing::serverTls();
-  config.data.target = services.data->address();
-  config.data.tls = testing::clientTls("crackvis-render");
-  config.sessionGraceSeconds = graceSeconds;
-  config.maxSessions = maxSessions;
-  config.users = std::move(users);
-  config.accessLog = "";
-  auto render = service::RenderServer::start(config);
-  INFO(render.status().message());
-  REQUIRE(render.isOk());
-  services.render = std::move(render).value();
-  return services;
-}
 
 std::unique_ptr<v1::RenderService::Stub> connect(const service::RenderServer& server,
                                                  const std::string& certificate = "client") {
@@ -88,20 +41,6 @@ std::unique_ptr<v1::RenderService::Stub> connect(const service::RenderServer& se
   grpc::SslCredentialsOptions ssl{read(tls.ca), read(tls.key), read(tls.cert)};
   return v1::RenderService::NewStub(
       grpc::CreateChannel(fmt::format("localhost:{}", server.port()), grpc::SslCredentials(ssl)));
-}
-
-// A small view of the file's last step: particles hidden, cracks red.
-pipeline::PipelineDescription crackView() {
-  pipeline::PipelineDescription d;
-  d.file = "cuboidA.h5";
-  d.step = -1;
-  d.view.width = 320;
-  d.view.height = 240;
-  d.view.background = {0, 0, 0};
-  d.view.scalarBar = false;
-  d.particles.visible = false;
-  d.cracks.colour = {255, 0, 0};
-  return d;
 }
 
 std::string openSession(v1::RenderService::Stub& stub, const pipeline::PipelineDescription& d,

@@ -1,0 +1,67 @@
+// Edits every element of a pipeline description (pipeline-schemas/
+// pipeline.xsd): crack method and validation, colour-bys, representations,
+// opacities, clipping plane, bonds, decomposition and inconsistency marks,
+// background, colour map, scalar bar, stream rate. What it emits is a typed
+// description; crackvis::pipeline::toXml turns it into a valid document.
+#pragma once
+
+#include <QWidget>
+
+#include <crackvis/pipeline/pipeline_description.hpp>
+
+class QCheckBox;
+class QComboBox;
+class QDoubleSpinBox;
+class QSpinBox;
+class QLineEdit;
+
+namespace crackvis::client {
+
+class PipelinePanel : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit PipelinePanel(QWidget* parent = nullptr);
+
+  const pipeline::PipelineDescription& description() const { return m_description; }
+  // Shows a description without emitting changed().
+  void setDescription(const pipeline::PipelineDescription& description);
+  QComboBox* methodBox() const { return m_method; }
+
+ signals:
+  void changed(const crackvis::pipeline::PipelineDescription& description);
+
+ private:
+  void collect();  // widgets -> m_description, then changed()
+  void show(const pipeline::PipelineDescription& d);
+
+  pipeline::PipelineDescription m_description;
+  bool m_updating = false;
+  QCheckBox* m_particlesVisible;
+  QComboBox* m_particleRepresentation;
+  QComboBox* m_particleColour;
+  QDoubleSpinBox* m_particleOpacity;
+  QCheckBox* m_clip;
+  QDoubleSpinBox* m_clipOrigin[3];
+  QDoubleSpinBox* m_clipNormal[3];
+  QCheckBox* m_cracksVisible;
+  QComboBox* m_method;
+  QCheckBox* m_validation;
+  QDoubleSpinBox* m_tolerance;
+  QCheckBox* m_merge;
+  QComboBox* m_crackColour;
+  QDoubleSpinBox* m_crackOpacity;
+  QComboBox* m_bondsShow;
+  QComboBox* m_bondRepresentation;
+  QComboBox* m_bondColour;
+  QDoubleSpinBox* m_tubeRadius;
+  QCheckBox* m_decomposition;
+  QCheckBox* m_inconsistent;
+  QLineEdit* m_background;
+  QComboBox* m_colourMap;
+  QCheckBox* m_scalarBar;
+  QSpinBox* m_fps;
+  QSpinBox* m_bitrate;
+};
+
+}  // namespace crackvis::client

@@ -1,0 +1,264 @@
+#include <QCheckBox>
+#include <QColor>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QFormLayout>
+#include <QGroupBox>
+#include <QHBoxLayout>
+#include <QLineEdit>
+#include <QSpinBox>
+#include <QVBoxLayout>
+
+#include <crackvis/client/pipeline_panel.hpp>
+
+namespace crackvis::client {
+namespace {
+
+using namespace crackvis::pipeline;
+
+// Combo entries carry the enum value as item data.
+template <typename Enum>
+QComboBox* combo(std::initializer_list<std::pair<const char*, Enum>> items) {
+  auto* box = new QComboBox;
+  for (const auto& [label, value] : items) {
+    box->addItem(QString::fromUtf8(label), static_cast<int>(value));
+  }
+  return box;
+}
+
+template <typename Enum>
+Enum selected(const QComboBox* box) {
+  return static_cast<Enum>(box->currentData().toInt());
+}
+
+template <typename Enum>
+void select(QComboBox* box, Enum value) {
+  box->setCurrentIndex(box->findData(static_cast<int>(value)));
+}
+
+QDoubleSpinBox* spin(double lo, double hi, double step, int decimals) {
+  auto* box = new QDoubleSpinBox;
+  box->setRange(lo, hi);
+  box->setSingleStep(step);
+  box->setDecimals(decimals);
+  return box;
+}
+
+QString hex(Colour c) {
+  return QColor(c.r, c.g, c.b).name();
+}
+
+Colour colour(const QString& text, Colour otherwise) {
+  const QColor parsed(text);
+  if (!parsed.isValid()) {
+    return otherwise;
+  }
+  return {static_cast<std::uint8_t>(parsed.red()), static_cast<std::uint8_t>(parsed.green()),
+          static_cast<std::uint8_t>(parsed.blue())};
+}
+
+}  // namespace
+
+PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
+  auto* layout = new QVBoxLayout(this);
+
+  auto* cracks = new QGroupBox(tr("Crack surfaces"));
+  auto* crackForm = new QFormLayout(cracks);
+  m_cracksVisible = new QCheckBox(tr("visible"));
+  m_method = combo<cracks::Method>({{"local Voronoi", cracks::Method::kLocalVoronoi},
+                                    {"cell cut", cracks::Method::kCellCut},
+                                    {"cell centre", cracks::Method::kCellCentre},
+                                    {"cell attribute", cracks::Method::kCellAttribute}});
+  m_method->setObjectName(QStringLiteral("method"));
+  m_validation = new QCheckBox(tr("validate (empty-sphere test)"));
+  m_tolerance = spin(0.0, 1.0, 0.05, 2);
+  m_merge = new QCheckBox(tr("merge octahedra (cell centre)"));
+  m_crackColour = combo<CrackColourBy>({{"solid", CrackColourBy::kSolid},
+                                        {"bond id", CrackColourBy::kBondId},
+                                        {"force", CrackColourBy::kForce},
+                                        {"break step", CrackColourBy::kBreakStep},
+                                        {"state", CrackColourBy::kState}});
+  m_crackOpacity = spin(0.0, 1.0, 0.1, 2);
+  crackForm->addRow(m_cracksVisible);
+  crackForm->addRow(tr("method"), m_method);
+  crackForm->addRow(m_validation);
+  crackForm->addRow(tr("tolerance"), m_tolerance);
+  crackForm->addRow(m_merge);
+  crackForm->addRow(tr("colour by"), m_crackColour);
+  crackForm->addRow(tr("opacity"), m_crackOpacity);
+  layout->addWidget(cracks);
+
+  auto* particles = new QGroupBox(tr("Particles"));
+  auto* particleForm = new QFormLayout(particles);
+  m_particlesVisible = new QCheckBox(tr("visible"));
+  m_particleRepresentation =
+      combo<ParticleRepresentation>({{"sphere impostors", ParticleRepresentation::kImpostors},
+                                     {"points", ParticleRepresentation::kPoints}});
+  m_particleColour = combo<ParticleColourBy>({{"solid", ParticleColourBy::kSolid},
+                                              {"radius", ParticleColourBy::kRadius},
+                                              {"displacement", ParticleColourBy::kDisplacement},
+                                              {"velocity", ParticleColourBy::kVelocity},
+                                              {"damage", ParticleColourBy::kDamage}});
+  m_particleOpacity = spin(0.0, 1.0, 0.1, 2);
+  m_clip = new QCheckBox(tr("clip (hide the side the normal points to)"));
+  auto* clipRow = new QHBoxLayout;
+  for (int k = 0; k < 3; ++k) {
+    m_clipOrigin[k] = spin(-1e6, 1e6, 1.0, 2);
+    m_clipNormal[k] = spin(-1.0, 1.0, 0.1, 2);
+  }
+  for (auto* box : m_clipOrigin) {
+    clipRow->addWidget(box);
+  }
+  auto* normalRow = new QHBoxLayout;
+  for (auto* box : m_clipNormal) {
+    normalRow->addWidget(box);
+  }
+  particleForm->addRow(m_particlesVisible);
+  particleForm->addRow(tr("representation"), m_particleRepresentation);
+  particleForm->addRow(tr("colour by"), m_particleColour);
+  particleForm->addRow(tr("opacity"), m_particleOpacity);
+  particleForm->addRow(m_clip);
+  particleForm->addRow(tr("clip origin"), clipRow);
+  particleForm->addRow(tr("clip normal"), normalRow);
+  layout->addWidget(particles);
+
+  auto* bonds = new QGroupBox(tr("Bonds and decomposition"));
+  auto* bondForm = new QFormLayout(bonds);
+  m_bondsShow = combo<BondSelection>({{"none", BondSelection::kNone},
+                                      {"broken", BondSelection::kBroken},
+                                      {"all", BondSelection::kAll}});
+  m_bondRepresentation = combo<BondRepresentation>(
+      {{"lines", BondRepresentation::kLines}, {"tubes", BondRepresentation::kTubes}});
+  m_bondColour = combo<BondColourBy>({{"state", BondColourBy::kState},
+                                      {"solid", BondColourBy::kSolid},
+                                      {"force", BondColourBy::kForce},
+                                      {"break step", BondColourBy::kBreakStep}});
+  m_tubeRadius = spin(0.01, 1.0, 0.05, 2);
+  m_decomposition = new QCheckBox(tr("show the local decomposition"));
+  m_inconsistent = new QCheckBox(tr("mark inconsistent bonds"));
+  bondForm->addRow(tr("show"), m_bondsShow);
+  bondForm->addRow(tr("as"), m_bondRepresentation);
+  bondForm->addRow(tr("colour by"), m_bondColour);
+  bondForm->addRow(tr("tube radius"), m_tubeRadius);
+  bondForm->addRow(m_decomposition);
+  bondForm->addRow(m_inconsistent);
+  layout->addWidget(bonds);
+
+  auto* view = new QGroupBox(tr("View and stream"));
+  auto* viewForm = new QFormLayout(view);
+  m_background = new QLineEdit;
+  m_colourMap = combo<ColourMap>({{"viridis", ColourMap::kViridis},
+                                  {"cool to warm", ColourMap::kCoolWarm},
+                                  {"rainbow", ColourMap::kRainbow},
+                                  {"grayscale", ColourMap::kGrayscale}});
+  m_scalarBar = new QCheckBox(tr("scalar bar"));
+  m_fps = new QSpinBox;
+  m_fps->setRange(1, 120);
+  m_bitrate = new QSpinBox;
+  m_bitrate->setRange(100, 100000);
+  m_bitrate->setSuffix(QStringLiteral(" kbit/s"));
+  viewForm->addRow(tr("background"), m_background);
+  viewForm->addRow(tr("colour map"), m_colourMap);
+  viewForm->addRow(m_scalarBar);
+  viewForm->addRow(tr("stream fps"), m_fps);
+  viewForm->addRow(tr("bitrate"), m_bitrate);
+  layout->addWidget(view);
+  layout->addStretch();
+
+  show(m_description);
+  for (auto* box : findChildren<QComboBox*>()) {
+    connect(box, &QComboBox::currentIndexChanged, this, &PipelinePanel::collect);
+  }
+  for (auto* box : findChildren<QCheckBox*>()) {
+    connect(box, &QCheckBox::toggled, this, &PipelinePanel::collect);
+  }
+  for (auto* box : findChildren<QDoubleSpinBox*>()) {
+    connect(box, &QDoubleSpinBox::editingFinished, this, &PipelinePanel::collect);
+  }
+  for (auto* box : findChildren<QSpinBox*>()) {
+    connect(box, &QSpinBox::editingFinished, this, &PipelinePanel::collect);
+  }
+  connect(m_background, &QLineEdit::editingFinished, this, &PipelinePanel::collect);
+}
+
+void PipelinePanel::setDescription(const pipeline::PipelineDescription& description) {
+  m_description = description;
+  show(description);
+}
+
+void PipelinePanel::show(const pipeline::PipelineDescription& d) {
+  m_updating = true;
+  m_particlesVisible->setChecked(d.particles.visible);
+  select(m_particleRepresentation, d.particles.representation);
+  select(m_particleColour, d.particles.colourBy);
+  m_particleOpacity->setValue(d.particles.opacity);
+  m_clip->setChecked(d.particles.clip.has_value());
+  const ClipPlane clip = d.particles.clip.value_or(ClipPlane{{0, 0, 0}, {1, 0, 0}});
+  const double origin[3] = {clip.origin.x, clip.origin.y, clip.origin.z};
+  const double normal[3] = {clip.normal.x, clip.normal.y, clip.normal.z};
+  for (int k = 0; k < 3; ++k) {
+    m_clipOrigin[k]->setValue(origin[k]);
+    m_clipNormal[k]->setValue(normal[k]);
+  }
+  m_cracksVisible->setChecked(d.cracks.visible);
+  select(m_method, d.cracks.method);
+  m_validation->setChecked(d.cracks.validation);
+  m_tolerance->setValue(d.cracks.validationTolerance);
+  m_merge->setChecked(d.cracks.mergeOctahedra);
+  select(m_crackColour, d.cracks.colourBy);
+  m_crackOpacity->setValue(d.cracks.opacity);
+  select(m_bondsShow, d.bonds.show);
+  select(m_bondRepresentation, d.bonds.representation);
+  select(m_bondColour, d.bonds.colourBy);
+  m_tubeRadius->setValue(d.bonds.tubeRadius);
+  m_decomposition->setChecked(d.showDecomposition);
+  m_inconsistent->setChecked(d.showInconsistent);
+  m_background->setText(hex(d.view.background));
+  select(m_colourMap, d.view.colourMap);
+  m_scalarBar->setChecked(d.view.scalarBar);
+  m_fps->setValue(d.stream.fps);
+  m_bitrate->setValue(d.stream.bitrate / 1000);
+  m_updating = false;
+}
+
+void PipelinePanel::collect() {
+  if (m_updating) {
+    return;
+  }
+  PipelineDescription d = m_description;
+  d.particles.visible = m_particlesVisible->isChecked();
+  d.particles.representation = selected<ParticleRepresentation>(m_particleRepresentation);
+  d.particles.colourBy = selected<ParticleColourBy>(m_particleColour);
+  d.particles.opacity = m_particleOpacity->value();
+  d.particles.clip.reset();
+  if (m_clip->isChecked()) {
+    d.particles.clip =
+        ClipPlane{{m_clipOrigin[0]->value(), m_clipOrigin[1]->value(), m_clipOrigin[2]->value()},
+                  {m_clipNormal[0]->value(), m_clipNormal[1]->value(), m_clipNormal[2]->value()}};
+  }
+  d.cracks.visible = m_cracksVisible->isChecked();
+  d.cracks.method = selected<cracks::Method>(m_method);
+  d.cracks.validation = m_validation->isChecked();
+  d.cracks.validationTolerance = m_tolerance->value();
+  d.cracks.mergeOctahedra = m_merge->isChecked();
+  d.cracks.colourBy = selected<CrackColourBy>(m_crackColour);
+  d.cracks.opacity = m_crackOpacity->value();
+  d.bonds.show = selected<BondSelection>(m_bondsShow);
+  d.bonds.representation = selected<BondRepresentation>(m_bondRepresentation);
+  d.bonds.colourBy = selected<BondColourBy>(m_bondColour);
+  d.bonds.tubeRadius = m_tubeRadius->value();
+  d.showDecomposition = m_decomposition->isChecked();
+  d.showInconsistent = m_inconsistent->isChecked();
+  d.view.background = colour(m_background->text(), d.view.background);
+  d.view.colourMap = selected<ColourMap>(m_colourMap);
+  d.view.scalarBar = m_scalarBar->isChecked();
+  d.stream.fps = m_fps->value();
+  d.stream.bitrate = m_bitrate->value() * 1000;
+  if (d == m_description) {
+    return;
+  }
+  m_description = d;
+  emit changed(m_description);
+}
+
+}  // namespace crackvis::client

@@ -1,0 +1,113 @@
+#include <QKeyEvent>
+#include <QMouseEvent>
+#include <QPainter>
+#include <QWheelEvent>
+
+#include <crackvis/client/render_client.hpp>
+#include <crackvis/client/viewport.hpp>
+
+namespace crackvis::client {
+
+Viewport::Viewport(RenderClient& client, QWidget* parent) : QWidget(parent), m_client(client) {
+  setFocusPolicy(Qt::StrongFocus);
+  setMinimumSize(320, 240);
+  setAttribute(Qt::WA_OpaquePaintEvent);
+  m_resizeTimer.setSingleShot(true);
+  m_resizeTimer.setInterval(150);
+  connect(&m_resizeTimer, &QTimer::timeout, this, [this] {
+    if (m_client.hasSession()) {
+      m_client.resize(std::max(16, width()), std::max(16, height()));
+    }
+  });
+}
+
+void Viewport::showFrame(const QImage& image) {
+  m_image = image;
+  ++m_framesShown;
+  update();
+}
+
+void Viewport::paintEvent(QPaintEvent*) {
+  QPainter painter(this);
+  painter.fillRect(rect(), QColor(30, 30, 40));
+  if (m_image.isNull()) {
+    painter.setPen(Qt::lightGray);
+    painter.drawText(rect(), Qt::AlignCenter, tr("Connect and open a file (File menu)"));
+    return;
+  }
+  // The stream has the window's size once a resize went through; until
+  // then the picture is scaled, keeping its aspect ratio.
+  const QSize size = m_image.size().scaled(this->size(), Qt::KeepAspectRatio);
+  const QRect target(QPoint((width() - size.width()) / 2, (height() - size.height()) / 2), size);
+  painter.drawImage(target, m_image);
+}
+
+void Viewport::mousePressEvent(QMouseEvent* event) {
+  m_last = event->position().toPoint();
+  if (event->button() == Qt::LeftButton) {
+    m_drag = event->modifiers() & Qt::ShiftModifier ? Drag::kPan : Drag::kRotate;
+  } else if (event->button() == Qt::MiddleButton) {
+    m_drag = Drag::kPan;
+  } else if (event->button() == Qt::RightButton) {
+    m_drag = Drag::kZoom;
+  }
+}
+
+void Viewport::mouseMoveEvent(QMouseEvent* event) {
+  const QPoint now = event->position().toPoint();
+  const double dx = static_cast<double>(now.x() - m_last.x()) / std::max(1, width());
+  const double dy = static_cast<double>(now.y() - m_last.y()) / std::max(1, height());
+  m_last = now;
+  switch (m_drag) {
+    case Drag::kRotate:
+      m_client.rotate(dx, dy);
+      break;
+    case Drag::kPan:
+      m_client.pan(dx, dy);
+      break;
+    case Drag::kZoom:
+      m_client.zoom(-2.0 * dy);  // drag up to zoom in
+      break;
+    case Drag::kNone:
+      break;
+  }
+}
+
+void Viewport::mouseReleaseEvent(QMouseEvent*) {
+  if (m_drag != Drag::kNone) {
+    m_client.requestStill();  // the full-resolution picture at once
+  }
+  m_drag = Drag::kNone;
+}
+
+void Viewport::wheelEvent(QWheelEvent* event) {
+  m_client.zoom(event->angleDelta().y() / 1200.0);
+}
+
+void Viewport::keyPressEvent(QKeyEvent* event) {
+  switch (event->key()) {
+    case Qt::Key_R:
+      m_client.resetCamera();
+      break;
+    case Qt::Key_Space:
+      emit playToggled();
+      break;
+    case Qt::Key_Right:
+    case Qt::Key_Up:
+      emit stepBy(1);
+      break;
+    case Qt::Key_Left:
+    case Qt::Key_Down:
+      emit stepBy(-1);
+      break;
+    default:
+      QWidget::keyPressEvent(event);
+  }
+}
+
+void Viewport::resizeEvent(QResizeEvent* event) {
+  QWidget::resizeEvent(event);
+  m_resizeTimer.start();
+}
+
+}  // namespace crackvis::client

@@ -1,0 +1,88 @@
+#include "server/render_fixture.hpp"
+
+#include <fstream>
+#include <mutex>
+
+#include <catch2/catch.hpp>
+
+#include "dataservice/service_fixture.hpp"
+#include <crackvis/sim/presets.hpp>
+#include <crackvis/sim/run.hpp>
+
+namespace crackvis::testing {
+
+const TempDir& crackRoot() {
+  static TempDir dir;
+  static std::once_flag once;
+  std::call_once(once, [] {
+    sim::PresetOptions options;
+    options.name = "cuboid3d";
+    options.defectSet = 'A';
+    options.scale = 0.3;
+    auto preset = sim::makePreset(options);
+    REQUIRE(preset.isOk());
+    sim::RunOptions run;
+    run.path = dir.file("cuboidA.h5");
+    run.metadata.source = "crackvis render tests: cuboid3d A, scale 0.3";
+    run.stepsPerSave = preset->stepsPerSave;
+    run.savedSteps = preset->savedSteps;
+    REQUIRE(sim::runToFile(std::move(preset->setup), run).isOk());
+    std::ofstream(dir.file("notes.txt")) << "not HDF5\n";
+  });
+  return dir;
+}
+
+namespace {
+
+std::unique_ptr<service::RenderServer> startRender(const dataservice::DataServer& data,
+                                                   const std::string& listen, double graceSeconds,
+                                                   int maxSessions,
+                                                   std::vector<dataservice::UserEntry> users) {
+  service::RenderServerConfig config;
+  config.listen = listen;
+  config.tls = serverTls();
+  config.data.target = data.address();
+  config.data.tls = clientTls("crackvis-render");
+  config.sessionGraceSeconds = graceSeconds;
+  config.maxSessions = maxSessions;
+  config.users = std::move(users);
+  config.accessLog = "";
+  auto render = service::RenderServer::start(config);
+  INFO(render.status().message());
+  REQUIRE(render.isOk());
+  return std::move(render).value();
+}
+
+}  // namespace
+
+std::unique_ptr<service::RenderServer> startRenderServer(const dataservice::DataServer& data,
+                                                         const std::string& listen,
+                                                         double graceSeconds) {
+  return startRender(data, listen, graceSeconds, 8, {});
+}
+
+Services startServices(double graceSeconds, int maxSessions,
+                       std::vector<dataservice::UserEntry> users) {
+  Services services;
+  auto dataConfig = baseConfig();
+  dataConfig.dataRoot = crackRoot().path().string();
+  services.data = startServer(dataConfig);
+  services.render =
+      startRender(*services.data, "127.0.0.1:0", graceSeconds, maxSessions, std::move(users));
+  return services;
+}
+
+pipeline::PipelineDescription crackView() {
+  pipeline::PipelineDescription d;
+  d.file = "cuboidA.h5";
+  d.step = -1;
+  d.view.width = 320;
+  d.view.height = 240;
+  d.view.background = {0, 0, 0};
+  d.view.scalarBar = false;
+  d.particles.visible = false;
+  d.cracks.colour = {255, 0, 0};
+  return d;
+}
+
+}  // namespace crackvis::testing

@@ -1,0 +1,37 @@
+// What the render server's and the client's tests share: a data root with a
+// scaled simulated cuboid A, real crackvis-data and crackvis-render started
+// in this process on loopback ports with generated certificates, and a small
+// view of the cracks.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "support/temp_dir.hpp"
+#include <crackvis/dataservice/data_server.hpp>
+#include <crackvis/pipeline/pipeline_description.hpp>
+#include <crackvis/service/render_server.hpp>
+
+namespace crackvis::testing {
+
+// cuboidA.h5 (cuboid3d A at scale 0.3, made once per process) and notes.txt.
+const TempDir& crackRoot();
+
+struct Services {
+  std::unique_ptr<dataservice::DataServer> data;
+  std::unique_ptr<service::RenderServer> render;
+};
+
+Services startServices(double graceSeconds = 30.0, int maxSessions = 8,
+                       std::vector<dataservice::UserEntry> users = {});
+// A render server for an already running data service (a restart); `listen`
+// may name the port the previous one had.
+std::unique_ptr<service::RenderServer> startRenderServer(const dataservice::DataServer& data,
+                                                         const std::string& listen,
+                                                         double graceSeconds = 30.0);
+
+// A 320x240 view of the file's last step: particles hidden, cracks red on black.
+pipeline::PipelineDescription crackView();
+
+}  // namespace crackvis::testing
