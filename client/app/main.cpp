@@ -2,6 +2,7 @@
 // connects at once (else File > Connect); --file opens a file.
 #include <QApplication>
 #include <QCommandLineParser>
+#include <QFile>
 #include <QTimer>
 
 #include <crackvis/client/main_window.hpp>
@@ -29,14 +30,32 @@ int main(int argc, char** argv) {
                            QStringLiteral("token"));
   QCommandLineOption file(QStringLiteral("file"), QStringLiteral("file to open"),
                           QStringLiteral("path"));
+  QCommandLineOption pipelineFile(
+      QStringLiteral("pipeline"),
+      QStringLiteral("start from this pipeline description (XML, pipeline-schemas/pipeline.xsd)"),
+      QStringLiteral("xml"));
   QCommandLineOption screenshot(
       QStringLiteral("window-screenshot"),
       QStringLiteral("grab the window to this PNG once frames arrive, then quit (for docs)"),
       QStringLiteral("png"));
-  parser.addOptions({connect, ca, cert, key, token, file, screenshot});
+  parser.addOptions({connect, ca, cert, key, token, file, pipelineFile, screenshot});
   parser.process(app);
 
   crackvis::client::MainWindow window;
+  if (parser.isSet(pipelineFile)) {
+    QFile xml(parser.value(pipelineFile));
+    if (!xml.open(QIODevice::ReadOnly)) {
+      qCritical("crackvis-client: cannot read %s", qPrintable(parser.value(pipelineFile)));
+      return 1;
+    }
+    auto description = crackvis::pipeline::parsePipeline(xml.readAll().toStdString());
+    if (!description) {
+      qCritical("crackvis-client: %s: %s", qPrintable(parser.value(pipelineFile)),
+                description.status().message().c_str());
+      return 1;
+    }
+    window.pipelinePanel().setDescription(*description);
+  }
   window.show();
   if (parser.isSet(connect)) {
     const crackvis::client::ConnectionSettings settings{parser.value(connect), parser.value(ca),
@@ -47,19 +66,24 @@ int main(int argc, char** argv) {
     }
   }
   if (parser.isSet(screenshot)) {
+    // Once the stream has settled (a full-resolution frame and nothing newer
+    // for a second: the window's resize has gone through), grab and quit.
     const QString path = parser.value(screenshot);
-    QObject::connect(
-        &window.client(), &crackvis::client::RenderClient::frameReady, &window,
-        [&window, path](const QImage&, const crackvis::client::FrameInfo& info) {
-          static bool scheduled = false;
-          if (!scheduled && info.fullResolution && window.viewport().framesShown() > 3) {
-            scheduled = true;
-            QTimer::singleShot(300, &window, [&window, path] {
-              window.grab().save(path);
-              QApplication::quit();
-            });
-          }
-        });
+    auto* settle = new QTimer(&window);
+    settle->setSingleShot(true);
+    settle->setInterval(1000);
+    QObject::connect(settle, &QTimer::timeout, &window, [&window, path] {
+      const bool saved = window.grab().save(path);
+      QApplication::exit(saved ? 0 : 1);
+    });
+    QObject::connect(&window.client(), &crackvis::client::RenderClient::frameReady, settle,
+                     [settle](const QImage&, const crackvis::client::FrameInfo& info) {
+                       if (info.fullResolution) {
+                         settle->start();
+                       } else {
+                         settle->stop();
+                       }
+                     });
     QTimer::singleShot(60000, &app, [] { QApplication::exit(1); });
   }
   return QApplication::exec();

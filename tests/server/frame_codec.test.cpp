@@ -66,3 +66,38 @@ TEST_CASE("the encoder refuses odd sizes and frames of another size", "[encode]"
   CHECK(encoder.value()->encode(wrong, false).status().message() ==
         "frame 32x32 for an encoder of 64x48");
 }
+
+TEST_CASE("frames of any even width survive the round trip, and the stream may change size",
+          "[encode]") {
+  // Rows that are not a multiple of 16 bytes (1046 * 3) once made the
+  // decoder's colour conversion write past its buffer; one decoder follows
+  // a stream through size changes as a client does after a resize.
+  auto decoder = encode::FrameDecoder::create();
+  REQUIRE(decoder.isOk());
+  for (auto [width, height] : {std::pair{1046, 700}, std::pair{322, 242}, std::pair{640, 360}}) {
+    auto encoder = encode::FrameEncoder::create({width, height, 30, 4'000'000});
+    REQUIRE(encoder.isOk());
+    for (int frame = 0; frame < 5; ++frame) {
+      encode::RgbFrame rgb{width, height,
+                           std::vector<std::uint8_t>(static_cast<std::size_t>(width) * height * 3)};
+      for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+          auto* p = &rgb.rgb[(static_cast<std::size_t>(y) * width + x) * 3];
+          // Smooth ramps that move a little per frame.
+          p[0] = static_cast<std::uint8_t>((x + 4 * frame) * 200 / (width + 20));
+          p[1] = static_cast<std::uint8_t>(y * 200 / height);
+          p[2] = 128;
+        }
+      }
+      auto encoded = (*encoder)->encode(rgb, frame == 0);
+      REQUIRE(encoded.isOk());
+      auto back = (*decoder)->decode(*encoded);
+      REQUIRE(back.isOk());
+      REQUIRE(back->has_value());
+      CHECK((*back)->width == width);
+      CHECK((*back)->rgb.size() == rgb.rgb.size());
+      INFO(width << "x" << height << " frame " << frame);
+      CHECK(encode::psnr(rgb, **back) >= 35.0);
+    }
+  }
+}

@@ -97,6 +97,7 @@ struct RenderClient::Impl {
 
   std::unique_ptr<record::StreamRecorder> recorder;  // under `mutex`
   Clock::time_point recordingStart;
+  qint64 recordedFrames = 0;
   int frameWidth = 0;  // of the stream's pictures, under `mutex`
   int frameHeight = 0;
 
@@ -689,7 +690,18 @@ Status RenderClient::stopRecording() {
     std::lock_guard lock(m_impl->mutex);
     recorder = std::move(m_impl->recorder);
   }
-  return recorder ? recorder->finish() : Status::ok();
+  if (!recorder) {
+    return Status::ok();
+  }
+  Status finished = recorder->finish();
+  std::lock_guard lock(m_impl->mutex);
+  m_impl->recordedFrames = recorder->framesWritten();
+  return finished;
+}
+
+qint64 RenderClient::recordedFrames() const {
+  std::lock_guard lock(m_impl->mutex);
+  return m_impl->recordedFrames;
 }
 
 bool RenderClient::recording() const {

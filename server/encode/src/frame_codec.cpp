@@ -168,6 +168,10 @@ Result<std::unique_ptr<FrameDecoder>> FrameDecoder::create() {
 
 FrameDecoder::~FrameDecoder() = default;
 
+namespace {
+constexpr std::size_t kScalerPadding = 256;
+}  // namespace
+
 Result<std::optional<RgbFrame>> FrameDecoder::decode(const EncodedFrame& frame) {
   Impl& impl = *m_impl;
   impl.packet->data = const_cast<std::uint8_t*>(frame.data.data());
@@ -185,17 +189,24 @@ Result<std::optional<RgbFrame>> FrameDecoder::decode(const EncodedFrame& frame) 
   const int height = impl.yuv->height;
   if (!impl.toRgb || width != impl.scalerWidth || height != impl.scalerHeight) {
     impl.toRgb.reset(sws_getContext(width, height, static_cast<AVPixelFormat>(impl.yuv->format),
-                                    width, height, AV_PIX_FMT_RGB24, SWS_BILINEAR, nullptr, nullptr,
-                                    nullptr));
+                                    width, height, AV_PIX_FMT_RGB24,
+                                    SWS_BILINEAR | SWS_ACCURATE_RND | SWS_FULL_CHR_H_INT, nullptr,
+                                    nullptr, nullptr));
     impl.scalerWidth = width;
     impl.scalerHeight = height;
   }
-  RgbFrame rgb{width, height,
-               std::vector<std::uint8_t>(static_cast<std::size_t>(width) *
-                                         static_cast<std::size_t>(height) * 3)};
+  // swscale's special-case YUV to RGB converter works in SIMD blocks: for a
+  // width that is not a multiple of 8 it wrote garbage into the last pixels
+  // of each row and past the buffer (the heap corruption a 1046-pixel-wide
+  // client window caused). The context above takes the generic path
+  // (accurate rounding, full chroma interpolation), which handles any width;
+  // the padding stays as a guard. Shrinking a vector keeps its storage.
+  const std::size_t bytes = static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3;
+  RgbFrame rgb{width, height, std::vector<std::uint8_t>(bytes + kScalerPadding)};
   std::uint8_t* target[1] = {rgb.rgb.data()};
   const int stride[1] = {width * 3};
   sws_scale(impl.toRgb.get(), impl.yuv->data, impl.yuv->linesize, 0, height, target, stride);
+  rgb.rgb.resize(bytes);
   av_frame_unref(impl.yuv.get());
   return std::optional<RgbFrame>(std::move(rgb));
 }

@@ -737,6 +737,8 @@ Status SceneRenderer::renderFrame(int width, int height, Image& out, bool intera
   out.width = width;
   out.height = height;
   const std::size_t row = static_cast<std::size_t>(width) * 3;
+  // Capacity beyond the pixels: swscale reads RGB rows in whole SIMD blocks.
+  out.rgb.reserve(row * static_cast<std::size_t>(height) + 256);
   out.rgb.resize(row * static_cast<std::size_t>(height));
   // OpenGL's rows run bottom to top.
   for (int y = 0; y < height; ++y) {
@@ -827,6 +829,8 @@ void SceneRenderer::setCamera(const pipeline::CameraDescription& c) {
 void resample(const Image& in, int width, int height, Image& out) {
   out.width = width;
   out.height = height;
+  // Capacity beyond the pixels: swscale reads RGB rows in whole SIMD blocks.
+  out.rgb.reserve(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3 + 256);
   out.rgb.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3);
   std::vector<int> sourceX(static_cast<std::size_t>(width));
   for (int x = 0; x < width; ++x) {

@@ -111,6 +111,8 @@ class RenderClient : public QObject {
   Status startRecording(const QString& path);
   Status stopRecording();
   bool recording() const;
+  // Frames the last finished recording holds.
+  qint64 recordedFrames() const;
 
   StreamStatistics statistics() const;
 
