@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <crackvis/common/termination.hpp>
 #include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/dataservice/data_server.hpp>
 
@@ -115,13 +116,7 @@ int newToken() {
 }
 
 int serve(const ServerConfig& config) {
-  // Signals go to the thread that waits for them, not to gRPC's threads.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-  std::signal(SIGPIPE, SIG_IGN);
+  const crackvis::TerminationSignals signals;
 
   auto server = crackvis::dataservice::DataServer::start(config);
   if (!server) {
@@ -134,8 +129,7 @@ int serve(const ServerConfig& config) {
     std::printf("crackvis-data: raw TLS baseline on port %d\n", (*server)->rawTlsPort());
   }
   std::fflush(stdout);
-  int signal = 0;
-  sigwait(&signals, &signal);
+  const int signal = signals.wait();
   std::fprintf(stderr, "crackvis-data: signal %d, shutting down\n", signal);
   (*server)->shutdown();
   return kExitOk;

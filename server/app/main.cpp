@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <crackvis/common/termination.hpp>
 #include <crackvis/dataservice/data_root.hpp>
 #include <crackvis/dataservice/server_config.hpp>
 #include <crackvis/service/render_server.hpp>
@@ -111,13 +112,7 @@ int snapshot(const Flags& flags, const RenderServerConfig& config) {
 }
 
 int serve(const RenderServerConfig& config) {
-  // Signals go to the thread that waits for them, not to gRPC's threads.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGINT);
-  sigaddset(&signals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-  std::signal(SIGPIPE, SIG_IGN);
+  const crackvis::TerminationSignals signals;
 
   auto server = crackvis::service::RenderServer::start(config);
   if (!server) {
@@ -127,8 +122,7 @@ int serve(const RenderServerConfig& config) {
               config.insecure ? "INSECURE: plaintext, loopback only" : "mutual TLS",
               config.data.target.c_str());
   std::fflush(stdout);
-  int signal = 0;
-  sigwait(&signals, &signal);
+  const int signal = signals.wait();
   std::fprintf(stderr, "crackvis-render: signal %d, closing %d sessions and shutting down\n",
                signal, (*server)->sessionCount());
   (*server)->shutdown();
