@@ -4,11 +4,61 @@
 #include <QCommandLineParser>
 #include <QFile>
 #include <QTimer>
+#include <cstdio>
+#include <memory>
 
+#include <crackvis/client/demo_script.hpp>
 #include <crackvis/client/main_window.hpp>
 
+namespace {
+
+bool wantsDemo(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    if (QByteArray(argv[i]) == "--demo" || QByteArray(argv[i]).startsWith("--demo=")) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// The scripted session without a window (no display needed).
+int runHeadlessDemo(const crackvis::client::ConnectionSettings& settings, const QString& file,
+                    const QString& outDir, const crackvis::pipeline::PipelineDescription& view) {
+  crackvis::client::RenderClient client;
+  auto say = [](const QString& line) {
+    std::printf("crackvis-client: %s\n", qPrintable(line));
+    std::fflush(stdout);
+  };
+  if (auto status = client.connectTo(settings); !status) {
+    say(QString::fromStdString(status.message()));
+    return 1;
+  }
+  crackvis::client::DemoOptions options;
+  options.file = file;
+  options.view = view;
+  options.moviePath = outDir + QStringLiteral("/demo.mp4");
+  options.picturePath = outDir + QStringLiteral("/demo.png");
+  if (qEnvironmentVariableIsSet("CRACKVIS_DEMO_SHORT")) {  // the test's shortened run
+    options.rotateEvents = 15;
+    options.stepStride = 100;
+  }
+  auto result = crackvis::client::runDemo(client, options, say);
+  if (!result) {
+    say(QStringLiteral("demo failed: %1").arg(QString::fromStdString(result.status().message())));
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  QApplication app(argc, argv);
+  // Without a display the scripted demo runs on a QCoreApplication.
+  const bool demo = wantsDemo(argc, argv);
+  std::unique_ptr<QCoreApplication> application =
+      demo ? std::make_unique<QCoreApplication>(argc, argv)
+           : std::make_unique<QApplication>(argc, argv);
+  QCoreApplication& app = *application;
   QApplication::setOrganizationName(QStringLiteral("crackvis"));
   QApplication::setApplicationName(QStringLiteral("crackvis-client"));
   QCommandLineParser parser;
@@ -38,8 +88,39 @@ int main(int argc, char** argv) {
       QStringLiteral("window-screenshot"),
       QStringLiteral("grab the window to this PNG once frames arrive, then quit (for docs)"),
       QStringLiteral("png"));
-  parser.addOptions({connect, ca, cert, key, token, file, pipelineFile, screenshot});
+  QCommandLineOption demoOption(
+      QStringLiteral("demo"),
+      QStringLiteral("no window: run the scripted demo session (rotate, step through the fracture, "
+                     "the four methods) and write demo.mp4 and demo.png into this folder"),
+      QStringLiteral("folder"));
+  parser.addOptions({connect, ca, cert, key, token, file, pipelineFile, screenshot, demoOption});
   parser.process(app);
+
+  crackvis::pipeline::PipelineDescription startView;
+  if (parser.isSet(pipelineFile)) {
+    QFile xml(parser.value(pipelineFile));
+    if (!xml.open(QIODevice::ReadOnly)) {
+      qCritical("crackvis-client: cannot read %s", qPrintable(parser.value(pipelineFile)));
+      return 1;
+    }
+    auto description = crackvis::pipeline::parsePipeline(xml.readAll().toStdString());
+    if (!description) {
+      qCritical("crackvis-client: %s: %s", qPrintable(parser.value(pipelineFile)),
+                description.status().message().c_str());
+      return 1;
+    }
+    startView = *description;
+  }
+  const crackvis::client::ConnectionSettings settings{parser.value(connect), parser.value(ca),
+                                                      parser.value(cert), parser.value(key),
+                                                      parser.value(token)};
+  if (demo) {
+    if (!parser.isSet(connect) || !parser.isSet(file)) {
+      qCritical("crackvis-client: --demo needs --connect and --file");
+      return 2;
+    }
+    return runHeadlessDemo(settings, parser.value(file), parser.value(demoOption), startView);
+  }
 
   crackvis::client::MainWindow window;
   if (parser.isSet(pipelineFile)) {

@@ -9,6 +9,8 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <grpcpp/grpcpp.h>
+#include <hdf5.h>
 
 #include <crackvis/common/termination.hpp>
 #include <crackvis/dataservice/credentials.hpp>
@@ -122,6 +124,12 @@ int serve(const ServerConfig& config) {
   if (!server) {
     return fail(server.status().message());
   }
+  unsigned hdf5Major = 0;
+  unsigned hdf5Minor = 0;
+  unsigned hdf5Release = 0;
+  H5get_libversion(&hdf5Major, &hdf5Minor, &hdf5Release);
+  std::printf("crackvis-data %s (gRPC %s, HDF5 %u.%u.%u)\n", CRACKVIS_VERSION,
+              grpc::Version().c_str(), hdf5Major, hdf5Minor, hdf5Release);
   std::printf("crackvis-data: serving %s on %s (%s)\n", config.dataRoot.c_str(),
               (*server)->address().c_str(),
               config.insecure ? "INSECURE: plaintext, loopback only" : "mutual TLS");

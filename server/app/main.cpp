@@ -11,10 +11,12 @@
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <grpcpp/grpcpp.h>
 
 #include <crackvis/common/termination.hpp>
 #include <crackvis/dataservice/data_root.hpp>
 #include <crackvis/dataservice/server_config.hpp>
+#include <crackvis/render/scene_renderer.hpp>
 #include <crackvis/service/render_server.hpp>
 
 namespace {
@@ -114,6 +116,16 @@ int snapshot(const Flags& flags, const RenderServerConfig& config) {
 int serve(const RenderServerConfig& config) {
   const crackvis::TerminationSignals signals;
 
+  // The rendering backend is chosen now, with a clear error if neither
+  // Mesa's surfaceless platform nor an EGL device works, not at the first
+  // session.
+  auto probe = crackvis::render::SceneRenderer::create(64, 64);
+  if (!probe) {
+    return fail(probe.status().message());
+  }
+  std::printf("crackvis-render %s (gRPC %s): rendering backend %s\n", CRACKVIS_VERSION,
+              grpc::Version().c_str(), (*probe)->backend().c_str());
+  probe->reset();
   auto server = crackvis::service::RenderServer::start(config);
   if (!server) {
     return fail(server.status().message());
@@ -131,6 +143,23 @@ int serve(const RenderServerConfig& config) {
 
 }  // namespace
 
+// The value of -c/--config on the command line, if any.
+static std::string configPath(int argc, char** argv) {
+  for (int i = 1; i + 1 < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "-c" || arg == "--config") {
+      return argv[i + 1];
+    }
+  }
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind("--config=", 0) == 0) {
+      return arg.substr(9);
+    }
+  }
+  return {};
+}
+
 int main(int argc, char** argv) {
   CLI::App app{
       "crackvis-render: remote rendering of DEM data and crack surfaces over gRPC with mutual\n"
@@ -139,8 +168,21 @@ int main(int argc, char** argv) {
       "render off screen under EGL (Mesa llvmpipe or an NVIDIA GPU) and stream H.264.\n"
       "Certificates: certs/make-dev-certs.sh --client crackvis-render; docs/protocol.md.",
       "crackvis-render"};
+  // The configuration file first: options bound to its values below are
+  // overwritten only by the flags actually given (CLI11 assigns no default).
   RenderServerConfig config;
   Flags flags;
+  if (const std::string path = configPath(argc, argv); !path.empty()) {
+    auto loaded = crackvis::service::loadRenderServerConfig(path);
+    if (!loaded) {
+      return fail(loaded.status().message());
+    }
+    config = std::move(loaded).value();
+  }
+  std::string configFile;
+  app.add_option("-c,--config", configFile,
+                 "JSON configuration file (listen, tls, insecure, users_from, data_service, "
+                 "limits, access_log; deploy/config/render.json); flags override it");
   app.add_option("--listen", config.listen, "host:port to listen on (port 0 lets the OS choose)")
       ->capture_default_str();
   app.add_option("--ca", config.tls.ca, "CA certificate that signs client certificates")

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <crackvis/common/json_config.hpp>
 #include <crackvis/dataservice/server_config.hpp>
 
 namespace crackvis::dataservice {
@@ -11,36 +12,8 @@ namespace {
 
 using nlohmann::json;
 
-Status checkKeys(const json& object, const std::string& where,
-                 std::initializer_list<const char*> known) {
-  if (!object.is_object()) {
-    return invalidArgument(fmt::format("{}: expected an object", where));
-  }
-  for (const auto& [key, value] : object.items()) {
-    bool found = false;
-    for (const char* name : known) {
-      found = found || key == name;
-    }
-    if (!found) {
-      return invalidArgument(fmt::format("{}: unknown key '{}'", where, key));
-    }
-  }
-  return Status::ok();
-}
-
-template <typename T>
-Status read(const json& object, const char* key, const std::string& where, T& out) {
-  if (!object.contains(key)) {
-    return Status::ok();
-  }
-  try {
-    out = object.at(key).get<T>();
-  } catch (const json::exception&) {
-    return invalidArgument(
-        fmt::format("{}: '{}' has the wrong type ({})", where, key, object.at(key).dump()));
-  }
-  return Status::ok();
-}
+using config::checkKeys;
+using config::read;
 
 Status readLimits(const json& object, const std::string& where, Limits& limits) {
   CRACKVIS_RETURN_IF_ERROR(checkKeys(object, where,

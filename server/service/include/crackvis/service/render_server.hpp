@@ -34,6 +34,16 @@ struct RenderServerConfig {
   std::string accessLog = "-";  // "-": stderr; "": none
 };
 
+// Reads a JSON configuration (deploy/config/render.json shows one): listen,
+// tls {ca, cert, key}, insecure, users_from (a crackvis-data configuration
+// whose users apply here too), data_service {target, ca, cert, key, token,
+// insecure, server_name}, limits {max_sessions, session_grace_seconds,
+// refine_after_ms, interactive_frame_ms, max_width, max_height}, access_log.
+// Unknown keys are errors.
+Result<RenderServerConfig> loadRenderServerConfig(const std::string& path);
+Result<RenderServerConfig> parseRenderServerConfig(const std::string& json,
+                                                   const std::string& origin);
+
 class RenderServer {
  public:
   // Checks the configuration (TLS files, loopback for --insecure, the data

@@ -1,0 +1,110 @@
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <crackvis/common/json_config.hpp>
+#include <crackvis/service/render_server.hpp>
+
+namespace crackvis::service {
+namespace {
+
+using config::checkKeys;
+using config::read;
+using nlohmann::json;
+
+Status readTls(const json& object, const std::string& where, dataservice::TlsFiles& tls) {
+  CRACKVIS_RETURN_IF_ERROR(checkKeys(object, where, {"ca", "cert", "key"}));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "ca", where, tls.ca));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "cert", where, tls.cert));
+  return read(object, "key", where, tls.key);
+}
+
+Status readDataService(const json& object, const std::string& where,
+                       dataservice::ClientOptions& data) {
+  CRACKVIS_RETURN_IF_ERROR(checkKeys(
+      object, where, {"target", "ca", "cert", "key", "token", "insecure", "server_name"}));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "target", where, data.target));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "ca", where, data.tls.ca));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "cert", where, data.tls.cert));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "key", where, data.tls.key));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "token", where, data.token));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "insecure", where, data.insecure));
+  return read(object, "server_name", where, data.serverName);
+}
+
+Status readLimits(const json& object, const std::string& where, RenderServerConfig& config) {
+  CRACKVIS_RETURN_IF_ERROR(checkKeys(object, where,
+                                     {"max_sessions", "session_grace_seconds", "refine_after_ms",
+                                      "interactive_frame_ms", "max_width", "max_height"}));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_sessions", where, config.maxSessions));
+  CRACKVIS_RETURN_IF_ERROR(
+      read(object, "session_grace_seconds", where, config.sessionGraceSeconds));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "refine_after_ms", where, config.limits.refineAfterMs));
+  CRACKVIS_RETURN_IF_ERROR(
+      read(object, "interactive_frame_ms", where, config.limits.interactiveFrameMs));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_width", where, config.limits.maxWidth));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_height", where, config.limits.maxHeight));
+  if (config.maxSessions < 1 || !(config.sessionGraceSeconds > 0.0) ||
+      config.limits.maxWidth < 16 || config.limits.maxHeight < 16) {
+    return invalidArgument(fmt::format(
+        "{}: max_sessions, session_grace_seconds, max_width and max_height must be positive "
+        "(sizes at least 16)",
+        where));
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+Result<RenderServerConfig> parseRenderServerConfig(const std::string& text,
+                                                   const std::string& origin) {
+  json root;
+  try {
+    root = json::parse(text);
+  } catch (const json::parse_error& e) {
+    return invalidArgument(
+        fmt::format("{}: not valid JSON (byte {}): {}", origin, e.byte, e.what()));
+  }
+  RenderServerConfig config;
+  CRACKVIS_RETURN_IF_ERROR(checkKeys(
+      root, origin,
+      {"listen", "tls", "insecure", "users_from", "data_service", "limits", "access_log"}));
+  CRACKVIS_RETURN_IF_ERROR(read(root, "listen", origin, config.listen));
+  CRACKVIS_RETURN_IF_ERROR(read(root, "insecure", origin, config.insecure));
+  CRACKVIS_RETURN_IF_ERROR(read(root, "access_log", origin, config.accessLog));
+  if (root.contains("tls")) {
+    CRACKVIS_RETURN_IF_ERROR(readTls(root.at("tls"), origin + ": tls", config.tls));
+  }
+  if (root.contains("data_service")) {
+    CRACKVIS_RETURN_IF_ERROR(
+        readDataService(root.at("data_service"), origin + ": data_service", config.data));
+  }
+  if (root.contains("limits")) {
+    CRACKVIS_RETURN_IF_ERROR(readLimits(root.at("limits"), origin + ": limits", config));
+  }
+  std::string usersFrom;
+  CRACKVIS_RETURN_IF_ERROR(read(root, "users_from", origin, usersFrom));
+  if (!usersFrom.empty()) {
+    auto users = dataservice::loadServerConfig(usersFrom);
+    if (!users) {
+      return Status(users.status().code(),
+                    fmt::format("{}: users_from: {}", origin, users.status().message()));
+    }
+    config.users = users->users;
+  }
+  return config;
+}
+
+Result<RenderServerConfig> loadRenderServerConfig(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) {
+    return notFound(fmt::format("cannot read configuration file '{}'", path));
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  return parseRenderServerConfig(text.str(), path);
+}
+
+}  // namespace crackvis::service
