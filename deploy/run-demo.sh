@@ -1,35 +1,94 @@
 #!/usr/bin/env bash
-# The main job, from a fresh Debian 12 machine: installs what is missing,
-# builds crackvis, simulates the dissertation's cuboid A fracture benchmark,
-# and extracts its crack surfaces with the four methods as ParaView series.
-# (Later issues grow this into the full client-server demo.)
+# The main job, from a fresh Debian 12 machine to a live remote visualization:
+# installs what is missing, builds crackvis, simulates the dissertation's
+# cuboid A fracture benchmark (once), makes development certificates (once),
+# starts crackvis-data and crackvis-render on loopback with mutual TLS, and
+# opens crackvis-client on them. Without a display (or with DEMO_HEADLESS=1)
+# the client runs a scripted session instead (rotate, step through the
+# fracture, switch between the four crack methods) and writes demo.mp4 and
+# demo.png. The services stop when the client ends. A second run reuses the
+# build, the data and the certificates and starts in seconds.
 #
-#   deploy/run-demo.sh [DATA_DIR]        # default: demo-data/
-#   DEMO_SCALE=0.3 deploy/run-demo.sh    # a smaller specimen, seconds instead of a minute
-# A second run reuses the simulated file.
+#   deploy/run-demo.sh [OUT_DIR]          # default: demo-out/ (demo.mp4, demo.png, logs)
+#   DEMO_SCALE=0.3 deploy/run-demo.sh     # a smaller specimen (default: full size)
+#   DEMO_HEADLESS=1 deploy/run-demo.sh    # the scripted session even with a display
+#   DEMO_PORT=50051 (data; render = +1; 0: ports the OS chooses)
+#   DEMO_DATA=demo-data                   # where the simulated file is kept
+#   DEMO_SKIP_INSTALL=1                   # skip deploy/install-deps.sh (tests)
+#   DEMO_BUILD=DIR                        # use this build tree as it is (tests)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-data_dir="${1:-demo-data}"
+out_dir="${1:-demo-out}"
+data_dir="${DEMO_DATA:-demo-data}"
 scale="${DEMO_SCALE:-1}"
+data_port="${DEMO_PORT:-50051}"
+render_port=$((data_port == 0 ? 0 : data_port + 1))
+build="${DEMO_BUILD:-build/release}"
 
-bash deploy/install-deps.sh
-cmake --preset release >/dev/null
-cmake --build --preset release --target crackvis
-crackvis=build/release/tools/crackvis
+say() { echo "run-demo: $*"; }
+# The port a service printed it serves on ("serving ... on 127.0.0.1:PORT").
+port_of() { grep -o 'on 127\.0\.0\.1:[0-9]*' "$1" | head -1 | cut -d: -f2; }
 
-mkdir -p "$data_dir"
-run="$data_dir/cuboidA-scale$scale.h5"
-if [[ ! -f "$run" ]] || ! "$crackvis" info "$run" >/dev/null 2>&1; then
-  "$crackvis" sim cuboid3d --set A --scale "$scale" -o "$run"
+if [[ -z "${DEMO_SKIP_INSTALL:-}" ]]; then
+  bash deploy/install-deps.sh
 fi
-"$crackvis" info "$run"
+if [[ -z "${DEMO_BUILD:-}" ]]; then
+  cmake --preset release >/dev/null
+  cmake --build --preset release --target crackvis crackvis-data crackvis-render crackvis-client
+fi
 
-# Every 10th step of the fracture, each method; open the .pvd files in ParaView.
-for method in cell-attribute cell-cut local-voronoi cell-centre; do
-  "$crackvis" extract "$run" --method "$method" --steps 0:-1:10 -o "$data_dir/$method.pvd"
-done
-echo
-echo "Crack metrics at the last step (local Voronoi):"
-"$crackvis" extract "$run" --method local-voronoi --steps -1 --metrics --quiet
-echo
-echo "ParaView series in $data_dir/: cell-attribute.pvd cell-cut.pvd local-voronoi.pvd cell-centre.pvd"
+mkdir -p "$data_dir" "$out_dir"
+file="cuboidA-scale$scale.h5"
+if ! "$build/tools/crackvis" info "$data_dir/$file" >/dev/null 2>&1; then
+  say "simulating cuboid A (scale $scale) into $data_dir/$file"
+  "$build/tools/crackvis" sim cuboid3d --set A --scale "$scale" -o "$data_dir/$file"
+fi
+certs=certs/generated
+if [[ ! -f "$certs/crackvis-render.pem" || ! -f "$certs/client.pem" ]]; then
+  bash certs/make-dev-certs.sh --client crackvis-render
+fi
+
+pids=()
+stop_services() {
+  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
+}
+trap stop_services EXIT
+
+# Waits until a service prints that it serves, or fails with its log.
+await() {
+  local log=$1 name=$2
+  for _ in $(seq 1 300); do
+    if grep -q "serving" "$log" 2>/dev/null; then return 0; fi
+    sleep 0.1
+  done
+  say "$name did not start:"; cat "$log" >&2; exit 1
+}
+
+"$build/dataservice/crackvis-data" --root "$data_dir" --listen "127.0.0.1:$data_port" \
+  --ca "$certs/ca.pem" --cert "$certs/server.pem" --key "$certs/server.key" \
+  --access-log "$out_dir/data-access.log" >"$out_dir/crackvis-data.log" 2>&1 &
+pids+=($!)
+await "$out_dir/crackvis-data.log" crackvis-data
+data_port=$(port_of "$out_dir/crackvis-data.log")
+"$build/server/app/crackvis-render" --listen "127.0.0.1:$render_port" \
+  --ca "$certs/ca.pem" --cert "$certs/server.pem" --key "$certs/server.key" \
+  --data-server "localhost:$data_port" --data-ca "$certs/ca.pem" \
+  --data-cert "$certs/crackvis-render.pem" --data-key "$certs/crackvis-render.key" \
+  --access-log "$out_dir/render-access.log" >"$out_dir/crackvis-render.log" 2>&1 &
+pids+=($!)
+await "$out_dir/crackvis-render.log" crackvis-render
+render_port=$(port_of "$out_dir/crackvis-render.log")
+say "services on 127.0.0.1:$data_port (data) and 127.0.0.1:$render_port (render); logs in $out_dir/"
+head -1 "$out_dir/crackvis-render.log"
+
+client=("$build/client/app/crackvis-client" --connect "localhost:$render_port"
+        --ca "$certs/ca.pem" --cert "$certs/client.pem" --key "$certs/client.key"
+        --file "$file" --pipeline deploy/demo-view.xml)
+if [[ -n "${DISPLAY:-}" && -z "${DEMO_HEADLESS:-}" ]]; then
+  say "opening crackvis-client (close its window to stop the services)"
+  "${client[@]}"
+else
+  say "no display: the scripted session writes $out_dir/demo.mp4 and $out_dir/demo.png"
+  "${client[@]}" --demo "$out_dir" 2>&1 | grep -v '^\[libx264\|^\[mp4'
+fi

@@ -204,6 +204,8 @@ int main(int argc, char** argv) {
   app.add_option("--data-key", config.data.tls.key, "its private key")->capture_default_str();
   app.add_option("--data-token", config.data.token,
                  "bearer token for crackvis-data, if it has users");
+  app.add_option("--data-server-name", config.data.serverName,
+                 "name crackvis-data's certificate must carry (default: the --data-server host)");
   app.add_flag("--data-insecure", config.data.insecure,
                "crackvis-data runs with --insecure (plaintext, loopback)");
   app.add_option("--max-sessions", config.maxSessions, "sessions open at once")
