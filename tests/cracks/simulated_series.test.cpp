@@ -4,10 +4,9 @@
 
 #include <catch2/catch.hpp>
 
+#include "support/simulated_cuboid.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/cracks/dem_series.hpp>
-#include <crackvis/sim/presets.hpp>
-#include <crackvis/sim/run.hpp>
 
 using namespace crackvis;
 using namespace crackvis::cracks;
@@ -18,19 +17,8 @@ namespace {
 const std::string& simulatedFile() {
   static testing::TempDir dir;
   static const std::string path = [&] {
-    sim::PresetOptions options;
-    options.name = "cuboid3d";
-    options.defectSet = 'A';
-    options.scale = 0.3;
-    auto preset = sim::makePreset(options);
-    REQUIRE(preset.isOk());
-    sim::RunOptions run;
-    run.path = dir.file("cuboidA-scaled.h5");
-    run.metadata.source = "crackvis tests: cuboid3d A, scale 0.3";
-    run.stepsPerSave = preset->stepsPerSave;
-    run.savedSteps = preset->savedSteps;
-    REQUIRE(sim::runToFile(std::move(preset->setup), run).isOk());
-    return run.path;
+    testing::writeSimulatedCuboidA(dir.file("cuboidA-scaled.h5"));
+    return dir.file("cuboidA-scaled.h5");
   }();
   return path;
 }

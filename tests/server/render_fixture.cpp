@@ -6,8 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include "dataservice/service_fixture.hpp"
-#include <crackvis/sim/presets.hpp>
-#include <crackvis/sim/run.hpp>
+#include "support/simulated_cuboid.hpp"
 
 namespace crackvis::testing {
 
@@ -15,18 +14,7 @@ const TempDir& crackRoot() {
   static TempDir dir;
   static std::once_flag once;
   std::call_once(once, [] {
-    sim::PresetOptions options;
-    options.name = "cuboid3d";
-    options.defectSet = 'A';
-    options.scale = 0.3;
-    auto preset = sim::makePreset(options);
-    REQUIRE(preset.isOk());
-    sim::RunOptions run;
-    run.path = dir.file("cuboidA.h5");
-    run.metadata.source = "crackvis render tests: cuboid3d A, scale 0.3";
-    run.stepsPerSave = preset->stepsPerSave;
-    run.savedSteps = preset->savedSteps;
-    REQUIRE(sim::runToFile(std::move(preset->setup), run).isOk());
+    writeSimulatedCuboidA(dir.file("cuboidA.h5"));
     std::ofstream(dir.file("notes.txt")) << "not HDF5\n";
   });
   return dir;
