@@ -26,8 +26,8 @@ render_port=$((data_port == 0 ? 0 : data_port + 1))
 build="${DEMO_BUILD:-build/release}"
 
 say() { echo "run-demo: $*"; }
-# The port a service printed it serves on ("serving ... on 127.0.0.1:PORT").
-port_of() { grep -o 'on 127\.0\.0\.1:[0-9]*' "$1" | head -1 | cut -d: -f2; }
+# The port a service printed it serves on ('event=serving address="127.0.0.1:PORT"').
+port_of() { grep -o 'event=serving address="127\.0\.0\.1:[0-9]*' "$1" | head -1 | cut -d: -f2; }
 
 if [[ -z "${DEMO_SKIP_INSTALL:-}" ]]; then
   bash deploy/install-deps.sh

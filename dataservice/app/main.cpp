@@ -12,6 +12,7 @@
 #include <grpcpp/grpcpp.h>
 #include <hdf5.h>
 
+#include <crackvis/common/log.hpp>
 #include <crackvis/common/termination.hpp>
 #include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/dataservice/data_server.hpp>
@@ -128,17 +129,17 @@ int serve(const ServerConfig& config) {
   unsigned hdf5Minor = 0;
   unsigned hdf5Release = 0;
   H5get_libversion(&hdf5Major, &hdf5Minor, &hdf5Release);
-  std::printf("crackvis-data %s (gRPC %s, HDF5 %u.%u.%u)\n", CRACKVIS_VERSION,
-              grpc::Version().c_str(), hdf5Major, hdf5Minor, hdf5Release);
-  std::printf("crackvis-data: serving %s on %s (%s)\n", config.dataRoot.c_str(),
-              (*server)->address().c_str(),
-              config.insecure ? "INSECURE: plaintext, loopback only" : "mutual TLS");
-  if ((*server)->rawTlsPort() != 0) {
-    std::printf("crackvis-data: raw TLS baseline on port %d\n", (*server)->rawTlsPort());
-  }
-  std::fflush(stdout);
+  crackvis::log::event(stdout, "crackvis-data", "start",
+                       {{"version", CRACKVIS_VERSION},
+                        {"grpc", grpc::Version()},
+                        {"hdf5", fmt::format("{}.{}.{}", hdf5Major, hdf5Minor, hdf5Release)}});
+  crackvis::log::event(stdout, "crackvis-data", "serving",
+                       {{"address", (*server)->address()},
+                        {"root", config.dataRoot},
+                        {"tls", config.insecure ? "none (INSECURE, loopback only)" : "mutual"},
+                        {"raw_tls_port", std::to_string((*server)->rawTlsPort())}});
   const int signal = signals.wait();
-  std::fprintf(stderr, "crackvis-data: signal %d, shutting down\n", signal);
+  crackvis::log::event(stderr, "crackvis-data", "stop", {{"signal", std::to_string(signal)}});
   (*server)->shutdown();
   return kExitOk;
 }

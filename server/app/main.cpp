@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 #include <grpcpp/grpcpp.h>
 
+#include <crackvis/common/log.hpp>
 #include <crackvis/common/termination.hpp>
 #include <crackvis/dataservice/data_root.hpp>
 #include <crackvis/dataservice/server_config.hpp>
@@ -123,20 +124,24 @@ int serve(const RenderServerConfig& config) {
   if (!probe) {
     return fail(probe.status().message());
   }
-  std::printf("crackvis-render %s (gRPC %s): rendering backend %s\n", CRACKVIS_VERSION,
-              grpc::Version().c_str(), (*probe)->backend().c_str());
+  crackvis::log::event(
+      stdout, "crackvis-render", "start",
+      {{"version", CRACKVIS_VERSION}, {"grpc", grpc::Version()}, {"backend", (*probe)->backend()}});
   probe->reset();
   auto server = crackvis::service::RenderServer::start(config);
   if (!server) {
     return fail(server.status().message());
   }
-  std::printf("crackvis-render: serving on %s (%s), data from %s\n", (*server)->address().c_str(),
-              config.insecure ? "INSECURE: plaintext, loopback only" : "mutual TLS",
-              config.data.target.c_str());
+  crackvis::log::event(stdout, "crackvis-render", "serving",
+                       {{"address", (*server)->address()},
+                        {"tls", config.insecure ? "none (INSECURE, loopback only)" : "mutual"},
+                        {"data_service", config.data.target},
+                        {"max_sessions", std::to_string(config.maxSessions)}});
   std::fflush(stdout);
   const int signal = signals.wait();
-  std::fprintf(stderr, "crackvis-render: signal %d, closing %d sessions and shutting down\n",
-               signal, (*server)->sessionCount());
+  crackvis::log::event(stderr, "crackvis-render", "stop",
+                       {{"signal", std::to_string(signal)},
+                        {"sessions_closed", std::to_string((*server)->sessionCount())}});
   (*server)->shutdown();
   return kExitOk;
 }

@@ -58,14 +58,15 @@ class ServerProcess {
   std::string out() const { return m_dir.file("stdout"); }
   std::string err() const { return m_dir.file("stderr"); }
 
-  // The address from "crackvis-data: serving ROOT on HOST:PORT (...)".
+  // The address from the line 'crackvis-data event=serving address="HOST:PORT" ...'.
   std::string waitForAddress() {
+    constexpr std::string_view kServing = "event=serving address=\"";
     for (int i = 0; i < 500; ++i) {
       const std::string text = readText(out());
-      const size_t on = text.find(" on ");
-      const size_t end = text.find(" (", on == std::string::npos ? 0 : on);
-      if (on != std::string::npos && end != std::string::npos) {
-        return text.substr(on + 4, end - on - 4);
+      const size_t at = text.find(kServing);
+      const size_t end = text.find('"', at == std::string::npos ? 0 : at + kServing.size());
+      if (at != std::string::npos && end != std::string::npos) {
+        return text.substr(at + kServing.size(), end - at - kServing.size());
       }
       int status = 0;
       if (::waitpid(m_pid, &status, WNOHANG) == m_pid) {

@@ -59,9 +59,9 @@ class Service {
     text << in.rdbuf();
     return text.str();
   }
-  // The port from "serving ... on HOST:PORT", once printed.
+  // The port from the line 'event=serving address="HOST:PORT"', once printed.
   int awaitPort(double seconds = 30.0) const {
-    const std::regex serving(R"(serving .*on [0-9.]+:([0-9]+))");
+    const std::regex serving(R"re(event=serving address="[0-9.]+:([0-9]+)")re");
     const auto end = Clock::now() + std::chrono::duration<double>(seconds);
     while (Clock::now() < end) {
       std::smatch match;
@@ -135,8 +135,9 @@ TEST_CASE("both services run from config files, answer health and stop on SIGTER
   INFO(renderer.output());
   REQUIRE(renderPort > 0);
   // Versions and the rendering backend at start-up.
-  CHECK(renderer.output().find("rendering backend EGL") != std::string::npos);
-  CHECK(data.output().find("crackvis-data 0.") != std::string::npos);
+  CHECK(renderer.output().find("event=start version=\"0.") != std::string::npos);
+  CHECK(renderer.output().find("backend=\"EGL") != std::string::npos);
+  CHECK(data.output().find("crackvis-data event=start version=\"0.") != std::string::npos);
   CHECK(healthOf(dataPort).find("SERVING") != std::string::npos);
   CHECK(healthOf(renderPort).find("SERVING") != std::string::npos);
 
@@ -175,7 +176,8 @@ TEST_CASE("both services run from config files, answer health and stop on SIGTER
   }
   const grpc::Status ended = stream->Finish();
   CHECK(!ended.ok());
-  CHECK(renderer.output().find("closing 1 sessions") != std::string::npos);
+  CHECK(renderer.output().find("event=stop signal=\"15\" sessions_closed=\"1\"") !=
+        std::string::npos);
 }
 
 TEST_CASE("the README's main command, shortened, writes demo.mp4 and demo.png",

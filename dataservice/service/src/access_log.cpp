@@ -5,39 +5,14 @@
 
 #include <fmt/format.h>
 
+#include <crackvis/common/log.hpp>
 #include <crackvis/dataservice/access_log.hpp>
 
 namespace crackvis::dataservice {
 namespace {
 
-// Quotes a value; control characters, quotes and backslashes are escaped,
-// so a hostile file name cannot forge a log line.
-std::string quoted(const std::string& text) {
-  std::string out = "\"";
-  for (unsigned char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += static_cast<char>(c);
-    } else if (c < 0x20 || c == 0x7f) {
-      out += fmt::format("\\x{:02x}", c);
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  return out + "\"";
-}
-
-std::string utcNow() {
-  const auto now = std::chrono::system_clock::now();
-  const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
-  const auto millis =
-      std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
-  std::tm utc{};
-  gmtime_r(&seconds, &utc);
-  char text[32];
-  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%S", &utc);
-  return fmt::format("{}.{:03d}Z", text, millis);
-}
+using log::quoted;
+using log::utcNow;
 
 }  // namespace
 

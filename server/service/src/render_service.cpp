@@ -15,6 +15,7 @@
 
 #include "crackvis/v1/data.grpc.pb.h"
 #include "crackvis/v1/render.grpc.pb.h"
+#include <crackvis/common/log.hpp>
 #include <crackvis/dataservice/access_log.hpp>
 #include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/dataservice/data_root.hpp>
@@ -206,8 +207,9 @@ class SessionRegistry {
       }
     }
     for (auto& session : expired) {
-      std::fprintf(stderr, "crackvis-render: session %s closed: no stream for %.1f s\n",
-                   session->id().c_str(), m_grace);
+      log::event(
+          stderr, "crackvis-render", "session_expired",
+          {{"session", session->id()}, {"no_stream_seconds", fmt::format("{:.1f}", m_grace)}});
     }
   }
 
