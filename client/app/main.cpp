@@ -124,24 +124,10 @@ int main(int argc, char** argv) {
 
   crackvis::client::MainWindow window;
   if (parser.isSet(pipelineFile)) {
-    QFile xml(parser.value(pipelineFile));
-    if (!xml.open(QIODevice::ReadOnly)) {
-      qCritical("crackvis-client: cannot read %s", qPrintable(parser.value(pipelineFile)));
-      return 1;
-    }
-    auto description = crackvis::pipeline::parsePipeline(xml.readAll().toStdString());
-    if (!description) {
-      qCritical("crackvis-client: %s: %s", qPrintable(parser.value(pipelineFile)),
-                description.status().message().c_str());
-      return 1;
-    }
-    window.pipelinePanel().setDescription(*description);
+    window.pipelinePanel().setDescription(startView);
   }
   window.show();
   if (parser.isSet(connect)) {
-    const crackvis::client::ConnectionSettings settings{parser.value(connect), parser.value(ca),
-                                                        parser.value(cert), parser.value(key),
-                                                        parser.value(token)};
     if (window.connectTo(settings) && parser.isSet(file)) {
       window.openFile(parser.value(file));
     }

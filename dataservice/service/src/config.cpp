@@ -1,6 +1,3 @@
-#include <fstream>
-#include <sstream>
-
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -104,13 +101,11 @@ Result<ServerConfig> parseServerConfig(const std::string& text, const std::strin
 }
 
 Result<ServerConfig> loadServerConfig(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) {
-    return notFound(fmt::format("cannot read configuration file '{}'", path));
+  auto text = config::readFile(path);
+  if (!text) {
+    return text.status();
   }
-  std::stringstream text;
-  text << in.rdbuf();
-  return parseServerConfig(text.str(), path);
+  return parseServerConfig(*text, path);
 }
 
 Result<HostPort> parseHostPort(const std::string& address) {

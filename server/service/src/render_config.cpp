@@ -1,6 +1,3 @@
-#include <fstream>
-#include <sstream>
-
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -98,13 +95,11 @@ Result<RenderServerConfig> parseRenderServerConfig(const std::string& text,
 }
 
 Result<RenderServerConfig> loadRenderServerConfig(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) {
-    return notFound(fmt::format("cannot read configuration file '{}'", path));
+  auto text = config::readFile(path);
+  if (!text) {
+    return text.status();
   }
-  std::stringstream text;
-  text << in.rdbuf();
-  return parseRenderServerConfig(text.str(), path);
+  return parseRenderServerConfig(*text, path);
 }
 
 }  // namespace crackvis::service

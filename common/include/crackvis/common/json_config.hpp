@@ -3,7 +3,9 @@
 // its key and what was there. Header-only; users link nlohmann_json.
 #pragma once
 
+#include <fstream>
 #include <initializer_list>
+#include <sstream>
 #include <string>
 
 #include <fmt/format.h>
@@ -43,6 +45,17 @@ Status read(const nlohmann::json& object, const char* key, const std::string& wh
         fmt::format("{}: '{}' has the wrong type ({})", where, key, object.at(key).dump()));
   }
   return Status::ok();
+}
+
+// The text of a configuration file; NOT_FOUND naming it when unreadable.
+inline Result<std::string> readFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) {
+    return notFound(fmt::format("cannot read configuration file '{}'", path));
+  }
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 }  // namespace crackvis::config
