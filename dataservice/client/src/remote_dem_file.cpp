@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <span>
 
 #include <fmt/format.h>
 
@@ -43,32 +44,30 @@ std::string bondStatePath(int step) {
   return dem::stepGroupPath(step) + "/bond_state";
 }
 
-// Every bond must join two existing particles. The common case, all in
-// range, is one branch-free (vectorized) pass over the indices; only a bad
-// file pays for finding the first offending bond.
-Status checkBonds(const std::vector<dem::Bond>& bonds, std::int64_t particles,
-                  const std::string& file) {
-  std::int64_t low = 0;
-  std::int64_t high = -1;
-  if (!bonds.empty()) {
-    dem::ParticleIndex lo = bonds.front().first;
-    dem::ParticleIndex hi = lo;
+// Every bond must join two existing particles; `first` is the index of
+// bonds[0] in the file's list (readStep checks the list chunk by chunk). The
+// common case, all in range, is one branch-free pass that vectorizes: read
+// as unsigned, a negative index is larger than any particle count up to
+// 2^31, so a single maximum checks both bounds (a min and a max pass took
+// twice as long). Only a bad file pays for finding the first offending bond.
+Status checkBonds(std::span<const dem::Bond> bonds, std::int64_t particles, const std::string& file,
+                  std::size_t first = 0) {
+  if (particles <= (std::int64_t{1} << 31)) {
+    std::uint32_t highest = 0;
     for (const dem::Bond& bond : bonds) {
-      lo = std::min(lo, std::min(bond.first, bond.second));
-      hi = std::max(hi, std::max(bond.first, bond.second));
+      highest = std::max(highest, std::max(static_cast<std::uint32_t>(bond.first),
+                                           static_cast<std::uint32_t>(bond.second)));
     }
-    low = lo;
-    high = hi;
-  }
-  if (low >= 0 && high < particles) {
-    return Status::ok();
+    if (bonds.empty() || static_cast<std::int64_t>(highest) < particles) {
+      return Status::ok();
+    }
   }
   for (size_t b = 0; b < bonds.size(); ++b) {
     if (bonds[b].first < 0 || bonds[b].first >= particles || bonds[b].second < 0 ||
         bonds[b].second >= particles) {
       return failedPrecondition(
-          fmt::format("{}: bond {} joins particles {} and {}: index out of range (N = {})", file, b,
-                      bonds[b].first, bonds[b].second, particles));
+          fmt::format("{}: bond {} joins particles {} and {}: index out of range (N = {})", file,
+                      first + b, bonds[b].first, bonds[b].second, particles));
     }
   }
   return Status::ok();
@@ -204,6 +203,10 @@ Result<RemoteStep> RemoteDemFile::readStep(int step) {
   if (withBonds) {
     slabs.push_back(Hyperslab::whole("/bonds/pairs"));
   }
+  // The request goes out first: the arrays below are allocated (3.5 MB for
+  // cuboid A, page faults and zeroing included) while the server opens the
+  // file and reads the first piece, not before the server hears of the call.
+  auto pending = m_client->startRead(m_file, slabs);
   const auto n = static_cast<std::uint64_t>(m_particles);
   const auto m = static_cast<std::uint64_t>(m_bonds);
   RemoteStep result;
@@ -223,8 +226,11 @@ Result<RemoteStep> RemoteDemFile::readStep(int step) {
       {DataType::kUInt8, {m}, reinterpret_cast<std::byte*>(result.bondState.data())},
       {DataType::kInt32, {m, 2}, reinterpret_cast<std::byte*>(bonds.data())}};
   std::vector<bool> arrived(slabs.size(), false);
-  CRACKVIS_RETURN_IF_ERROR(m_client->readInto(
-      m_file, slabs, [&](const DataClient::SlabHeader& slab) -> Result<std::byte*> {
+  // The bonds are checked as their chunks arrive, while the bytes are still
+  // in the cache, rather than in one pass over 2 MB after the last chunk.
+  std::size_t bondsChecked = 0;
+  CRACKVIS_RETURN_IF_ERROR(pending.receive(
+      [&](const DataClient::SlabHeader& slab) -> Result<std::byte*> {
         const Expected& want = expected.at(slab.index);
         if (slab.dtype != want.dtype || slab.shape != want.shape) {
           return failedPrecondition(fmt::format(
@@ -234,6 +240,19 @@ Result<RemoteStep> RemoteDemFile::readStep(int step) {
         }
         arrived[slab.index] = true;
         return want.data;
+      },
+      [&](std::size_t slab, std::uint64_t offset, std::uint64_t bytes) -> Status {
+        if (slab != 2) {
+          return Status::ok();
+        }
+        // Chunks come in byte order; a bond split across two chunks is
+        // checked with the second.
+        const auto complete = static_cast<std::size_t>((offset + bytes) / sizeof(dem::Bond));
+        const std::span<const dem::Bond> fresh(bonds.data() + bondsChecked,
+                                               complete - bondsChecked);
+        const std::size_t first = bondsChecked;
+        bondsChecked = complete;
+        return checkBonds(fresh, m_particles, m_file, first);
       }));
   for (size_t i = 0; i < slabs.size(); ++i) {
     const bool empty = i == 0 ? n == 0 : m == 0;
@@ -242,7 +261,9 @@ Result<RemoteStep> RemoteDemFile::readStep(int step) {
     }
   }
   if (withBonds) {
-    CRACKVIS_RETURN_IF_ERROR(checkBonds(bonds, m_particles, m_file));
+    if (bondsChecked != bonds.size()) {
+      return internalError(fmt::format("{}: /bonds/pairs arrived incomplete", m_file));
+    }
     m_bondList = std::make_shared<const std::vector<dem::Bond>>(std::move(bonds));
   }
   return result;

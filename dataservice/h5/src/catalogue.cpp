@@ -1,5 +1,7 @@
 #include <algorithm>
+#include <chrono>
 #include <limits>
+#include <map>
 
 #include <fcntl.h>
 #include <fmt/format.h>
@@ -470,6 +472,117 @@ Result<SlabPlan> planSlab(hid_t file, const std::string& fileName, const Hypersl
 
 // --------------------------------------------------------------- Catalogue
 
+// The HDF5 files describe() and openRead() opened, kept open between calls
+// that follow each other within two seconds (a viewer stepping through a
+// file). Opening a file HDF5 already has open shares it: no superblock to
+// read, and what HDF5 cached of the file's metadata (group B-trees, object
+// headers) stays warm. A view's Read of cuboid A opened its file in
+// 0.16-0.33 ms and closed it in 0.07-0.2 ms, against 0.03 ms each when kept
+// open; stepping through steps, the Read is 7-10% faster.
+//
+// Every use compares the file with what it was when opened (device, inode,
+// size, modification and change times) and opens it afresh on any
+// difference; a file changed in the last two seconds is not kept, since a
+// second write within one tick of the file system's clock would leave those
+// unchanged. The idle limit is short because HDF5's file locking keeps a
+// writer from opening a file for writing while any reader has it open (as
+// during every call anyway). Everything here runs under hdf5Mutex().
+class Catalogue::OpenFiles {
+ public:
+  using Clock = std::chrono::steady_clock;
+  static constexpr std::size_t kMaxFiles = 16;
+  static constexpr std::chrono::seconds kIdle{2};
+  static constexpr std::chrono::seconds kSettled{2};
+
+  OpenFiles() = default;
+  OpenFiles(const OpenFiles&) = delete;
+  OpenFiles& operator=(const OpenFiles&) = delete;
+  ~OpenFiles() {
+    std::lock_guard lock(hdf5Mutex());
+    h5::quietHdf5();
+    m_files.clear();
+  }
+
+  // A handle of its own for the caller, as openHdf5() gives.
+  Result<h5::Handle> open(const ResolvedPath& file) {
+    const auto now = Clock::now();
+    closeIdle(now);
+    const std::string path = file.absolute.string();
+    struct stat info {};
+    const bool found = ::stat(path.c_str(), &info) == 0;
+    if (auto kept = m_files.find(path); kept != m_files.end()) {
+      if (found && kept->second.identity == identityOf(info)) {
+        h5::Handle handle = h5::fileHandle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
+        if (handle.valid()) {
+          kept->second.lastUsed = now;
+          return handle;
+        }
+      }
+      m_files.erase(kept);  // changed, gone or unreadable: opened afresh below
+    }
+    auto handle = openHdf5(file);
+    if (!handle || !found || !settled(info)) {
+      return handle;
+    }
+    if (m_files.size() >= kMaxFiles) {
+      m_files.erase(std::min_element(
+          m_files.begin(), m_files.end(),
+          [](const auto& a, const auto& b) { return a.second.lastUsed < b.second.lastUsed; }));
+    }
+    // A second handle, kept: it shares the file the caller's handle opened.
+    h5::Handle kept = h5::fileHandle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
+    if (kept.valid()) {
+      m_files.emplace(path, File{std::move(kept), identityOf(info), now});
+    }
+    return handle;
+  }
+
+  void closeIdle(Clock::time_point now) {
+    std::erase_if(m_files, [&](const auto& file) { return now - file.second.lastUsed > kIdle; });
+  }
+
+ private:
+  struct Identity {
+    dev_t device = 0;
+    ino_t inode = 0;
+    off_t size = 0;
+    std::int64_t modified = 0;  // ns since the epoch
+    std::int64_t changed = 0;
+    bool operator==(const Identity&) const = default;
+  };
+  struct File {
+    h5::Handle handle;
+    Identity identity;
+    Clock::time_point lastUsed;
+  };
+
+  static std::int64_t nanoseconds(const timespec& time) {
+    return std::int64_t{time.tv_sec} * 1'000'000'000 + time.tv_nsec;
+  }
+  static Identity identityOf(const struct stat& info) {
+    return {info.st_dev, info.st_ino, info.st_size, nanoseconds(info.st_mtim),
+            nanoseconds(info.st_ctim)};
+  }
+  static bool settled(const struct stat& info) {
+    const std::int64_t now = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                 std::chrono::system_clock::now().time_since_epoch())
+                                 .count();
+    const std::int64_t last = std::max(nanoseconds(info.st_mtim), nanoseconds(info.st_ctim));
+    return now - last >= std::chrono::duration_cast<std::chrono::nanoseconds>(kSettled).count();
+  }
+
+  std::map<std::string, File> m_files;
+};
+
+Catalogue::Catalogue(DataRoot root)
+    : m_root(std::move(root)), m_openFiles(std::make_shared<OpenFiles>()) {}
+
+void Catalogue::closeIdleFiles() const {
+  std::lock_guard lock(hdf5Mutex());
+  h5::quietHdf5();
+  m_openFiles->closeIdle(OpenFiles::Clock::now());
+}
+
 Result<std::vector<FileEntry>> Catalogue::listFiles(std::string_view folder, bool recursive,
                                                     const AccessFilter& mayRead) const {
   auto base = m_root.resolveFolder(folder);
@@ -529,7 +642,7 @@ Result<FileDescription> Catalogue::describe(const ResolvedPath& file) const {
   description.sizeBytes = fs::file_size(file.absolute, error);
   std::lock_guard lock(hdf5Mutex());
   h5::quietHdf5();
-  auto handle = openHdf5(file);
+  auto handle = m_openFiles->open(file);
   if (!handle) {
     return handle.status();
   }
@@ -641,7 +754,7 @@ Result<std::unique_ptr<SlabReader>> Catalogue::openRead(const ResolvedPath& file
   reader->m_file = file.requested;
   std::lock_guard lock(hdf5Mutex());
   h5::quietHdf5();
-  auto handle = openHdf5(file);
+  auto handle = m_openFiles->open(file);
   if (!handle) {
     return handle.status();
   }

@@ -30,9 +30,14 @@ struct DataServer::Impl {
 
   void reap() {
     std::unique_lock lock(mutex);
-    while (!stopping) {
+    for (int round = 1; !stopping; ++round) {
       stopped.wait_for(lock, std::chrono::milliseconds(100));
       service->streams().cancelOverdue(StreamRegistry::Clock::now());
+      if (round % 10 == 0) {
+        // Once a second: files no call needs any more are not held open
+        // (nor, if deleted, their disk space).
+        service->catalogue().closeIdleFiles();
+      }
     }
   }
 };

@@ -17,6 +17,8 @@ grpc::Status toGrpcStatus(const Status& status) {
         return grpc::StatusCode::INVALID_ARGUMENT;
       case StatusCode::kNotFound:
         return grpc::StatusCode::NOT_FOUND;
+      case StatusCode::kOutOfRange:
+        return grpc::StatusCode::OUT_OF_RANGE;
       case StatusCode::kFailedPrecondition:
         return grpc::StatusCode::FAILED_PRECONDITION;
       case StatusCode::kPermissionDenied:

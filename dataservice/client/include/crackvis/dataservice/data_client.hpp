@@ -97,6 +97,11 @@ class DataClient {
   using SlabSink = std::function<Result<std::byte*>(const SlabHeader& slab)>;
   Status readInto(const std::string& file, const std::vector<Hyperslab>& slabs,
                   const SlabSink& sink) const;
+  // readInto in two steps: startRead() sends the request and returns at
+  // once, so the caller can allocate its buffers while the server opens the
+  // file and reads the first piece; receive() then takes the chunks.
+  class PendingRead;
+  PendingRead startRead(const std::string& file, const std::vector<Hyperslab>& slabs) const;
   // Streams the whole file to `sink` (offset, bytes, file size) in chunks of
   // at most 1 MiB; returns the bytes received. A sink error ends the call.
   using FetchSink = std::function<Status(std::uint64_t offset, const std::byte* data,
@@ -107,6 +112,30 @@ class DataClient {
   struct Impl;
   explicit DataClient(std::shared_ptr<Impl> impl) : m_impl(std::move(impl)) {}
   std::shared_ptr<Impl> m_impl;
+};
+
+// A Read whose request is on its way (DataClient::startRead). Dropping it
+// without receive() cancels the call.
+class DataClient::PendingRead {
+ public:
+  PendingRead(PendingRead&&) noexcept;
+  PendingRead& operator=(PendingRead&&) noexcept;
+  ~PendingRead();
+
+  // Called after each chunk's bytes are in place: the slab's index, the
+  // offset of the chunk's first byte in the slab and its size. Chunks of a
+  // slab come in byte order, so a caller can check the data while it is
+  // still in the cache; an error ends the call.
+  using ChunkCallback =
+      std::function<Status(std::size_t slab, std::uint64_t offset, std::uint64_t bytes)>;
+  // Receives the whole Read as readInto does; once only.
+  Status receive(const SlabSink& sink, const ChunkCallback& arrived = {});
+
+ private:
+  friend class DataClient;
+  struct Call;
+  explicit PendingRead(std::unique_ptr<Call> call);
+  std::unique_ptr<Call> m_call;
 };
 
 }  // namespace crackvis::dataservice

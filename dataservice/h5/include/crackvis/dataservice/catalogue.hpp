@@ -100,7 +100,7 @@ class FileReader {
 
 class Catalogue {
  public:
-  explicit Catalogue(DataRoot root) : m_root(std::move(root)) {}
+  explicit Catalogue(DataRoot root);
 
   const DataRoot& root() const { return m_root; }
 
@@ -126,8 +126,17 @@ class Catalogue {
   Result<std::unique_ptr<FileReader>> openFetch(const ResolvedPath& file,
                                                 std::uint64_t maxBytes) const;
 
+  // describe() and openRead() keep the HDF5 files they open open for later
+  // calls (at most 16, each checked against the file on disk at every use);
+  // this closes those no call used for 2 s, so that a writer (which HDF5's
+  // file locking keeps out while a reader has the file open) is not kept
+  // out for long. Copies of a catalogue share these files.
+  void closeIdleFiles() const;
+
  private:
+  class OpenFiles;
   DataRoot m_root;
+  std::shared_ptr<OpenFiles> m_openFiles;
 };
 
 }  // namespace crackvis::dataservice

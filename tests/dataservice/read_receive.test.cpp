@@ -1,0 +1,348 @@
+// How a Read is received and served without needless work: the client
+// parses chunks off the wire straight into the caller's buffers (as protobuf
+// defines the message, whatever the field order), a Read can be started
+// before its buffers exist and checked chunk by chunk, and the catalogue
+// keeps files open between calls without serving a changed file stale.
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include <catch2/catch.hpp>
+#include <fmt/format.h>
+#include <grpcpp/generic/async_generic_service.h>
+#include <grpcpp/grpcpp.h>
+
+#include "crackvis/v1/data.pb.h"
+#include "service_fixture.hpp"
+#include "support/h5_tamper.hpp"
+#include <crackvis/dataservice/catalogue.hpp>
+#include <crackvis/dataservice/remote_dem_file.hpp>
+
+namespace crackvis::testing {
+namespace {
+
+namespace fs = std::filesystem;
+namespace v1 = crackvis::v1;
+using dataservice::DataClient;
+using dataservice::Hyperslab;
+
+// A stand-in for crackvis-data (plaintext, loopback) that answers every call
+// with the given serialized messages, then OK: lets a test send chunks the
+// real server never would.
+class ScriptedServer {
+ public:
+  explicit ScriptedServer(std::vector<std::string> messages) : m_service(std::move(messages)) {
+    grpc::ServerBuilder builder;
+    builder.AddListeningPort("127.0.0.1:0", grpc::InsecureServerCredentials(), &m_port);
+    builder.RegisterCallbackGenericService(&m_service);
+    m_server = builder.BuildAndStart();
+  }
+  ~ScriptedServer() { m_server->Shutdown(); }
+
+  DataClient connect() const {
+    dataservice::ClientOptions options;
+    options.target = fmt::format("127.0.0.1:{}", m_port);
+    options.insecure = true;
+    options.timeoutSeconds = 10.0;
+    return DataClient::connect(options).value();
+  }
+
+ private:
+  class Reactor : public grpc::ServerGenericBidiReactor {
+   public:
+    explicit Reactor(const std::vector<std::string>& messages) : m_messages(messages) {
+      StartRead(&m_request);
+    }
+    void OnReadDone(bool) override { next(); }
+    void OnWriteDone(bool ok) override {
+      if (!ok) {
+        Finish(grpc::Status::CANCELLED);
+        return;
+      }
+      next();
+    }
+    void OnDone() override { delete this; }
+
+   private:
+    void next() {
+      if (m_sent == m_messages.size()) {
+        Finish(grpc::Status::OK);
+        return;
+      }
+      grpc::Slice slice(m_messages[m_sent++]);
+      m_reply = grpc::ByteBuffer(&slice, 1);
+      StartWrite(&m_reply);
+    }
+
+    const std::vector<std::string>& m_messages;
+    grpc::ByteBuffer m_request;
+    grpc::ByteBuffer m_reply;
+    std::size_t m_sent = 0;
+  };
+
+  class Service : public grpc::CallbackGenericService {
+   public:
+    explicit Service(std::vector<std::string> messages) : m_messages(std::move(messages)) {}
+    grpc::ServerGenericBidiReactor* CreateReactor(grpc::GenericCallbackServerContext*) override {
+      return new Reactor(m_messages);
+    }
+
+   private:
+    std::vector<std::string> m_messages;
+  };
+
+  Service m_service;
+  int m_port = 0;
+  std::unique_ptr<grpc::Server> m_server;
+};
+
+v1::ReadChunk header(std::uint32_t slab, std::uint64_t slabBytes, std::uint64_t offset) {
+  v1::ReadChunk chunk;
+  chunk.set_slab_index(slab);
+  chunk.set_dtype(v1::UINT8);
+  chunk.add_shape(slabBytes);
+  chunk.set_slab_bytes(slabBytes);
+  chunk.set_offset(offset);
+  return chunk;
+}
+
+std::string chunk(std::uint32_t slab, std::uint64_t slabBytes, std::uint64_t offset,
+                  const std::string& data) {
+  v1::ReadChunk message = header(slab, slabBytes, offset);
+  message.set_data(data);
+  return message.SerializeAsString();
+}
+
+Result<std::vector<dataservice::TypedArray>> readFrom(const ScriptedServer& server, int slabs) {
+  std::vector<Hyperslab> request;
+  for (int i = 0; i < slabs; ++i) {
+    request.push_back(Hyperslab::whole(fmt::format("/s{}", i)));
+  }
+  return server.connect().read("any.h5", request);
+}
+
+std::string asString(const std::vector<std::byte>& bytes) {
+  return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
+}
+
+TEST_CASE("Read chunks are taken off the wire as protobuf defines them",
+          "[dataservice][integration]") {
+  SECTION("the server's order: header fields, then the data") {
+    ScriptedServer server({chunk(0, 6, 0, "abc"), chunk(0, 6, 3, "def"), chunk(1, 2, 0, "gh")});
+    auto arrays = readFrom(server, 2);
+    INFO(arrays.status().message());
+    REQUIRE(arrays.isOk());
+    CHECK(asString((*arrays)[0].bytes) == "abcdef");
+    CHECK((*arrays)[0].dtype == dataservice::DataType::kUInt8);
+    CHECK((*arrays)[0].shape == std::vector<std::uint64_t>{6});
+    CHECK(asString((*arrays)[1].bytes) == "gh");
+  }
+
+  SECTION("the data before the other fields, unknown fields, shape unpacked") {
+    v1::ReadChunk data;
+    data.set_data("abcdef");
+    // Two serialized messages one after the other parse as their merge.
+    std::string dataFirst = data.SerializeAsString() + header(0, 6, 0).SerializeAsString();
+    // Fields this client does not know, after the data: 15 = 7 (varint),
+    // 16 = "ignored" (length-delimited), 17 (fixed32), 18 (fixed64).
+    const std::string withUnknown = chunk(0, 6, 0, "abcdef") +
+                                    std::string("\x78\x07\x82\x01\x07ignored", 12) +
+                                    std::string("\x8d\x01\x01\x02\x03\x04", 6) +
+                                    std::string("\x91\x01\x01\x02\x03\x04\x05\x06\x07\x08", 10);
+    // slab_index 0, dtype UINT8 (2), shape 6 as an unpacked varint, slab_bytes
+    // 6, offset 0, data "abcdef".
+    const std::string unpacked(
+        "\x08\x00\x10\x02\x18\x06\x20\x06\x28\x00\x32\x06"
+        "abcdef",
+        18);
+    // The data given twice: the last one counts.
+    v1::ReadChunk first;
+    first.set_data("xxxxxx");
+    std::string twice = first.SerializeAsString() + chunk(0, 6, 0, "abcdef");
+    for (const std::string& message : {dataFirst, withUnknown, unpacked, twice}) {
+      ScriptedServer server({message});
+      auto arrays = readFrom(server, 1);
+      INFO(arrays.status().message());
+      REQUIRE(arrays.isOk());
+      CHECK(asString((*arrays)[0].bytes) == "abcdef");
+      CHECK((*arrays)[0].shape == std::vector<std::uint64_t>{6});
+    }
+  }
+
+  SECTION("chunks that do not fit their slab, and broken messages, end the call") {
+    const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+        {{chunk(0, 6, 3, "def")}, "out of order"},
+        {{chunk(0, 6, 0, "abcdefg")}, "too long"},
+        {{chunk(1, 6, 0, "abcdef")}, "chunk for slab 1 of 1"},
+        {{chunk(0, 5, 0, "abcde") + header(0, 6, 0).SerializeAsString()}, "announces"},
+        {{std::string("\x32\x10", 2) + "abc"}, "malformed chunk"},  // 16 bytes announced, 3 sent
+        {{std::string("\x08\xff\xff", 3)}, "malformed chunk"},
+        {{chunk(0, 6, 0, "abcdef") + std::string("\x7b", 1)}, "malformed chunk"},  // a group
+        {{chunk(0, 6, 0, "abc")}, "ended after 3 of 6 bytes"}};
+    for (const auto& [messages, expected] : cases) {
+      ScriptedServer server(messages);
+      auto arrays = readFrom(server, 1);
+      CHECK(arrays.status().code() == StatusCode::kInternal);
+      CHECK_THAT(arrays.status().message(), Catch::Contains(expected));
+    }
+  }
+}
+
+TEST_CASE("A Read can be started before its buffers exist and checked chunk by chunk",
+          "[dataservice][integration]") {
+  auto server = startServer(baseConfig());
+  auto client = connect(clientOptions(*server));
+  const std::vector<Hyperslab> ramp = {Hyperslab::whole("/ramp")};
+  std::vector<double> values;
+
+  SECTION("every chunk is announced once its bytes are in place, in order") {
+    auto pending = client.startRead("big.h5", ramp);
+    values.resize(std::size_t{2} << 20);  // allocated while the server reads
+    std::uint64_t expectedOffset = 0;
+    int chunks = 0;
+    const Status status = pending.receive(
+        [&](const DataClient::SlabHeader& slab) -> Result<std::byte*> {
+          REQUIRE(slab.bytes == values.size() * sizeof(double));
+          return reinterpret_cast<std::byte*>(values.data());
+        },
+        [&](std::size_t slab, std::uint64_t offset, std::uint64_t bytes) -> Status {
+          CHECK(slab == 0);
+          CHECK(offset == expectedOffset);
+          CHECK(bytes <= dataservice::kMaxChunkBytes);
+          const auto first = static_cast<std::size_t>(offset / sizeof(double));
+          CHECK(values[first] == 0.5 * static_cast<double>(first));
+          expectedOffset += bytes;
+          ++chunks;
+          return Status::ok();
+        });
+    INFO(status.message());
+    REQUIRE(status.isOk());
+    CHECK(chunks == 16);
+    CHECK(expectedOffset == values.size() * sizeof(double));
+    CHECK(values.back() == 0.5 * static_cast<double>(values.size() - 1));
+    CHECK(pending
+              .receive([](const DataClient::SlabHeader&) -> Result<std::byte*> {
+                return internalError("not called");
+              })
+              .code() == StatusCode::kInternal);
+  }
+
+  SECTION("an error from the check ends the call with that error") {
+    values.resize(std::size_t{2} << 20);
+    int chunks = 0;
+    const Status status =
+        client.startRead("big.h5", ramp)
+            .receive(
+                [&](const DataClient::SlabHeader&) -> Result<std::byte*> {
+                  return reinterpret_cast<std::byte*>(values.data());
+                },
+                [&](std::size_t, std::uint64_t, std::uint64_t) -> Status {
+                  return ++chunks == 2 ? failedPrecondition("bad values") : Status::ok();
+                });
+    CHECK(status.code() == StatusCode::kFailedPrecondition);
+    CHECK(status.message() == "bad values");
+    CHECK(chunks == 2);
+  }
+
+  SECTION("a Read dropped before it is received is cancelled") {
+    for (int i = 0; i < 3; ++i) {
+      auto pending = client.startRead("big.h5", ramp);
+    }
+  }
+  requireServerHealthy(*server);
+}
+
+TEST_CASE("A bond list with an index out of range is refused, naming the bond",
+          "[dataservice][integration]") {
+  TempDir root;
+  const SampleData sample = writeSampleFile(root.file("run.h5"));
+  const auto lastBond = static_cast<std::uint64_t>(sample.lattice.bondCount() - 1);
+  {
+    std::lock_guard lock(dataservice::hdf5Mutex());
+    setInt32Elements(root.file("run.h5"), "/bonds/pairs", {3, -1}, 2 * lastBond);
+  }
+  auto config = baseConfig();
+  config.dataRoot = root.path().string();
+  auto server = startServer(config);
+  auto client = connect(clientOptions(*server));
+  auto file = dataservice::RemoteDemFile::open(client, "run.h5");
+  REQUIRE(file.isOk());
+  auto step = file->readStep(1);
+  CHECK(step.status().code() == StatusCode::kFailedPrecondition);
+  CHECK_THAT(step.status().message(),
+             Catch::Contains(fmt::format("bond {} joins particles 3 and -1", lastBond)));
+  CHECK_FALSE(file->bondsLoaded());
+}
+
+// Whether this process holds `path` open (the catalogue's kept files).
+bool heldOpen(const fs::path& path) {
+  for (const auto& entry : fs::directory_iterator("/proc/self/fd")) {
+    std::error_code error;
+    if (fs::read_symlink(entry.path(), error) == path) {
+      return true;
+    }
+  }
+  return false;
+}
+
+TEST_CASE("Files kept open between calls are read afresh once changed", "[dataservice]") {
+  using namespace crackvis::dataservice;
+  TempDir root;
+  const fs::path path = fs::canonical(root.path()) / "run.h5";
+  const fs::path next = fs::canonical(root.path()) / "next.h5";
+  {
+    std::lock_guard lock(hdf5Mutex());
+    writeSample(path.string(), makeSample(3, 3));
+    writeSample(next.string(), makeSample(3, 5));
+  }
+  Catalogue catalogue(DataRoot::open(root.path().string()).value());
+  auto describe = [&]() -> Result<FileDescription> {
+    auto file = catalogue.root().resolveFile("run.h5");
+    REQUIRE(file.isOk());
+    return catalogue.describe(*file);
+  };
+  // Only a file unchanged for two seconds is kept open.
+  REQUIRE(describe().value().steps.size() == 3);
+  CHECK_FALSE(heldOpen(path));
+  std::this_thread::sleep_for(std::chrono::milliseconds(2100));
+  REQUIRE(describe().value().steps.size() == 3);
+  CHECK(heldOpen(path));
+  // Closed once idle, so that a writer may open it.
+  catalogue.closeIdleFiles();
+  CHECK(heldOpen(path));
+  std::this_thread::sleep_for(std::chrono::milliseconds(2100));
+  catalogue.closeIdleFiles();
+  CHECK_FALSE(heldOpen(path));
+  REQUIRE(describe().value().steps.size() == 3);
+  CHECK(heldOpen(path));
+
+  // Changed in place with its size and modification time kept: the format
+  // attribute's "crackvis-dem" becomes "crackvis-DEM", written as raw bytes
+  // (HDF5 would refuse to write a file this process has open read-only).
+  const auto modified = fs::last_write_time(path);
+  const auto size = fs::file_size(path);
+  {
+    std::fstream stream(path, std::ios::in | std::ios::out | std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(stream)), {});
+    const auto position = bytes.find("crackvis-dem");
+    REQUIRE(position != std::string::npos);
+    stream.seekp(static_cast<std::streamoff>(position));
+    stream.write("crackvis-DEM", 12);
+  }
+  fs::last_write_time(path, modified);
+  REQUIRE(fs::file_size(path) == size);
+  CHECK(describe().value().format == "crackvis-DEM");
+
+  // Replaced by another file.
+  fs::rename(next, path);
+  CHECK(describe().value().steps.size() == 5);
+
+  // Cut short.
+  truncateFile(path.string(), 0.5);
+  CHECK(describe().status().code() == StatusCode::kFailedPrecondition);
+  CHECK_FALSE(heldOpen(path));
+}
+
+}  // namespace
+}  // namespace crackvis::testing
