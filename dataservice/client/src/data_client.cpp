@@ -11,52 +11,12 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "grpc_convert.hpp"
 #include <crackvis/dataservice/data_client.hpp>
+#include <crackvis/rpc/grpc_status.hpp>
 
 namespace crackvis::dataservice {
 namespace v1 = crackvis::v1;
 
 namespace {
-
-const char* grpcCodeName(grpc::StatusCode code) {
-  switch (code) {
-    case grpc::StatusCode::OK:
-      return "OK";
-    case grpc::StatusCode::CANCELLED:
-      return "CANCELLED";
-    case grpc::StatusCode::UNKNOWN:
-      return "UNKNOWN";
-    case grpc::StatusCode::INVALID_ARGUMENT:
-      return "INVALID_ARGUMENT";
-    case grpc::StatusCode::DEADLINE_EXCEEDED:
-      return "DEADLINE_EXCEEDED";
-    case grpc::StatusCode::NOT_FOUND:
-      return "NOT_FOUND";
-    case grpc::StatusCode::ALREADY_EXISTS:
-      return "ALREADY_EXISTS";
-    case grpc::StatusCode::PERMISSION_DENIED:
-      return "PERMISSION_DENIED";
-    case grpc::StatusCode::RESOURCE_EXHAUSTED:
-      return "RESOURCE_EXHAUSTED";
-    case grpc::StatusCode::FAILED_PRECONDITION:
-      return "FAILED_PRECONDITION";
-    case grpc::StatusCode::ABORTED:
-      return "ABORTED";
-    case grpc::StatusCode::OUT_OF_RANGE:
-      return "OUT_OF_RANGE";
-    case grpc::StatusCode::UNIMPLEMENTED:
-      return "UNIMPLEMENTED";
-    case grpc::StatusCode::INTERNAL:
-      return "INTERNAL";
-    case grpc::StatusCode::UNAVAILABLE:
-      return "UNAVAILABLE";
-    case grpc::StatusCode::DATA_LOSS:
-      return "DATA_LOSS";
-    case grpc::StatusCode::UNAUTHENTICATED:
-      return "UNAUTHENTICATED";
-    default:
-      return "UNKNOWN";
-  }
-}
 
 std::vector<std::uint64_t> toVector(const google::protobuf::RepeatedField<std::uint64_t>& field) {
   return {field.begin(), field.end()};
@@ -284,37 +244,6 @@ Result<PlacedChunk> receiveChunk(grpc::ByteBuffer& message, SlabReceiver& receiv
 }
 
 }  // namespace
-
-Status fromGrpcStatus(const grpc::Status& status, const std::string& call) {
-  if (status.ok()) {
-    return Status::ok();
-  }
-  const std::string& message = status.error_message();
-  switch (status.error_code()) {
-    case grpc::StatusCode::INVALID_ARGUMENT:
-    case grpc::StatusCode::OUT_OF_RANGE:
-      return {StatusCode::kInvalidArgument, message};
-    case grpc::StatusCode::NOT_FOUND:
-      return {StatusCode::kNotFound, message};
-    case grpc::StatusCode::FAILED_PRECONDITION:
-      return {StatusCode::kFailedPrecondition, message};
-    case grpc::StatusCode::PERMISSION_DENIED:
-      return {StatusCode::kPermissionDenied, message};
-    case grpc::StatusCode::UNAUTHENTICATED:
-      return {StatusCode::kUnauthenticated, message};
-    case grpc::StatusCode::RESOURCE_EXHAUSTED:
-      return {StatusCode::kResourceExhausted, message};
-    case grpc::StatusCode::UNAVAILABLE:
-    case grpc::StatusCode::CANCELLED:
-    case grpc::StatusCode::DEADLINE_EXCEEDED:
-    case grpc::StatusCode::ABORTED:
-      return {StatusCode::kUnavailable,
-              fmt::format("{}: {}: {}", call, grpcCodeName(status.error_code()), message)};
-    default:
-      return {StatusCode::kInternal,
-              fmt::format("{}: {}: {}", call, grpcCodeName(status.error_code()), message)};
-  }
-}
 
 FileDescription fromProto(const v1::DescribeResponse& in) {
   FileDescription out;

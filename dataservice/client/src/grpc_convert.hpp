@@ -7,13 +7,14 @@
 #include "crackvis/v1/data.pb.h"
 #include <crackvis/common/status.hpp>
 #include <crackvis/dataservice/types.hpp>
+#include <crackvis/rpc/grpc_status.hpp>
 
 namespace crackvis::dataservice {
 
 // gRPC's codes that crackvis has no name for (CANCELLED, DEADLINE_EXCEEDED,
 // UNKNOWN, ...) become UNAVAILABLE or INTERNAL with the gRPC name kept in
-// the message.
-Status fromGrpcStatus(const grpc::Status& status, const std::string& call);
+// the message (crackvis::rpc, shared with the render service).
+using rpc::fromGrpcStatus;
 
 FileDescription fromProto(const crackvis::v1::DescribeResponse& response);
 

@@ -8,35 +8,6 @@ namespace crackvis::dataservice {
 namespace v1 = crackvis::v1;
 using Clock = std::chrono::steady_clock;
 
-grpc::Status toGrpcStatus(const Status& status) {
-  const auto code = [&] {
-    switch (status.code()) {
-      case StatusCode::kOk:
-        return grpc::StatusCode::OK;
-      case StatusCode::kInvalidArgument:
-        return grpc::StatusCode::INVALID_ARGUMENT;
-      case StatusCode::kNotFound:
-        return grpc::StatusCode::NOT_FOUND;
-      case StatusCode::kOutOfRange:
-        return grpc::StatusCode::OUT_OF_RANGE;
-      case StatusCode::kFailedPrecondition:
-        return grpc::StatusCode::FAILED_PRECONDITION;
-      case StatusCode::kPermissionDenied:
-        return grpc::StatusCode::PERMISSION_DENIED;
-      case StatusCode::kUnauthenticated:
-        return grpc::StatusCode::UNAUTHENTICATED;
-      case StatusCode::kResourceExhausted:
-        return grpc::StatusCode::RESOURCE_EXHAUSTED;
-      case StatusCode::kUnavailable:
-        return grpc::StatusCode::UNAVAILABLE;
-      case StatusCode::kInternal:
-        return grpc::StatusCode::INTERNAL;
-    }
-    return grpc::StatusCode::UNKNOWN;
-  }();
-  return code == grpc::StatusCode::OK ? grpc::Status::OK : grpc::Status(code, status.message());
-}
-
 namespace {
 
 Status permissionDenied(std::string message) {

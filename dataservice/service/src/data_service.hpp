@@ -17,10 +17,11 @@
 #include <crackvis/dataservice/catalogue.hpp>
 #include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/dataservice/server_config.hpp>
+#include <crackvis/rpc/grpc_status.hpp>
 
 namespace crackvis::dataservice {
 
-grpc::Status toGrpcStatus(const Status& status);
+using rpc::toGrpcStatus;  // the one mapping, shared with the render service
 
 // The streams in progress: counts them against the limit, and cancels those
 // that run past their time limit even when the client has stopped reading
