@@ -601,7 +601,6 @@ struct SceneRenderer::Impl {
   int width = 0;                          // capacity
   int height = 0;
   bool cameraSet = false;
-  std::optional<pipeline::CameraDescription> requestedCamera;
   vtkSmartPointer<vtkActor> impostors;  // null unless particles are impostors
   vtkSmartPointer<vtkActor> standIn;    // their interactive level of detail
   double meanRadius = 0.0;

@@ -310,8 +310,6 @@ class StreamEncoder {
     return out;
   }
 
-  std::uint64_t bytes() const { return m_totalBytes; }
-
  private:
   struct Window {
     double frames = 0;
@@ -322,7 +320,6 @@ class StreamEncoder {
   std::unique_ptr<encode::FrameEncoder> m_encoder;
   Window m_window;
   Clock::time_point m_windowStart = Clock::now();
-  std::uint64_t m_totalBytes = 0;
 };
 
 v1::ServerMessage toMessage(const SessionNotice& notice) {
