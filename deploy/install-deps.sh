@@ -5,8 +5,9 @@
 # everything returns in about a second without touching the network. Works as
 # root with no terminal (CI); as another user it goes through sudo.
 #
-#   deploy/install-deps.sh            # everything
-#   deploy/install-deps.sh --list     # print the package list and exit
+#   deploy/install-deps.sh                   # everything (build, test, run)
+#   deploy/install-deps.sh --runtime         # only what the built services and CLI load
+#   deploy/install-deps.sh [--runtime] --list   # print the package list and exit
 set -euo pipefail
 
 # One package per line, grouped by the part of crackvis that needs it.
@@ -31,8 +32,37 @@ readonly PACKAGES=(
   catch2 gnuplot-nox
 )
 
-if [[ "${1:-}" == "--list" ]]; then
-  printf '%s\n' "${PACKAGES[@]}"
+# What crackvis-data, crackvis-render and the crackvis CLI load when they run
+# on a machine that did not build them (container images, service nodes): the
+# packages of their direct shared libraries (tests/deploy/runtime-packages.sh
+# checks this against the binaries), plus Mesa's EGL and llvmpipe, which
+# libglvnd loads at run time. apt brings each library's own dependencies.
+readonly RUNTIME_PACKAGES=(
+  libhdf5-103-1 libgrpc++1.51 libgrpc29 libabsl20220623 libprotobuf32 libssl3 libfmt9
+  libtbb12 libvoro++1 libvtk9.1 libxml2
+  libavcodec59 libavutil57 libswscale6
+  libegl1 libegl-mesa0 libgl1-mesa-dri
+)
+
+selected=("${PACKAGES[@]}")
+list_only=false
+for argument in "$@"; do
+  case "$argument" in
+    --runtime) selected=("${RUNTIME_PACKAGES[@]}") ;;
+    --list) list_only=true ;;
+    -h | --help)
+      sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'
+      exit 0
+      ;;
+    *)
+      echo "install-deps: unknown option '$argument' (try --help)" >&2
+      exit 2
+      ;;
+  esac
+done
+
+if $list_only; then
+  printf '%s\n' "${selected[@]}"
   exit 0
 fi
 
@@ -41,12 +71,12 @@ is_installed() {
 }
 
 missing=()
-for package in "${PACKAGES[@]}"; do
+for package in "${selected[@]}"; do
   is_installed "$package" || missing+=("$package")
 done
 
 if ((${#missing[@]} == 0)); then
-  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  echo "install-deps: all ${#selected[@]} packages present"
   exit 0
 fi
 

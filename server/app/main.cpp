@@ -14,9 +14,11 @@
 #include <grpcpp/grpcpp.h>
 
 #include <crackvis/common/log.hpp>
+#include <crackvis/common/service_manager.hpp>
 #include <crackvis/common/termination.hpp>
 #include <crackvis/dataservice/data_root.hpp>
 #include <crackvis/dataservice/server_config.hpp>
+#include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/render/scene_renderer.hpp>
 #include <crackvis/service/render_server.hpp>
 
@@ -116,6 +118,7 @@ int snapshot(const Flags& flags, const RenderServerConfig& config) {
 
 int serve(const RenderServerConfig& config) {
   const crackvis::TerminationSignals signals;
+  crackvis::encode::limitCodecLogsToWarnings();
 
   // The rendering backend is chosen now, with a clear error if neither
   // Mesa's surfaceless platform nor an EGL device works, not at the first
@@ -138,7 +141,9 @@ int serve(const RenderServerConfig& config) {
                         {"data_service", config.data.target},
                         {"max_sessions", std::to_string(config.maxSessions)}});
   std::fflush(stdout);
+  crackvis::service_manager::notify("READY=1\nSTATUS=serving " + (*server)->address());
   const int signal = signals.wait();
+  crackvis::service_manager::notify("STOPPING=1");
   crackvis::log::event(stderr, "crackvis-render", "stop",
                        {{"signal", std::to_string(signal)},
                         {"sessions_closed", std::to_string((*server)->sessionCount())}});

@@ -14,8 +14,13 @@
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <grpcpp/grpcpp.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <crackvis/common/service_manager.hpp>
 
 #include "crackvis/v1/render.grpc.pb.h"
 #include "dataservice/service_fixture.hpp"
@@ -29,21 +34,33 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-// A service started like systemd starts it, its output in a file.
+// A service started like systemd starts it (NOTIFY_SOCKET among `extraEnv`
+// for a Type=notify unit), its output in a file.
 class Service {
  public:
-  Service(const std::vector<std::string>& argv, const std::string& log) : m_log(log) {
+  Service(const std::vector<std::string>& argv, const std::string& log,
+          const std::vector<std::string>& extraEnv = {})
+      : m_log(log) {
+    // Arguments and environment are built before fork: the child only execs.
+    std::vector<char*> args;
+    for (const auto& a : argv) {
+      args.push_back(const_cast<char*>(a.c_str()));
+    }
+    args.push_back(nullptr);
+    std::vector<char*> env;
+    for (char** variable = environ; *variable != nullptr; ++variable) {
+      env.push_back(*variable);
+    }
+    for (const auto& variable : extraEnv) {
+      env.push_back(const_cast<char*>(variable.c_str()));
+    }
+    env.push_back(nullptr);
     m_pid = fork();
     if (m_pid == 0) {
       const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
       dup2(fd, 1);
       dup2(fd, 2);
-      std::vector<char*> args;
-      for (const auto& a : argv) {
-        args.push_back(const_cast<char*>(a.c_str()));
-      }
-      args.push_back(nullptr);
-      execv(args[0], args.data());
+      execve(args[0], args.data(), env.data());
       _exit(127);
     }
   }
@@ -99,6 +116,42 @@ std::string write(const TempDir& dir, const std::string& name, const std::string
   return dir.file(name);
 }
 
+// The receiving end of $NOTIFY_SOCKET, as systemd holds it for a Type=notify
+// unit: a datagram socket bound to a path, or with a leading '@' to a name in
+// the abstract namespace.
+class NotifySocket {
+ public:
+  explicit NotifySocket(const std::string& path) : m_path(path) {
+    m_fd = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    sockaddr_un address{};
+    address.sun_family = AF_UNIX;
+    std::snprintf(address.sun_path, sizeof(address.sun_path), "%s", path.c_str());
+    if (path.front() == '@') {
+      address.sun_path[0] = '\0';
+    }
+    const auto length = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + path.size());
+    m_bound = bind(m_fd, reinterpret_cast<const sockaddr*>(&address), length) == 0;
+  }
+  ~NotifySocket() { close(m_fd); }
+  bool bound() const { return m_bound; }
+  std::string environment() const { return "NOTIFY_SOCKET=" + m_path; }
+  // The next message, or "" after `seconds` without one.
+  std::string receive(double seconds) const {
+    pollfd waiting{m_fd, POLLIN, 0};
+    if (poll(&waiting, 1, static_cast<int>(seconds * 1000)) != 1) {
+      return {};
+    }
+    char buffer[4096];
+    const ssize_t size = recv(m_fd, buffer, sizeof(buffer), 0);
+    return size > 0 ? std::string(buffer, static_cast<std::size_t>(size)) : std::string();
+  }
+
+ private:
+  std::string m_path;
+  int m_fd = -1;
+  bool m_bound = false;
+};
+
 std::string healthOf(int port) {
   const auto tls = clientTls("client");
   const auto result = runProcess({CRACKVIS_CLI, "health", fmt::format("127.0.0.1:{}", port), "--ca",
@@ -107,6 +160,20 @@ std::string healthOf(int port) {
 }
 
 }  // namespace
+
+TEST_CASE("readiness reaches systemd's notify socket, a path or an abstract name",
+          "[deploy]") {
+  CHECK(unsetenv("NOTIFY_SOCKET") == 0);
+  CHECK_FALSE(service_manager::notify("READY=1"));  // not under systemd: nothing sent
+  const NotifySocket abstract(fmt::format("@crackvis-notify-test-{}", getpid()));
+  REQUIRE(abstract.bound());
+  CHECK(setenv("NOTIFY_SOCKET", abstract.environment().substr(14).c_str(), 1) == 0);
+  CHECK(service_manager::notify("STATUS=testing"));
+  CHECK(abstract.receive(5.0) == "STATUS=testing");
+  CHECK(setenv("NOTIFY_SOCKET", "relative/path", 1) == 0);
+  CHECK_FALSE(service_manager::notify("READY=1"));  // not an address systemd gives
+  CHECK(unsetenv("NOTIFY_SOCKET") == 0);
+}
 
 TEST_CASE("both services run from config files, answer health and stop on SIGTERM",
           "[deploy][integration]") {
@@ -119,10 +186,17 @@ TEST_CASE("both services run from config files, answer health and stop on SIGTER
   "tls": {{"ca": "{}", "cert": "{}", "key": "{}"}}, "access_log": "{}"}})",
                         crackRoot().path().string(), server.ca, server.cert, server.key,
                         dir.file("data-access.log")));
-  Service data({CRACKVIS_DATA, "--config", dataConfig}, dir.file("data.log"));
+  // Type=notify: READY=1 once it serves, so `systemctl start` returns then.
+  const NotifySocket dataNotify(dir.file("data.notify"));
+  REQUIRE(dataNotify.bound());
+  Service data({CRACKVIS_DATA, "--config", dataConfig}, dir.file("data.log"),
+               {dataNotify.environment()});
+  const std::string dataReady = dataNotify.receive(30.0);
   const int dataPort = data.awaitPort();
   INFO(data.output());
   REQUIRE(dataPort > 0);
+  CHECK(dataReady.rfind("READY=1\nSTATUS=serving 127.0.0.1:", 0) == 0);
+  CHECK(healthOf(dataPort).find("SERVING") != std::string::npos);
   const std::string renderConfig = write(dir, "render.json",
                                          fmt::format(R"({{"listen": "127.0.0.1:0",
   "tls": {{"ca": "{}", "cert": "{}", "key": "{}"}},
@@ -130,7 +204,11 @@ TEST_CASE("both services run from config files, answer health and stop on SIGTER
   "limits": {{"max_sessions": 4, "session_grace_seconds": 30}}, "access_log": "-"}})",
                                                      server.ca, server.cert, server.key, dataPort,
                                                      render.ca, render.cert, render.key));
-  Service renderer({CRACKVIS_RENDER, "--config", renderConfig}, dir.file("render.log"));
+  const NotifySocket renderNotify(dir.file("render.notify"));
+  REQUIRE(renderNotify.bound());
+  Service renderer({CRACKVIS_RENDER, "--config", renderConfig}, dir.file("render.log"),
+                   {renderNotify.environment()});
+  CHECK(renderNotify.receive(30.0).rfind("READY=1\n", 0) == 0);
   const int renderPort = renderer.awaitPort();
   INFO(renderer.output());
   REQUIRE(renderPort > 0);
@@ -171,6 +249,8 @@ TEST_CASE("both services run from config files, answer health and stop on SIGTER
   CHECK(renderer.terminate(5.0) == 0);
   CHECK(data.terminate(5.0) == 0);
   CHECK(std::chrono::duration<double>(Clock::now() - start).count() < 5.0);
+  CHECK(renderNotify.receive(1.0) == "STOPPING=1");
+  CHECK(dataNotify.receive(1.0) == "STOPPING=1");
   // The stream ended with the session closed, not hanging.
   while (stream->Read(&message)) {
   }

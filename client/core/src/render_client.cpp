@@ -77,7 +77,7 @@ struct RenderClient::Impl {
 
   // The stream currently attached, under `mutex`.
   grpc::ClientContext* streamContext = nullptr;
-  std::uint64_t generation = 0;
+  std::uint64_t streamGeneration = 0;  // counts attached streams
 
   // Frames for the decoder, under `mutex`.
   std::condition_variable unitsChanged;
@@ -152,7 +152,7 @@ struct RenderClient::Impl {
     {
       std::lock_guard lock(mutex);
       streamContext = &context;
-      generation = ++this->generation;
+      generation = ++streamGeneration;
       v1::ClientEvent attach;
       attach.set_attach_session_id(sessionId);
       if (!stream->Write(attach)) {

@@ -8,6 +8,7 @@
 extern "C" {
 #include <libavcodec/avcodec.h>
 #include <libavutil/imgutils.h>
+#include <libavutil/log.h>
 #include <libavutil/opt.h>
 #include <libswscale/swscale.h>
 }
@@ -223,5 +224,7 @@ double psnr(const RgbFrame& a, const RgbFrame& b) {
   const double mse = sum / static_cast<double>(a.rgb.size());
   return mse == 0.0 ? 99.0 : 10.0 * std::log10(255.0 * 255.0 / mse);
 }
+
+void limitCodecLogsToWarnings() { av_log_set_level(AV_LOG_WARNING); }
 
 }  // namespace crackvis::encode

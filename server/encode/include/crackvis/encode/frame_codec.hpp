@@ -70,4 +70,9 @@ class FrameDecoder {
 // Peak signal-to-noise ratio of two frames of the same size, dB.
 double psnr(const RgbFrame& a, const RgbFrame& b);
 
+// FFmpeg (and libx264 through it) prints per-encoder statistics at the info
+// level when each stream closes: unstructured lines a service's log should
+// not carry. Process-wide; warnings and errors still go to stderr.
+void limitCodecLogsToWarnings();
+
 }  // namespace crackvis::encode
