@@ -13,6 +13,7 @@
 #include <hdf5.h>
 
 #include <crackvis/common/log.hpp>
+#include <crackvis/common/service_manager.hpp>
 #include <crackvis/common/termination.hpp>
 #include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/dataservice/data_server.hpp>
@@ -138,7 +139,10 @@ int serve(const ServerConfig& config) {
                         {"root", config.dataRoot},
                         {"tls", config.insecure ? "none (INSECURE, loopback only)" : "mutual"},
                         {"raw_tls_port", std::to_string((*server)->rawTlsPort())}});
+  std::fflush(stdout);
+  crackvis::service_manager::notify("READY=1\nSTATUS=serving " + (*server)->address());
   const int signal = signals.wait();
+  crackvis::service_manager::notify("STOPPING=1");
   crackvis::log::event(stderr, "crackvis-data", "stop", {{"signal", std::to_string(signal)}});
   (*server)->shutdown();
   return kExitOk;
