@@ -1,5 +1,3 @@
-#include <crackvis/common/service_manager.hpp>
-
 #include <cstddef>
 #include <cstdlib>
 #include <cstring>
@@ -8,6 +6,8 @@
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <unistd.h>
+
+#include <crackvis/common/service_manager.hpp>
 
 namespace crackvis::service_manager {
 namespace {

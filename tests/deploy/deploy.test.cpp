@@ -20,13 +20,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <crackvis/common/service_manager.hpp>
-
 #include "crackvis/v1/render.grpc.pb.h"
 #include "dataservice/service_fixture.hpp"
 #include "server/render_fixture.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
+#include <crackvis/common/service_manager.hpp>
 
 using namespace crackvis;
 using namespace crackvis::testing;
@@ -161,8 +160,7 @@ std::string healthOf(int port) {
 
 }  // namespace
 
-TEST_CASE("readiness reaches systemd's notify socket, a path or an abstract name",
-          "[deploy]") {
+TEST_CASE("readiness reaches systemd's notify socket, a path or an abstract name", "[deploy]") {
   CHECK(unsetenv("NOTIFY_SOCKET") == 0);
   CHECK_FALSE(service_manager::notify("READY=1"));  // not under systemd: nothing sent
   const NotifySocket abstract(fmt::format("@crackvis-notify-test-{}", getpid()));

@@ -225,6 +225,8 @@ double psnr(const RgbFrame& a, const RgbFrame& b) {
   return mse == 0.0 ? 99.0 : 10.0 * std::log10(255.0 * 255.0 / mse);
 }
 
-void limitCodecLogsToWarnings() { av_log_set_level(AV_LOG_WARNING); }
+void limitCodecLogsToWarnings() {
+  av_log_set_level(AV_LOG_WARNING);
+}
 
 }  // namespace crackvis::encode
