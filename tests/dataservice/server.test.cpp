@@ -269,6 +269,25 @@ TEST_CASE("The client library reads a crackvis-dem file as typed DEM arrays",
   auto bonds = file->bonds();
   REQUIRE(bonds.isOk());
   CHECK(**bonds == sample.sample3d.lattice.bonds);
+  // Velocities and bond forces only when asked for (a view colours by
+  // them), in the same Read; the break steps per file.
+  CHECK(step->velocities.empty());
+  CHECK(step->bondForce.empty());
+  dataservice::StepExtras extras;
+  extras.velocities = true;
+  extras.bondForce = true;
+  auto withExtras = file->readStep(1, extras);
+  INFO(withExtras.status().message());
+  REQUIRE(withExtras.isOk());
+  CHECK(withExtras->positions == sample.sample3d.steps[1].positions);
+  CHECK(withExtras->bondState == sample.sample3d.steps[1].bondState);
+  CHECK(withExtras->velocities == sample.sample3d.steps[1].velocities);
+  CHECK(withExtras->bondForce == sample.sample3d.steps[1].bondForce);
+  auto breakSteps = file->breakSteps();
+  REQUIRE(breakSteps.isOk());
+  auto local = dem::DemFileReader::open(sample.file("run.h5"));
+  REQUIRE(local.isOk());
+  CHECK(*breakSteps == *local->readBreakSteps());
 
   auto block = file->positions(1, 5, 10);
   REQUIRE(block.isOk());

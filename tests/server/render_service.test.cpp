@@ -266,6 +266,62 @@ TEST_CASE("a session streams frames that follow the client's events",
   CHECK(stream.errors().empty());
 }
 
+// Pixels a red-on-black crack view never has: viridis's greens, blues and
+// yellows (green well above red).
+int viridisPixels(const encode::RgbFrame& picture) {
+  int n = 0;
+  for (std::size_t i = 0; i + 2 < picture.rgb.size(); i += 3) {
+    n += picture.rgb[i + 1] > picture.rgb[i] + 40 ? 1 : 0;
+  }
+  return n;
+}
+
+TEST_CASE("a session reads the arrays its view colours by: break step, bond force, velocity",
+          "[render][service][integration]") {
+  auto services = startServices();
+  auto stub = connect(*services.render);
+  const std::string id = openSession(*stub, crackView());
+  StreamClient stream(*stub, id);
+  REQUIRE(stream.waitFor([](const auto& frames, const auto&) {
+    return !frames.empty() && frames.back().frame.full_resolution();
+  }));
+  CHECK(redPixels(stream.frames().back().picture) > 100);
+  CHECK(viridisPixels(stream.frames().back().picture) < 20);
+  // A replaced pipeline that colours by another array; the frame after it.
+  auto colouredBy = [&](const pipeline::PipelineDescription& view) {
+    v1::ClientEvent replace;
+    replace.mutable_replace_pipeline()->set_pipeline_xml(pipeline::toXml(view));
+    const auto event = stream.send(replace);
+    REQUIRE(stream.waitFor([&](const auto& frames, const auto&) {
+      return frames.back().frame.last_event_id() == event && frames.back().frame.full_resolution();
+    }));
+    INFO(pipeline::toXml(view));
+    CHECK(stream.errors().empty());
+    return stream.frames().back().picture;
+  };
+  // Without the arrays these were drawn in the solid colour (the red crack
+  // colour, or one colour-map end for every particle).
+  auto view = crackView();
+  view.cracks.colourBy = pipeline::CrackColourBy::kBreakStep;
+  const int byBreakStep = viridisPixels(colouredBy(view));
+  CHECK(byBreakStep > 100);
+  // Broken bonds carry no force: the intact bonds show it.
+  view.cracks.colourBy = pipeline::CrackColourBy::kSolid;
+  view.cracks.visible = false;
+  view.bonds.show = pipeline::BondSelection::kAll;
+  view.bonds.colourBy = pipeline::BondColourBy::kForce;
+  const int byForce = viridisPixels(colouredBy(view));
+  CHECK(byForce > 100);
+  view.bonds.show = pipeline::BondSelection::kNone;
+  view.cracks.visible = true;
+  view.particles.visible = true;
+  view.particles.colourBy = pipeline::ParticleColourBy::kVelocity;
+  const int byVelocity = viridisPixels(colouredBy(view));
+  CHECK(byVelocity > 100);
+  view.particles.colourBy = pipeline::ParticleColourBy::kSolid;
+  CHECK(viridisPixels(colouredBy(view)) < 20);
+}
+
 TEST_CASE("a session steps and plays through the fracture", "[render][service][integration]") {
   auto services = startServices();
   auto stub = connect(*services.render);

@@ -57,3 +57,37 @@ TEST_CASE("the step cache reads once, hits after, and prefetches in the backgrou
         std::string::npos);
   cache.prefetch(99);  // ignored
 }
+
+TEST_CASE("a step source brings velocities, bond forces and break steps only when asked",
+          "[source]") {
+  testing::TempDir dir;
+  const auto sample = testing::writeSampleFile(dir.file("run.h5"), 3, 4);
+  auto source = source::openLocalSource(dir.file("run.h5"));
+  REQUIRE(source.isOk());
+  auto plain = (*source)->read(2);
+  REQUIRE(plain.isOk());
+  CHECK(plain->velocities.empty());
+  CHECK(plain->bondForce.empty());
+  CHECK((*source)->breakSteps().empty());
+
+  source::ExtraArrays extras;
+  extras.velocities = true;
+  extras.bondForce = true;
+  extras.breakStep = true;
+  REQUIRE((*source)->setExtraArrays(extras).isOk());
+  auto full = (*source)->read(2);
+  REQUIRE(full.isOk());
+  CHECK(full->velocities == sample.steps[2].velocities);
+  CHECK(full->bondForce == sample.steps[2].bondForce);
+  CHECK((*source)->breakSteps().size() == sample.lattice.bondCount());
+
+  // A file without the optional arrays: asked for, they stay empty.
+  testing::writeSample(dir.file("bare.h5"), testing::makeSample(3, 2, false));
+  auto bare = source::openLocalSource(dir.file("bare.h5"));
+  REQUIRE(bare.isOk());
+  REQUIRE((*bare)->setExtraArrays(extras).isOk());
+  auto step = (*bare)->read(1);
+  REQUIRE(step.isOk());
+  CHECK(step->velocities.empty());
+  CHECK(step->bondForce.empty());
+}

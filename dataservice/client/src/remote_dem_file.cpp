@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cstdint>
 #include <span>
 
 #include <fmt/format.h>
@@ -42,6 +43,22 @@ std::string positionsPath(int step) {
 }
 std::string bondStatePath(int step) {
   return dem::stepGroupPath(step) + "/bond_state";
+}
+std::string velocitiesPath(int step) {
+  return dem::stepGroupPath(step) + "/velocities";
+}
+std::string bondForcePath(int step) {
+  return dem::stepGroupPath(step) + "/bond_force";
+}
+
+// An optional dataset: absent is fine (false), present must be as specified.
+Result<bool> optionalDataset(const FileDescription& description, const std::string& path,
+                             DataType dtype, const std::vector<std::uint64_t>& shape) {
+  if (description.findDataset(path) == nullptr) {
+    return false;
+  }
+  CRACKVIS_RETURN_IF_ERROR(expectDataset(description, path, dtype, shape));
+  return true;
 }
 
 // Every bond must join two existing particles; `first` is the index of
@@ -187,6 +204,22 @@ Result<std::shared_ptr<const std::vector<dem::Bond>>> RemoteDemFile::bonds() {
   return m_bondList;
 }
 
+Result<std::vector<std::int32_t>> RemoteDemFile::breakSteps() const {
+  auto present = optionalDataset(*m_description, "/bonds/break_step", DataType::kInt32,
+                                 {static_cast<std::uint64_t>(m_bonds)});
+  if (!present) {
+    return present.status();
+  }
+  if (!*present) {
+    return std::vector<std::int32_t>{};
+  }
+  auto arrays = m_client->read(m_file, {Hyperslab::whole("/bonds/break_step")});
+  if (!arrays) {
+    return arrays.status();
+  }
+  return arrays->front().values<std::int32_t>();
+}
+
 Result<std::vector<double>> RemoteDemFile::radii() const {
   auto arrays = m_client->read(m_file, {Hyperslab::whole("/particles/radius")});
   if (!arrays) {
@@ -195,36 +228,76 @@ Result<std::vector<double>> RemoteDemFile::radii() const {
   return arrays->front().values<double>();
 }
 
-Result<RemoteStep> RemoteDemFile::readStep(int step) {
+Result<RemoteStep> RemoteDemFile::readStep(int step, StepExtras extras) {
   CRACKVIS_RETURN_IF_ERROR(checkStep(step));
+  const auto n = static_cast<std::uint64_t>(m_particles);
+  const auto m = static_cast<std::uint64_t>(m_bonds);
+  // The optional arrays are looked up only when asked for: the usual view
+  // pays nothing for them.
+  Result<bool> withVelocities = false;
+  if (extras.velocities) {
+    withVelocities =
+        optionalDataset(*m_description, velocitiesPath(step), DataType::kFloat32, {n, 3});
+    if (!withVelocities) {
+      return withVelocities.status();
+    }
+  }
+  Result<bool> withForce = false;
+  if (extras.bondForce) {
+    withForce = optionalDataset(*m_description, bondForcePath(step), DataType::kFloat32, {m});
+    if (!withForce) {
+      return withForce.status();
+    }
+  }
   std::vector<Hyperslab> slabs = {Hyperslab::whole(positionsPath(step)),
                                   Hyperslab::whole(bondStatePath(step))};
   const bool withBonds = !m_bondList;
+  const std::size_t bondsSlab = withBonds ? slabs.size() : SIZE_MAX;
   if (withBonds) {
     slabs.push_back(Hyperslab::whole("/bonds/pairs"));
+  }
+  const bool readVelocities = *withVelocities;
+  const bool readForce = *withForce;
+  if (readVelocities) {
+    slabs.push_back(Hyperslab::whole(velocitiesPath(step)));
+  }
+  if (readForce) {
+    slabs.push_back(Hyperslab::whole(bondForcePath(step)));
   }
   // The request goes out first: the arrays below are allocated (3.5 MB for
   // cuboid A, page faults and zeroing included) while the server opens the
   // file and reads the first piece, not before the server hears of the call.
   auto pending = m_client->startRead(m_file, slabs);
-  const auto n = static_cast<std::uint64_t>(m_particles);
-  const auto m = static_cast<std::uint64_t>(m_bonds);
   RemoteStep result;
   result.index = step;
   result.time = steps()[static_cast<size_t>(step)].time;
   result.positions.resize(n);
   result.bondState.resize(m);
   std::vector<dem::Bond> bonds(withBonds ? m : 0);
-  // Straight into the typed arrays, once their dtype and shape are checked.
+  // Straight into the typed arrays, once their dtype and shape are checked;
+  // in the order of `slabs`.
   struct Expected {
     DataType dtype;
     std::vector<std::uint64_t> shape;
     std::byte* data;
+    std::uint64_t elements() const { return shape[0] * (shape.size() > 1 ? shape[1] : 1); }
   };
-  const std::vector<Expected> expected = {
+  std::vector<Expected> expected = {
       {DataType::kFloat64, {n, 3}, reinterpret_cast<std::byte*>(result.positions.data())},
-      {DataType::kUInt8, {m}, reinterpret_cast<std::byte*>(result.bondState.data())},
-      {DataType::kInt32, {m, 2}, reinterpret_cast<std::byte*>(bonds.data())}};
+      {DataType::kUInt8, {m}, reinterpret_cast<std::byte*>(result.bondState.data())}};
+  if (withBonds) {
+    expected.push_back({DataType::kInt32, {m, 2}, reinterpret_cast<std::byte*>(bonds.data())});
+  }
+  if (readVelocities) {
+    result.velocities.resize(n);
+    expected.push_back(
+        {DataType::kFloat32, {n, 3}, reinterpret_cast<std::byte*>(result.velocities.data())});
+  }
+  if (readForce) {
+    result.bondForce.resize(m);
+    expected.push_back(
+        {DataType::kFloat32, {m}, reinterpret_cast<std::byte*>(result.bondForce.data())});
+  }
   std::vector<bool> arrived(slabs.size(), false);
   // The bonds are checked as their chunks arrive, while the bytes are still
   // in the cache, rather than in one pass over 2 MB after the last chunk.
@@ -242,7 +315,7 @@ Result<RemoteStep> RemoteDemFile::readStep(int step) {
         return want.data;
       },
       [&](std::size_t slab, std::uint64_t offset, std::uint64_t bytes) -> Status {
-        if (slab != 2) {
+        if (slab != bondsSlab) {
           return Status::ok();
         }
         // Chunks come in byte order; a bond split across two chunks is
@@ -255,8 +328,7 @@ Result<RemoteStep> RemoteDemFile::readStep(int step) {
         return checkBonds(fresh, m_particles, m_file, first);
       }));
   for (size_t i = 0; i < slabs.size(); ++i) {
-    const bool empty = i == 0 ? n == 0 : m == 0;
-    if (!arrived[i] && !empty) {
+    if (!arrived[i] && expected[i].elements() != 0) {
       return internalError(fmt::format("{}: {} did not arrive", m_file, slabs[i].dataset));
     }
   }

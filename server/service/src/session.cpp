@@ -25,6 +25,20 @@ cracks::ExtractOptions extractOptions(const pipeline::PipelineDescription& d) {
 }
 
 // Whether two descriptions need different extractors.
+// The arrays beyond positions and bond states that a description colours by
+// (docs/pipeline.md): a session reads them only then.
+source::ExtraArrays extraArraysFor(const pipeline::PipelineDescription& d) {
+  using pipeline::BondColourBy;
+  using pipeline::CrackColourBy;
+  source::ExtraArrays extras;
+  extras.velocities = d.particles.colourBy == pipeline::ParticleColourBy::kVelocity;
+  extras.bondForce =
+      d.cracks.colourBy == CrackColourBy::kForce || d.bonds.colourBy == BondColourBy::kForce;
+  extras.breakStep = d.cracks.colourBy == CrackColourBy::kBreakStep ||
+                     d.bonds.colourBy == BondColourBy::kBreakStep;
+  return extras;
+}
+
 bool sameExtraction(const pipeline::PipelineDescription& a,
                     const pipeline::PipelineDescription& b) {
   return a.file == b.file && a.cracks.method == b.cracks.method &&
@@ -92,6 +106,7 @@ struct Session::Worker {
     if ((*source)->stepCount() < 1) {
       return failedPrecondition(fmt::format("{}: the file has no steps", d.file));
     }
+    CRACKVIS_RETURN_IF_ERROR((*source)->setExtraArrays(extraArraysFor(d)));
     auto newCache =
         std::make_unique<source::StepCache>(std::move(source).value(), session.m_limits.cacheSteps);
     auto first = newCache->get(0);
@@ -134,19 +149,23 @@ struct Session::Worker {
 
   // Extracts the current step's cracks and builds the scene.
   Status extractAndBuild(bool resetCamera) {
-    const auto& lattice = cache->source().lattice();
-    cracks::StepInput input{current->positions, current->bondState, lattice.radius, {}, {}};
+    const cracks::StepInput input = stepInput();
     const auto extractStart = Clock::now();
     CRACKVIS_RETURN_IF_ERROR(extractor->extract(input, mesh));
     stepTimings.extractMs = millisecondsSince(extractStart);
     return buildScene(resetCamera);
   }
 
+  // The current step as the extractor and the scene see it.
+  cracks::StepInput stepInput() const {
+    const source::StepSource& source = cache->source();
+    return {current->positions, current->bondState, source.lattice().radius, current->bondForce,
+            source.breakSteps()};
+  }
+
   Status buildScene(bool resetCamera) {
-    const auto& lattice = cache->source().lattice();
-    cracks::StepInput input{current->positions, current->bondState, lattice.radius, {}, {}};
-    render::SceneInput scene{&lattice, input, initial->positions,
-                             {},       &mesh, extractor->decomposition()};
+    render::SceneInput scene{&cache->source().lattice(), stepInput(), initial->positions,
+                             current->velocities,        &mesh,       extractor->decomposition()};
     const auto start = Clock::now();
     CRACKVIS_RETURN_IF_ERROR(renderer->setScene(description, scene, resetCamera));
     stepTimings.sceneMs = millisecondsSince(start);
@@ -280,7 +299,11 @@ struct Session::Worker {
     const bool newFile = next.file != description.file;
     const bool newExtractor = !sameExtraction(next, description);
     const bool stepChanged = next.step != description.step;
-    if (newFile) {
+    // Colouring by another array reads the file anew with it (rare: a menu
+    // choice), so that the step cache never mixes steps with and without it.
+    const bool reopen = newFile || extraArraysFor(next) != extraArraysFor(description);
+    const int shown = current ? current->index : -1;
+    if (reopen) {
       // The old file stays in force if the new one cannot be opened.
       auto previous = std::move(cache);
       auto previousGraph = std::move(graph);
@@ -296,7 +319,7 @@ struct Session::Worker {
       current.reset();
     }
     const int step = next.step < 0 ? stepCount() - 1 : static_cast<int>(next.step);
-    const int target = newFile || stepChanged ? step : current->index;
+    const int target = newFile || stepChanged ? step : shown;
     CRACKVIS_RETURN_IF_ERROR(source::checkStepInRange(next.file, target, stepCount()));
     CRACKVIS_RETURN_IF_ERROR(ensureRenderer(next.view.width, next.view.height));
     const bool cameraGiven =
@@ -307,7 +330,7 @@ struct Session::Worker {
     if (newExtractor || !extractor) {
       makeExtractor(description);
     }
-    if (newFile || target != current->index) {
+    if (reopen || target != shown) {
       CRACKVIS_RETURN_IF_ERROR(showStep(target));
     } else if (newExtractor) {
       CRACKVIS_RETURN_IF_ERROR(extractAndBuild(false));

@@ -37,11 +37,25 @@ class RemoteSource final : public StepSource {
   const std::string& file() const override { return m_remote.file(); }
   const dem::Lattice& lattice() const override { return m_lattice; }
   int stepCount() const override { return m_remote.stepCount(); }
+  const std::vector<std::int32_t>& breakSteps() const override { return m_breakSteps; }
+
+  Status setExtraArrays(const ExtraArrays& extras) override {
+    m_extras = {extras.velocities, extras.bondForce};
+    m_breakSteps.clear();
+    if (extras.breakStep) {
+      auto breakSteps = m_remote.breakSteps();
+      if (!breakSteps) {
+        return breakSteps.status();
+      }
+      m_breakSteps = std::move(breakSteps).value();
+    }
+    return Status::ok();
+  }
 
   Result<SourceStep> read(int step) override {
     CRACKVIS_RETURN_IF_ERROR(checkStepInRange(file(), step, stepCount()));
     const auto start = Clock::now();
-    auto remote = m_remote.readStep(step);
+    auto remote = m_remote.readStep(step, m_extras);
     if (!remote) {
       return remote.status();
     }
@@ -50,6 +64,8 @@ class RemoteSource final : public StepSource {
     out.time = remote->time;
     out.positions = std::move(remote->positions);
     out.bondState = std::move(remote->bondState);
+    out.velocities = std::move(remote->velocities);
+    out.bondForce = std::move(remote->bondForce);
     out.loadMs = millisecondsSince(start);
     return out;
   }
@@ -57,6 +73,8 @@ class RemoteSource final : public StepSource {
  private:
   dataservice::RemoteDemFile m_remote;
   dem::Lattice m_lattice;
+  dataservice::StepExtras m_extras;
+  std::vector<std::int32_t> m_breakSteps;
 };
 
 class LocalSource final : public StepSource {
@@ -76,6 +94,20 @@ class LocalSource final : public StepSource {
   const std::string& file() const override { return m_path; }
   const dem::Lattice& lattice() const override { return m_lattice; }
   int stepCount() const override { return m_reader.stepCount(); }
+  const std::vector<std::int32_t>& breakSteps() const override { return m_breakSteps; }
+
+  Status setExtraArrays(const ExtraArrays& extras) override {
+    m_extras = extras;
+    m_breakSteps.clear();
+    if (extras.breakStep) {
+      auto breakSteps = m_reader.readBreakSteps();
+      if (!breakSteps) {
+        return breakSteps.status();
+      }
+      m_breakSteps = std::move(breakSteps).value();
+    }
+    return Status::ok();
+  }
 
   Result<SourceStep> read(int step) override {
     CRACKVIS_RETURN_IF_ERROR(checkStepInRange(file(), step, stepCount()));
@@ -89,6 +121,13 @@ class LocalSource final : public StepSource {
     out.time = state->time;
     out.positions = std::move(state->positions);
     out.bondState = std::move(state->bondState);
+    // The local reader reads them anyway; kept only when the view uses them.
+    if (m_extras.velocities) {
+      out.velocities = std::move(state->velocities);
+    }
+    if (m_extras.bondForce) {
+      out.bondForce = std::move(state->bondForce);
+    }
     out.loadMs = millisecondsSince(start);
     return out;
   }
@@ -97,6 +136,8 @@ class LocalSource final : public StepSource {
   std::string m_path;
   dem::DemFileReader m_reader;
   dem::Lattice m_lattice;
+  ExtraArrays m_extras;
+  std::vector<std::int32_t> m_breakSteps;
 };
 
 }  // namespace

@@ -4,9 +4,12 @@
 // open() describes the file once (one round trip) and checks that it is
 // crackvis-dem v1 with the expected dtypes and shapes. The bond list is read
 // once, with the first step asked for, and kept; each further step is one
-// Read of its positions and bond states. Not thread-safe: one per session.
+// Read of its positions and bond states, plus the optional arrays a view
+// colours by (velocities, bond forces) when asked for. Not thread-safe: one
+// per session.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -24,6 +27,16 @@ struct RemoteStep {
   double time = 0.0;
   std::vector<dem::Vec3> positions;     // [N]
   std::vector<std::uint8_t> bondState;  // [M], dem::BondState values
+  // Only when asked for and the step has them (crackvis-dem: optional).
+  std::vector<std::array<float, 3>> velocities;  // [N], m/s
+  std::vector<float> bondForce;                  // [M], N
+};
+
+// The optional per-step arrays readStep should bring along.
+struct StepExtras {
+  bool velocities = false;
+  bool bondForce = false;
+  friend bool operator==(const StepExtras&, const StepExtras&) = default;
 };
 
 class RemoteDemFile {
@@ -45,8 +58,12 @@ class RemoteDemFile {
   Result<std::vector<double>> radii() const;
 
   // Positions and bond states of a step in one Read (with the bond list in
-  // the same call when it has not been read yet).
-  Result<RemoteStep> readStep(int step);
+  // the same call when it has not been read yet, and the `extras` the step
+  // has; one it lacks stays empty).
+  Result<RemoteStep> readStep(int step, StepExtras extras = {});
+  // /bonds/break_step: the first step at which each bond broke, -1 if never
+  // (as the file has it now: a writer updates it); empty if the file has none.
+  Result<std::vector<std::int32_t>> breakSteps() const;
   Result<std::vector<dem::Vec3>> positions(int step) const;
   // Particles [first, first + count) of a step: a spatial block's share.
   Result<std::vector<dem::Vec3>> positions(int step, std::int64_t first, std::int64_t count) const;

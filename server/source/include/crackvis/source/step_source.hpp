@@ -1,12 +1,14 @@
 // Where a render session's data comes from: the lattice once, then the
-// positions and bond states of one step at a time. RemoteSource reads through
-// crackvis-data with partial reads only (the bond list and radii once per
-// file, then one Read per step of its positions and bond states); LocalSource
+// positions and bond states of one step at a time (with velocities, bond
+// forces, break steps only when the view colours by them). RemoteSource reads
+// through crackvis-data with partial reads only (the bond list and radii once
+// per file, then one Read per step of what it needs); LocalSource
 // reads a file beside the process (crackvis-render --snapshot --data-root,
 // tests). StepCache keeps recent steps and prefetches the next one on its own
 // thread while a session plays.
 #pragma once
 
+#include <array>
 #include <condition_variable>
 #include <cstdint>
 #include <list>
@@ -28,7 +30,19 @@ struct SourceStep {
   double time = 0.0;
   std::vector<dem::Vec3> positions;     // [N]
   std::vector<std::uint8_t> bondState;  // [M]
-  double loadMs = 0.0;                  // time the read took
+  // Only what the view colours by (ExtraArrays) and the file has; else empty.
+  std::vector<std::array<float, 3>> velocities;  // [N]
+  std::vector<float> bondForce;                  // [M]
+  double loadMs = 0.0;                           // time the read took
+};
+
+// The arrays beyond positions and bond states that a view colours by: read
+// only when it does, so that the usual view moves the least data.
+struct ExtraArrays {
+  bool velocities = false;  // per step, [N, 3]
+  bool bondForce = false;   // per step, [M]
+  bool breakStep = false;   // per file, [M]
+  friend bool operator==(const ExtraArrays&, const ExtraArrays&) = default;
 };
 
 // A step from the cache: the data and what getting it cost now.
@@ -45,6 +59,11 @@ class StepSource {
   // Radii and bonds (strengths may be empty: a view does not need them).
   virtual const dem::Lattice& lattice() const = 0;
   virtual int stepCount() const = 0;
+  // Which extra arrays read() brings from now on; reads the break steps (once)
+  // when they are asked for. Called before the source goes into a StepCache.
+  virtual Status setExtraArrays(const ExtraArrays& extras) = 0;
+  // /bonds/break_step when asked for and the file has it; else empty.
+  virtual const std::vector<std::int32_t>& breakSteps() const = 0;
   // OUT_OF_RANGE naming the file's steps for a step outside them.
   virtual Result<SourceStep> read(int step) = 0;
 };
