@@ -119,6 +119,14 @@ int newToken() {
   return kExitOk;
 }
 
+std::string hdf5Version() {
+  unsigned major = 0;
+  unsigned minor = 0;
+  unsigned release = 0;
+  H5get_libversion(&major, &minor, &release);
+  return fmt::format("{}.{}.{}", major, minor, release);
+}
+
 int serve(const ServerConfig& config) {
   const crackvis::TerminationSignals signals;
 
@@ -126,14 +134,9 @@ int serve(const ServerConfig& config) {
   if (!server) {
     return fail(server.status().message());
   }
-  unsigned hdf5Major = 0;
-  unsigned hdf5Minor = 0;
-  unsigned hdf5Release = 0;
-  H5get_libversion(&hdf5Major, &hdf5Minor, &hdf5Release);
-  crackvis::log::event(stdout, "crackvis-data", "start",
-                       {{"version", CRACKVIS_VERSION},
-                        {"grpc", grpc::Version()},
-                        {"hdf5", fmt::format("{}.{}.{}", hdf5Major, hdf5Minor, hdf5Release)}});
+  crackvis::log::event(
+      stdout, "crackvis-data", "start",
+      {{"version", CRACKVIS_VERSION}, {"grpc", grpc::Version()}, {"hdf5", hdf5Version()}});
   crackvis::log::event(stdout, "crackvis-data", "serving",
                        {{"address", (*server)->address()},
                         {"root", config.dataRoot},
@@ -158,6 +161,8 @@ int main(int argc, char** argv) {
       "plus grpc.health.v1 and server reflection. Flags override the --config file.\n"
       "Certificates: certs/make-dev-certs.sh; see docs/security.md and docs/protocol.md.",
       "crackvis-data"};
+  app.set_version_flag("--version", fmt::format("crackvis-data {} (gRPC {}, HDF5 {})",
+                                                CRACKVIS_VERSION, grpc::Version(), hdf5Version()));
   Flags flags;
   app.add_option("-c,--config", flags.config,
                  "JSON configuration file (listen, data_root, tls, limits, users, access_log, "

@@ -178,6 +178,10 @@ int main(int argc, char** argv) {
       "render off screen under EGL (Mesa llvmpipe or an NVIDIA GPU) and stream H.264.\n"
       "Certificates: certs/make-dev-certs.sh --client crackvis-render; docs/protocol.md.",
       "crackvis-render"};
+  // The rendering backend needs an EGL context: it is printed at start-up.
+  app.set_version_flag("--version",
+                       fmt::format("crackvis-render {} (gRPC {}, libavcodec {})", CRACKVIS_VERSION,
+                                   grpc::Version(), crackvis::encode::codecLibraryVersion()));
   // The configuration file first: options bound to its values below are
   // overwritten only by the flags actually given (CLI11 assigns no default).
   RenderServerConfig config;

@@ -173,6 +173,17 @@ TEST_CASE("readiness reaches systemd's notify socket, a path or an abstract name
   CHECK(unsetenv("NOTIFY_SOCKET") == 0);
 }
 
+TEST_CASE("the services and the CLI say their versions", "[deploy]") {
+  for (const std::string program : {CRACKVIS_DATA, CRACKVIS_RENDER, CRACKVIS_CLI}) {
+    const auto result = runProcess({program, "--version"});
+    INFO(program << ": " << result.out << result.err);
+    CHECK(result.exitCode == 0);
+    CHECK_THAT(result.out, Catch::Contains(" 0.") && Catch::StartsWith("crackvis"));
+  }
+  CHECK_THAT(runProcess({CRACKVIS_DATA, "--version"}).out, Catch::Contains("HDF5 1."));
+  CHECK_THAT(runProcess({CRACKVIS_RENDER, "--version"}).out, Catch::Contains("libavcodec "));
+}
+
 TEST_CASE("both services run from config files, answer health and stop on SIGTERM",
           "[deploy][integration]") {
   TempDir dir;

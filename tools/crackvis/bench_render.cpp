@@ -361,9 +361,9 @@ Result<Report> run(const RenderBenchOptions& options) {
         {pictures.front().width, pictures.front().height, d.stream.fps, d.stream.bitrate});
     if (encoder) {
       for (std::size_t k = 0; k < pictures.size(); ++k) {
-        const auto start = Clock::now();
+        const auto encodeStart = Clock::now();
         if ((*encoder)->encode(pictures[k], k == 0)) {
-          report.isolatedEncodeMs.push_back(ms(Clock::now() - start));
+          report.isolatedEncodeMs.push_back(ms(Clock::now() - encodeStart));
         }
       }
     }

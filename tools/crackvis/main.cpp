@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
       "Data sets are HDF5 files in the crackvis-dem layout (docs/data-format.md).",
       "crackvis"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "crackvis 0.1.0");
+  app.set_version_flag("--version", std::string("crackvis ") + CRACKVIS_VERSION);
   auto* bench = app.add_subcommand(
       "bench", "Benchmarks that print ratios against a baseline measured in the same run.");
   bench->require_subcommand(1);

@@ -225,6 +225,12 @@ double psnr(const RgbFrame& a, const RgbFrame& b) {
   return mse == 0.0 ? 99.0 : 10.0 * std::log10(255.0 * 255.0 / mse);
 }
 
+std::string codecLibraryVersion() {
+  const unsigned version = avcodec_version();
+  return fmt::format("{}.{}.{}", AV_VERSION_MAJOR(version), AV_VERSION_MINOR(version),
+                     AV_VERSION_MICRO(version));
+}
+
 void limitCodecLogsToWarnings() {
   av_log_set_level(AV_LOG_WARNING);
 }

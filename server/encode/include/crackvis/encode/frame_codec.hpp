@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <crackvis/common/status.hpp>
@@ -74,5 +75,8 @@ double psnr(const RgbFrame& a, const RgbFrame& b);
 // level when each stream closes: unstructured lines a service's log should
 // not carry. Process-wide; warnings and errors still go to stderr.
 void limitCodecLogsToWarnings();
+
+// libavcodec's version, as FFmpeg prints it ("59.37.100").
+std::string codecLibraryVersion();
 
 }  // namespace crackvis::encode
