@@ -289,6 +289,7 @@ TEST_CASE("a session reads the arrays its view colours by: break step, bond forc
   CHECK(viridisPixels(stream.frames().back().picture) < 20);
   // A replaced pipeline that colours by another array; the frame after it.
   auto colouredBy = [&](const pipeline::PipelineDescription& view) {
+    const std::size_t errorsBefore = stream.errors().size();
     v1::ClientEvent replace;
     replace.mutable_replace_pipeline()->set_pipeline_xml(pipeline::toXml(view));
     const auto event = stream.send(replace);
@@ -296,7 +297,7 @@ TEST_CASE("a session reads the arrays its view colours by: break step, bond forc
       return frames.back().frame.last_event_id() == event && frames.back().frame.full_resolution();
     }));
     INFO(pipeline::toXml(view));
-    CHECK(stream.errors().empty());
+    CHECK(stream.errors().size() == errorsBefore);
     return stream.frames().back().picture;
   };
   // Without the arrays these were drawn in the solid colour (the red crack
@@ -320,6 +321,24 @@ TEST_CASE("a session reads the arrays its view colours by: break step, bond forc
   CHECK(byVelocity > 100);
   view.particles.colourBy = pipeline::ParticleColourBy::kSolid;
   CHECK(viridisPixels(colouredBy(view)) < 20);
+
+  // A replacement that fails after the file was re-read for it (the step is
+  // not there) is an event error and leaves the session as it was: it goes on
+  // streaming the previous view, not a half-switched one.
+  auto missingStep = view;
+  missingStep.particles.colourBy = pipeline::ParticleColourBy::kVelocity;
+  missingStep.step = 1'000'000;
+  v1::ClientEvent replace;
+  replace.mutable_replace_pipeline()->set_pipeline_xml(pipeline::toXml(missingStep));
+  stream.send(replace);
+  REQUIRE(stream.waitFor([](const auto&, const auto& errors) { return !errors.empty(); }));
+  CHECK(stream.errors().front().code() == static_cast<int>(grpc::StatusCode::OUT_OF_RANGE));
+  const auto event = stream.rotate(0.02);
+  REQUIRE(stream.waitFor([&](const auto& frames, const auto&) {
+    return frames.back().frame.last_event_id() == event && frames.back().frame.full_resolution();
+  }));
+  CHECK(viridisPixels(stream.frames().back().picture) < 20);  // solid grey particles still
+  CHECK(colouredBy(view).rgb.size() > 0);  // and it takes the next replacement
 }
 
 TEST_CASE("a session steps and plays through the fracture", "[render][service][integration]") {

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <crackvis/common/log.hpp>
 #include <crackvis/cracks/bond_graph.hpp>
 #include <crackvis/cracks/extractor.hpp>
 #include <crackvis/service/session.hpp>
@@ -294,8 +295,31 @@ struct Session::Worker {
     session.notify({event.id, Status::ok(), state()});
   }
 
+  // What a replacement may change, kept so that one failing part-way (a new
+  // file that opens but lacks the step, a read that fails) leaves the session
+  // showing what it showed rather than half-switched.
+  struct Shown {
+    std::unique_ptr<source::StepCache> cache;           // set only when replaced
+    std::unique_ptr<cracks::BondGraph> graph;           // set only when replaced
+    std::unique_ptr<cracks::CrackExtractor> extractor;  // set only when replaced
+    std::shared_ptr<const source::SourceStep> initial;
+    std::shared_ptr<const source::SourceStep> current;
+    pipeline::PipelineDescription description;
+    int width = 0;
+    int height = 0;
+  };
+
   Status replaceDescription(pipeline::PipelineDescription next) {
     CRACKVIS_RETURN_IF_ERROR(checkViewSize(next.view.width, next.view.height, session.m_limits));
+    Shown before{nullptr, nullptr, nullptr, initial, current, description, width, height};
+    Status status = applyDescription(std::move(next), before);
+    if (!status) {
+      restore(std::move(before));
+    }
+    return status;
+  }
+
+  Status applyDescription(pipeline::PipelineDescription next, Shown& before) {
     const bool newFile = next.file != description.file;
     const bool newExtractor = !sameExtraction(next, description);
     const bool stepChanged = next.step != description.step;
@@ -304,18 +328,10 @@ struct Session::Worker {
     const bool reopen = newFile || extraArraysFor(next) != extraArraysFor(description);
     const int shown = current ? current->index : -1;
     if (reopen) {
-      // The old file stays in force if the new one cannot be opened.
-      auto previous = std::move(cache);
-      auto previousGraph = std::move(graph);
-      auto previousExtractor = std::move(extractor);
-      auto previousInitial = initial;
-      if (Status status = openFile(next); !status) {
-        cache = std::move(previous);
-        graph = std::move(previousGraph);
-        extractor = std::move(previousExtractor);
-        initial = previousInitial;
-        return status;
-      }
+      before.cache = std::move(cache);
+      before.graph = std::move(graph);
+      before.extractor = std::move(extractor);
+      CRACKVIS_RETURN_IF_ERROR(openFile(next));
       current.reset();
     }
     const int step = next.step < 0 ? stepCount() - 1 : static_cast<int>(next.step);
@@ -328,6 +344,9 @@ struct Session::Worker {
     width = description.view.width;
     height = description.view.height;
     if (newExtractor || !extractor) {
+      if (extractor) {
+        before.extractor = std::move(extractor);
+      }
       makeExtractor(description);
     }
     if (reopen || target != shown) {
@@ -343,6 +362,34 @@ struct Session::Worker {
       renderer->moveCamera(render::CameraMove::kReset, 0, 0);
     }
     return Status::ok();
+  }
+
+  // Back to `before` after a failed replacement; the scene is rebuilt from it.
+  void restore(Shown before) {
+    if (before.cache) {
+      extractor.reset();  // may refer to the graph replaced below
+      cache = std::move(before.cache);
+      graph = std::move(before.graph);
+    }
+    if (before.extractor) {
+      extractor = std::move(before.extractor);
+    }
+    initial = std::move(before.initial);
+    current = std::move(before.current);
+    description = std::move(before.description);
+    width = before.width;
+    height = before.height;
+    if (!extractor) {
+      makeExtractor(description);
+    }
+    if (current) {
+      // Same data as before the replacement: a failure here would be new.
+      if (Status status = extractAndBuild(false); !status) {
+        log::event(stderr, "crackvis-render", "restore_failed",
+                   {{"session", session.m_id}, {"detail", status.message()}});
+      }
+    }
+    dirty = true;
   }
 
   void handle(const SessionEvent& event, const StillEvent&) {
