@@ -133,19 +133,43 @@ struct Session::Worker {
       return Status::ok();
     }
     std::optional<pipeline::CameraDescription> camera;
+    int oldWidth = 0;
+    int oldHeight = 0;
     if (renderer) {
       camera = renderer->camera();
+      oldWidth = renderer->capacityWidth();
+      oldHeight = renderer->capacityHeight();
     }
     renderer.reset();  // one GL context per session at a time
     auto created = render::SceneRenderer::create(w, h);
     if (!created) {
+      // Back to a context of the old size, so that the session keeps its view
+      // (without one, frames and camera moves answer "no rendering context").
+      if (oldWidth > 0) {
+        if (auto again = render::SceneRenderer::create(oldWidth, oldHeight)) {
+          renderer = std::move(again).value();
+          (void)restoreScene(camera);  // the creation error is the one to report
+        }
+      }
       return created.status();
     }
     renderer = std::move(created).value();
+    return restoreScene(camera);
+  }
+
+  Status restoreScene(const std::optional<pipeline::CameraDescription>& camera) {
     if (camera) {
       renderer->setCamera(*camera);
     }
     return current ? buildScene(false) : Status::ok();
+  }
+
+  Status needRenderer() const {
+    if (!renderer) {
+      return internalError(
+          fmt::format("session {}: no rendering context (creating one failed)", session.m_id));
+    }
+    return Status::ok();
   }
 
   // Extracts the current step's cracks and builds the scene.
@@ -168,6 +192,7 @@ struct Session::Worker {
     render::SceneInput scene{&cache->source().lattice(), stepInput(), initial->positions,
                              current->velocities,        &mesh,       extractor->decomposition()};
     const auto start = Clock::now();
+    CRACKVIS_RETURN_IF_ERROR(needRenderer());
     CRACKVIS_RETURN_IF_ERROR(renderer->setScene(description, scene, resetCamera));
     stepTimings.sceneMs = millisecondsSince(start);
     dirty = true;
@@ -232,6 +257,10 @@ struct Session::Worker {
   }
 
   void handle(const SessionEvent& event, const CameraEvent& camera) {
+    if (Status status = needRenderer(); !status) {
+      session.notify({event.id, status, std::nullopt});
+      return;
+    }
     renderer->moveCamera(camera.move, camera.dx, camera.dy);
     interacted(event);
   }
@@ -461,7 +490,11 @@ struct Session::Worker {
     const int w = std::max(16, width / factor);
     const int h = std::max(16, height / factor);
     const auto start = Clock::now();
-    if (Status status = renderer->renderFrame(w, h, image, factor > 1); !status) {
+    Status rendered = needRenderer();
+    if (rendered) {
+      rendered = renderer->renderFrame(w, h, image, factor > 1);
+    }
+    if (Status status = rendered; !status) {
       session.notify({lastEventId, status, std::nullopt});
       dirty = false;
       return;
