@@ -49,9 +49,6 @@ int main(int argc, char** argv) {
   commands.push_back(addBenchRenderCommand(*bench));
   commands.push_back(addSimCommand(app));
   commands.push_back(addHealthCommand(app));
-  if (bench->get_subcommands({}).empty()) {
-    app.remove_subcommand(bench);  // no benchmark has landed yet
-  }
 
   try {
     app.parse(argc, argv);
