@@ -30,6 +30,8 @@ readonly PACKAGES=(
   qt6-base-dev qt6-base-dev-tools libqt6opengl6-dev xvfb
   # tests and benchmark plots
   catch2 gnuplot-nox
+  # fuzzing (tests/fuzz/): clang with libFuzzer and the sanitizer runtimes
+  clang libclang-rt-14-dev
 )
 
 # What crackvis-data, crackvis-render and the crackvis CLI load when they run

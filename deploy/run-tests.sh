@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds crackvis (release preset) and runs the
-# whole test suite; ends with ctest's summary line. Used by .ci/run.
+# Installs what is missing, builds crackvis (release preset), runs the whole
+# test suite, then a short fuzzing run (tests/fuzz/run-short.sh: each
+# libFuzzer target for FUZZ_SECONDS, default 60; FUZZ_SECONDS=0 skips it).
+# Used by .ci/run.
 #
-#   deploy/run-tests.sh            # release build + tests
+#   deploy/run-tests.sh            # release build + tests + short fuzzing
 #   PRESET=asan deploy/run-tests.sh  # the same under ASan + UBSan
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,3 +14,6 @@ bash deploy/install-deps.sh
 cmake --preset "$preset"
 cmake --build --preset "$preset"
 ctest --preset "$preset"
+if [[ "${FUZZ_SECONDS:-60}" != 0 ]]; then
+  bash tests/fuzz/run-short.sh
+fi

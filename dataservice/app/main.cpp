@@ -45,7 +45,8 @@ struct Flags {
   std::optional<double> maxCallSeconds;
 };
 
-// The configuration file first, then every flag given on top of it.
+// The configuration file first, then every flag given on top of it, then
+// the checks.
 crackvis::Result<ServerConfig> configure(const Flags& flags, const CLI::App& app) {
   ServerConfig config;
   if (!flags.config.empty()) {
@@ -92,9 +93,8 @@ crackvis::Result<ServerConfig> configure(const Flags& flags, const CLI::App& app
   if (flags.maxCallSeconds) {
     config.limits.maxCallSeconds = *flags.maxCallSeconds;
   }
-  if (config.dataRoot.empty()) {
-    return crackvis::invalidArgument("no data root: give --root DIR or data_root in --config");
-  }
+  // Checked once merged, so a flag and a file value meet the same rules.
+  CRACKVIS_RETURN_IF_ERROR(crackvis::dataservice::validateServerConfig(config));
   return config;
 }
 

@@ -5,7 +5,9 @@
 // server: for scripts and tests). docs/protocol.md describes the service.
 #include <csignal>
 #include <cstdio>
+#include <exception>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -35,12 +37,14 @@ int fail(const std::string& message) {
   return kExitFailure;
 }
 
+constexpr std::int64_t kDescriptionStep = -2;  // --step not given: the description's
+
 struct Flags {
   std::string usersFrom;
   std::string snapshot;
   std::string output;
   std::string dataRoot;
-  std::int64_t step = -2;  // -2: the description's
+  std::int64_t step = kDescriptionStep;
   int width = 0;
   int height = 0;
 };
@@ -66,7 +70,7 @@ int snapshot(const Flags& flags, const RenderServerConfig& config) {
   if (!description) {
     return fail(fmt::format("{}: {}", flags.snapshot, description.status().message()));
   }
-  if (flags.step != -2) {
+  if (flags.step != kDescriptionStep) {
     description->step = flags.step;
   }
   if (flags.width > 0) {
@@ -114,6 +118,17 @@ int snapshot(const Flags& flags, const RenderServerConfig& config) {
   std::printf("wrote %s: %s step %d, %dx%d, %s\n", flags.output.c_str(), description->file.c_str(),
               step, image->width, image->height, (*session)->info().backend.c_str());
   return kExitOk;
+}
+
+// A bug's exception ends the process with one line and status 1, not an
+// abort: expected failures are Status values and never get here.
+template <typename Run>
+int runGuarded(Run run) {
+  try {
+    return run();
+  } catch (const std::exception& e) {
+    return fail(fmt::format("internal error: {}", e.what()));
+  }
 }
 
 int serve(const RenderServerConfig& config) {
@@ -223,20 +238,16 @@ int main(int argc, char** argv) {
   app.add_flag("--data-insecure", config.data.insecure,
                "crackvis-data runs with --insecure (plaintext, loopback)");
   app.add_option("--max-sessions", config.maxSessions, "sessions open at once")
-      ->capture_default_str()
-      ->check(CLI::Range(1, 256));
+      ->capture_default_str();
   app.add_option("--session-grace", config.sessionGraceSeconds,
                  "seconds a session without a stream is kept for a reconnect")
-      ->capture_default_str()
-      ->check(CLI::Range(0.1, 86400.0));
+      ->capture_default_str();
   app.add_option("--refine-after-ms", config.limits.refineAfterMs,
                  "full-resolution frame this long after the last event")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 5000.0));
+      ->capture_default_str();
   app.add_option("--interactive-frame-ms", config.limits.interactiveFrameMs,
                  "render-time budget of a reduced-resolution frame while interacting")
-      ->capture_default_str()
-      ->check(CLI::Range(1.0, 1000.0));
+      ->capture_default_str();
   app.add_option("--access-log", config.accessLog, "file for access lines; - stderr; empty none")
       ->capture_default_str();
   auto* snapshotOption =
@@ -265,11 +276,23 @@ int main(int argc, char** argv) {
     }
     config.users = users->users;
   }
+  // Checked once merged, so a flag and a file value meet the same rules.
+  if (Status valid = crackvis::service::validateRenderServerConfig(config); !valid) {
+    return fail(valid.message());
+  }
   if (!flags.snapshot.empty()) {
     if (flags.output.empty()) {
       return fail("--snapshot needs -o OUT.png");
     }
-    return snapshot(flags, config);
+    if (flags.step != kDescriptionStep) {
+      // Steps are int indices: a wider value must not wrap.
+      if (Status valid = crackvis::dataservice::checkSetting<std::int64_t>(
+              {"--step", ""}, flags.step, -1, std::numeric_limits<int>::max());
+          !valid) {
+        return fail(valid.message());
+      }
+    }
+    return runGuarded([&] { return snapshot(flags, config); });
   }
-  return serve(config);
+  return runGuarded([&] { return serve(config); });
 }

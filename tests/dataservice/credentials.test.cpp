@@ -94,7 +94,6 @@ TEST_CASE("The configuration file is read strictly", "[dataservice]") {
            {"{", "not valid JSON"},
            {R"({"limit": {}})", "unknown key 'limit'"},
            {R"({"limits": {"max_read_byte": 1}})", "unknown key 'max_read_byte'"},
-           {R"({"limits": {"max_concurrent_streams": 0}})", "must be positive"},
            {R"({"listen": 7})", "'listen' has the wrong type"},
            {R"({"users": [{"name": "x"}]})", "needs token_hash, password_hash or certificate_name"},
            {R"({"users": [{"name": "a b", "token_hash": "h"}]})", "without spaces"},
@@ -106,6 +105,18 @@ TEST_CASE("The configuration file is read strictly", "[dataservice]") {
     CHECK_THAT(parsed.status().message(),
                Catch::StartsWith("test.json") && Catch::Contains(bad.message));
   }
+}
+
+TEST_CASE("Limits are checked on the merged configuration", "[dataservice]") {
+  // The file alone may hold a value a flag then replaces.
+  auto parsed = parseServerConfig(
+      R"({"data_root": "/srv", "limits": {"max_concurrent_streams": 0}})", "test.json");
+  REQUIRE(parsed.isOk());
+  const Status refused = validateServerConfig(*parsed);
+  CHECK(refused.code() == StatusCode::kInvalidArgument);
+  CHECK_THAT(refused.message(), Catch::StartsWith("--max-streams must be at least 1, got 0"));
+  parsed->limits.maxConcurrentStreams = 4;  // as --max-streams 4 does
+  CHECK(validateServerConfig(*parsed).isOk());
 }
 
 TEST_CASE("Listen addresses and loopback", "[dataservice]") {

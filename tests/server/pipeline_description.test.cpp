@@ -3,6 +3,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "support/process.hpp"
+#include "support/temp_dir.hpp"
 #include <crackvis/pipeline/pipeline_description.hpp>
 
 using namespace crackvis;
@@ -162,4 +164,186 @@ TEST_CASE("an oversized document is refused before parsing", "[pipeline][validat
   auto parsed = parsePipeline(huge);
   REQUIRE_FALSE(parsed.isOk());
   CHECK_THAT(parsed.status().message(), Catch::Contains("the limit is 1048576"));
+}
+
+namespace {
+
+// A document whose line 4 is `line` (after <data> on line 3).
+std::string withLine(const std::string& line) {
+  return document("  <data file=\"a.h5\"/>\n" + line + "\n");
+}
+
+// Every numeric attribute with values the schema's types admit or that only
+// the conversions catch: beyond a double (1e-400, 1e309), beyond 64 or 32
+// bits, NaN and infinities, zero directions. Each must be refused naming
+// the line, the element and the attribute, never thrown.
+struct BadAttribute {
+  const char* name;
+  std::string xml;
+  std::string where;  // "line N, element <e>"
+  std::string attribute;
+  std::string value;
+};
+
+std::vector<BadAttribute> badAttributes() {
+  return {
+      {"step beyond 64 bits", document("  <data file=\"a.h5\" step=\"99999999999999999999\"/>\n"),
+       "line 3, element <data>", "step", "99999999999999999999"},
+      {"step beyond an int", document("  <data file=\"a.h5\" step=\"2147483648\"/>\n"),
+       "line 3, element <data>", "step", "2147483648"},
+      {"step not an integer", document("  <data file=\"a.h5\" step=\"1.5\"/>\n"),
+       "line 3, element <data>", "step", "1.5"},
+      {"particle opacity below a double", withLine("  <particles opacity=\"1e-400\"/>"),
+       "line 4, element <particles>", "opacity", "1e-400"},
+      {"particle opacity NaN", withLine("  <particles opacity=\"NaN\"/>"),
+       "line 4, element <particles>", "opacity", "NaN"},
+      {"particle opacity negative", withLine("  <particles opacity=\"-0.5\"/>"),
+       "line 4, element <particles>", "opacity", "-0.5"},
+      {"clip origin beyond a double",
+       withLine("  <particles>\n    <clip origin=\"1e309 0 0\" normal=\"0 1 0\"/>\n  </particles>"),
+       "line 5, element <clip>", "origin", "1e309"},
+      {"clip origin infinite",
+       withLine("  <particles>\n    <clip origin=\"0 INF 0\" normal=\"0 1 0\"/>\n  </particles>"),
+       "line 5, element <clip>", "origin", "INF"},
+      {"clip normal NaN",
+       withLine("  <particles>\n    <clip origin=\"0 0 0\" normal=\"0 NaN 1\"/>\n  </particles>"),
+       "line 5, element <clip>", "normal", "NaN"},
+      {"clip normal zero",
+       withLine("  <particles>\n    <clip origin=\"0 0 0\" normal=\"0 0 0\"/>\n  </particles>"),
+       "line 5, element <clip>", "normal", "zero vector"},
+      {"validation tolerance below a double",
+       withLine("  <cracks validation-tolerance=\"1e-400\"/>"), "line 4, element <cracks>",
+       "validation-tolerance", "1e-400"},
+      {"crack opacity infinite", withLine("  <cracks opacity=\"INF\"/>"),
+       "line 4, element <cracks>", "opacity", "INF"},
+      {"crack opacity NaN", withLine("  <cracks opacity=\"NaN\"/>"), "line 4, element <cracks>",
+       "opacity", "NaN"},
+      {"tube radius below a double", withLine("  <bonds tube-radius=\"1e-400\"/>"),
+       "line 4, element <bonds>", "tube-radius", "1e-400"},
+      {"tube radius zero", withLine("  <bonds tube-radius=\"0\"/>"), "line 4, element <bonds>",
+       "tube-radius", "0"},
+      {"tube radius NaN", withLine("  <bonds tube-radius=\"NaN\"/>"), "line 4, element <bonds>",
+       "tube-radius", "NaN"},
+      {"width beyond an int", withLine("  <view width=\"2147483648\"/>"), "line 4, element <view>",
+       "width", "2147483648"},
+      {"height negative", withLine("  <view height=\"-720\"/>"), "line 4, element <view>", "height",
+       "-720"},
+      {"height beyond 64 bits", withLine("  <view height=\"99999999999999999999\"/>"),
+       "line 4, element <view>", "height", "99999999999999999999"},
+      {"camera position beyond a double",
+       withLine("  <view>\n    <camera position=\"1 1e999 1\" focal-point=\"0 0 0\"/>\n  </view>"),
+       "line 5, element <camera>", "position", "1e999"},
+      {"camera focal point NaN",
+       withLine("  <view>\n    <camera position=\"1 1 1\" focal-point=\"NaN 0 0\"/>\n  </view>"),
+       "line 5, element <camera>", "focal-point", "NaN"},
+      {"camera focal point at the position",
+       withLine("  <view>\n    <camera position=\"1 1 1\" focal-point=\"1 1 1\"/>\n  </view>"),
+       "line 5, element <camera>", "focal-point", "equals the position"},
+      {"camera view-up zero",
+       withLine("  <view>\n    <camera position=\"1 1 1\" focal-point=\"0 0 0\" view-up=\"0 0 "
+                "0\"/>\n  </view>"),
+       "line 5, element <camera>", "view-up", "zero vector"},
+      {"camera view-up infinite",
+       withLine("  <view>\n    <camera position=\"1 1 1\" focal-point=\"0 0 0\" view-up=\"0 0 "
+                "-INF\"/>\n  </view>"),
+       "line 5, element <camera>", "view-up", "-INF"},
+      {"view angle below a double",
+       withLine("  <view>\n    <camera position=\"1 1 1\" focal-point=\"0 0 0\" "
+                "view-angle=\"1e-400\"/>\n  </view>"),
+       "line 5, element <camera>", "view-angle", "1e-400"},
+      {"view angle NaN",
+       withLine("  <view>\n    <camera position=\"1 1 1\" focal-point=\"0 0 0\" "
+                "view-angle=\"NaN\"/>\n  </view>"),
+       "line 5, element <camera>", "view-angle", "NaN"},
+      {"view angle 180",
+       withLine("  <view>\n    <camera position=\"1 1 1\" focal-point=\"0 0 0\" "
+                "view-angle=\"180\"/>\n  </view>"),
+       "line 5, element <camera>", "view-angle", "180"},
+      {"fps beyond 64 bits", withLine("  <stream fps=\"99999999999999999999\"/>"),
+       "line 4, element <stream>", "fps", "99999999999999999999"},
+      {"fps zero", withLine("  <stream fps=\"0\"/>"), "line 4, element <stream>", "fps", "0"},
+      {"bitrate beyond an int", withLine("  <stream bitrate=\"2147483648\"/>"),
+       "line 4, element <stream>", "bitrate", "2147483648"},
+      {"bitrate negative", withLine("  <stream bitrate=\"-4000000\"/>"), "line 4, element <stream>",
+       "bitrate", "-4000000"},
+  };
+}
+
+}  // namespace
+
+TEST_CASE("every numeric attribute is converted with range checks", "[pipeline][validation]") {
+  for (const BadAttribute& bad : badAttributes()) {
+    DYNAMIC_SECTION(bad.name) {
+      auto parsed = parsePipeline(bad.xml);
+      REQUIRE_FALSE(parsed.isOk());
+      CHECK(parsed.status().code() == StatusCode::kInvalidArgument);
+      const std::string& message = parsed.status().message();
+      CHECK_THAT(message, Catch::StartsWith("pipeline " + bad.where));
+      CHECK_THAT(message, Catch::Contains("attribute '" + bad.attribute + "'"));
+      CHECK_THAT(message, Catch::Contains(bad.value));
+      CHECK(message.find('\n') == std::string::npos);
+    }
+  }
+}
+
+TEST_CASE("numbers in every spelling the schema allows are read exactly",
+          "[pipeline][validation]") {
+  auto parsed = parsePipeline(document(
+      "  <data file=\"a.h5\" step=\"+2147483647\"/>\n"
+      "  <particles opacity=\" 5e-1 \">\n"
+      "    <clip origin=\"-0 1E2  3.\" normal=\"0 0 -4.9e-324\"/>\n  </particles>\n"
+      "  <cracks validation-tolerance=\"1\" opacity=\"0\"/>\n  <bonds tube-radius=\"1e-300\"/>\n"
+      "  <view width=\"16\" height=\"7680\">\n"
+      "    <camera position=\"1 2 3\" focal-point=\"0 0 0\" view-angle=\"179.5\"/>\n  </view>\n"
+      "  <stream fps=\"120\" bitrate=\"100000000\"/>\n"));
+  INFO(parsed.status().message());
+  REQUIRE(parsed.isOk());
+  CHECK(parsed->step == 2147483647);
+  CHECK(parsed->particles.opacity == 0.5);
+  REQUIRE(parsed->particles.clip.has_value());
+  CHECK(parsed->particles.clip->origin == Vec3{0, 100, 3});
+  CHECK(parsed->particles.clip->normal.z == -4.9e-324);
+  CHECK(parsed->cracks.validationTolerance == 1.0);
+  CHECK(parsed->bonds.tubeRadius == 1e-300);
+  CHECK(parsed->view.width == 16);
+  CHECK(parsed->view.height == 7680);
+  REQUIRE(parsed->view.camera.has_value());
+  CHECK(parsed->view.camera->viewAngle == 179.5);
+  CHECK(parsed->stream.fps == 120);
+  CHECK(parsed->stream.bitrate == 100'000'000);
+  // And back: toXml writes what parses to the same values.
+  auto again = parsePipeline(toXml(*parsed));
+  REQUIRE(again.isOk());
+  CHECK(*again == *parsed);
+}
+
+TEST_CASE("a long bad value is echoed shortened", "[pipeline][validation]") {
+  const std::string digits(5000, '9');
+  auto parsed = parsePipeline(document("  <data file=\"a.h5\" step=\"" + digits + "\"/>\n"));
+  REQUIRE_FALSE(parsed.isOk());
+  CHECK_THAT(parsed.status().message(), Catch::Contains("attribute 'step'"));
+  CHECK(parsed.status().message().size() < 400);
+}
+
+TEST_CASE("crackvis-render --snapshot with a bad description exits 1 with one line",
+          "[pipeline][validation][cli]") {
+  using crackvis::testing::lines;
+  using crackvis::testing::runProcess;
+  crackvis::testing::TempDir dir;
+  for (const BadAttribute& bad : badAttributes()) {
+    DYNAMIC_SECTION(bad.name) {
+      const std::string path = dir.file("view.xml");
+      std::ofstream(path) << bad.xml;
+      auto run = runProcess({CRACKVIS_RENDER, "--snapshot", path, "--data-root",
+                             dir.path().string(), "-o", dir.file("view.png")});
+      CHECK(run.exitCode == 1);
+      CHECK(run.out.empty());
+      const auto errorLines = lines(run.err);
+      REQUIRE(errorLines.size() == 1);
+      CHECK_THAT(errorLines[0],
+                 Catch::StartsWith("crackvis-render: " + path + ": pipeline " + bad.where));
+      CHECK_THAT(errorLines[0], Catch::Contains("attribute '" + bad.attribute + "'"));
+      CHECK_FALSE(std::filesystem::exists(dir.file("view.png")));
+    }
+  }
 }

@@ -1,3 +1,7 @@
+#include <cmath>
+#include <limits>
+#include <type_traits>
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -21,14 +25,7 @@ Status readLimits(const json& object, const std::string& where, Limits& limits) 
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "max_concurrent_streams", where, limits.maxConcurrentStreams));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_slabs_per_read", where, limits.maxSlabsPerRead));
-  CRACKVIS_RETURN_IF_ERROR(read(object, "max_call_seconds", where, limits.maxCallSeconds));
-  if (limits.maxConcurrentStreams < 1 || limits.maxSlabsPerRead < 1 ||
-      !(limits.maxCallSeconds > 0.0)) {
-    return invalidArgument(fmt::format(
-        "{}: max_concurrent_streams, max_slabs_per_read and max_call_seconds must be positive",
-        where));
-  }
-  return Status::ok();
+  return read(object, "max_call_seconds", where, limits.maxCallSeconds);
 }
 
 Status readUser(const json& object, const std::string& where, UserEntry& user) {
@@ -106,6 +103,67 @@ Result<ServerConfig> loadServerConfig(const std::string& path) {
     return text.status();
   }
   return parseServerConfig(*text, path);
+}
+
+template <typename T>
+Status checkSetting(SettingName name, T value, T min, T max) {
+  std::string bounds;
+  if constexpr (std::is_floating_point_v<T>) {
+    if (!std::isfinite(value)) {
+      bounds = "must be a finite number";
+    }
+  }
+  if (bounds.empty() && (value < min || value > max)) {
+    bounds = max == std::numeric_limits<T>::max()
+                 ? fmt::format("must be at least {}", min)
+                 : fmt::format("must be between {} and {}", min, max);
+  }
+  if (bounds.empty()) {
+    return Status::ok();
+  }
+  if (name.flag.empty()) {
+    return invalidArgument(
+        fmt::format("{} in the configuration file {}, got {}", name.key, bounds, value));
+  }
+  if (name.key.empty()) {
+    return invalidArgument(fmt::format("{} {}, got {}", name.flag, bounds, value));
+  }
+  return invalidArgument(fmt::format("{} {}, got {} ({} in the configuration file)", name.flag,
+                                     bounds, value, name.key));
+}
+
+template Status checkSetting<int>(SettingName, int, int, int);
+template Status checkSetting<std::int64_t>(SettingName, std::int64_t, std::int64_t, std::int64_t);
+template Status checkSetting<std::uint64_t>(SettingName, std::uint64_t, std::uint64_t,
+                                            std::uint64_t);
+template Status checkSetting<double>(SettingName, double, double, double);
+
+Status validateServerConfig(const ServerConfig& config) {
+  if (config.dataRoot.empty()) {
+    return invalidArgument("no data root: give --root DIR or data_root in --config");
+  }
+  if (auto listen = parseHostPort(config.listen); !listen) {
+    return invalidArgument(fmt::format("--listen: {}", listen.status().message()));
+  }
+  if (!config.rawTlsListen.empty()) {
+    if (auto raw = parseHostPort(config.rawTlsListen); !raw) {
+      return invalidArgument(fmt::format("--raw-tls-listen: {}", raw.status().message()));
+    }
+  }
+  const Limits& limits = config.limits;
+  constexpr auto kNoMax = std::numeric_limits<std::uint64_t>::max();
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-read-bytes", "limits.max_read_bytes"},
+                                        limits.maxReadBytes, std::uint64_t{1}, kNoMax));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-fetch-bytes", "limits.max_fetch_bytes"},
+                                        limits.maxFetchBytes, std::uint64_t{1}, kNoMax));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-streams", "limits.max_concurrent_streams"},
+                                        limits.maxConcurrentStreams, 1,
+                                        std::numeric_limits<int>::max()));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"", "limits.max_slabs_per_read"}, limits.maxSlabsPerRead,
+                                        1, std::numeric_limits<int>::max()));
+  // Deadlines are computed from it: a week keeps them far from overflow.
+  return checkSetting({"--max-call-seconds", "limits.max_call_seconds"}, limits.maxCallSeconds,
+                      0.001, 7 * 86400.0);
 }
 
 Result<HostPort> parseHostPort(const std::string& address) {

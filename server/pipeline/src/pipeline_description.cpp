@@ -1,7 +1,9 @@
+#include <algorithm>
 #include <array>
+#include <charconv>
+#include <cmath>
+#include <limits>
 #include <memory>
-#include <mutex>
-#include <sstream>
 
 #include <fmt/format.h>
 #include <libxml/parser.h>
@@ -56,16 +58,6 @@ const char* nameOf(const Names<E, N>& names, E value) {
   return names[0].second;
 }
 
-template <typename E, std::size_t N>
-E valueOf(const Names<E, N>& names, const std::string& text) {
-  for (const auto& [v, name] : names) {
-    if (text == name) {
-      return v;
-    }
-  }
-  return names[0].first;  // unreachable after validation
-}
-
 struct DocFree {
   void operator()(xmlDoc* doc) const { xmlFreeDoc(doc); }
 };
@@ -76,12 +68,22 @@ struct ValidFree {
   void operator()(xmlSchemaValidCtxt* context) const { xmlSchemaFreeValidCtxt(context); }
 };
 
+// What an error echoes of a value: attributes may be long, messages are not.
+std::string echoed(std::string_view text, std::size_t limit = 40) {
+  return text.size() <= limit
+             ? std::string(text)
+             : fmt::format("{}... ({} characters)", text.substr(0, limit), text.size());
+}
+
+// libxml2's message, one line, the values it quotes shortened with it.
 std::string trimmed(const char* message) {
-  std::string text = message != nullptr ? message : "";
+  std::string_view text = message != nullptr ? message : "";
   while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) {
-    text.pop_back();
+    text.remove_suffix(1);
   }
-  return text;
+  std::string line = echoed(text, 300);
+  std::replace(line.begin(), line.end(), '\n', ' ');
+  return line;
 }
 
 // The schema, parsed once; validation contexts are per call, so parsing
@@ -116,34 +118,6 @@ void keepFirstError(void* data, xmlError* error) {
       fmt::format("pipeline line {}, element <{}>: {}", line, element, trimmed(error->message));
 }
 
-std::string attribute(const xmlNode* node, const char* name) {
-  xmlChar* value = xmlGetProp(node, reinterpret_cast<const xmlChar*>(name));
-  if (value == nullptr) {
-    return {};
-  }
-  std::string text = reinterpret_cast<const char*>(value);
-  xmlFree(value);
-  return text;
-}
-
-bool boolean(const std::string& text) {
-  return text == "true" || text == "1";
-}
-
-Vec3 vec3(const std::string& text) {
-  std::istringstream in(text);
-  Vec3 v;
-  in >> v.x >> v.y >> v.z;
-  return v;
-}
-
-Colour colour(const std::string& text) {
-  const auto hex = [&](std::size_t at) {
-    return static_cast<std::uint8_t>(std::stoi(text.substr(at, 2), nullptr, 16));
-  };
-  return text.size() == 7 ? Colour{hex(1), hex(3), hex(5)} : Colour{};
-}
-
 bool named(const xmlNode* node, const char* name) {
   return node->type == XML_ELEMENT_NODE &&
          xmlStrcmp(node->name, reinterpret_cast<const xmlChar*>(name)) == 0;
@@ -158,60 +132,339 @@ const xmlNode* child(const xmlNode* node, const char* name) {
   return nullptr;
 }
 
-// Reads a validated document; the schema filled in every default attribute.
-PipelineDescription convert(const xmlNode* root) {
-  PipelineDescription d;
-  for (const xmlNode* node = root->children; node != nullptr; node = node->next) {
-    if (named(node, "data")) {
-      d.file = attribute(node, "file");
-      d.step = std::stoll(attribute(node, "step"));
-    } else if (named(node, "particles")) {
-      auto& p = d.particles;
-      p.visible = boolean(attribute(node, "visible"));
-      p.representation = valueOf(kParticleRepresentations, attribute(node, "representation"));
-      p.colourBy = valueOf(kParticleColourBy, attribute(node, "colour-by"));
-      p.colour = colour(attribute(node, "colour"));
-      p.opacity = std::stod(attribute(node, "opacity"));
-      if (const xmlNode* clip = child(node, "clip")) {
-        p.clip = ClipPlane{vec3(attribute(clip, "origin")), vec3(attribute(clip, "normal"))};
-      }
-    } else if (named(node, "cracks")) {
-      auto& c = d.cracks;
-      c.visible = boolean(attribute(node, "visible"));
-      c.method = *cracks::parseMethod(attribute(node, "method"));
-      c.validation = boolean(attribute(node, "validation"));
-      c.validationTolerance = std::stod(attribute(node, "validation-tolerance"));
-      c.mergeOctahedra = boolean(attribute(node, "merge-octahedra"));
-      c.colourBy = valueOf(kCrackColourBy, attribute(node, "colour-by"));
-      c.colour = colour(attribute(node, "colour"));
-      c.opacity = std::stod(attribute(node, "opacity"));
-    } else if (named(node, "bonds")) {
-      auto& b = d.bonds;
-      b.show = valueOf(kBondSelections, attribute(node, "show"));
-      b.representation = valueOf(kBondRepresentations, attribute(node, "representation"));
-      b.colourBy = valueOf(kBondColourBy, attribute(node, "colour-by"));
-      b.colour = colour(attribute(node, "colour"));
-      b.tubeRadius = std::stod(attribute(node, "tube-radius"));
-    } else if (named(node, "decomposition")) {
-      d.showDecomposition = boolean(attribute(node, "show"));
-    } else if (named(node, "inconsistent")) {
-      d.showInconsistent = boolean(attribute(node, "show"));
-    } else if (named(node, "view")) {
-      auto& v = d.view;
-      v.width = std::stoi(attribute(node, "width"));
-      v.height = std::stoi(attribute(node, "height"));
-      v.background = colour(attribute(node, "background"));
-      v.colourMap = valueOf(kColourMaps, attribute(node, "colour-map"));
-      v.scalarBar = boolean(attribute(node, "scalar-bar"));
-      if (const xmlNode* camera = child(node, "camera")) {
-        v.camera = CameraDescription{
-            vec3(attribute(camera, "position")), vec3(attribute(camera, "focal-point")),
-            vec3(attribute(camera, "view-up")), std::stod(attribute(camera, "view-angle"))};
-      }
-    } else if (named(node, "stream")) {
-      d.stream.fps = std::stoi(attribute(node, "fps"));
-      d.stream.bitrate = std::stoi(attribute(node, "bitrate"));
+// XML Schema's whitespace (the "collapse" facet of numbers and lists).
+bool isXmlSpace(char ch) {
+  return ch == ' ' || ch == '\t' || ch == '\n' || ch == '\r';
+}
+
+std::string_view stripped(std::string_view text) {
+  while (!text.empty() && isXmlSpace(text.front())) {
+    text.remove_prefix(1);
+  }
+  while (!text.empty() && isXmlSpace(text.back())) {
+    text.remove_suffix(1);
+  }
+  return text;
+}
+
+// A number's text without the leading '+' that XML Schema allows and
+// std::from_chars does not; a second sign is left in place to be refused.
+std::string_view withoutPlus(std::string_view text) {
+  if (text.size() > 1 && text.front() == '+' && text[1] != '-' && text[1] != '+') {
+    text.remove_prefix(1);
+  }
+  return text;
+}
+
+// The range of a real attribute; open ends exclude their bound.
+struct Interval {
+  double min;
+  double max;
+  bool minOpen = false;
+  bool maxOpen = false;
+
+  bool contains(double v) const {
+    return (minOpen ? v > min : v >= min) && (maxOpen ? v < max : v <= max);
+  }
+  std::string text() const {
+    return fmt::format("{}{} .. {}{}", minOpen ? "(" : "[", min, max, maxOpen ? ")" : "]");
+  }
+};
+
+constexpr Interval kUnitInterval{0.0, 1.0};
+constexpr Interval kTubeRadius{0.0, 1.0, true, false};
+constexpr Interval kViewAngle{0.0, 180.0, true, true};
+constexpr double kLargest = std::numeric_limits<double>::max();
+constexpr Interval kCoordinate{-kLargest, kLargest};
+
+// The range of an integer attribute, both ends included.
+struct Span {
+  std::int64_t min;
+  std::int64_t max;
+};
+
+// Steps are int indices downstream; a wider value must not wrap.
+constexpr Span kStep{-1, std::numeric_limits<int>::max()};
+constexpr Span kPixels{16, 7680};
+constexpr Span kFps{1, 120};
+constexpr Span kBitrate{100'000, 100'000'000};
+constexpr Span kVersion{1, 1};
+
+// The attributes of one element, converted with range checks: every value
+// of a description passes through these few functions. The first error is
+// kept (naming line, element and attribute) and the caller asks status()
+// once per element; after an error the readers return harmless defaults.
+class Attributes {
+ public:
+  explicit Attributes(const xmlNode* node) : m_node(node) {}
+
+  std::string text(const char* name) {
+    xmlChar* value = xmlGetProp(m_node, reinterpret_cast<const xmlChar*>(name));
+    if (value == nullptr) {
+      fail(name, "is missing");
+      return {};
     }
+    std::string result = reinterpret_cast<const char*>(value);
+    xmlFree(value);
+    return result;
+  }
+
+  std::int64_t integer(const char* name, Span span) {
+    const std::string raw = text(name);
+    const std::string_view digits = withoutPlus(stripped(raw));
+    std::int64_t value = 0;
+    const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+    if (error == std::errc::invalid_argument || end != digits.data() + digits.size()) {
+      fail(name, fmt::format("'{}' is not an integer", echoed(raw)));
+      return span.min;
+    }
+    if (error == std::errc::result_out_of_range || value < span.min || value > span.max) {
+      fail(name, fmt::format("'{}' is out of range ({} .. {})", echoed(raw), span.min, span.max));
+      return span.min;
+    }
+    return value;
+  }
+
+  double real(const char* name, Interval interval) {
+    const std::string raw = text(name);
+    return realIn(name, raw, stripped(raw), interval);
+  }
+
+  // Three finite numbers; `nonZero` refuses the zero vector (a direction).
+  Vec3 vector(const char* name, bool nonZero = false) {
+    const std::string raw = text(name);
+    std::array<double, 3> xyz{};
+    std::string_view rest = raw;
+    std::size_t count = 0;
+    while (m_status.isOk()) {
+      rest = stripped(rest);
+      if (rest.empty()) {
+        break;
+      }
+      std::size_t length = 0;
+      while (length < rest.size() && !isXmlSpace(rest[length])) {
+        ++length;
+      }
+      if (count < xyz.size()) {
+        xyz[count] = realIn(name, raw, rest.substr(0, length), kCoordinate);
+      }
+      ++count;
+      rest.remove_prefix(length);
+    }
+    if (m_status.isOk() && count != xyz.size()) {
+      fail(name, fmt::format("'{}' is not three numbers", echoed(raw)));
+    }
+    const Vec3 v{xyz[0], xyz[1], xyz[2]};
+    if (m_status.isOk() && nonZero && v.x == 0.0 && v.y == 0.0 && v.z == 0.0) {
+      fail(name, "is the zero vector, a direction is needed");
+    }
+    return v;
+  }
+
+  Colour colour(const char* name) {
+    const std::string raw = text(name);
+    const auto hex = [&](std::size_t at) {
+      unsigned value = 0;
+      const char* first = raw.data() + at;
+      const auto [end, error] = std::from_chars(first, first + 2, value, 16);
+      return error == std::errc{} && end == first + 2 ? static_cast<int>(value) : -1;
+    };
+    if (raw.size() == 7 && raw[0] == '#') {
+      const int r = hex(1), g = hex(3), b = hex(5);
+      if (r >= 0 && g >= 0 && b >= 0) {
+        return Colour{static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g),
+                      static_cast<std::uint8_t>(b)};
+      }
+    }
+    fail(name, fmt::format("'{}' is not a colour #rrggbb", echoed(raw)));
+    return {};
+  }
+
+  bool boolean(const char* name) {
+    const std::string raw = text(name);
+    const std::string_view value = stripped(raw);
+    if (value == "true" || value == "1") {
+      return true;
+    }
+    if (value != "false" && value != "0") {
+      fail(name, fmt::format("'{}' is not a boolean", echoed(raw)));
+    }
+    return false;
+  }
+
+  template <typename E, std::size_t N>
+  E choice(const char* name, const Names<E, N>& names) {
+    const std::string raw = text(name);
+    for (const auto& [v, spelling] : names) {
+      if (raw == spelling) {
+        return v;
+      }
+    }
+    fail(name, fmt::format("'{}' is not one of the allowed values", echoed(raw)));
+    return names[0].first;
+  }
+
+  cracks::Method method(const char* name) {
+    auto method = cracks::parseMethod(text(name));
+    if (!method) {
+      fail(name, method.status().message());
+      return cracks::Method::kLocalVoronoi;
+    }
+    return *method;
+  }
+
+  const Status& status() const { return m_status; }
+
+ private:
+  double realIn(const char* name, const std::string& raw, std::string_view number,
+                Interval interval) {
+    number = withoutPlus(number);
+    double value = 0.0;
+    const auto [end, error] = std::from_chars(number.data(), number.data() + number.size(), value);
+    if (error == std::errc::result_out_of_range) {
+      fail(name, fmt::format("'{}' is out of the range of a double", echoed(raw)));
+      return 0.0;
+    }
+    if (error != std::errc{} || end != number.data() + number.size() || number.empty()) {
+      fail(name, fmt::format("'{}' is not a number", echoed(raw)));
+      return 0.0;
+    }
+    if (!std::isfinite(value)) {
+      fail(name, fmt::format("'{}' is not a finite number", echoed(raw)));
+      return 0.0;
+    }
+    if (!interval.contains(value)) {
+      fail(name, fmt::format("'{}' is out of range {}", echoed(raw), interval.text()));
+      return 0.0;
+    }
+    return value;
+  }
+
+  void fail(const char* name, const std::string& what) {
+    if (m_status.isOk()) {
+      m_status = invalidArgument(
+          fmt::format("pipeline line {}, element <{}>, attribute '{}': {}", xmlGetLineNo(m_node),
+                      reinterpret_cast<const char*>(m_node->name), name, what));
+    }
+  }
+
+  const xmlNode* m_node;
+  Status m_status;
+};
+
+Status convertData(const xmlNode* node, PipelineDescription& d) {
+  Attributes a(node);
+  d.file = a.text("file");
+  d.step = a.integer("step", kStep);
+  if (a.status().isOk() && d.file.empty()) {
+    return invalidArgument(fmt::format(
+        "pipeline line {}, element <data>, attribute 'file': is empty", xmlGetLineNo(node)));
+  }
+  return a.status();
+}
+
+Status convertParticles(const xmlNode* node, ParticlesDescription& p) {
+  Attributes a(node);
+  p.visible = a.boolean("visible");
+  p.representation = a.choice("representation", kParticleRepresentations);
+  p.colourBy = a.choice("colour-by", kParticleColourBy);
+  p.colour = a.colour("colour");
+  p.opacity = a.real("opacity", kUnitInterval);
+  CRACKVIS_RETURN_IF_ERROR(a.status());
+  if (const xmlNode* clip = child(node, "clip")) {
+    Attributes c(clip);
+    p.clip = ClipPlane{c.vector("origin"), c.vector("normal", true)};
+    return c.status();
+  }
+  return Status::ok();
+}
+
+Status convertCracks(const xmlNode* node, CracksDescription& c) {
+  Attributes a(node);
+  c.visible = a.boolean("visible");
+  c.method = a.method("method");
+  c.validation = a.boolean("validation");
+  c.validationTolerance = a.real("validation-tolerance", kUnitInterval);
+  c.mergeOctahedra = a.boolean("merge-octahedra");
+  c.colourBy = a.choice("colour-by", kCrackColourBy);
+  c.colour = a.colour("colour");
+  c.opacity = a.real("opacity", kUnitInterval);
+  return a.status();
+}
+
+Status convertBonds(const xmlNode* node, BondsDescription& b) {
+  Attributes a(node);
+  b.show = a.choice("show", kBondSelections);
+  b.representation = a.choice("representation", kBondRepresentations);
+  b.colourBy = a.choice("colour-by", kBondColourBy);
+  b.colour = a.colour("colour");
+  b.tubeRadius = a.real("tube-radius", kTubeRadius);
+  return a.status();
+}
+
+Status convertView(const xmlNode* node, ViewDescription& v) {
+  Attributes a(node);
+  v.width = static_cast<int>(a.integer("width", kPixels));
+  v.height = static_cast<int>(a.integer("height", kPixels));
+  v.background = a.colour("background");
+  v.colourMap = a.choice("colour-map", kColourMaps);
+  v.scalarBar = a.boolean("scalar-bar");
+  CRACKVIS_RETURN_IF_ERROR(a.status());
+  if (const xmlNode* camera = child(node, "camera")) {
+    Attributes c(camera);
+    v.camera = CameraDescription{c.vector("position"), c.vector("focal-point"),
+                                 c.vector("view-up", true), c.real("view-angle", kViewAngle)};
+    CRACKVIS_RETURN_IF_ERROR(c.status());
+    if (v.camera->position == v.camera->focalPoint) {
+      return invalidArgument(fmt::format(
+          "pipeline line {}, element <camera>, attribute 'focal-point': equals the position",
+          xmlGetLineNo(camera)));
+    }
+  }
+  return Status::ok();
+}
+
+Status convertToggle(const xmlNode* node, bool& show) {
+  Attributes a(node);
+  show = a.boolean("show");
+  return a.status();
+}
+
+Status convertStream(const xmlNode* node, StreamDescription& s) {
+  Attributes a(node);
+  s.fps = static_cast<int>(a.integer("fps", kFps));
+  s.bitrate = static_cast<int>(a.integer("bitrate", kBitrate));
+  return a.status();
+}
+
+// Reads a validated document; the schema filled in every default attribute.
+// The schema already bounds most values, but the conversions check again:
+// the schema's xs:double admits INF, NaN and values a double cannot hold.
+Result<PipelineDescription> convert(const xmlNode* root) {
+  PipelineDescription d;
+  Attributes pipeline(root);
+  pipeline.integer("version", kVersion);
+  CRACKVIS_RETURN_IF_ERROR(pipeline.status());
+  for (const xmlNode* node = root->children; node != nullptr; node = node->next) {
+    Status status;
+    if (named(node, "data")) {
+      status = convertData(node, d);
+    } else if (named(node, "particles")) {
+      status = convertParticles(node, d.particles);
+    } else if (named(node, "cracks")) {
+      status = convertCracks(node, d.cracks);
+    } else if (named(node, "bonds")) {
+      status = convertBonds(node, d.bonds);
+    } else if (named(node, "decomposition")) {
+      status = convertToggle(node, d.showDecomposition);
+    } else if (named(node, "inconsistent")) {
+      status = convertToggle(node, d.showInconsistent);
+    } else if (named(node, "view")) {
+      status = convertView(node, d.view);
+    } else if (named(node, "stream")) {
+      status = convertStream(node, d.stream);
+    }
+    CRACKVIS_RETURN_IF_ERROR(status);
   }
   return d;
 }

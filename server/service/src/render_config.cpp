@@ -42,15 +42,7 @@ Status readLimits(const json& object, const std::string& where, RenderServerConf
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "interactive_frame_ms", where, config.limits.interactiveFrameMs));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_width", where, config.limits.maxWidth));
-  CRACKVIS_RETURN_IF_ERROR(read(object, "max_height", where, config.limits.maxHeight));
-  if (config.maxSessions < 1 || !(config.sessionGraceSeconds > 0.0) ||
-      config.limits.maxWidth < 16 || config.limits.maxHeight < 16) {
-    return invalidArgument(fmt::format(
-        "{}: max_sessions, session_grace_seconds, max_width and max_height must be positive "
-        "(sizes at least 16)",
-        where));
-  }
-  return Status::ok();
+  return read(object, "max_height", where, config.limits.maxHeight);
 }
 
 }  // namespace
@@ -92,6 +84,28 @@ Result<RenderServerConfig> parseRenderServerConfig(const std::string& text,
     config.users = users->users;
   }
   return config;
+}
+
+Status validateRenderServerConfig(const RenderServerConfig& config) {
+  using dataservice::checkSetting;
+  if (auto listen = dataservice::parseHostPort(config.listen); !listen) {
+    return invalidArgument(fmt::format("--listen: {}", listen.status().message()));
+  }
+  if (config.data.target.empty()) {
+    return invalidArgument("--data-server must name crackvis-data's host:port");
+  }
+  CRACKVIS_RETURN_IF_ERROR(
+      checkSetting({"--max-sessions", "limits.max_sessions"}, config.maxSessions, 1, 256));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--session-grace", "limits.session_grace_seconds"},
+                                        config.sessionGraceSeconds, 0.1, 86400.0));
+  const SessionLimits& limits = config.limits;
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--refine-after-ms", "limits.refine_after_ms"},
+                                        limits.refineAfterMs, 0.0, 5000.0));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--interactive-frame-ms", "limits.interactive_frame_ms"},
+                                        limits.interactiveFrameMs, 1.0, 1000.0));
+  // The schema's frame sizes: a larger limit could never be used.
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"", "limits.max_width"}, limits.maxWidth, 16, 7680));
+  return checkSetting({"", "limits.max_height"}, limits.maxHeight, 16, 7680);
 }
 
 Result<RenderServerConfig> loadRenderServerConfig(const std::string& path) {

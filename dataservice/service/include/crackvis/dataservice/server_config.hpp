@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <crackvis/common/status.hpp>
@@ -44,9 +45,31 @@ struct ServerConfig {
 };
 
 // Reads a JSON configuration; unknown keys are errors (a typo must not
-// silently drop a limit). Relative paths are kept as written.
+// silently drop a limit). Relative paths are kept as written. Values are not
+// range-checked here: flags may still override them (validateServerConfig).
 Result<ServerConfig> loadServerConfig(const std::string& path);
 Result<ServerConfig> parseServerConfig(const std::string& json, const std::string& origin);
+
+// The merged configuration (file, then flags), checked once before the
+// server starts: a data root, well-formed addresses, every limit in range.
+// INVALID_ARGUMENT naming the flag and the file's key, e.g. "--max-streams
+// must be at least 1, got 0 (limits.max_concurrent_streams in the
+// configuration file)".
+Status validateServerConfig(const ServerConfig& config);
+
+// A setting as a user may give it: its command-line flag and its key in the
+// configuration file (either may be empty).
+struct SettingName {
+  std::string_view flag;
+  std::string_view key;
+};
+
+// OK when min <= value <= max (and a real is finite), otherwise
+// INVALID_ARGUMENT naming the setting, its bounds and the value. The
+// services' configuration checks are made of these (T: int, std::int64_t,
+// std::uint64_t, double).
+template <typename T>
+Status checkSetting(SettingName name, T value, T min, T max);
 
 // Splits "host:port" ("[::1]:50051" for IPv6); the port must be 0..65535.
 struct HostPort {

@@ -39,10 +39,15 @@ struct RenderServerConfig {
 // whose users apply here too), data_service {target, ca, cert, key, token,
 // insecure, server_name}, limits {max_sessions, session_grace_seconds,
 // refine_after_ms, interactive_frame_ms, max_width, max_height}, access_log.
-// Unknown keys are errors.
+// Unknown keys are errors; values are range-checked by
+// validateRenderServerConfig once flags are applied.
 Result<RenderServerConfig> loadRenderServerConfig(const std::string& path);
 Result<RenderServerConfig> parseRenderServerConfig(const std::string& json,
                                                    const std::string& origin);
+
+// The merged configuration (file, then flags), checked once before the
+// server starts; INVALID_ARGUMENT naming the flag and the file's key.
+Status validateRenderServerConfig(const RenderServerConfig& config);
 
 class RenderServer {
  public:
