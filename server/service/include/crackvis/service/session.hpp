@@ -1,7 +1,8 @@
-// One render session: a pipeline description, its data source with a step
-// cache, the crack extractor (incremental across steps), and an off-screen
-// renderer with its own GL context, all owned by the session's own thread (a
-// GL context is current on one thread). No gRPC types: the render service
+// One render session: a pipeline description's scene data (a
+// scene::ScenePipeline: the data source with a step cache, the crack
+// extractor, incremental across steps) and an off-screen renderer with its
+// own GL context, all owned by the session's own thread (a GL context is
+// current on one thread). No gRPC types: the render service
 // turns a stream's messages into SessionEvents and RenderedFrames into
 // encoded frames.
 //
@@ -29,6 +30,7 @@
 #include <crackvis/common/status.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/scene_renderer.hpp>
+#include <crackvis/scene/scene_pipeline.hpp>
 #include <crackvis/source/step_source.hpp>
 
 namespace crackvis::service {
@@ -125,8 +127,7 @@ class Session {
  public:
   // Opens the data source of a file (the render server's: through
   // crackvis-data, with the caller's folder rules applied).
-  using SourceOpener =
-      std::function<Result<std::unique_ptr<source::StepSource>>(const std::string& file)>;
+  using SourceOpener = scene::SourceOpener;
 
   // Starts the session's thread, which creates the GL context, opens the
   // file, loads and extracts the description's step and builds the scene;
@@ -170,7 +171,7 @@ class Session {
  private:
   Session(std::string id, pipeline::PipelineDescription description, SourceOpener opener,
           SessionLimits limits);
-  struct Worker;  // the thread's state: renderer, cache, extractor
+  struct Worker;  // the thread's state: scene pipeline, renderer, view
 
   void run(std::promise<Status> started);
   void publish(RenderedFrame frame);
