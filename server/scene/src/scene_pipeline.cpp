@@ -24,6 +24,44 @@ int resolveStep(std::int64_t step, int stepCount) {
   return static_cast<int>(std::min<std::int64_t>(step, std::numeric_limits<int>::max()));
 }
 
+// Runs a source call; an exception becomes an INTERNAL error naming it.
+template <typename Call>
+auto guardedCall(const std::string& file, const std::string& what, Call&& call)
+    -> decltype(call()) {
+  std::string detail;
+  try {
+    return call();
+  } catch (const std::exception& e) {
+    detail = e.what();
+  } catch (...) {
+    detail = "an exception of unknown type";
+  }
+  return internalError(fmt::format("{}: {} failed on an internal error: {}", file, what, detail));
+}
+
+// A step source whose exceptions become errors. Its reads run on the owner's
+// thread and on the step cache's prefetch thread, where an exception (a
+// library throwing on data it should have refused) would end the process.
+class GuardedSource final : public source::StepSource {
+ public:
+  explicit GuardedSource(std::unique_ptr<source::StepSource> inner) : m_inner(std::move(inner)) {}
+  const std::string& file() const override { return m_inner->file(); }
+  const dem::Lattice& lattice() const override { return m_inner->lattice(); }
+  int stepCount() const override { return m_inner->stepCount(); }
+  const std::vector<std::int32_t>& breakSteps() const override { return m_inner->breakSteps(); }
+  Status setExtraArrays(const source::ExtraArrays& extras) override {
+    return guardedCall(file(), "reading the extra arrays",
+                       [&] { return m_inner->setExtraArrays(extras); });
+  }
+  Result<source::SourceStep> read(int step) override {
+    return guardedCall(file(), fmt::format("reading step {}", step),
+                       [&] { return m_inner->read(step); });
+  }
+
+ private:
+  std::unique_ptr<source::StepSource> m_inner;
+};
+
 // Whether two descriptions need different extractors.
 bool sameExtraction(const pipeline::PipelineDescription& a,
                     const pipeline::PipelineDescription& b) {
@@ -78,7 +116,14 @@ Result<std::unique_ptr<ScenePipeline>> ScenePipeline::open(
 Status ScenePipeline::replace(pipeline::PipelineDescription next) {
   commit();
   State before = m_state;
-  if (Status status = apply(std::move(next)); !status) {
+  Status status;
+  try {
+    status = apply(std::move(next));
+  } catch (...) {
+    restore(std::move(before));  // a throwing source or extractor changes nothing either
+    throw;
+  }
+  if (!status) {
     restore(std::move(before));
     return status;
   }
@@ -131,11 +176,12 @@ Status ScenePipeline::openFile(const pipeline::PipelineDescription& d) {
   if (!opened) {
     return opened.status();
   }
-  if ((*opened)->stepCount() < 1) {
+  auto guarded = std::make_unique<GuardedSource>(std::move(opened).value());
+  if (guarded->stepCount() < 1) {
     return failedPrecondition(fmt::format("{}: the file has no steps", d.file));
   }
-  CRACKVIS_RETURN_IF_ERROR((*opened)->setExtraArrays(extraArraysFor(d)));
-  auto cache = std::make_shared<source::StepCache>(std::move(opened).value(), m_cacheSteps);
+  CRACKVIS_RETURN_IF_ERROR(guarded->setExtraArrays(extraArraysFor(d)));
+  auto cache = std::make_shared<source::StepCache>(std::move(guarded), m_cacheSteps);
   auto first = cache->get(0);
   if (!first) {
     return first.status();

@@ -26,6 +26,37 @@ Status checkViewSize(int width, int height, const SessionLimits& limits) {
   return Status::ok();
 }
 
+// What an event is, for the log and error messages.
+const char* eventName(const SessionEvent& event) {
+  static constexpr const char* kNames[] = {"camera",           "resize", "set_step", "play",
+                                           "replace_pipeline", "still",  "keyframe"};
+  return kNames[event.what.index()];
+}
+
+// Runs `work` on a session's thread. An exception (a bug, or a library that
+// throws on data it should have refused) fails only this piece of work with
+// an INTERNAL error and an event line; it never escapes the thread, which
+// would end the process for every user.
+template <typename Work>
+Status guarded(const std::string& session, std::string_view during, Work&& work) noexcept {
+  std::string detail;
+  try {
+    return work();
+  } catch (const std::exception& e) {
+    detail = e.what();
+  } catch (...) {
+    detail = "an exception of unknown type";
+  }
+  try {
+    log::event(stderr, "crackvis-render", "session_exception",
+               {{"session", session}, {"during", std::string(during)}, {"detail", detail}});
+    return internalError(
+        fmt::format("session {}: {} failed on an internal error: {}", session, during, detail));
+  } catch (...) {
+    return Status(StatusCode::kInternal, "internal error");
+  }
+}
+
 }  // namespace
 
 // Everything the session's thread owns: the scene's data (ScenePipeline), the
@@ -392,6 +423,32 @@ struct Session::Worker {
     }
   }
 
+  // A full-resolution picture of the current state (0: the view's size).
+  Result<render::Image> snapshot(int w, int h, int& step) {
+    w = w > 0 ? w : width;
+    h = h > 0 ? h : height;
+    CRACKVIS_RETURN_IF_ERROR(checkViewSize(w, h, session.m_limits));
+    CRACKVIS_RETURN_IF_ERROR(ensureRenderer(w, h));
+    render::Image image;
+    CRACKVIS_RETURN_IF_ERROR(renderer->renderFrame(w, h, image));
+    step = scene->step();
+    dirty = true;  // the stream's next frame is rendered again at its own size
+    return image;
+  }
+
+  // After work that threw: back to the last complete scene (a replacement
+  // not yet committed is undone) and to a still picture. Fails when even
+  // that throws; the session is then unusable.
+  Status recover() {
+    playing = false;
+    dirty = true;
+    forceFull = true;
+    return guarded(session.m_id, "recovery", [&] {
+      scene->revert();
+      return buildScene(false);
+    });
+  }
+
   std::optional<Clock::time_point> wakeTime() const {
     std::optional<Clock::time_point> at = refineAt;
     if (playing && (!at || nextTick < *at)) {
@@ -436,11 +493,21 @@ Session::~Session() {
 
 void Session::run(std::promise<Status> started) {
   Worker worker(*this);
-  if (Status status = worker.start(); !status) {
+  if (Status status = guarded(m_id, "open", [&] { return worker.start(); }); !status) {
     started.set_value(status);
     return;
   }
   started.set_value(Status::ok());
+  if (Status status = guarded(m_id, "the session loop", [&] { return serve(worker); }); !status) {
+    fail(status);
+  }
+  // Tasks that will not run break their promises: a waiting snapshot
+  // returns UNAVAILABLE.
+  std::lock_guard lock(m_mutex);
+  m_tasks.clear();
+}
+
+Status Session::serve(Worker& worker) {
   std::unique_lock lock(m_mutex);
   while (!m_closing) {
     auto ready = [&] {
@@ -468,20 +535,44 @@ void Session::run(std::promise<Status> started) {
     const bool attached = m_attachment != 0;
     lock.unlock();
     for (const SessionEvent& event : events) {
-      worker.apply(event);
+      const Status status = guarded(m_id, eventName(event), [&] {
+        worker.apply(event);
+        return Status::ok();
+      });
+      if (!status) {
+        notify({event.id, status, std::nullopt});
+        CRACKVIS_RETURN_IF_ERROR(worker.recover());
+      }
     }
     for (auto& task : tasks) {
-      task(worker);
+      task(worker);  // guards itself: it owns the promise to answer
     }
-    worker.tick();
-    if (attached) {
-      worker.renderIfDirty();
+    Status status = guarded(m_id, "playing", [&] {
+      worker.tick();
+      return Status::ok();
+    });
+    if (status && attached) {
+      status = guarded(m_id, "rendering", [&] {
+        worker.renderIfDirty();
+        return Status::ok();
+      });
+    }
+    if (!status) {
+      notify({worker.lastEventId, status, std::nullopt});
+      CRACKVIS_RETURN_IF_ERROR(worker.recover());
+      worker.dirty = false;  // no frame until the next event: it may throw again
     }
     lock.lock();
   }
-  // Tasks that will not run break their promises: a waiting snapshot
-  // returns UNAVAILABLE.
-  m_tasks.clear();
+  return Status::ok();
+}
+
+// The session cannot go on: its stream gets the error, then the end.
+void Session::fail(const Status& status) {
+  log::event(stderr, "crackvis-render", "session_failed",
+             {{"session", m_id}, {"detail", status.message()}});
+  notify({0, status, std::nullopt});
+  close();
 }
 
 void Session::post(SessionEvent event) {
@@ -527,16 +618,17 @@ Session::Next Session::next(std::uint64_t attachment, std::chrono::milliseconds 
   m_outgoing.wait_for(lock, timeout, [&] {
     return m_closing || m_attachment != attachment || !m_notices.empty() || m_latest.has_value();
   });
-  if (m_closing) {
-    return Next::kClosed;
-  }
   if (m_attachment != attachment) {
     return Next::kSuperseded;
   }
+  // Notices first, even from a closing session: the error that ended it.
   if (!m_notices.empty()) {
     notice = std::move(m_notices.front());
     m_notices.pop_front();
     return Next::kNotice;
+  }
+  if (m_closing) {
+    return Next::kClosed;
   }
   if (m_latest) {
     frame = std::move(*m_latest);
@@ -581,24 +673,12 @@ Result<render::Image> Session::snapshot(int width, int height, int* step) {
       return failedPrecondition(fmt::format("session {} is closed", m_id));
     }
     m_tasks.push_back([promise, width, height, stepOut, this](Worker& worker) {
-      const int w = width > 0 ? width : worker.width;
-      const int h = height > 0 ? height : worker.height;
-      if (Status status = checkViewSize(w, h, m_limits); !status) {
-        promise->set_value(status);
-        return;
-      }
-      if (Status status = worker.ensureRenderer(w, h); !status) {
-        promise->set_value(status);
-        return;
-      }
-      render::Image image;
-      if (Status status = worker.renderer->renderFrame(w, h, image); !status) {
-        promise->set_value(status);
-        return;
-      }
-      *stepOut = worker.scene->step();
-      worker.dirty = true;  // the stream's next frame is rendered again at its own size
-      promise->set_value(std::move(image));
+      Result<render::Image> result = Status(StatusCode::kInternal, "");
+      const Status status = guarded(m_id, "snapshot", [&] {
+        result = worker.snapshot(width, height, *stepOut);
+        return result.status();
+      });
+      promise->set_value(status ? std::move(result) : Result<render::Image>(status));
     });
   }
   m_wake.notify_one();
