@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <crackvis/cracks/bond_graph.hpp>
+#include <crackvis/scene/guarded_call.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 
 namespace crackvis::scene {
@@ -24,21 +25,6 @@ int resolveStep(std::int64_t step, int stepCount) {
   return static_cast<int>(std::min<std::int64_t>(step, std::numeric_limits<int>::max()));
 }
 
-// Runs a source call; an exception becomes an INTERNAL error naming it.
-template <typename Call>
-auto guardedCall(const std::string& file, const std::string& what, Call&& call)
-    -> decltype(call()) {
-  std::string detail;
-  try {
-    return call();
-  } catch (const std::exception& e) {
-    detail = e.what();
-  } catch (...) {
-    detail = "an exception of unknown type";
-  }
-  return internalError(fmt::format("{}: {} failed on an internal error: {}", file, what, detail));
-}
-
 // A step source whose exceptions become errors. Its reads run on the owner's
 // thread and on the step cache's prefetch thread, where an exception (a
 // library throwing on data it should have refused) would end the process.
@@ -50,12 +36,14 @@ class GuardedSource final : public source::StepSource {
   int stepCount() const override { return m_inner->stepCount(); }
   const std::vector<std::int32_t>& breakSteps() const override { return m_inner->breakSteps(); }
   Status setExtraArrays(const source::ExtraArrays& extras) override {
-    return guardedCall(file(), "reading the extra arrays",
-                       [&] { return m_inner->setExtraArrays(extras); });
+    return guardedCall(
+        fmt::format("{}: reading the extra arrays", file()),
+        [&] { return m_inner->setExtraArrays(extras); }, [](std::string_view) {});
   }
   Result<source::SourceStep> read(int step) override {
-    return guardedCall(file(), fmt::format("reading step {}", step),
-                       [&] { return m_inner->read(step); });
+    return guardedCall(
+        fmt::format("{}: reading step {}", file(), step), [&] { return m_inner->read(step); },
+        [](std::string_view) {});
   }
 
  private:

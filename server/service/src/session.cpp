@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <crackvis/common/log.hpp>
+#include <crackvis/scene/guarded_call.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 #include <crackvis/service/session.hpp>
 
@@ -39,22 +40,13 @@ const char* eventName(const SessionEvent& event) {
 // would end the process for every user.
 template <typename Work>
 Status guarded(const std::string& session, std::string_view during, Work&& work) noexcept {
-  std::string detail;
-  try {
-    return work();
-  } catch (const std::exception& e) {
-    detail = e.what();
-  } catch (...) {
-    detail = "an exception of unknown type";
-  }
-  try {
-    log::event(stderr, "crackvis-render", "session_exception",
-               {{"session", session}, {"during", std::string(during)}, {"detail", detail}});
-    return internalError(
-        fmt::format("session {}: {} failed on an internal error: {}", session, during, detail));
-  } catch (...) {
-    return Status(StatusCode::kInternal, "internal error");
-  }
+  return scene::guardedCall(fmt::format("session {}: {}", session, during), work,
+                            [&](std::string_view detail) {
+                              log::event(stderr, "crackvis-render", "session_exception",
+                                         {{"session", session},
+                                          {"during", std::string(during)},
+                                          {"detail", std::string(detail)}});
+                            });
 }
 
 }  // namespace
