@@ -160,4 +160,82 @@ TEST_CASE("an exception on a session's thread fails only that event", "[session]
   CHECK_THAT(failing.status().message(), Catch::Contains("session s3: open failed"));
 }
 
+TEST_CASE("a session's queues stay bounded while its stream does not read", "[session][render]") {
+  const Fixture fixture;
+  auto opened = Session::open("s4", smallView(0), fixture.opener(-1), {});
+  REQUIRE(opened);
+  Session& session = **opened;
+  const std::uint64_t attachment = session.attach();  // a stream that never reads
+
+  // 400k events as fast as they come: camera moves of alternating kinds
+  // (nothing to add up), step changes (each answered by a state) and bad
+  // sizes (each answered by an error).
+  constexpr std::uint64_t kEvents = 400'000;
+  std::size_t mostEvents = 0;
+  std::size_t mostNotices = 0;
+  for (std::uint64_t id = 1; id <= kEvents; ++id) {
+    SessionEvent event{id, service::Clock::now(), service::StillEvent{}};
+    switch (id % 4) {
+      case 0:
+        event.what = service::CameraEvent{render::CameraMove::kRotate, 0.001, 0.0};
+        break;
+      case 1:
+        event.what = service::CameraEvent{render::CameraMove::kPan, 0.001, 0.0};
+        break;
+      case 2:
+        event.what = service::SetStepEvent{static_cast<int>(id / 4 % 3)};
+        break;
+      default:
+        event.what = service::ResizeEvent{3, 3};
+        break;
+    }
+    session.post(std::move(event));
+    if (id % 1000 == 0) {
+      const auto stats = session.queueStats();
+      mostEvents = std::max(mostEvents, stats.events);
+      mostNotices = std::max(mostNotices, stats.notices);
+    }
+  }
+  const auto stats = session.queueStats();
+  INFO("most events queued " << mostEvents << ", most notices " << mostNotices << ", refused "
+                             << stats.refused << ", errors dropped " << stats.errorsDropped);
+  const service::SessionLimits limits;
+  CHECK(mostEvents <= limits.maxQueuedEvents);
+  CHECK(mostNotices <= limits.maxQueuedErrors + 1);  // the errors and the newest state
+  CHECK(stats.errorsDropped > 0);
+
+  // The session still answers: once the stream has read what is queued, the
+  // next event.
+  CHECK_FALSE(session.closed());
+  service::RenderedFrame frame;
+  SessionNotice notice;
+  while (session.next(attachment, std::chrono::milliseconds(500), frame, notice) !=
+         Session::Next::kTimeout) {
+  }
+  session.post({kEvents + 1, service::Clock::now(), service::SetStepEvent{2}});
+  const SessionNotice moved = noticeFor(session, attachment, kEvents + 1);
+  CHECK(moved.error);
+  REQUIRE(moved.state);
+  CHECK(moved.state->step == 2);
+}
+
+TEST_CASE("camera moves queued back to back add up into one", "[session][render]") {
+  const Fixture fixture;
+  service::SessionLimits limits;
+  limits.maxQueuedEvents = 4;
+  auto opened = Session::open("s5", smallView(0), fixture.opener(-1), limits);
+  REQUIRE(opened);
+  Session& session = **opened;
+  // Events arrive faster than the session's thread takes them: those that
+  // meet a queued move of their kind join it.
+  for (std::uint64_t id = 1; id <= 10'000; ++id) {
+    session.post(
+        {id, service::Clock::now(), service::CameraEvent{render::CameraMove::kZoom, 0.0, 0.0}});
+  }
+  const auto stats = session.queueStats();
+  CHECK(stats.coalesced > 0);
+  CHECK(stats.refused == 0);  // moves of one kind never fill the queue
+  CHECK(stats.events <= 1);
+}
+
 }  // namespace crackvis

@@ -567,12 +567,47 @@ void Session::fail(const Status& status) {
   close();
 }
 
+// A client that sends faster than the session applies (or a stream whose
+// reader stopped) must not grow the queue without bound: camera moves of one
+// kind queued back to back add up into one, and beyond maxQueuedEvents an
+// event is refused with an error notice (itself bounded, see notify).
 void Session::post(SessionEvent event) {
+  std::optional<std::uint64_t> refused;
   {
     std::lock_guard lock(m_mutex);
-    m_events.push_back(std::move(event));
+    auto* camera = std::get_if<CameraEvent>(&event.what);
+    auto* last = m_events.empty() ? nullptr : std::get_if<CameraEvent>(&m_events.back().what);
+    if (camera != nullptr && last != nullptr && camera->move == last->move &&
+        camera->move != render::CameraMove::kReset) {
+      last->dx += camera->dx;
+      last->dy += camera->dy;
+      m_events.back().id = event.id;
+      m_events.back().received = event.received;
+      ++m_queue.coalesced;
+    } else if (m_events.size() >= m_limits.maxQueuedEvents) {
+      ++m_queue.refused;
+      refused = event.id;
+    } else {
+      m_events.push_back(std::move(event));
+    }
+  }
+  if (refused) {
+    notify({*refused,
+            Status(StatusCode::kResourceExhausted,
+                   fmt::format("session {}: {} events are queued already; event refused", m_id,
+                               m_limits.maxQueuedEvents)),
+            std::nullopt});
+    return;
   }
   m_wake.notify_one();
+}
+
+Session::QueueStats Session::queueStats() const {
+  std::lock_guard lock(m_mutex);
+  QueueStats stats = m_queue;
+  stats.events = m_events.size();
+  stats.notices = m_notices.size();
+  return stats;
 }
 
 std::uint64_t Session::attach() {
@@ -647,9 +682,28 @@ void Session::reportEventError(std::uint64_t eventId, Status error) {
   notify({eventId, std::move(error), std::nullopt});
 }
 
+// Notices wait for a stream that may never read them: a newer state
+// supersedes the queued ones (a state says everything), and beyond
+// maxQueuedErrors an event error is dropped (its state, if any, still goes).
 void Session::notify(SessionNotice notice) {
   {
     std::lock_guard lock(m_mutex);
+    if (notice.state) {
+      std::erase_if(m_notices, [](const SessionNotice& queued) {
+        return queued.error.isOk() && queued.state.has_value();
+      });
+    }
+    if (!notice.error.isOk()) {
+      const auto errors = std::count_if(m_notices.begin(), m_notices.end(),
+                                        [](const SessionNotice& n) { return !n.error.isOk(); });
+      if (static_cast<std::size_t>(errors) >= m_limits.maxQueuedErrors) {
+        ++m_queue.errorsDropped;
+        if (!notice.state) {
+          return;
+        }
+        notice.error = Status::ok();
+      }
+    }
     m_notices.push_back(std::move(notice));
   }
   m_outgoing.notify_all();

@@ -44,6 +44,9 @@ struct SessionLimits {
   double interactiveFrameMs = 35.0;  // render budget of a reduced frame
   int maxReduction = 8;
   std::size_t cacheSteps = 8;
+  // Bounds of what waits for a slow or absent stream reader.
+  std::size_t maxQueuedEvents = 256;  // beyond: an event is refused (RESOURCE_EXHAUSTED)
+  std::size_t maxQueuedErrors = 64;   // beyond: event errors are dropped
 };
 
 struct CameraEvent {
@@ -164,6 +167,16 @@ class Session {
   // view's), rendered on the session's thread.
   Result<render::Image> snapshot(int width, int height, int* step = nullptr);
 
+  // What waits in the session's queues, and what bounded them so far.
+  struct QueueStats {
+    std::size_t events = 0;   // queued for the session's thread
+    std::size_t notices = 0;  // queued for the stream
+    std::uint64_t coalesced = 0;
+    std::uint64_t refused = 0;
+    std::uint64_t errorsDropped = 0;
+  };
+  QueueStats queueStats() const;
+
   void close();
   bool closed() const;
   std::uint64_t framesDropped() const;
@@ -198,6 +211,7 @@ class Session {
   bool m_needFrame = false;  // a stream attached and wants a keyframe now
   bool m_closing = false;
   std::uint64_t m_dropped = 0;
+  QueueStats m_queue;  // the counters
   std::thread m_thread;
 };
 
