@@ -1,5 +1,6 @@
 // Rendered frames through libx264 and back: the stream's picture quality.
 #include <cmath>
+#include <cstdlib>
 
 #include <catch2/catch.hpp>
 
@@ -8,6 +9,22 @@
 #include <crackvis/render/scene_renderer.hpp>
 
 using namespace crackvis;
+
+namespace {
+
+// Pixels that differ clearly from the background (the top-left pixel): a
+// blank frame has none, so a round trip of blank frames proves nothing.
+std::size_t contentPixels(const std::vector<std::uint8_t>& rgb) {
+  std::size_t count = 0;
+  for (std::size_t k = 0; k + 2 < rgb.size(); k += 3) {
+    const int difference =
+        std::abs(rgb[k] - rgb[0]) + std::abs(rgb[k + 1] - rgb[1]) + std::abs(rgb[k + 2] - rgb[2]);
+    count += difference > 60 ? 1 : 0;
+  }
+  return count;
+}
+
+}  // namespace
 
 TEST_CASE("rendered frames survive H.264 encode and decode at >= 35 dB PSNR",
           "[encode][render][egl]") {
@@ -33,6 +50,7 @@ TEST_CASE("rendered frames survive H.264 encode and decode at >= 35 dB PSNR",
   const dem::Vec3 centre = 0.5 * crack.block.extent;
   double worst = 1e9;
   int decoded = 0;
+  std::vector<std::uint8_t> previous;
   for (int frame = 0; frame < 30; ++frame) {
     // The camera orbits the block, as during a rotate interaction.
     const double angle = 0.05 * frame;
@@ -51,15 +69,35 @@ TEST_CASE("rendered frames survive H.264 encode and decode at >= 35 dB PSNR",
     REQUIRE(back->has_value());  // zero latency: every access unit decodes at once
     ++decoded;
     worst = std::min(worst, encode::psnr(rgb, **back));
+    // The block fills a good part of the view, before and after the codec.
+    const std::size_t pixels = static_cast<std::size_t>(kWidth) * kHeight;
+    CHECK(contentPixels(rgb.rgb) > pixels / 10);
+    CHECK(contentPixels((*back)->rgb) > pixels / 10);
+    CHECK((*back)->rgb != previous);  // the orbit shows in the decoded stream
+    previous = (*back)->rgb;
   }
   INFO("lowest PSNR over 30 frames: " << worst << " dB");
   CHECK(decoded == 30);
   CHECK(worst >= 35.0);
 }
 
-TEST_CASE("the encoder refuses odd sizes and frames of another size", "[encode]") {
-  CHECK(encode::FrameEncoder::create({641, 360, 30, 4'000'000}).status().message() ==
-        "frame size 641x360: H.264 needs even sizes of at least 16");
+TEST_CASE("the encoder refuses bad settings and frames of another size", "[encode]") {
+  struct Bad {
+    encode::EncoderSettings settings;
+    const char* message;
+  };
+  for (const Bad& bad : {
+           Bad{{641, 360, 30, 4'000'000}, "frame size 641x360: H.264 needs even sizes of 16..8192"},
+           Bad{{8, 8, 30, 4'000'000}, "frame size 8x8: H.264 needs even sizes of 16..8192"},
+           Bad{{64, 48, 0, 4'000'000}, "encoder fps 0 outside 1..240"},
+           Bad{{64, 48, -5, 4'000'000}, "encoder fps -5 outside 1..240"},
+           Bad{{64, 48, 1000, 4'000'000}, "encoder fps 1000 outside 1..240"},
+           Bad{{64, 48, 30, 0}, "encoder bitrate 0 below 1 kbit per frame (30 fps)"},
+       }) {
+    const auto created = encode::FrameEncoder::create(bad.settings);
+    CHECK(created.status().code() == StatusCode::kInvalidArgument);
+    CHECK(created.status().message() == bad.message);
+  }
   auto encoder = encode::FrameEncoder::create({64, 48, 30, 1'000'000});
   REQUIRE(encoder.isOk());
   const encode::RgbFrame wrong{32, 32, std::vector<std::uint8_t>(32 * 32 * 3, 0)};

@@ -5,7 +5,9 @@
 #include <catch2/catch.hpp>
 
 #include "cracks/crack_fixtures.hpp"
+#include "support/temp_dir.hpp"
 #include <crackvis/render/scene_renderer.hpp>
+#include <crackvis/scene/scene_content.hpp>
 
 using namespace crackvis;
 
@@ -209,10 +211,16 @@ TEST_CASE("hidden particles are culled without changing the picture", "[render][
   d.view.camera =
       pipeline::CameraDescription{centre + dem::Vec3{40, 25, 15}, centre, {0, 0, 1}, 30};
   render::SceneInput input{&crack.block.lattice, crack.input(), {}, {}, &mesh};
+  // Culling is at work here: a good share of the particles is not drawn.
+  const std::size_t n = crack.block.positions.size();
+  const std::size_t drawn = scene::visibleParticles(d.particles, input).size();
+  INFO(drawn << " of " << n << " particles drawn");
+  CHECK(n - drawn > n / 10);
   render::Image culled;
   REQUIRE((*renderer)->render(d, input, culled).isOk());
   // A clip plane far outside the block keeps every particle (no culling).
   d.particles.clip = pipeline::ClipPlane{centre + dem::Vec3{1000, 0, 0}, {1, 0, 0}};
+  REQUIRE(scene::visibleParticles(d.particles, input).size() == n);
   render::Image all;
   REQUIRE((*renderer)->render(d, input, all).isOk());
   int differing = 0;
@@ -221,4 +229,19 @@ TEST_CASE("hidden particles are culled without changing the picture", "[render][
   }
   CHECK(count(all, notBlack) > kWidth * kHeight / 10);
   CHECK(differing < kWidth * kHeight / 500);
+}
+
+TEST_CASE("VTK's errors become the call's error, not a line on stderr", "[render]") {
+  render::Image image{16, 16, std::vector<std::uint8_t>(16 * 16 * 3, 128)};
+  const Status status = render::writePng(image, "/nonexistent-folder/x.png");
+  CHECK(status.code() == StatusCode::kFailedPrecondition);
+  INFO(status.message());
+  // The writer's own words, with its class and without its address.
+  CHECK_THAT(status.message(),
+             Catch::StartsWith("/nonexistent-folder/x.png: cannot write the PNG (vtkPNGWriter: "
+                               "VTK: vtkPNGWriter: "));
+  CHECK_THAT(status.message(), !Catch::Contains("0x"));
+  // An error is the call's own: the next call succeeds.
+  testing::TempDir dir;
+  CHECK(render::writePng(image, dir.file("x.png")));
 }

@@ -7,9 +7,10 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
-#include <crackvis/cracks/dem_series.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/scene_renderer.hpp>
+#include <crackvis/scene/scene_pipeline.hpp>
+#include <crackvis/source/step_source.hpp>
 
 namespace crackvis::cli {
 namespace {
@@ -57,67 +58,42 @@ Result<pipeline::PipelineDescription> description(const SnapshotOptions& options
   return d;
 }
 
+// Prints the command's one error line.
+int fail(const Status& status) {
+  printError("snapshot", status.message());
+  return kExitFailure;
+}
+
 int runSnapshot(const SnapshotOptions& options) {
   auto d = description(options);
   if (!d) {
-    printError("snapshot", d.status().message());
-    return kExitFailure;
+    return fail(d.status());
   }
-  auto series = cracks::DemSeries::open(options.file);
-  if (!series) {
-    printError("snapshot", series.status().message());
-    return kExitFailure;
-  }
-  const int steps = (*series)->stepCount();
-  const std::int64_t step = d->step < 0 ? steps - 1 : d->step;
-  if (step >= steps) {
-    printError("snapshot", fmt::format("{}: step {} out of range (the file has steps 0..{})",
-                                       options.file, step, steps - 1));
-    return kExitFailure;
-  }
-  auto initial = (*series)->load(0);
-  if (!initial) {
-    printError("snapshot", initial.status().message());
-    return kExitFailure;
-  }
-  const std::vector<dem::Vec3> initialPositions((*series)->state().positions);
-  auto input = (*series)->load(static_cast<int>(step));
-  if (!input) {
-    printError("snapshot", input.status().message());
-    return kExitFailure;
-  }
-  cracks::ExtractOptions extract;
-  extract.validate = d->cracks.validation;
-  extract.validationTolerance = d->cracks.validationTolerance;
-  extract.mergeOctahedra = d->cracks.mergeOctahedra;
-  extract.includeIntactFaces = d->showDecomposition;
-  auto extractor = cracks::makeExtractor(d->cracks.method, (*series)->graph(),
-                                         (*series)->lattice().dimension, extract);
-  cracks::CrackMesh mesh;
-  if (Status status = extractor->extract(*input, mesh); !status) {
-    printError("snapshot", status.message());
-    return kExitFailure;
+  // The render server's scene pipeline on FILE: the same data, extraction and
+  // scene input as a session's (and `crackvis-render --snapshot`'s) picture.
+  d->file = options.file;
+  auto scene = scene::ScenePipeline::open(
+      *d, [](const std::string& file) { return source::openLocalSource(file); }, 1);
+  if (!scene) {
+    return fail(scene.status());
   }
   auto renderer = render::SceneRenderer::create(d->view.width, d->view.height);
   if (!renderer) {
-    printError("snapshot", renderer.status().message());
-    return kExitFailure;
+    return fail(renderer.status());
   }
-  render::SceneInput scene{&(*series)->lattice(), *input, initialPositions,
-                           (*series)->state().velocities, &mesh};
   render::Image image;
-  for (const Status& status :
-       {(*renderer)->render(*d, scene, image), render::writePng(image, options.output)}) {
+  for (const Status& status : {(*renderer)->render(*d, (*scene)->input(), image),
+                               render::writePng(image, options.output)}) {
     if (!status) {
-      printError("snapshot", status.message());
-      return kExitFailure;
+      return fail(status);
     }
   }
   if (!options.quiet) {
-    std::printf("wrote %s: step %lld, %s cracks (%zu primitives), %dx%d, %s\n",
-                options.output.c_str(), static_cast<long long>(step),
-                std::string(cracks::toString(d->cracks.method)).c_str(), mesh.primitiveCount(),
-                image.width, image.height, (*renderer)->backend().c_str());
+    std::printf("wrote %s: step %d, %s cracks (%zu primitives), %dx%d, %s\n",
+                options.output.c_str(), (*scene)->step(),
+                std::string(cracks::toString(d->cracks.method)).c_str(),
+                (*scene)->cracks().primitiveCount(), image.width, image.height,
+                (*renderer)->backend().c_str());
   }
   return kExitOk;
 }

@@ -76,14 +76,6 @@ vtkSmartPointer<vtkPoints> toPoints(const std::vector<Vec3>& points) {
 
 }  // namespace
 
-bool CrackFilterState::sameOptions(const ExtractOptions& o) const {
-  return o.globalDecomposition == m_options.globalDecomposition &&
-         o.minBrokenBonds == m_options.minBrokenBonds && o.validate == m_options.validate &&
-         o.validationTolerance == m_options.validationTolerance &&
-         o.includeIntactFaces == m_options.includeIntactFaces &&
-         o.mergeOctahedra == m_options.mergeOctahedra;
-}
-
 bool CrackFilterState::readLattice(vtkPolyData* input, double radiusDefault, std::string& error) {
   const vtkIdType n = input->GetNumberOfPoints();
   vtkCellArray* lines = input->GetLines();
@@ -175,7 +167,7 @@ bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptio
   if (!readLattice(input, radiusDefault, error)) {
     return false;
   }
-  if (m_extractor == nullptr || method != m_method || !sameOptions(options)) {
+  if (m_extractor == nullptr || method != m_method || options != m_options) {
     m_method = method;
     m_options = options;
     m_extractor = makeExtractor(method, *m_graph, m_dimension, options);

@@ -25,7 +25,6 @@ class CrackFilterState {
 
  private:
   bool readLattice(vtkPolyData* input, double radiusDefault, std::string& error);
-  bool sameOptions(const ExtractOptions& options) const;
 
   std::vector<dem::Bond> m_bonds;
   std::vector<Vec3> m_positions;

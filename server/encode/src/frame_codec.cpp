@@ -40,6 +40,32 @@ using Frame = std::unique_ptr<AVFrame, FrameFree>;
 using Packet = std::unique_ptr<AVPacket, PacketFree>;
 using Scaler = std::unique_ptr<SwsContext, ScaleFree>;
 
+// libavcodec's allocators return null when out of memory.
+Status allocated(const void* object, const char* call) {
+  if (object == nullptr) {
+    return Status(StatusCode::kResourceExhausted, fmt::format("{}: out of memory", call));
+  }
+  return Status::ok();
+}
+
+// The settings an H.264 stream can be made with: even sizes of at least 16,
+// 1..240 fps, a bitrate of at least two frames' worth of 1 kbit/s.
+Status checkSettings(const EncoderSettings& settings) {
+  if (settings.width < 16 || settings.height < 16 || settings.width > 8192 ||
+      settings.height > 8192 || settings.width % 2 != 0 || settings.height % 2 != 0) {
+    return invalidArgument(fmt::format("frame size {}x{}: H.264 needs even sizes of 16..8192",
+                                       settings.width, settings.height));
+  }
+  if (settings.fps < 1 || settings.fps > 240) {
+    return invalidArgument(fmt::format("encoder fps {} outside 1..240", settings.fps));
+  }
+  if (settings.bitrate < 1000 * settings.fps) {
+    return invalidArgument(fmt::format("encoder bitrate {} below 1 kbit per frame ({} fps)",
+                                       settings.bitrate, settings.fps));
+  }
+  return Status::ok();
+}
+
 Status check(int code, const char* call) {
   if (code < 0) {
     return failedPrecondition(fmt::format("{}: {}", call, avError(code)));
@@ -58,11 +84,7 @@ struct FrameEncoder::Impl {
 };
 
 Result<std::unique_ptr<FrameEncoder>> FrameEncoder::create(const EncoderSettings& settings) {
-  if (settings.width < 16 || settings.height < 16 || settings.width % 2 != 0 ||
-      settings.height % 2 != 0) {
-    return invalidArgument(fmt::format("frame size {}x{}: H.264 needs even sizes of at least 16",
-                                       settings.width, settings.height));
-  }
+  CRACKVIS_RETURN_IF_ERROR(checkSettings(settings));
   const AVCodec* codec = avcodec_find_encoder_by_name("libx264");
   if (codec == nullptr) {
     return failedPrecondition("libavcodec has no libx264 encoder (install libavcodec59 with x264)");
@@ -72,6 +94,7 @@ Result<std::unique_ptr<FrameEncoder>> FrameEncoder::create(const EncoderSettings
   encoder->m_impl = std::make_unique<Impl>();
   Impl& impl = *encoder->m_impl;
   impl.context.reset(avcodec_alloc_context3(codec));
+  CRACKVIS_RETURN_IF_ERROR(allocated(impl.context.get(), "avcodec_alloc_context3(libx264)"));
   AVCodecContext* c = impl.context.get();
   c->width = settings.width;
   c->height = settings.height;
@@ -88,11 +111,13 @@ Result<std::unique_ptr<FrameEncoder>> FrameEncoder::create(const EncoderSettings
   av_opt_set(c->priv_data, "tune", "zerolatency", 0);
   CRACKVIS_RETURN_IF_ERROR(check(avcodec_open2(c, codec, nullptr), "avcodec_open2(libx264)"));
   impl.yuv.reset(av_frame_alloc());
+  CRACKVIS_RETURN_IF_ERROR(allocated(impl.yuv.get(), "av_frame_alloc"));
   impl.yuv->format = c->pix_fmt;
   impl.yuv->width = c->width;
   impl.yuv->height = c->height;
   CRACKVIS_RETURN_IF_ERROR(check(av_frame_get_buffer(impl.yuv.get(), 0), "av_frame_get_buffer"));
   impl.packet.reset(av_packet_alloc());
+  CRACKVIS_RETURN_IF_ERROR(allocated(impl.packet.get(), "av_packet_alloc"));
   // Same size, so the flag only picks how chroma is subsampled: point
   // sampling converts a 720p frame in 1.4 ms instead of 2.2 ms (bilinear),
   // and the round trip stays above 35 dB (tests/server/frame_codec.test.cpp).
@@ -117,7 +142,10 @@ Result<EncodedFrame> FrameEncoder::encode(const RgbFrame& frame, bool keyframe) 
   CRACKVIS_RETURN_IF_ERROR(check(av_frame_make_writable(impl.yuv.get()), "av_frame_make_writable"));
   const std::uint8_t* source[1] = {frame.rgb.data()};
   const int stride[1] = {frame.width * 3};
-  sws_scale(impl.toYuv.get(), source, stride, 0, frame.height, impl.yuv->data, impl.yuv->linesize);
+  if (sws_scale(impl.toYuv.get(), source, stride, 0, frame.height, impl.yuv->data,
+                impl.yuv->linesize) != frame.height) {
+    return internalError("sws_scale: RGB24 to YUV420P converted fewer rows than the frame has");
+  }
   impl.yuv->pts = impl.next;
   impl.yuv->pict_type = keyframe ? AV_PICTURE_TYPE_I : AV_PICTURE_TYPE_NONE;
   impl.yuv->key_frame = keyframe ? 1 : 0;
@@ -159,11 +187,14 @@ Result<std::unique_ptr<FrameDecoder>> FrameDecoder::create() {
   decoder->m_impl = std::make_unique<Impl>();
   Impl& impl = *decoder->m_impl;
   impl.context.reset(avcodec_alloc_context3(codec));
+  CRACKVIS_RETURN_IF_ERROR(allocated(impl.context.get(), "avcodec_alloc_context3(h264)"));
   impl.context->flags |= AV_CODEC_FLAG_LOW_DELAY;
   CRACKVIS_RETURN_IF_ERROR(
       check(avcodec_open2(impl.context.get(), codec, nullptr), "avcodec_open2(h264)"));
   impl.yuv.reset(av_frame_alloc());
+  CRACKVIS_RETURN_IF_ERROR(allocated(impl.yuv.get(), "av_frame_alloc"));
   impl.packet.reset(av_packet_alloc());
+  CRACKVIS_RETURN_IF_ERROR(allocated(impl.packet.get(), "av_packet_alloc"));
   return decoder;
 }
 
@@ -193,6 +224,7 @@ Result<std::optional<RgbFrame>> FrameDecoder::decode(const EncodedFrame& frame) 
                                     width, height, AV_PIX_FMT_RGB24,
                                     SWS_BILINEAR | SWS_ACCURATE_RND | SWS_FULL_CHR_H_INT, nullptr,
                                     nullptr, nullptr));
+    CRACKVIS_RETURN_IF_ERROR(allocated(impl.toRgb.get(), "sws_getContext(YUV to RGB24)"));
     impl.scalerWidth = width;
     impl.scalerHeight = height;
   }
@@ -206,9 +238,13 @@ Result<std::optional<RgbFrame>> FrameDecoder::decode(const EncodedFrame& frame) 
   RgbFrame rgb{width, height, std::vector<std::uint8_t>(bytes + kScalerPadding)};
   std::uint8_t* target[1] = {rgb.rgb.data()};
   const int stride[1] = {width * 3};
-  sws_scale(impl.toRgb.get(), impl.yuv->data, impl.yuv->linesize, 0, height, target, stride);
-  rgb.rgb.resize(bytes);
+  const int rows =
+      sws_scale(impl.toRgb.get(), impl.yuv->data, impl.yuv->linesize, 0, height, target, stride);
   av_frame_unref(impl.yuv.get());
+  if (rows != height) {
+    return internalError("sws_scale: YUV to RGB24 converted fewer rows than the frame has");
+  }
+  rgb.rgb.resize(bytes);
   return std::optional<RgbFrame>(std::move(rgb));
 }
 

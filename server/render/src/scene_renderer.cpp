@@ -33,9 +33,10 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 
-#include <crackvis/cracks/lattice_cells.hpp>
+#include "vtk_errors.hpp"
 #include <crackvis/render/egl_context.hpp>
 #include <crackvis/render/scene_renderer.hpp>
+#include <crackvis/scene/scene_content.hpp>
 
 namespace crackvis::render {
 namespace {
@@ -148,104 +149,10 @@ const char* bondArrayName(pipeline::BondColourBy by) {
   return "bond_state";
 }
 
-// The per-particle value a colour-by names.
-std::vector<double> particleValues(const pipeline::ParticlesDescription& particles,
-                                   const SceneInput& input) {
-  const std::size_t n = input.step.positions.size();
-  std::vector<double> values(n, 0.0);
-  switch (particles.colourBy) {
-    case pipeline::ParticleColourBy::kRadius:
-      std::copy(input.step.radius.begin(), input.step.radius.end(), values.begin());
-      break;
-    case pipeline::ParticleColourBy::kDisplacement:
-      for (std::size_t i = 0; i < n && i < input.initialPositions.size(); ++i) {
-        values[i] = dem::norm(input.step.positions[i] - input.initialPositions[i]);
-      }
-      break;
-    case pipeline::ParticleColourBy::kVelocity:
-      for (std::size_t i = 0; i < n && i < input.velocities.size(); ++i) {
-        const auto& v = input.velocities[i];
-        values[i] = std::sqrt(double{v[0]} * v[0] + double{v[1]} * v[1] + double{v[2]} * v[2]);
-      }
-      break;
-    case pipeline::ParticleColourBy::kDamage: {
-      // Share of a particle's bonds that are broken.
-      std::vector<int> bonds(n, 0);
-      std::vector<int> broken(n, 0);
-      for (std::size_t b = 0; b < input.lattice->bonds.size(); ++b) {
-        for (auto end : {input.lattice->bonds[b].first, input.lattice->bonds[b].second}) {
-          ++bonds[static_cast<std::size_t>(end)];
-          broken[static_cast<std::size_t>(end)] += input.step.bondState[b] != 0 ? 1 : 0;
-        }
-      }
-      for (std::size_t i = 0; i < n; ++i) {
-        values[i] = bonds[i] > 0 ? static_cast<double>(broken[i]) / bonds[i] : 0.0;
-      }
-      break;
-    }
-    case pipeline::ParticleColourBy::kSolid:
-      break;
-  }
-  return values;
-}
-
-// The particles a viewer can see when they are opaque and unclipped: those
-// on the lattice's boundary (fewer bonds than the most) or at a broken bond,
-// and two more layers of bonded neighbours below them (in FCC, the third
-// layer shows through the gaps of the first two along <111>). Deeper ones
-// are hidden; impostors write their depth, so the GPU's early depth test
-// cannot skip them and every hidden sphere would cost its fragments.
-std::vector<vtkIdType> visibleParticles(const pipeline::ParticlesDescription& particles,
-                                        const SceneInput& input) {
-  const std::size_t n = input.step.positions.size();
-  std::vector<vtkIdType> all(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    all[i] = static_cast<vtkIdType>(i);
-  }
-  const auto& bonds = input.lattice->bonds;
-  if (particles.opacity < 1.0 || particles.clip || bonds.empty() ||
-      input.step.bondState.size() != bonds.size()) {
-    return all;
-  }
-  std::vector<int> degree(n, 0);
-  std::vector<std::uint8_t> keep(n, 0);
-  for (std::size_t b = 0; b < bonds.size(); ++b) {
-    const auto i = static_cast<std::size_t>(bonds[b].first);
-    const auto j = static_cast<std::size_t>(bonds[b].second);
-    ++degree[i];
-    ++degree[j];
-    if (input.step.bondState[b] != 0) {
-      keep[i] = keep[j] = 1;
-    }
-  }
-  const int most = *std::max_element(degree.begin(), degree.end());
-  for (std::size_t i = 0; i < n; ++i) {
-    keep[i] = keep[i] != 0 || degree[i] < most ? 1 : 0;
-  }
-  for (std::uint8_t layer = 2; layer <= 3; ++layer) {
-    for (const dem::Bond& bond : bonds) {
-      auto& a = keep[static_cast<std::size_t>(bond.first)];
-      auto& c = keep[static_cast<std::size_t>(bond.second)];
-      if (a != 0 && a < layer && c == 0) {
-        c = layer;
-      } else if (c != 0 && c < layer && a == 0) {
-        a = layer;
-      }
-    }
-  }
-  std::vector<vtkIdType> visible;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (keep[i] != 0) {
-      visible.push_back(static_cast<vtkIdType>(i));
-    }
-  }
-  return visible;
-}
-
 vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
                                         const SceneInput& input, Legend* legend) {
   const auto& particles = d.particles;
-  const std::vector<vtkIdType> visible = visibleParticles(particles, input);
+  const std::vector<dem::ParticleIndex> visible = scene::visibleParticles(particles, input);
   const auto n = static_cast<vtkIdType>(visible.size());
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
@@ -272,7 +179,7 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   data->GetPointData()->AddArray(radius);
   vtkNew<vtkDoubleArray> values;
   values->SetName(particleArrayName(particles.colourBy));
-  const auto perParticle = particleValues(particles, input);
+  const auto perParticle = scene::particleValues(particles, input);
   values->SetNumberOfValues(n);
   for (vtkIdType k = 0; k < n; ++k) {
     values->SetValue(k, perParticle[static_cast<std::size_t>(visible[k])]);
@@ -356,60 +263,6 @@ const char* crackArrayName(pipeline::CrackColourBy by) {
   return nullptr;
 }
 
-// The primitives of `mesh` that `keep(k)` selects (k in VTK order: vertices,
-// lines, polygons, volume cells), with their cell data; points are shared.
-template <typename Keep>
-cracks::CrackMesh selectPrimitives(const cracks::CrackMesh& mesh, Keep keep) {
-  cracks::CrackMesh out;
-  out.dimension = mesh.dimension;
-  out.points = mesh.points;
-  out.pointData = mesh.pointData;
-  std::vector<std::size_t> kept;
-  std::size_t k = 0;
-  for (std::int32_t v : mesh.vertices) {
-    if (keep(k)) {
-      out.vertices.push_back(v);
-      kept.push_back(k);
-    }
-    ++k;
-  }
-  auto copyList = [&](const cracks::PrimitiveList& from, cracks::PrimitiveList& to,
-                      const std::vector<std::uint8_t>* types) {
-    for (std::size_t i = 0; i < from.size(); ++i, ++k) {
-      if (!keep(k)) {
-        continue;
-      }
-      to.addRange(from.connectivity.begin() + from.offsets[i],
-                  from.connectivity.begin() + from.offsets[i + 1]);
-      if (types != nullptr) {
-        out.volumeCellTypes.push_back((*types)[i]);
-      }
-      kept.push_back(k);
-    }
-  };
-  copyList(mesh.lines, out.lines, nullptr);
-  copyList(mesh.polygons, out.polygons, nullptr);
-  copyList(mesh.volumeCells, out.volumeCells, &mesh.volumeCellTypes);
-  for (const cracks::AttributeArray& array : mesh.cellData) {
-    cracks::AttributeArray selected{array.name, array.type, array.components, {}};
-    const auto c = static_cast<std::size_t>(array.components);
-    for (std::size_t i : kept) {
-      selected.values.insert(selected.values.end(), array.values.begin() + i * c,
-                             array.values.begin() + (i + 1) * c);
-    }
-    out.cellData.push_back(std::move(selected));
-  }
-  return out;
-}
-
-// A flag of primitive k from a cell array (absent array: `otherwise`).
-bool flagOf(const cracks::AttributeArray* array, std::size_t k, bool otherwise) {
-  if (array == nullptr || k >= array->values.size()) {
-    return otherwise;
-  }
-  return array->values[k] != 0.0;
-}
-
 // One actor of crack primitives: surfaces (or lines in 2D) through an
 // ordinary mapper; volume cells (cell attribute, 3D) through a data set mapper.
 vtkSmartPointer<vtkActor> meshActor(const cracks::CrackMesh& mesh, const char* colourArray,
@@ -452,56 +305,44 @@ vtkSmartPointer<vtkActor> meshActor(const cracks::CrackMesh& mesh, const char* c
 // (the local decomposition) as separate actors when the description shows them.
 void addCracks(const pipeline::PipelineDescription& d, const cracks::CrackMesh& mesh,
                vtkRenderer* renderer, Legend* legend) {
-  const cracks::AttributeArray* state = mesh.findCellData("bond_state");
-  const cracks::AttributeArray* inconsistent = mesh.findCellData("inconsistent");
-  const auto crack = selectPrimitives(mesh, [&](std::size_t k) {
-    return flagOf(state, k, true) && !flagOf(inconsistent, k, false);
-  });
-  auto actor = meshActor(crack, crackArrayName(d.cracks.colourBy), d.view.colourMap, legend);
+  const scene::CrackLayers layers = scene::crackLayers(d, mesh);
+  auto actor =
+      meshActor(layers.cracks, crackArrayName(d.cracks.colourBy), d.view.colourMap, legend);
   setColour(actor->GetProperty(), d.cracks.colour);
   actor->GetProperty()->SetOpacity(d.cracks.opacity);
   renderer->AddActor(actor);
-  if (d.showInconsistent && inconsistent != nullptr) {
-    const auto marks =
-        selectPrimitives(mesh, [&](std::size_t k) { return flagOf(inconsistent, k, false); });
-    auto marksActor = meshActor(marks, nullptr, d.view.colourMap, nullptr);
+  if (layers.marks.primitiveCount() > 0) {
+    auto marksActor = meshActor(layers.marks, nullptr, d.view.colourMap, nullptr);
     marksActor->GetProperty()->SetColor(1.0, 0.85, 0.0);  // yellow: stands out on every map
     marksActor->GetProperty()->SetLineWidth(3.0);
     renderer->AddActor(marksActor);
   }
-  if (d.showDecomposition && state != nullptr) {
-    const auto intact = selectPrimitives(mesh, [&](std::size_t k) {
-      return !flagOf(state, k, true) && !flagOf(inconsistent, k, false);
-    });
-    if (intact.primitiveCount() > 0) {
-      auto intactActor = meshActor(intact, nullptr, d.view.colourMap, nullptr);
-      intactActor->GetProperty()->SetColor(0.75, 0.8, 0.9);
-      intactActor->GetProperty()->SetOpacity(0.25);
-      renderer->AddActor(intactActor);
-    }
+  if (layers.intact.primitiveCount() > 0) {
+    auto intactActor = meshActor(layers.intact, nullptr, d.view.colourMap, nullptr);
+    intactActor->GetProperty()->SetColor(0.75, 0.8, 0.9);
+    intactActor->GetProperty()->SetOpacity(0.25);
+    renderer->AddActor(intactActor);
   }
+}
+
+// Lines between the particles of `bonds`.
+vtkSmartPointer<vtkPolyData> bondPolyData(const SceneInput& input,
+                                          std::span<const dem::BondIndex> bonds) {
+  vtkNew<vtkCellArray> lines;
+  for (dem::BondIndex b : bonds) {
+    const dem::Bond& bond = input.lattice->bonds[static_cast<std::size_t>(b)];
+    const vtkIdType ids[2] = {bond.first, bond.second};
+    lines->InsertNextCell(2, ids);
+  }
+  auto data = vtkSmartPointer<vtkPolyData>::New();
+  data->SetPoints(positionPoints(input.step.positions));
+  data->SetLines(lines);
+  return data;
 }
 
 // The cell methods' local decomposition: the edges of its cells, faint.
 void addDecompositionEdges(const SceneInput& input, vtkRenderer* renderer) {
-  const cracks::LatticeDecomposition& decomposition = *input.decomposition;
-  std::vector<std::uint8_t> used(input.lattice->bonds.size(), 0);
-  for (const cracks::LatticeCell& cell : decomposition.cells()) {
-    const auto& shape = cracks::shapeOf(cell.type);
-    for (std::size_t e = 0; e < shape.edges.size(); ++e) {
-      used[static_cast<std::size_t>(decomposition.bondOf(cell, static_cast<int>(e)))] = 1;
-    }
-  }
-  vtkNew<vtkCellArray> lines;
-  for (std::size_t b = 0; b < used.size(); ++b) {
-    if (used[b] != 0) {
-      const vtkIdType ids[2] = {input.lattice->bonds[b].first, input.lattice->bonds[b].second};
-      lines->InsertNextCell(2, ids);
-    }
-  }
-  vtkNew<vtkPolyData> data;
-  data->SetPoints(positionPoints(input.step.positions));
-  data->SetLines(lines);
+  const auto data = bondPolyData(input, scene::decompositionBonds(input));
   vtkNew<vtkPolyDataMapper> mapper;
   mapper->SetInputData(data);
   mapper->ScalarVisibilityOff();
@@ -522,28 +363,12 @@ double meanRadius(std::span<const double> radius) {
 
 void addBonds(const pipeline::PipelineDescription& d, const SceneInput& input,
               vtkRenderer* renderer, Legend* legend) {
-  vtkNew<vtkCellArray> lines;
+  const scene::BondLines shown = scene::bondLines(d.bonds, input);
   vtkNew<vtkDoubleArray> values;
   values->SetName(bondArrayName(d.bonds.colourBy));
-  for (std::size_t b = 0; b < input.lattice->bonds.size(); ++b) {
-    const bool broken = input.step.bondState[b] != 0;
-    if (d.bonds.show == pipeline::BondSelection::kBroken && !broken) {
-      continue;
-    }
-    const vtkIdType ids[2] = {input.lattice->bonds[b].first, input.lattice->bonds[b].second};
-    lines->InsertNextCell(2, ids);
-    double value = broken ? 1.0 : 0.0;
-    if (d.bonds.colourBy == pipeline::BondColourBy::kForce && !input.step.bondForce.empty()) {
-      value = input.step.bondForce[b];
-    } else if (d.bonds.colourBy == pipeline::BondColourBy::kBreakStep &&
-               !input.step.breakStep.empty()) {
-      value = input.step.breakStep[b];
-    }
-    values->InsertNextValue(value);
-  }
-  auto data = vtkSmartPointer<vtkPolyData>::New();
-  data->SetPoints(positionPoints(input.step.positions));
-  data->SetLines(lines);
+  values->SetNumberOfValues(static_cast<vtkIdType>(shown.values.size()));
+  std::copy(shown.values.begin(), shown.values.end(), values->GetPointer(0));
+  const auto data = bondPolyData(input, shown.bonds);
   data->GetCellData()->AddArray(values);
   vtkNew<vtkPolyDataMapper> mapper;
   if (d.bonds.representation == pipeline::BondRepresentation::kTubes) {
@@ -630,6 +455,7 @@ Result<std::unique_ptr<SceneRenderer>> SceneRenderer::create(int width, int heig
   if (!egl) {
     return egl.status();
   }
+  const VtkErrorScope vtkErrors;
   std::unique_ptr<SceneRenderer> renderer(new SceneRenderer());
   Impl& impl = *renderer->m_impl;
   impl.egl = std::move(egl).value();
@@ -647,6 +473,8 @@ Result<std::unique_ptr<SceneRenderer>> SceneRenderer::create(int width, int heig
   impl.renderer = vtkSmartPointer<vtkRenderer>::New();
   impl.window->AddRenderer(impl.renderer);
   impl.window->Render();
+  CRACKVIS_RETURN_IF_ERROR(
+      vtkErrors.status(fmt::format("{}: the first frame", impl.egl->description())));
   const char* capabilities = impl.window->ReportCapabilities();
   if (capabilities == nullptr || std::string(capabilities).find("OpenGL") == std::string::npos) {
     return failedPrecondition(
@@ -668,6 +496,7 @@ Status SceneRenderer::setScene(const pipeline::PipelineDescription& d, const Sce
     return invalidArgument("a scene needs the lattice");
   }
   CRACKVIS_RETURN_IF_ERROR(impl.egl->makeCurrent());
+  const VtkErrorScope vtkErrors;
   vtkRenderer* renderer = impl.renderer;
   renderer->RemoveAllViewProps();
   renderer->SetBackground(d.view.background.r / 255.0, d.view.background.g / 255.0,
@@ -704,7 +533,7 @@ Status SceneRenderer::setScene(const pipeline::PipelineDescription& d, const Sce
     impl.cameraSet = true;
   }
   renderer->ResetCameraClippingRange();
-  return Status::ok();
+  return vtkErrors.status("building the scene");
 }
 
 Status SceneRenderer::renderFrame(int width, int height, Image& out, bool interactive) {
@@ -714,6 +543,7 @@ Status SceneRenderer::renderFrame(int width, int height, Image& out, bool intera
                                        height, impl.width, impl.height));
   }
   CRACKVIS_RETURN_IF_ERROR(impl.egl->makeCurrent());
+  const VtkErrorScope vtkErrors;
   // A frame smaller than the pbuffer renders into its lower-left corner.
   impl.window->SetSize(width, height);
   impl.renderer->ResetCameraClippingRange();
@@ -731,11 +561,17 @@ Status SceneRenderer::renderFrame(int width, int height, Image& out, bool intera
     }
   }
   impl.window->Render();
+  CRACKVIS_RETURN_IF_ERROR(vtkErrors.status(fmt::format("rendering a {}x{} frame", width, height)));
   vtkNew<vtkUnsignedCharArray> pixels;
-  impl.window->GetPixelData(0, 0, width - 1, height - 1, 0, pixels, 0);
+  const std::size_t row = static_cast<std::size_t>(width) * 3;
+  if (impl.window->GetPixelData(0, 0, width - 1, height - 1, 0, pixels, 0) != VTK_OK ||
+      static_cast<std::size_t>(pixels->GetNumberOfValues()) !=
+          row * static_cast<std::size_t>(height)) {
+    return internalError(fmt::format("reading the {}x{} frame's pixels back from GL failed ({})",
+                                     width, height, vtkErrors.status("glReadPixels").message()));
+  }
   out.width = width;
   out.height = height;
-  const std::size_t row = static_cast<std::size_t>(width) * 3;
   // Capacity beyond the pixels: swscale reads RGB rows in whole SIMD blocks.
   out.rgb.reserve(row * static_cast<std::size_t>(height) + 256);
   out.rgb.resize(row * static_cast<std::size_t>(height));
@@ -864,12 +700,14 @@ vtkSmartPointer<vtkImageData> toImageData(const Image& image) {
 }  // namespace
 
 Status writePng(const Image& image, const std::string& path) {
+  const VtkErrorScope vtkErrors;
   vtkNew<vtkPNGWriter> writer;
   writer->SetFileName(path.c_str());
   writer->SetInputData(toImageData(image));
   writer->Write();
-  if (writer->GetErrorCode() != 0) {
-    return failedPrecondition(fmt::format("{}: cannot write the PNG", path));
+  if (const Status vtk = vtkErrors.status("vtkPNGWriter"); writer->GetErrorCode() != 0 || !vtk) {
+    return failedPrecondition(fmt::format("{}: cannot write the PNG ({})", path,
+                                          vtk ? "no detail from VTK" : vtk.message()));
   }
   return Status::ok();
 }
@@ -878,13 +716,16 @@ Result<std::vector<std::uint8_t>> encodePng(const Image& image) {
   if (image.width < 1 || image.height < 1) {
     return invalidArgument("an empty image has no PNG");
   }
+  const VtkErrorScope vtkErrors;
   vtkNew<vtkPNGWriter> writer;
   writer->WriteToMemoryOn();
   writer->SetInputData(toImageData(image));
   writer->Write();
   vtkUnsignedCharArray* bytes = writer->GetResult();
-  if (writer->GetErrorCode() != 0 || bytes == nullptr) {
-    return internalError("the PNG encoder failed");
+  if (const Status vtk = vtkErrors.status("vtkPNGWriter");
+      writer->GetErrorCode() != 0 || bytes == nullptr || !vtk) {
+    return internalError(
+        fmt::format("the PNG encoder failed ({})", vtk ? "no detail from VTK" : vtk.message()));
   }
   const auto* first = bytes->GetPointer(0);
   return std::vector<std::uint8_t>(first, first + bytes->GetNumberOfValues());

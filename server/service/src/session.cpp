@@ -5,8 +5,8 @@
 #include <fmt/format.h>
 
 #include <crackvis/common/log.hpp>
-#include <crackvis/cracks/bond_graph.hpp>
-#include <crackvis/cracks/extractor.hpp>
+#include <crackvis/scene/guarded_call.hpp>
+#include <crackvis/scene/scene_pipeline.hpp>
 #include <crackvis/service/session.hpp>
 
 namespace crackvis::service {
@@ -14,39 +14,6 @@ namespace {
 
 double millisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-cracks::ExtractOptions extractOptions(const pipeline::PipelineDescription& d) {
-  cracks::ExtractOptions options;
-  options.validate = d.cracks.validation;
-  options.validationTolerance = d.cracks.validationTolerance;
-  options.mergeOctahedra = d.cracks.mergeOctahedra;
-  options.includeIntactFaces = d.showDecomposition;
-  return options;
-}
-
-// Whether two descriptions need different extractors.
-// The arrays beyond positions and bond states that a description colours by
-// (docs/pipeline.md): a session reads them only then.
-source::ExtraArrays extraArraysFor(const pipeline::PipelineDescription& d) {
-  using pipeline::BondColourBy;
-  using pipeline::CrackColourBy;
-  source::ExtraArrays extras;
-  extras.velocities = d.particles.colourBy == pipeline::ParticleColourBy::kVelocity;
-  extras.bondForce =
-      d.cracks.colourBy == CrackColourBy::kForce || d.bonds.colourBy == BondColourBy::kForce;
-  extras.breakStep = d.cracks.colourBy == CrackColourBy::kBreakStep ||
-                     d.bonds.colourBy == BondColourBy::kBreakStep;
-  return extras;
-}
-
-bool sameExtraction(const pipeline::PipelineDescription& a,
-                    const pipeline::PipelineDescription& b) {
-  return a.file == b.file && a.cracks.method == b.cracks.method &&
-         a.cracks.validation == b.cracks.validation &&
-         a.cracks.validationTolerance == b.cracks.validationTolerance &&
-         a.cracks.mergeOctahedra == b.cracks.mergeOctahedra &&
-         a.showDecomposition == b.showDecomposition;
 }
 
 Status checkViewSize(int width, int height, const SessionLimits& limits) {
@@ -60,21 +27,37 @@ Status checkViewSize(int width, int height, const SessionLimits& limits) {
   return Status::ok();
 }
 
+// What an event is, for the log and error messages.
+const char* eventName(const SessionEvent& event) {
+  static constexpr const char* kNames[] = {"camera",           "resize", "set_step", "play",
+                                           "replace_pipeline", "still",  "keyframe"};
+  return kNames[event.what.index()];
+}
+
+// Runs `work` on a session's thread. An exception (a bug, or a library that
+// throws on data it should have refused) fails only this piece of work with
+// an INTERNAL error and an event line; it never escapes the thread, which
+// would end the process for every user.
+template <typename Work>
+Status guarded(const std::string& session, std::string_view during, Work&& work) noexcept {
+  return scene::guardedCall(fmt::format("session {}: {}", session, during), work,
+                            [&](std::string_view detail) {
+                              log::event(stderr, "crackvis-render", "session_exception",
+                                         {{"session", session},
+                                          {"during", std::string(during)},
+                                          {"detail", std::string(detail)}});
+                            });
+}
+
 }  // namespace
 
-// Everything the session's thread owns. Member order is destruction order
-// in reverse: the extractor goes before the graph, the graph before the
-// cache whose source holds the bonds it views.
+// Everything the session's thread owns: the scene's data (ScenePipeline), the
+// renderer with its GL context, and the interaction state (view size,
+// playing, resolution).
 struct Session::Worker {
   Session& session;
-  pipeline::PipelineDescription description;
-  std::unique_ptr<source::StepCache> cache;
-  std::unique_ptr<cracks::BondGraph> graph;
-  std::unique_ptr<cracks::CrackExtractor> extractor;
+  std::unique_ptr<scene::ScenePipeline> scene;
   std::unique_ptr<render::SceneRenderer> renderer;
-  std::shared_ptr<const source::SourceStep> initial;  // step 0: displacements
-  std::shared_ptr<const source::SourceStep> current;
-  cracks::CrackMesh mesh;
   FrameTimings stepTimings;  // of the last step change (reported with the next frame)
 
   int width = 0;
@@ -97,36 +80,8 @@ struct Session::Worker {
 
   explicit Worker(Session& owner) : session(owner) {}
 
-  int stepCount() const { return cache->source().stepCount(); }
-
-  Status openFile(const pipeline::PipelineDescription& d) {
-    auto source = session.m_opener(d.file);
-    if (!source) {
-      return source.status();
-    }
-    if ((*source)->stepCount() < 1) {
-      return failedPrecondition(fmt::format("{}: the file has no steps", d.file));
-    }
-    CRACKVIS_RETURN_IF_ERROR((*source)->setExtraArrays(extraArraysFor(d)));
-    auto newCache =
-        std::make_unique<source::StepCache>(std::move(source).value(), session.m_limits.cacheSteps);
-    auto first = newCache->get(0);
-    if (!first) {
-      return first.status();
-    }
-    extractor.reset();
-    graph.reset();
-    cache = std::move(newCache);
-    initial = first->step;
-    const dem::Lattice& lattice = cache->source().lattice();
-    graph = std::make_unique<cracks::BondGraph>(lattice.particleCount(), lattice.bonds);
-    return Status::ok();
-  }
-
-  void makeExtractor(const pipeline::PipelineDescription& d) {
-    extractor = cracks::makeExtractor(d.cracks.method, *graph, cache->source().lattice().dimension,
-                                      extractOptions(d));
-  }
+  int stepCount() const { return scene->stepCount(); }
+  const pipeline::PipelineDescription& description() const { return scene->description(); }
 
   Status ensureRenderer(int w, int h) {
     if (renderer && renderer->capacityWidth() >= w && renderer->capacityHeight() >= h) {
@@ -161,7 +116,7 @@ struct Session::Worker {
     if (camera) {
       renderer->setCamera(*camera);
     }
-    return current ? buildScene(false) : Status::ok();
+    return scene ? buildScene(false) : Status::ok();
   }
 
   Status needRenderer() const {
@@ -172,52 +127,37 @@ struct Session::Worker {
     return Status::ok();
   }
 
-  // Extracts the current step's cracks and builds the scene.
-  Status extractAndBuild(bool resetCamera) {
-    const cracks::StepInput input = stepInput();
-    const auto extractStart = Clock::now();
-    CRACKVIS_RETURN_IF_ERROR(extractor->extract(input, mesh));
-    stepTimings.extractMs = millisecondsSince(extractStart);
-    return buildScene(resetCamera);
-  }
-
-  // The current step as the extractor and the scene see it.
-  cracks::StepInput stepInput() const {
-    const source::StepSource& source = cache->source();
-    return {current->positions, current->bondState, source.lattice().radius, current->bondForce,
-            source.breakSteps()};
+  // What the pipeline's last step change cost, reported with the next frame.
+  void noteStepTimings() {
+    stepTimings = {};
+    stepTimings.loadMs = scene->timings().loadMs;
+    stepTimings.extractMs = scene->timings().extractMs;
   }
 
   Status buildScene(bool resetCamera) {
-    render::SceneInput scene{&cache->source().lattice(), stepInput(), initial->positions,
-                             current->velocities,        &mesh,       extractor->decomposition()};
-    const auto start = Clock::now();
     CRACKVIS_RETURN_IF_ERROR(needRenderer());
-    CRACKVIS_RETURN_IF_ERROR(renderer->setScene(description, scene, resetCamera));
+    const auto start = Clock::now();
+    CRACKVIS_RETURN_IF_ERROR(renderer->setScene(description(), scene->input(), resetCamera));
     stepTimings.sceneMs = millisecondsSince(start);
     dirty = true;
     return Status::ok();
   }
 
   Status showStep(int step) {
-    CRACKVIS_RETURN_IF_ERROR(source::checkStepInRange(description.file, step, stepCount()));
-    auto loaded = cache->get(step);
-    if (!loaded) {
-      return loaded.status();
-    }
-    stepTimings = {};
-    stepTimings.loadMs = loaded->loadMs;
-    current = loaded->step;
-    return extractAndBuild(false);
+    CRACKVIS_RETURN_IF_ERROR(scene->showStep(step));
+    noteStepTimings();
+    return buildScene(false);
   }
 
   Status start() {
     const auto& d = session.m_initial;
     CRACKVIS_RETURN_IF_ERROR(checkViewSize(d.view.width, d.view.height, session.m_limits));
-    description = d;
-    CRACKVIS_RETURN_IF_ERROR(openFile(d));
-    const int step = d.step < 0 ? stepCount() - 1 : static_cast<int>(d.step);
-    CRACKVIS_RETURN_IF_ERROR(source::checkStepInRange(d.file, step, stepCount()));
+    auto opened = scene::ScenePipeline::open(d, session.m_opener, session.m_limits.cacheSteps);
+    if (!opened) {
+      return opened.status();
+    }
+    scene = std::move(opened).value();
+    noteStepTimings();
     width = d.view.width;
     height = d.view.height;
     auto created = render::SceneRenderer::create(width, height);
@@ -225,20 +165,18 @@ struct Session::Worker {
       return created.status();
     }
     renderer = std::move(created).value();
-    makeExtractor(d);
-    CRACKVIS_RETURN_IF_ERROR(showStep(step));
+    CRACKVIS_RETURN_IF_ERROR(buildScene(false));
+    const dem::Lattice& lattice = scene->source().lattice();
     session.m_info.stepCount = stepCount();
-    session.m_info.particleCount =
-        static_cast<std::int64_t>(cache->source().lattice().particleCount());
-    session.m_info.bondCount = static_cast<std::int64_t>(cache->source().lattice().bondCount());
+    session.m_info.particleCount = static_cast<std::int64_t>(lattice.particleCount());
+    session.m_info.bondCount = static_cast<std::int64_t>(lattice.bondCount());
     session.m_info.backend = renderer->backend();
     session.m_info.file = d.file;
     return Status::ok();
   }
 
   SessionState state() const {
-    return {current ? current->index : 0, stepCount(), playing, width, height,
-            pipeline::toXml(description)};
+    return {scene->step(), stepCount(), playing, width, height, pipeline::toXml(description())};
   }
 
   void interacted(const SessionEvent& event) {
@@ -276,8 +214,7 @@ struct Session::Worker {
     }
     width = resize.width;
     height = resize.height;
-    description.view.width = width;
-    description.view.height = height;
+    scene->setViewSize(width, height);
     interacted(event);
     session.notify({event.id, Status::ok(), state()});
   }
@@ -288,7 +225,7 @@ struct Session::Worker {
       reject(event, status);
       return;
     }
-    cache->prefetch(step + 1);
+    scene->prefetch(step + 1);
     interacted(event);
     session.notify({event.id, Status::ok(), state()});
   }
@@ -300,10 +237,10 @@ struct Session::Worker {
     }
     playing = play.playing;
     loop = play.loop;
-    playFps = play.fps > 0.0 ? play.fps : description.stream.fps;
+    playFps = play.fps > 0.0 ? play.fps : description().stream.fps;
     nextTick = Clock::now();
-    if (playing && current) {
-      cache->prefetch(current->index + 1);
+    if (playing) {
+      scene->prefetch(scene->step() + 1);
     }
     lastEventReceived = event.received;
     dirty = true;
@@ -324,101 +261,39 @@ struct Session::Worker {
     session.notify({event.id, Status::ok(), state()});
   }
 
-  // What a replacement may change, kept so that one failing part-way (a new
-  // file that opens but lacks the step, a read that fails) leaves the session
-  // showing what it showed rather than half-switched.
-  struct Shown {
-    std::unique_ptr<source::StepCache> cache;           // set only when replaced
-    std::unique_ptr<cracks::BondGraph> graph;           // set only when replaced
-    std::unique_ptr<cracks::CrackExtractor> extractor;  // set only when replaced
-    std::shared_ptr<const source::SourceStep> initial;
-    std::shared_ptr<const source::SourceStep> current;
-    pipeline::PipelineDescription description;
-    int width = 0;
-    int height = 0;
-  };
-
+  // A replacement that fails part-way (a new file that opens but lacks the
+  // step, a read that fails, a rendering context that cannot grow) leaves
+  // the session showing what it showed rather than half-switched.
   Status replaceDescription(pipeline::PipelineDescription next) {
     CRACKVIS_RETURN_IF_ERROR(checkViewSize(next.view.width, next.view.height, session.m_limits));
-    Shown before{nullptr, nullptr, nullptr, initial, current, description, width, height};
-    Status status = applyDescription(std::move(next), before);
-    if (!status) {
-      restore(std::move(before));
-    }
-    return status;
-  }
-
-  Status applyDescription(pipeline::PipelineDescription next, Shown& before) {
-    const bool newFile = next.file != description.file;
-    const bool newExtractor = !sameExtraction(next, description);
-    const bool stepChanged = next.step != description.step;
-    // Colouring by another array reads the file anew with it (rare: a menu
-    // choice), so that the step cache never mixes steps with and without it.
-    const bool reopen = newFile || extraArraysFor(next) != extraArraysFor(description);
-    const int shown = current ? current->index : -1;
-    if (reopen) {
-      before.cache = std::move(cache);
-      before.graph = std::move(graph);
-      before.extractor = std::move(extractor);
-      CRACKVIS_RETURN_IF_ERROR(openFile(next));
-      current.reset();
-    }
-    const int step = next.step < 0 ? stepCount() - 1 : static_cast<int>(next.step);
-    const int target = newFile || stepChanged ? step : shown;
-    CRACKVIS_RETURN_IF_ERROR(source::checkStepInRange(next.file, target, stepCount()));
-    CRACKVIS_RETURN_IF_ERROR(ensureRenderer(next.view.width, next.view.height));
+    const bool newFile = next.file != description().file;
     const bool cameraGiven =
-        next.view.camera.has_value() && next.view.camera != description.view.camera;
-    description = std::move(next);
-    width = description.view.width;
-    height = description.view.height;
-    if (newExtractor || !extractor) {
-      if (extractor) {
-        before.extractor = std::move(extractor);
+        next.view.camera.has_value() && next.view.camera != description().view.camera;
+    CRACKVIS_RETURN_IF_ERROR(scene->replace(std::move(next)));
+    noteStepTimings();
+    Status status = ensureRenderer(description().view.width, description().view.height);
+    if (status) {
+      status = buildScene(false);
+    }
+    if (!status) {
+      scene->revert();
+      // Same data as before the replacement: a failure here would be new.
+      if (Status rebuilt = buildScene(false); !rebuilt) {
+        log::event(stderr, "crackvis-render", "restore_failed",
+                   {{"session", session.m_id}, {"detail", rebuilt.message()}});
       }
-      makeExtractor(description);
+      dirty = true;
+      return status;
     }
-    if (reopen || target != shown) {
-      CRACKVIS_RETURN_IF_ERROR(showStep(target));
-    } else if (newExtractor) {
-      CRACKVIS_RETURN_IF_ERROR(extractAndBuild(false));
-    } else {
-      CRACKVIS_RETURN_IF_ERROR(buildScene(false));
-    }
+    scene->commit();
+    width = description().view.width;
+    height = description().view.height;
     if (cameraGiven) {
-      renderer->setCamera(*description.view.camera);
+      renderer->setCamera(*description().view.camera);
     } else if (newFile) {
       renderer->moveCamera(render::CameraMove::kReset, 0, 0);
     }
     return Status::ok();
-  }
-
-  // Back to `before` after a failed replacement; the scene is rebuilt from it.
-  void restore(Shown before) {
-    if (before.cache) {
-      extractor.reset();  // may refer to the graph replaced below
-      cache = std::move(before.cache);
-      graph = std::move(before.graph);
-    }
-    if (before.extractor) {
-      extractor = std::move(before.extractor);
-    }
-    initial = std::move(before.initial);
-    current = std::move(before.current);
-    description = std::move(before.description);
-    width = before.width;
-    height = before.height;
-    if (!extractor) {
-      makeExtractor(description);
-    }
-    if (current) {
-      // Same data as before the replacement: a failure here would be new.
-      if (Status status = extractAndBuild(false); !status) {
-        log::event(stderr, "crackvis-render", "restore_failed",
-                   {{"session", session.m_id}, {"detail", status.message()}});
-      }
-    }
-    dirty = true;
   }
 
   void handle(const SessionEvent& event, const StillEvent&) {
@@ -441,7 +316,7 @@ struct Session::Worker {
     const auto period = std::chrono::duration_cast<Clock::duration>(
         std::chrono::duration<double>(1.0 / std::max(playFps, 0.1)));
     nextTick = std::max(nextTick + period, Clock::now());
-    int step = current->index + 1;
+    int step = scene->step() + 1;
     if (step >= stepCount()) {
       if (!loop) {
         playing = false;
@@ -457,7 +332,7 @@ struct Session::Worker {
       session.notify({0, status, state()});
       return;
     }
-    cache->prefetch(step + 1 < stepCount() ? step + 1 : 0);
+    scene->prefetch(step + 1 < stepCount() ? step + 1 : 0);
   }
 
   // Renders a frame when something changed: reduced while interacting or
@@ -477,12 +352,12 @@ struct Session::Worker {
                        session.m_limits.refineAfterMs;
     const int factor = interacting && !forceFull ? reduction : 1;
     RenderedFrame frame;
-    frame.step = current->index;
+    frame.step = scene->step();
     frame.reduction = factor;
     frame.fullResolution = factor == 1;
     frame.keyframe = keyframe;
-    frame.bitrate = description.stream.bitrate;
-    frame.fps = description.stream.fps;
+    frame.bitrate = description().stream.bitrate;
+    frame.fps = description().stream.fps;
     frame.lastEventId = lastEventId;
     frame.lastEventReceived = lastEventReceived;
     frame.timings = stepTimings;
@@ -540,6 +415,32 @@ struct Session::Worker {
     }
   }
 
+  // A full-resolution picture of the current state (0: the view's size).
+  Result<render::Image> snapshot(int w, int h, int& step) {
+    w = w > 0 ? w : width;
+    h = h > 0 ? h : height;
+    CRACKVIS_RETURN_IF_ERROR(checkViewSize(w, h, session.m_limits));
+    CRACKVIS_RETURN_IF_ERROR(ensureRenderer(w, h));
+    render::Image image;
+    CRACKVIS_RETURN_IF_ERROR(renderer->renderFrame(w, h, image));
+    step = scene->step();
+    dirty = true;  // the stream's next frame is rendered again at its own size
+    return image;
+  }
+
+  // After work that threw: back to the last complete scene (a replacement
+  // not yet committed is undone) and to a still picture. Fails when even
+  // that throws; the session is then unusable.
+  Status recover() {
+    playing = false;
+    dirty = true;
+    forceFull = true;
+    return guarded(session.m_id, "recovery", [&] {
+      scene->revert();
+      return buildScene(false);
+    });
+  }
+
   std::optional<Clock::time_point> wakeTime() const {
     std::optional<Clock::time_point> at = refineAt;
     if (playing && (!at || nextTick < *at)) {
@@ -584,11 +485,21 @@ Session::~Session() {
 
 void Session::run(std::promise<Status> started) {
   Worker worker(*this);
-  if (Status status = worker.start(); !status) {
+  if (Status status = guarded(m_id, "open", [&] { return worker.start(); }); !status) {
     started.set_value(status);
     return;
   }
   started.set_value(Status::ok());
+  if (Status status = guarded(m_id, "the session loop", [&] { return serve(worker); }); !status) {
+    fail(status);
+  }
+  // Tasks that will not run break their promises: a waiting snapshot
+  // returns UNAVAILABLE.
+  std::lock_guard lock(m_mutex);
+  m_tasks.clear();
+}
+
+Status Session::serve(Worker& worker) {
   std::unique_lock lock(m_mutex);
   while (!m_closing) {
     auto ready = [&] {
@@ -616,28 +527,87 @@ void Session::run(std::promise<Status> started) {
     const bool attached = m_attachment != 0;
     lock.unlock();
     for (const SessionEvent& event : events) {
-      worker.apply(event);
+      const Status status = guarded(m_id, eventName(event), [&] {
+        worker.apply(event);
+        return Status::ok();
+      });
+      if (!status) {
+        notify({event.id, status, std::nullopt});
+        CRACKVIS_RETURN_IF_ERROR(worker.recover());
+      }
     }
     for (auto& task : tasks) {
-      task(worker);
+      task(worker);  // guards itself: it owns the promise to answer
     }
-    worker.tick();
-    if (attached) {
-      worker.renderIfDirty();
+    Status status = guarded(m_id, "playing", [&] {
+      worker.tick();
+      return Status::ok();
+    });
+    if (status && attached) {
+      status = guarded(m_id, "rendering", [&] {
+        worker.renderIfDirty();
+        return Status::ok();
+      });
+    }
+    if (!status) {
+      notify({worker.lastEventId, status, std::nullopt});
+      CRACKVIS_RETURN_IF_ERROR(worker.recover());
+      worker.dirty = false;  // no frame until the next event: it may throw again
     }
     lock.lock();
   }
-  // Tasks that will not run break their promises: a waiting snapshot
-  // returns UNAVAILABLE.
-  m_tasks.clear();
+  return Status::ok();
 }
 
+// The session cannot go on: its stream gets the error, then the end.
+void Session::fail(const Status& status) {
+  log::event(stderr, "crackvis-render", "session_failed",
+             {{"session", m_id}, {"detail", status.message()}});
+  notify({0, status, std::nullopt});
+  close();
+}
+
+// A client that sends faster than the session applies (or a stream whose
+// reader stopped) must not grow the queue without bound: camera moves of one
+// kind queued back to back add up into one, and beyond maxQueuedEvents an
+// event is refused with an error notice (itself bounded, see notify).
 void Session::post(SessionEvent event) {
+  std::optional<std::uint64_t> refused;
   {
     std::lock_guard lock(m_mutex);
-    m_events.push_back(std::move(event));
+    auto* camera = std::get_if<CameraEvent>(&event.what);
+    auto* last = m_events.empty() ? nullptr : std::get_if<CameraEvent>(&m_events.back().what);
+    if (camera != nullptr && last != nullptr && camera->move == last->move &&
+        camera->move != render::CameraMove::kReset) {
+      last->dx += camera->dx;
+      last->dy += camera->dy;
+      m_events.back().id = event.id;
+      m_events.back().received = event.received;
+      ++m_queue.coalesced;
+    } else if (m_events.size() >= m_limits.maxQueuedEvents) {
+      ++m_queue.refused;
+      refused = event.id;
+    } else {
+      m_events.push_back(std::move(event));
+    }
+  }
+  if (refused) {
+    notify({*refused,
+            Status(StatusCode::kResourceExhausted,
+                   fmt::format("session {}: {} events are queued already; event refused", m_id,
+                               m_limits.maxQueuedEvents)),
+            std::nullopt});
+    return;
   }
   m_wake.notify_one();
+}
+
+Session::QueueStats Session::queueStats() const {
+  std::lock_guard lock(m_mutex);
+  QueueStats stats = m_queue;
+  stats.events = m_events.size();
+  stats.notices = m_notices.size();
+  return stats;
 }
 
 std::uint64_t Session::attach() {
@@ -675,16 +645,17 @@ Session::Next Session::next(std::uint64_t attachment, std::chrono::milliseconds 
   m_outgoing.wait_for(lock, timeout, [&] {
     return m_closing || m_attachment != attachment || !m_notices.empty() || m_latest.has_value();
   });
-  if (m_closing) {
-    return Next::kClosed;
-  }
   if (m_attachment != attachment) {
     return Next::kSuperseded;
   }
+  // Notices first, even from a closing session: the error that ended it.
   if (!m_notices.empty()) {
     notice = std::move(m_notices.front());
     m_notices.pop_front();
     return Next::kNotice;
+  }
+  if (m_closing) {
+    return Next::kClosed;
   }
   if (m_latest) {
     frame = std::move(*m_latest);
@@ -711,9 +682,28 @@ void Session::reportEventError(std::uint64_t eventId, Status error) {
   notify({eventId, std::move(error), std::nullopt});
 }
 
+// Notices wait for a stream that may never read them: a newer state
+// supersedes the queued ones (a state says everything), and beyond
+// maxQueuedErrors an event error is dropped (its state, if any, still goes).
 void Session::notify(SessionNotice notice) {
   {
     std::lock_guard lock(m_mutex);
+    if (notice.state) {
+      std::erase_if(m_notices, [](const SessionNotice& queued) {
+        return queued.error.isOk() && queued.state.has_value();
+      });
+    }
+    if (!notice.error.isOk()) {
+      const auto errors = std::count_if(m_notices.begin(), m_notices.end(),
+                                        [](const SessionNotice& n) { return !n.error.isOk(); });
+      if (static_cast<std::size_t>(errors) >= m_limits.maxQueuedErrors) {
+        ++m_queue.errorsDropped;
+        if (!notice.state) {
+          return;
+        }
+        notice.error = Status::ok();
+      }
+    }
     m_notices.push_back(std::move(notice));
   }
   m_outgoing.notify_all();
@@ -729,24 +719,12 @@ Result<render::Image> Session::snapshot(int width, int height, int* step) {
       return failedPrecondition(fmt::format("session {} is closed", m_id));
     }
     m_tasks.push_back([promise, width, height, stepOut, this](Worker& worker) {
-      const int w = width > 0 ? width : worker.width;
-      const int h = height > 0 ? height : worker.height;
-      if (Status status = checkViewSize(w, h, m_limits); !status) {
-        promise->set_value(status);
-        return;
-      }
-      if (Status status = worker.ensureRenderer(w, h); !status) {
-        promise->set_value(status);
-        return;
-      }
-      render::Image image;
-      if (Status status = worker.renderer->renderFrame(w, h, image); !status) {
-        promise->set_value(status);
-        return;
-      }
-      *stepOut = worker.current->index;
-      worker.dirty = true;  // the stream's next frame is rendered again at its own size
-      promise->set_value(std::move(image));
+      Result<render::Image> result = Status(StatusCode::kInternal, "");
+      const Status status = guarded(m_id, "snapshot", [&] {
+        result = worker.snapshot(width, height, *stepOut);
+        return result.status();
+      });
+      promise->set_value(status ? std::move(result) : Result<render::Image>(status));
     });
   }
   m_wake.notify_one();

@@ -18,6 +18,13 @@
 #include <crackvis/cracks/crack_mesh.hpp>
 #include <crackvis/cracks/lattice_decomposition.hpp>
 
+// dem::Bounds has no comparison of its own; ExtractOptions compares its domain.
+namespace crackvis::dem {
+inline bool operator==(const Bounds& a, const Bounds& b) {
+  return a.lo == b.lo && a.hi == b.hi;
+}
+}  // namespace crackvis::dem
+
 namespace crackvis::cracks {
 
 enum class Method { kCellAttribute, kCellCut, kLocalVoronoi, kCellCentre };
@@ -55,6 +62,9 @@ struct ExtractOptions {
   // cell centre: use the centroid of each whole octahedron instead of its two
   // pyramids (on an undeformed FCC lattice the faces are then the Voronoi faces).
   bool mergeOctahedra = false;
+
+  // Equal options make equal meshes: an extractor is kept while they are.
+  friend bool operator==(const ExtractOptions&, const ExtractOptions&) = default;
 };
 
 class CrackExtractor {

@@ -21,6 +21,7 @@
 #include <crackvis/common/status.hpp>
 #include <crackvis/cracks/extractor.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
+#include <crackvis/scene/scene_input.hpp>
 
 namespace crackvis::render {
 
@@ -39,18 +40,9 @@ struct Image {
 // down (nearest pixel) to width x height.
 void resample(const Image& in, int width, int height, Image& out);
 
-// What one step needs besides the description: the lattice, the step, the
-// reference positions (step 0, for displacement) and the extracted cracks.
-struct SceneInput {
-  const dem::Lattice* lattice = nullptr;
-  cracks::StepInput step;
-  std::span<const dem::Vec3> initialPositions;       // may be empty
-  std::span<const std::array<float, 3>> velocities;  // may be empty
-  const cracks::CrackMesh* cracks = nullptr;         // may be null
-  // The cell methods' decomposition, drawn as its edges when the description
-  // shows the decomposition (local Voronoi shows its intact faces instead).
-  const cracks::LatticeDecomposition* decomposition = nullptr;
-};
+// What one step needs besides the description (made by a
+// scene::ScenePipeline or by hand in tests).
+using SceneInput = scene::SceneInput;
 
 // Camera moves in view units, so that a client's mouse deltas map the same
 // way at any window size: dx, dy are fractions of the view's width and height,

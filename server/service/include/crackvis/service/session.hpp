@@ -1,7 +1,8 @@
-// One render session: a pipeline description, its data source with a step
-// cache, the crack extractor (incremental across steps), and an off-screen
-// renderer with its own GL context, all owned by the session's own thread (a
-// GL context is current on one thread). No gRPC types: the render service
+// One render session: a pipeline description's scene data (a
+// scene::ScenePipeline: the data source with a step cache, the crack
+// extractor, incremental across steps) and an off-screen renderer with its
+// own GL context, all owned by the session's own thread (a GL context is
+// current on one thread). No gRPC types: the render service
 // turns a stream's messages into SessionEvents and RenderedFrames into
 // encoded frames.
 //
@@ -29,6 +30,7 @@
 #include <crackvis/common/status.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/scene_renderer.hpp>
+#include <crackvis/scene/scene_pipeline.hpp>
 #include <crackvis/source/step_source.hpp>
 
 namespace crackvis::service {
@@ -42,6 +44,9 @@ struct SessionLimits {
   double interactiveFrameMs = 35.0;  // render budget of a reduced frame
   int maxReduction = 8;
   std::size_t cacheSteps = 8;
+  // Bounds of what waits for a slow or absent stream reader.
+  std::size_t maxQueuedEvents = 256;  // beyond: an event is refused (RESOURCE_EXHAUSTED)
+  std::size_t maxQueuedErrors = 64;   // beyond: event errors are dropped
 };
 
 struct CameraEvent {
@@ -125,8 +130,7 @@ class Session {
  public:
   // Opens the data source of a file (the render server's: through
   // crackvis-data, with the caller's folder rules applied).
-  using SourceOpener =
-      std::function<Result<std::unique_ptr<source::StepSource>>(const std::string& file)>;
+  using SourceOpener = scene::SourceOpener;
 
   // Starts the session's thread, which creates the GL context, opens the
   // file, loads and extracts the description's step and builds the scene;
@@ -163,6 +167,16 @@ class Session {
   // view's), rendered on the session's thread.
   Result<render::Image> snapshot(int width, int height, int* step = nullptr);
 
+  // What waits in the session's queues, and what bounded them so far.
+  struct QueueStats {
+    std::size_t events = 0;   // queued for the session's thread
+    std::size_t notices = 0;  // queued for the stream
+    std::uint64_t coalesced = 0;
+    std::uint64_t refused = 0;
+    std::uint64_t errorsDropped = 0;
+  };
+  QueueStats queueStats() const;
+
   void close();
   bool closed() const;
   std::uint64_t framesDropped() const;
@@ -170,9 +184,11 @@ class Session {
  private:
   Session(std::string id, pipeline::PipelineDescription description, SourceOpener opener,
           SessionLimits limits);
-  struct Worker;  // the thread's state: renderer, cache, extractor
+  struct Worker;  // the thread's state: scene pipeline, renderer, view
 
   void run(std::promise<Status> started);
+  Status serve(Worker& worker);  // the event loop; an error ends the session
+  void fail(const Status& status);
   void publish(RenderedFrame frame);
   void notify(SessionNotice notice);
 
@@ -195,6 +211,7 @@ class Session {
   bool m_needFrame = false;  // a stream attached and wants a keyframe now
   bool m_closing = false;
   std::uint64_t m_dropped = 0;
+  QueueStats m_queue;  // the counters
   std::thread m_thread;
 };
 

@@ -1,0 +1,25 @@
+// What one step of a scene needs besides its pipeline description: the
+// lattice, the step, the reference positions (step 0, for displacement), the
+// extracted cracks and the cell methods' decomposition. Views only: the
+// arrays belong to whoever made the input (a ScenePipeline, a test).
+#pragma once
+
+#include <array>
+#include <span>
+
+#include <crackvis/cracks/extractor.hpp>
+
+namespace crackvis::scene {
+
+struct SceneInput {
+  const dem::Lattice* lattice = nullptr;
+  cracks::StepInput step;
+  std::span<const dem::Vec3> initialPositions;       // may be empty
+  std::span<const std::array<float, 3>> velocities;  // may be empty
+  const cracks::CrackMesh* cracks = nullptr;         // may be null
+  // The cell methods' decomposition, drawn as its edges when the description
+  // shows the decomposition (local Voronoi shows its intact faces instead).
+  const cracks::LatticeDecomposition* decomposition = nullptr;
+};
+
+}  // namespace crackvis::scene

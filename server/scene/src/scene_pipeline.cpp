@@ -1,0 +1,241 @@
+#include <algorithm>
+#include <chrono>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include <crackvis/cracks/bond_graph.hpp>
+#include <crackvis/scene/guarded_call.hpp>
+#include <crackvis/scene/scene_pipeline.hpp>
+
+namespace crackvis::scene {
+namespace {
+
+double millisecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+// A description's step in a file of `stepCount` steps: negative is the last.
+// Steps beyond int are out of range anyway; clamping keeps them so.
+int resolveStep(std::int64_t step, int stepCount) {
+  if (step < 0) {
+    return stepCount - 1;
+  }
+  return static_cast<int>(std::min<std::int64_t>(step, std::numeric_limits<int>::max()));
+}
+
+// A step source whose exceptions become errors. Its reads run on the owner's
+// thread and on the step cache's prefetch thread, where an exception (a
+// library throwing on data it should have refused) would end the process.
+class GuardedSource final : public source::StepSource {
+ public:
+  explicit GuardedSource(std::unique_ptr<source::StepSource> inner) : m_inner(std::move(inner)) {}
+  const std::string& file() const override { return m_inner->file(); }
+  const dem::Lattice& lattice() const override { return m_inner->lattice(); }
+  int stepCount() const override { return m_inner->stepCount(); }
+  const std::vector<std::int32_t>& breakSteps() const override { return m_inner->breakSteps(); }
+  Status setExtraArrays(const source::ExtraArrays& extras) override {
+    return guardedCall(
+        fmt::format("{}: reading the extra arrays", file()),
+        [&] { return m_inner->setExtraArrays(extras); }, [](std::string_view) {});
+  }
+  Result<source::SourceStep> read(int step) override {
+    return guardedCall(
+        fmt::format("{}: reading step {}", file(), step), [&] { return m_inner->read(step); },
+        [](std::string_view) {});
+  }
+
+ private:
+  std::unique_ptr<source::StepSource> m_inner;
+};
+
+// Whether two descriptions need different extractors.
+bool sameExtraction(const pipeline::PipelineDescription& a,
+                    const pipeline::PipelineDescription& b) {
+  return a.file == b.file && a.cracks.method == b.cracks.method &&
+         extractOptions(a) == extractOptions(b);
+}
+
+}  // namespace
+
+// A plain move would replace the graph while the extractor that views it is
+// still alive; the extractor goes first.
+void ScenePipeline::restore(State&& state) {
+  m_state.extractor.reset();
+  m_state.graph.reset();
+  m_state = std::move(state);
+}
+
+cracks::ExtractOptions extractOptions(const pipeline::PipelineDescription& d) {
+  cracks::ExtractOptions options;
+  options.validate = d.cracks.validation;
+  options.validationTolerance = d.cracks.validationTolerance;
+  options.mergeOctahedra = d.cracks.mergeOctahedra;
+  options.includeIntactFaces = d.showDecomposition;
+  return options;
+}
+
+source::ExtraArrays extraArraysFor(const pipeline::PipelineDescription& d) {
+  using pipeline::BondColourBy;
+  using pipeline::CrackColourBy;
+  source::ExtraArrays extras;
+  extras.velocities = d.particles.colourBy == pipeline::ParticleColourBy::kVelocity;
+  extras.bondForce =
+      d.cracks.colourBy == CrackColourBy::kForce || d.bonds.colourBy == BondColourBy::kForce;
+  extras.breakStep = d.cracks.colourBy == CrackColourBy::kBreakStep ||
+                     d.bonds.colourBy == BondColourBy::kBreakStep;
+  return extras;
+}
+
+ScenePipeline::ScenePipeline(SourceOpener opener, std::size_t cacheSteps)
+    : m_opener(std::move(opener)), m_cacheSteps(cacheSteps) {}
+
+ScenePipeline::~ScenePipeline() = default;
+
+Result<std::unique_ptr<ScenePipeline>> ScenePipeline::open(
+    pipeline::PipelineDescription description, SourceOpener opener, std::size_t cacheSteps) {
+  std::unique_ptr<ScenePipeline> scene(new ScenePipeline(std::move(opener), cacheSteps));
+  CRACKVIS_RETURN_IF_ERROR(scene->replace(std::move(description)));
+  scene->commit();
+  return scene;
+}
+
+Status ScenePipeline::replace(pipeline::PipelineDescription next) {
+  commit();
+  State before = m_state;
+  Status status;
+  try {
+    status = apply(std::move(next));
+  } catch (...) {
+    restore(std::move(before));  // a throwing source or extractor changes nothing either
+    throw;
+  }
+  if (!status) {
+    restore(std::move(before));
+    return status;
+  }
+  m_before = std::move(before);
+  return Status::ok();
+}
+
+void ScenePipeline::revert() {
+  if (m_before) {
+    restore(std::move(*m_before));
+    m_before.reset();
+  }
+}
+
+void ScenePipeline::commit() {
+  m_before.reset();
+}
+
+Status ScenePipeline::apply(pipeline::PipelineDescription next) {
+  const bool empty = m_state.cache == nullptr;
+  const bool newFile = empty || next.file != m_state.description.file;
+  // Colouring by another array reads the file anew with it (rare: a menu
+  // choice), so that the step cache never mixes steps with and without it.
+  const bool reopen = newFile || extraArraysFor(next) != extraArraysFor(m_state.description);
+  const bool newExtractor = reopen || !sameExtraction(next, m_state.description);
+  const bool stepChanged = next.step != m_state.description.step;
+  const int shown = m_state.current ? m_state.current->index : -1;
+  if (reopen) {
+    CRACKVIS_RETURN_IF_ERROR(openFile(next));
+  }
+  const int target = newFile || stepChanged ? resolveStep(next.step, stepCount()) : shown;
+  CRACKVIS_RETURN_IF_ERROR(source::checkStepInRange(next.file, target, stepCount()));
+  if (newExtractor) {
+    m_state.extractor = cracks::makeExtractor(next.cracks.method, *m_state.graph,
+                                              source().lattice().dimension, extractOptions(next));
+  }
+  m_state.description = std::move(next);
+  if (reopen || target != shown) {
+    return showStep(target);
+  }
+  if (newExtractor) {
+    m_timings = {};
+    return extract(m_state.current);
+  }
+  return Status::ok();
+}
+
+Status ScenePipeline::openFile(const pipeline::PipelineDescription& d) {
+  auto opened = m_opener(d.file);
+  if (!opened) {
+    return opened.status();
+  }
+  auto guarded = std::make_unique<GuardedSource>(std::move(opened).value());
+  if (guarded->stepCount() < 1) {
+    return failedPrecondition(fmt::format("{}: the file has no steps", d.file));
+  }
+  CRACKVIS_RETURN_IF_ERROR(guarded->setExtraArrays(extraArraysFor(d)));
+  auto cache = std::make_shared<source::StepCache>(std::move(guarded), m_cacheSteps);
+  auto first = cache->get(0);
+  if (!first) {
+    return first.status();
+  }
+  const dem::Lattice& lattice = cache->source().lattice();
+  m_state.extractor.reset();  // views the graph replaced next
+  m_state.current.reset();
+  m_state.graph = std::make_shared<const cracks::BondGraph>(lattice.particleCount(), lattice.bonds);
+  m_state.cache = std::move(cache);
+  m_state.initial = first->step;
+  return Status::ok();
+}
+
+Status ScenePipeline::showStep(int step) {
+  CRACKVIS_RETURN_IF_ERROR(source::checkStepInRange(m_state.description.file, step, stepCount()));
+  auto loaded = m_state.cache->get(step);
+  if (!loaded) {
+    return loaded.status();
+  }
+  m_timings = {};
+  m_timings.loadMs = loaded->loadMs;
+  return extract(loaded->step);
+}
+
+Status ScenePipeline::extract(std::shared_ptr<const source::SourceStep> step) {
+  const auto start = std::chrono::steady_clock::now();
+  CRACKVIS_RETURN_IF_ERROR(m_state.extractor->extract(stepInput(*step), m_scratch));
+  m_timings.extractMs = millisecondsSince(start);
+  std::swap(m_scratch, m_state.mesh);
+  m_state.current = std::move(step);
+  return Status::ok();
+}
+
+void ScenePipeline::prefetch(int step) {
+  m_state.cache->prefetch(step);
+}
+
+void ScenePipeline::setViewSize(int width, int height) {
+  m_state.description.view.width = width;
+  m_state.description.view.height = height;
+}
+
+int ScenePipeline::stepCount() const {
+  return m_state.cache->source().stepCount();
+}
+
+int ScenePipeline::step() const {
+  return m_state.current->index;
+}
+
+const source::StepSource& ScenePipeline::source() const {
+  return m_state.cache->source();
+}
+
+cracks::StepInput ScenePipeline::stepInput(const source::SourceStep& step) const {
+  return {step.positions, step.bondState, source().lattice().radius, step.bondForce,
+          source().breakSteps()};
+}
+
+SceneInput ScenePipeline::input() const {
+  return {&source().lattice(),
+          stepInput(*m_state.current),
+          m_state.initial->positions,
+          m_state.current->velocities,
+          &m_state.mesh,
+          m_state.extractor->decomposition()};
+}
+
+}  // namespace crackvis::scene

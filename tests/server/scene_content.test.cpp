@@ -1,0 +1,198 @@
+// What a scene draws, checked without GL: culling, damage, crack layers, the
+// decomposition's edges and the bonds shown.
+#include <algorithm>
+#include <deque>
+
+#include <catch2/catch.hpp>
+
+#include "cracks/crack_fixtures.hpp"
+#include <crackvis/scene/scene_content.hpp>
+
+using namespace crackvis;
+
+namespace {
+
+scene::SceneInput inputOf(const testing::PlantedCrack& crack) {
+  return {&crack.block.lattice, crack.input(), {}, {}, nullptr};
+}
+
+// Bond hops from each particle to the nearest one on the boundary (fewer
+// bonds than the most) or at a broken bond.
+std::vector<int> hopsToSurface(const testing::PlantedCrack& crack) {
+  const auto& bonds = crack.block.lattice.bonds;
+  const std::size_t n = crack.block.positions.size();
+  std::vector<std::vector<std::size_t>> neighbours(n);
+  for (const dem::Bond& bond : bonds) {
+    neighbours[static_cast<std::size_t>(bond.first)].push_back(
+        static_cast<std::size_t>(bond.second));
+    neighbours[static_cast<std::size_t>(bond.second)].push_back(
+        static_cast<std::size_t>(bond.first));
+  }
+  std::size_t most = 0;
+  for (const auto& list : neighbours) {
+    most = std::max(most, list.size());
+  }
+  std::vector<int> hops(n, -1);
+  std::deque<std::size_t> queue;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (neighbours[i].size() < most) {
+      hops[i] = 0;
+      queue.push_back(i);
+    }
+  }
+  for (std::size_t b = 0; b < bonds.size(); ++b) {
+    for (auto end : {bonds[b].first, bonds[b].second}) {
+      const auto i = static_cast<std::size_t>(end);
+      if (crack.state[b] != 0 && hops[i] != 0) {
+        hops[i] = 0;
+        queue.push_back(i);
+      }
+    }
+  }
+  while (!queue.empty()) {
+    const std::size_t i = queue.front();
+    queue.pop_front();
+    for (std::size_t j : neighbours[i]) {
+      if (hops[j] < 0) {
+        hops[j] = hops[i] + 1;
+        queue.push_back(j);
+      }
+    }
+  }
+  return hops;
+}
+
+}  // namespace
+
+TEST_CASE("culling keeps the particles within two bonds of the surface or a crack",
+          "[scene][culling]") {
+  const auto crack = testing::fccPlaneCrack(9, {1, 0, 0}, 0.5 + 8.5 / std::sqrt(2.0));
+  REQUIRE(crack.brokenCount() > 0);
+  const auto input = inputOf(crack);
+  pipeline::ParticlesDescription particles;
+  const auto visible = scene::visibleParticles(particles, input);
+  const std::vector<int> hops = hopsToSurface(crack);
+  std::vector<dem::ParticleIndex> expected;
+  for (std::size_t i = 0; i < hops.size(); ++i) {
+    if (hops[i] >= 0 && hops[i] <= 2) {
+      expected.push_back(static_cast<dem::ParticleIndex>(i));
+    }
+  }
+  CHECK(visible == expected);
+  // The block has an interior: a good share is culled.
+  const std::size_t n = crack.block.positions.size();
+  INFO(visible.size() << " of " << n << " particles visible");
+  CHECK(n - visible.size() > n / 10);
+
+  SECTION("translucent or clipped particles are all drawn") {
+    particles.opacity = 0.5;
+    CHECK(scene::visibleParticles(particles, input).size() == n);
+    particles.opacity = 1.0;
+    particles.clip = pipeline::ClipPlane{{0, 0, 0}, {1, 0, 0}};
+    CHECK(scene::visibleParticles(particles, input).size() == n);
+  }
+}
+
+TEST_CASE("damage is the share of a particle's bonds that are broken", "[scene]") {
+  // A (100) plane between two atomic layers of FCC cuts 4 of the 12 bonds of
+  // each particle beside it.
+  const auto crack = testing::fccPlaneCrack(5, {1, 0, 0}, 0.5 + 4.5 / std::sqrt(2.0));
+  pipeline::ParticlesDescription particles;
+  particles.colourBy = pipeline::ParticleColourBy::kDamage;
+  const auto values = scene::particleValues(particles, inputOf(crack));
+  REQUIRE(values.size() == crack.block.positions.size());
+  std::vector<int> degree(values.size(), 0);
+  for (const dem::Bond& bond : crack.block.lattice.bonds) {
+    ++degree[static_cast<std::size_t>(bond.first)];
+    ++degree[static_cast<std::size_t>(bond.second)];
+  }
+  int beside = 0;
+  int intact = 0;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    CHECK(values[i] >= 0.0);
+    CHECK(values[i] <= 1.0);
+    if (degree[i] == 12) {
+      CHECK((values[i] == 0.0 || values[i] == Approx(1.0 / 3.0)));
+      (values[i] > 0.0 ? beside : intact) += 1;
+    }
+  }
+  CHECK(beside > 0);
+  CHECK(intact > 0);
+  particles.colourBy = pipeline::ParticleColourBy::kSolid;
+  const auto solid = scene::particleValues(particles, inputOf(crack));
+  CHECK(std::all_of(solid.begin(), solid.end(), [](double v) { return v == 0.0; }));
+}
+
+TEST_CASE("crack primitives go into the layer the description shows them in", "[scene]") {
+  cracks::CrackMesh mesh;
+  mesh.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  mesh.vertices = {3};
+  mesh.lines.add({0, 1});
+  for (int k = 0; k < 4; ++k) {
+    mesh.polygons.add({0, 1, 2});
+  }
+  // Primitive k: the vertex, the line, then the four polygons.
+  mesh.cellData.push_back({"bond_id", cracks::AttributeType::kInt32, 1, {10, 11, 12, 13, 14, 15}});
+  mesh.cellData.push_back({"bond_state", cracks::AttributeType::kInt32, 1, {1, 0, 1, 0, 1, 0}});
+  mesh.cellData.push_back({"inconsistent", cracks::AttributeType::kInt32, 1, {0, 0, 0, 0, 1, 0}});
+  auto ids = [](const cracks::CrackMesh& m) { return m.findCellData("bond_id")->values; };
+
+  pipeline::PipelineDescription d;
+  auto layers = scene::crackLayers(d, mesh);
+  CHECK(ids(layers.cracks) == std::vector<double>{10, 12});
+  CHECK(layers.cracks.vertices == std::vector<std::int32_t>{3});
+  CHECK(layers.cracks.lines.size() == 0);
+  CHECK(layers.cracks.polygons.size() == 1);
+  CHECK(layers.cracks.points == mesh.points);
+  CHECK(layers.marks.primitiveCount() == 0);
+  CHECK(layers.intact.primitiveCount() == 0);
+
+  d.showInconsistent = true;
+  d.showDecomposition = true;
+  layers = scene::crackLayers(d, mesh);
+  CHECK(ids(layers.marks) == std::vector<double>{14});
+  CHECK(ids(layers.intact) == std::vector<double>{11, 13, 15});
+  CHECK(layers.intact.lines.size() == 1);
+  CHECK(layers.intact.polygons.size() == 2);
+}
+
+TEST_CASE("the decomposition's edges and the bonds shown", "[scene]") {
+  const auto crack = testing::fccPlaneCrack(5, {1, 0, 0}, 0.5 + 4.5 / std::sqrt(2.0));
+  auto input = inputOf(crack);
+  CHECK(scene::decompositionBonds(input).empty());
+  auto extractor = cracks::makeExtractor(cracks::Method::kCellCut, *crack.graph, 3);
+  cracks::CrackMesh mesh;
+  REQUIRE(extractor->extract(crack.input(), mesh));
+  input.decomposition = extractor->decomposition();
+  REQUIRE(input.decomposition != nullptr);
+  const auto edges = scene::decompositionBonds(input);
+  CHECK(std::is_sorted(edges.begin(), edges.end()));
+  CHECK(std::adjacent_find(edges.begin(), edges.end()) == edges.end());
+  // The cells around the crack: its broken bonds are among their edges.
+  std::vector<dem::BondIndex> broken;
+  for (std::size_t b = 0; b < crack.state.size(); ++b) {
+    if (crack.state[b] != 0) {
+      broken.push_back(static_cast<dem::BondIndex>(b));
+    }
+  }
+  CHECK(std::includes(edges.begin(), edges.end(), broken.begin(), broken.end()));
+  CHECK(edges.size() > broken.size());
+  CHECK(edges.size() < crack.state.size());
+
+  pipeline::BondsDescription bonds;
+  CHECK(scene::bondLines(bonds, input).bonds.empty());  // kNone
+  bonds.show = pipeline::BondSelection::kBroken;
+  auto shown = scene::bondLines(bonds, input);
+  CHECK(shown.bonds == broken);
+  CHECK(std::all_of(shown.values.begin(), shown.values.end(), [](double v) { return v == 1.0; }));
+  bonds.show = pipeline::BondSelection::kAll;
+  bonds.colourBy = pipeline::BondColourBy::kForce;
+  std::vector<float> force(crack.state.size());
+  for (std::size_t b = 0; b < force.size(); ++b) {
+    force[b] = static_cast<float>(b) * 0.5f;
+  }
+  input.step.bondForce = force;
+  shown = scene::bondLines(bonds, input);
+  REQUIRE(shown.bonds.size() == crack.state.size());
+  CHECK(shown.values[7] == 3.5);
+}

@@ -1,0 +1,178 @@
+// The scene pipeline without GL: a description's file through a step source,
+// its cracks extracted as the cracks library extracts them, changes all or
+// nothing, and the extraction options compared as a whole.
+#include <catch2/catch.hpp>
+
+#include "support/sample_files.hpp"
+#include "support/temp_dir.hpp"
+#include <crackvis/cracks/dem_series.hpp>
+#include <crackvis/scene/scene_pipeline.hpp>
+
+namespace crackvis {
+namespace {
+
+// A series of 3 steps in which bonds break progressively, in a temp folder.
+struct Series {
+  testing::TempDir dir;
+  std::string file = dir.file("run.h5");
+  Series() { testing::writeSampleFile(file, 3, 3); }
+};
+
+scene::SourceOpener localOpener(const testing::TempDir& dir) {
+  return [&dir](const std::string& file) { return source::openLocalSource(dir.file(file)); };
+}
+
+pipeline::PipelineDescription cellCut(std::int64_t step) {
+  pipeline::PipelineDescription d;
+  d.file = "run.h5";
+  d.step = step;
+  d.cracks.method = cracks::Method::kCellCut;
+  return d;
+}
+
+// What the cracks library extracts from `path`'s step directly.
+cracks::CrackMesh extractedDirectly(const std::string& path, const pipeline::PipelineDescription& d,
+                                    int step) {
+  auto series = cracks::DemSeries::open(path);
+  REQUIRE(series);
+  auto extractor = cracks::makeExtractor(d.cracks.method, (*series)->graph(),
+                                         (*series)->lattice().dimension, scene::extractOptions(d));
+  cracks::CrackMesh mesh;
+  for (int k = 0; k <= step; ++k) {
+    auto input = (*series)->load(k);
+    REQUIRE(input);
+    REQUIRE(extractor->extract(*input, mesh));
+  }
+  return mesh;
+}
+
+void requireSameGeometry(const cracks::CrackMesh& a, const cracks::CrackMesh& b) {
+  REQUIRE(a.primitiveCount() > 0);
+  CHECK(a.points == b.points);
+  CHECK(a.polygons.connectivity == b.polygons.connectivity);
+  CHECK(a.polygons.offsets == b.polygons.offsets);
+  CHECK(a.lines.connectivity == b.lines.connectivity);
+  CHECK(a.volumeCells.connectivity == b.volumeCells.connectivity);
+}
+
+}  // namespace
+
+TEST_CASE("ExtractOptions compare every option, the domain included", "[scene][cracks]") {
+  cracks::ExtractOptions a;
+  cracks::ExtractOptions b;
+  CHECK(a == b);
+  b.domain = cracks::Box{{0, 0, 0}, {1, 1, 1}};
+  CHECK(a != b);
+  a.domain = cracks::Box{{0, 0, 0}, {1, 1, 1}};
+  CHECK(a == b);
+  a.domain->hi.z = 2.0;
+  CHECK(a != b);
+  b = a;
+  b.minBrokenBonds = 3;
+  CHECK(a != b);
+}
+
+TEST_CASE("a scene pipeline shows the description's step as the cracks library extracts it",
+          "[scene]") {
+  const Series series;
+  for (const cracks::Method method :
+       {cracks::Method::kCellCut, cracks::Method::kLocalVoronoi, cracks::Method::kCellAttribute}) {
+    DYNAMIC_SECTION(cracks::toString(method)) {
+      auto d = cellCut(-1);
+      d.cracks.method = method;
+      auto scene = scene::ScenePipeline::open(d, localOpener(series.dir));
+      REQUIRE(scene);
+      CHECK((*scene)->stepCount() == 3);
+      CHECK((*scene)->step() == 2);  // -1: the last
+      requireSameGeometry((*scene)->cracks(), extractedDirectly(series.file, d, 2));
+      const scene::SceneInput input = (*scene)->input();
+      REQUIRE(input.lattice != nullptr);
+      CHECK(input.step.positions.size() == input.lattice->particleCount());
+      CHECK(input.initialPositions.size() == input.lattice->particleCount());
+      CHECK(input.step.positions.data() != input.initialPositions.data());
+      CHECK(input.cracks == &(*scene)->cracks());
+      // The cell methods keep a decomposition, drawn as edges on request.
+      CHECK((input.decomposition != nullptr) == (method != cracks::Method::kLocalVoronoi));
+    }
+  }
+}
+
+TEST_CASE("a failed scene change leaves the pipeline as it was", "[scene]") {
+  const Series series;
+  auto opened = scene::ScenePipeline::open(cellCut(1), localOpener(series.dir));
+  REQUIRE(opened);
+  scene::ScenePipeline& scene = **opened;
+  const cracks::CrackMesh shown = scene.cracks();
+  REQUIRE(shown.primitiveCount() > 0);
+  auto unchanged = [&] {
+    CHECK(scene.step() == 1);
+    CHECK(scene.description() == cellCut(1));
+    CHECK(scene.cracks().points == shown.points);
+    CHECK(scene.cracks().polygons.connectivity == shown.polygons.connectivity);
+  };
+
+  SECTION("a step outside the file") {
+    auto next = cellCut(7);
+    next.cracks.method = cracks::Method::kLocalVoronoi;
+    const Status status = scene.replace(next);
+    CHECK(status.code() == StatusCode::kOutOfRange);
+    CHECK_THAT(status.message(), Catch::Contains("step 7 out of range (the file has steps 0..2)"));
+    unchanged();
+  }
+  SECTION("a file that does not exist") {
+    auto next = cellCut(0);
+    next.file = "missing.h5";
+    const Status status = scene.replace(next);
+    CHECK(status.code() == StatusCode::kNotFound);
+    CHECK_THAT(status.message(), Catch::Contains("missing.h5"));
+    unchanged();
+  }
+  SECTION("a step change outside the file") {
+    CHECK(scene.showStep(3).code() == StatusCode::kOutOfRange);
+    CHECK(scene.showStep(-2).code() == StatusCode::kOutOfRange);
+    unchanged();
+  }
+  SECTION("a change that succeeded and is reverted") {
+    auto next = cellCut(2);
+    next.cracks.method = cracks::Method::kLocalVoronoi;
+    REQUIRE(scene.replace(next));
+    CHECK(scene.step() == 2);
+    CHECK(scene.description() == next);
+    requireSameGeometry(scene.cracks(), extractedDirectly(series.file, next, 2));
+    scene.revert();
+    unchanged();
+    // Nothing is kept once committed: revert() then changes nothing.
+    REQUIRE(scene.replace(next));
+    scene.commit();
+    scene.revert();
+    CHECK(scene.description() == next);
+  }
+}
+
+TEST_CASE("a scene pipeline extracts anew only when the extraction changes", "[scene]") {
+  const Series series;
+  auto opened = scene::ScenePipeline::open(cellCut(2), localOpener(series.dir));
+  REQUIRE(opened);
+  scene::ScenePipeline& scene = **opened;
+  // The extractor's decomposition tells extractors apart (the state before a
+  // replacement is kept until the next one, so addresses are not reused).
+  auto decomposition = [&] { return scene.input().decomposition; };
+  const auto* first = decomposition();
+  REQUIRE(first != nullptr);
+
+  // Another colour: the same extractor (its decomposition object) and step.
+  auto coloured = cellCut(2);
+  coloured.cracks.colour = {1, 2, 3};
+  REQUIRE(scene.replace(coloured));
+  CHECK(decomposition() == first);
+
+  // Another extraction option: a new extractor, though file, step and method
+  // stay.
+  auto merged = coloured;
+  merged.cracks.mergeOctahedra = true;
+  REQUIRE(scene.replace(merged));
+  CHECK(decomposition() != first);
+  CHECK(scene.step() == 2);
+}
+
+}  // namespace crackvis

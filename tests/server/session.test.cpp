@@ -1,0 +1,241 @@
+// A render session's thread on its own (EGL, no gRPC): what no input may do
+// to it. A step source or an opener that throws stands for any library that
+// throws on data it should have refused; only that read or event fails.
+#include <stdexcept>
+
+#include <catch2/catch.hpp>
+
+#include "support/sample_files.hpp"
+#include "support/temp_dir.hpp"
+#include <crackvis/service/session.hpp>
+
+namespace crackvis {
+namespace {
+
+using service::Session;
+using service::SessionEvent;
+using service::SessionNotice;
+
+// A local file's source whose read of one step throws, as std::vector does
+// on a size it cannot hold.
+class ThrowingSource : public source::StepSource {
+ public:
+  ThrowingSource(std::unique_ptr<source::StepSource> inner, int poisoned)
+      : m_inner(std::move(inner)), m_poisoned(poisoned) {}
+  const std::string& file() const override { return m_inner->file(); }
+  const dem::Lattice& lattice() const override { return m_inner->lattice(); }
+  int stepCount() const override { return m_inner->stepCount(); }
+  Status setExtraArrays(const source::ExtraArrays& extras) override {
+    return m_inner->setExtraArrays(extras);
+  }
+  const std::vector<std::int32_t>& breakSteps() const override { return m_inner->breakSteps(); }
+  Result<source::SourceStep> read(int step) override {
+    if (step == m_poisoned) {
+      throw std::length_error("cannot create std::vector larger than max_size()");
+    }
+    return m_inner->read(step);
+  }
+
+ private:
+  std::unique_ptr<source::StepSource> m_inner;
+  int m_poisoned;
+};
+
+struct Fixture {
+  testing::TempDir dir;
+  Fixture() { testing::writeSampleFile(dir.file("run.h5"), 3, 3); }
+
+  Session::SourceOpener opener(int poisoned) const {
+    return
+        [this, poisoned](const std::string& file) -> Result<std::unique_ptr<source::StepSource>> {
+          auto inner = source::openLocalSource(dir.file(file));
+          if (!inner) {
+            return inner.status();
+          }
+          return std::unique_ptr<source::StepSource>(
+              new ThrowingSource(std::move(inner).value(), poisoned));
+        };
+  }
+};
+
+pipeline::PipelineDescription smallView(std::int64_t step) {
+  pipeline::PipelineDescription d;
+  d.file = "run.h5";
+  d.step = step;
+  d.view.width = 64;
+  d.view.height = 48;
+  return d;
+}
+
+// The next notice for `eventId` (frames in between are skipped).
+SessionNotice noticeFor(Session& session, std::uint64_t attachment, std::uint64_t eventId) {
+  service::RenderedFrame frame;
+  SessionNotice notice;
+  const auto until = service::Clock::now() + std::chrono::seconds(30);
+  while (service::Clock::now() < until) {
+    const auto next = session.next(attachment, std::chrono::milliseconds(100), frame, notice);
+    REQUIRE(next != Session::Next::kClosed);
+    if (next == Session::Next::kNotice && notice.eventId == eventId) {
+      return notice;
+    }
+  }
+  FAIL("no notice for event " << eventId);
+  return notice;
+}
+
+}  // namespace
+
+TEST_CASE("a step source that throws fails only that read", "[session][render]") {
+  const Fixture fixture;
+  auto opened = Session::open("s1", smallView(0), fixture.opener(2), {});
+  REQUIRE(opened);
+  Session& session = **opened;
+  const std::uint64_t attachment = session.attach();
+
+  // Step 1 prefetches step 2 on the cache's thread: that read throws too.
+  session.post({5, service::Clock::now(), service::SetStepEvent{1}});
+  REQUIRE(noticeFor(session, attachment, 5).error);
+  session.post({6, service::Clock::now(), service::SetStepEvent{2}});
+  const SessionNotice failed = noticeFor(session, attachment, 6);
+  CHECK(failed.error.code() == StatusCode::kInternal);
+  CHECK_THAT(failed.error.message(), Catch::Contains("run.h5: reading step 2 failed"));
+  CHECK_THAT(failed.error.message(), Catch::Contains("max_size"));
+  CHECK_FALSE(session.closed());
+
+  // The session goes on showing step 1.
+  int step = -1;
+  auto image = session.snapshot(0, 0, &step);
+  REQUIRE(image);
+  CHECK(step == 1);
+  CHECK(image->width == 64);
+  session.post({7, service::Clock::now(), service::SetStepEvent{0}});
+  const SessionNotice moved = noticeFor(session, attachment, 7);
+  CHECK(moved.error);
+  REQUIRE(moved.state);
+  CHECK(moved.state->step == 0);
+}
+
+TEST_CASE("an exception on a session's thread fails only that event", "[session][render]") {
+  const Fixture fixture;
+  // Opening any file but run.h5 throws (the opener runs on the session's
+  // thread, outside the source's guard).
+  auto opener = [inner = fixture.opener(-1)](const std::string& file) {
+    if (file != "run.h5") {
+      throw std::runtime_error("opener exploded on " + file);
+    }
+    return inner(file);
+  };
+  auto opened = Session::open("s2", smallView(1), opener, {});
+  REQUIRE(opened);
+  Session& session = **opened;
+  const std::uint64_t attachment = session.attach();
+
+  auto elsewhere = smallView(0);
+  elsewhere.file = "other.h5";
+  session.post(
+      {5, service::Clock::now(), service::ReplacePipelineEvent{pipeline::toXml(elsewhere)}});
+  const SessionNotice failed = noticeFor(session, attachment, 5);
+  CHECK(failed.error.code() == StatusCode::kInternal);
+  CHECK_THAT(failed.error.message(),
+             Catch::Contains("session s2: replace_pipeline failed on an internal error: opener "
+                             "exploded on other.h5"));
+  CHECK_FALSE(session.closed());
+
+  // The session goes on with its description and step.
+  session.post({6, service::Clock::now(), service::StillEvent{}});
+  int step = -1;
+  REQUIRE(session.snapshot(0, 0, &step));
+  CHECK(step == 1);
+  session.post({7, service::Clock::now(), service::SetStepEvent{2}});
+  const SessionNotice moved = noticeFor(session, attachment, 7);
+  CHECK(moved.error);
+  REQUIRE(moved.state);
+  CHECK(moved.state->step == 2);
+  CHECK_THAT(moved.state->pipelineXml, Catch::Contains("run.h5"));
+
+  // Opening a session whose opener throws fails that session only.
+  auto failing = Session::open("s3", elsewhere, opener, {});
+  REQUIRE_FALSE(failing);
+  CHECK(failing.status().code() == StatusCode::kInternal);
+  CHECK_THAT(failing.status().message(), Catch::Contains("session s3: open failed"));
+}
+
+TEST_CASE("a session's queues stay bounded while its stream does not read", "[session][render]") {
+  const Fixture fixture;
+  auto opened = Session::open("s4", smallView(0), fixture.opener(-1), {});
+  REQUIRE(opened);
+  Session& session = **opened;
+  const std::uint64_t attachment = session.attach();  // a stream that never reads
+
+  // 400k events as fast as they come: camera moves of alternating kinds
+  // (nothing to add up), step changes (each answered by a state) and bad
+  // sizes (each answered by an error).
+  constexpr std::uint64_t kEvents = 400'000;
+  std::size_t mostEvents = 0;
+  std::size_t mostNotices = 0;
+  for (std::uint64_t id = 1; id <= kEvents; ++id) {
+    SessionEvent event{id, service::Clock::now(), service::StillEvent{}};
+    switch (id % 4) {
+      case 0:
+        event.what = service::CameraEvent{render::CameraMove::kRotate, 0.001, 0.0};
+        break;
+      case 1:
+        event.what = service::CameraEvent{render::CameraMove::kPan, 0.001, 0.0};
+        break;
+      case 2:
+        event.what = service::SetStepEvent{static_cast<int>(id / 4 % 3)};
+        break;
+      default:
+        event.what = service::ResizeEvent{3, 3};
+        break;
+    }
+    session.post(std::move(event));
+    if (id % 1000 == 0) {
+      const auto stats = session.queueStats();
+      mostEvents = std::max(mostEvents, stats.events);
+      mostNotices = std::max(mostNotices, stats.notices);
+    }
+  }
+  const auto stats = session.queueStats();
+  INFO("most events queued " << mostEvents << ", most notices " << mostNotices << ", refused "
+                             << stats.refused << ", errors dropped " << stats.errorsDropped);
+  const service::SessionLimits limits;
+  CHECK(mostEvents <= limits.maxQueuedEvents);
+  CHECK(mostNotices <= limits.maxQueuedErrors + 1);  // the errors and the newest state
+  CHECK(stats.errorsDropped > 0);
+
+  // The session still answers: once the stream has read what is queued, the
+  // next event.
+  CHECK_FALSE(session.closed());
+  service::RenderedFrame frame;
+  SessionNotice notice;
+  while (session.next(attachment, std::chrono::milliseconds(500), frame, notice) !=
+         Session::Next::kTimeout) {
+  }
+  session.post({kEvents + 1, service::Clock::now(), service::SetStepEvent{2}});
+  const SessionNotice moved = noticeFor(session, attachment, kEvents + 1);
+  CHECK(moved.error);
+  REQUIRE(moved.state);
+  CHECK(moved.state->step == 2);
+}
+
+TEST_CASE("camera moves queued back to back add up into one", "[session][render]") {
+  const Fixture fixture;
+  service::SessionLimits limits;
+  limits.maxQueuedEvents = 4;
+  auto opened = Session::open("s5", smallView(0), fixture.opener(-1), limits);
+  REQUIRE(opened);
+  Session& session = **opened;
+  // Events arrive faster than the session's thread takes them: those that
+  // meet a queued move of their kind join it.
+  for (std::uint64_t id = 1; id <= 10'000; ++id) {
+    session.post(
+        {id, service::Clock::now(), service::CameraEvent{render::CameraMove::kZoom, 0.0, 0.0}});
+  }
+  const auto stats = session.queueStats();
+  CHECK(stats.coalesced > 0);
+  CHECK(stats.refused == 0);  // moves of one kind never fill the queue
+  CHECK(stats.events <= 1);
+}
+
+}  // namespace crackvis
