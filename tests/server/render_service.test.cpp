@@ -17,10 +17,10 @@
 #include "server/render_fixture.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
-#include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/egl_context.hpp>
+#include <crackvis/rpc/credentials.hpp>
 #include <crackvis/service/render_server.hpp>
 #include <crackvis/sim/presets.hpp>
 #include <crackvis/sim/run.hpp>
@@ -338,7 +338,7 @@ TEST_CASE("a session reads the arrays its view colours by: break step, bond forc
     return frames.back().frame.last_event_id() == event && frames.back().frame.full_resolution();
   }));
   CHECK(viridisPixels(stream.frames().back().picture) < 20);  // solid grey particles still
-  CHECK(colouredBy(view).rgb.size() > 0);  // and it takes the next replacement
+  CHECK(colouredBy(view).rgb.size() > 0);                     // and it takes the next replacement
 }
 
 TEST_CASE("a session steps and plays through the fracture", "[render][service][integration]") {
@@ -563,11 +563,11 @@ TEST_CASE("the render server applies crackvis-data's users: tokens and folders",
           "[render][service][integration]") {
   dataservice::UserEntry alice;
   alice.name = "alice";
-  alice.tokenHash = dataservice::hashSecret("alice-token", 1000).value();
+  alice.tokenHash = rpc::hashSecret("alice-token", 1000).value();
   alice.folders = {"*"};
   dataservice::UserEntry bob;
   bob.name = "bob";
-  bob.tokenHash = dataservice::hashSecret("bob-token", 1000).value();
+  bob.tokenHash = rpc::hashSecret("bob-token", 1000).value();
   bob.folders = {"bob"};
   auto services = startServices(30.0, 8, {alice, bob});
   auto stub = connect(*services.render);
