@@ -128,6 +128,9 @@ void ServerHost::shutdown(double graceSeconds) {
     if (m_settings.beforeStop) {
       m_settings.beforeStop();
     }
+    if (!m_server) {
+      return;  // it never started
+    }
     m_server->GetHealthCheckService()->SetServingStatus(false);
     m_server->Shutdown(std::chrono::system_clock::now() +
                        std::chrono::duration_cast<std::chrono::system_clock::duration>(

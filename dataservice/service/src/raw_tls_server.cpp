@@ -274,7 +274,7 @@ void RawTlsServer::closeStalled() {
   std::lock_guard lock(m_mutex);
   for (auto& [fd, deadline] : m_connections) {
     if (now > deadline) {
-      ::shutdown(fd, SHUT_RDWR);  // its blocked SSL_accept or SSL_read returns
+      ::shutdown(fd, SHUT_RD);  // its blocked SSL_accept or SSL_read sees the end
       deadline = std::chrono::steady_clock::time_point::max();
     }
   }
