@@ -31,15 +31,7 @@ namespace v1 = crackvis::v1;
 using dataservice::Hyperslab;
 
 std::unique_ptr<v1::DataService::Stub> rawStub(const dataservice::DataServer& server) {
-  const auto tls = dataservice::loadTlsMaterial(clientTls()).value();
-  grpc::SslCredentialsOptions ssl;
-  ssl.pem_root_certs = tls.caPem;
-  ssl.pem_cert_chain = tls.certPem;
-  ssl.pem_private_key = tls.keyPem;
-  grpc::ChannelArguments arguments;
-  arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
-  return v1::DataService::NewStub(
-      grpc::CreateCustomChannel(server.address(), grpc::SslCredentials(ssl), arguments));
+  return v1::DataService::NewStub(rawChannel(server));
 }
 
 double secondsOf(const std::function<void()>& work) {
@@ -116,10 +108,16 @@ TEST_CASE("Failed sign-ins are throttled per peer address, through the real serv
   const Status throttled = as("bob's password").describe("bob/b.h5").status();
   CHECK(throttled.code() == StatusCode::kResourceExhausted);
   CHECK_THAT(throttled.message(), Catch::Contains("too many failed sign-ins"));
-  // Another peer is not held up by this one's failures.
-  rpc::Authenticator same(config.users);
-  // base64 of "bob:bob's password"
-  CHECK(same.authenticate("Basic Ym9iOmJvYidzIHBhc3N3b3Jk", "", "ipv4:192.0.2.1:5").isOk());
+  // Counted per address: another peer is not held up by this one's failures.
+  rpc::Authenticator authenticator(config.users);
+  const std::string wrong = "Basic Ym9iOndyb25n";              // bob:wrong
+  const std::string right = "Basic Ym9iOmJvYidzIHBhc3N3b3Jk";  // bob:bob's password
+  for (int i = 0; i < rpc::kMaxFailuresPerPeer; ++i) {
+    CHECK_FALSE(authenticator.authenticate(wrong, "", fmt::format("ipv4:192.0.2.1:{}", i)));
+  }
+  CHECK(authenticator.authenticate(right, "", "ipv4:192.0.2.1:99").status().code() ==
+        StatusCode::kResourceExhausted);
+  CHECK(authenticator.authenticate(right, "", "ipv4:192.0.2.2:5").isOk());
 }
 
 TEST_CASE("An exception at a handler's boundary fails only that call", "[dataservice][rpc]") {
