@@ -30,10 +30,6 @@ namespace {
 namespace v1 = crackvis::v1;
 using dataservice::Hyperslab;
 
-std::unique_ptr<v1::DataService::Stub> rawStub(const dataservice::DataServer& server) {
-  return v1::DataService::NewStub(rawChannel(server));
-}
-
 double secondsOf(const std::function<void()>& work) {
   const auto start = std::chrono::steady_clock::now();
   work();

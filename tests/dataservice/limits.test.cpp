@@ -18,10 +18,6 @@ namespace {
 namespace v1 = crackvis::v1;
 using dataservice::Hyperslab;
 
-std::unique_ptr<v1::DataService::Stub> rawStub(const dataservice::DataServer& server) {
-  return v1::DataService::NewStub(rawChannel(server));
-}
-
 v1::ReadRequest bigRead() {
   v1::ReadRequest request;
   request.set_file("big.h5");

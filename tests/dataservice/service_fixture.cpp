@@ -141,6 +141,10 @@ std::shared_ptr<grpc::Channel> rawChannel(const dataservice::DataServer& server)
   return grpc::CreateCustomChannel(server.address(), grpc::SslCredentials(ssl), arguments);
 }
 
+std::unique_ptr<crackvis::v1::DataService::Stub> rawStub(const dataservice::DataServer& server) {
+  return crackvis::v1::DataService::NewStub(rawChannel(server));
+}
+
 std::unique_ptr<dataservice::DataServer> startServer(const dataservice::ServerConfig& config) {
   auto server = dataservice::DataServer::start(config);
   if (!server) {
