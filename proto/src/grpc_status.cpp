@@ -28,6 +28,10 @@ grpc::Status toGrpcStatus(const Status& status) {
         return grpc::StatusCode::UNAVAILABLE;
       case StatusCode::kInternal:
         return grpc::StatusCode::INTERNAL;
+      case StatusCode::kCancelled:
+        return grpc::StatusCode::CANCELLED;
+      case StatusCode::kDeadlineExceeded:
+        return grpc::StatusCode::DEADLINE_EXCEEDED;
     }
     return grpc::StatusCode::UNKNOWN;
   }();
@@ -95,9 +99,11 @@ Status fromGrpcStatus(const grpc::Status& status, const std::string& call) {
       return {StatusCode::kUnauthenticated, message};
     case grpc::StatusCode::RESOURCE_EXHAUSTED:
       return {StatusCode::kResourceExhausted, message};
-    case grpc::StatusCode::UNAVAILABLE:
     case grpc::StatusCode::CANCELLED:
+      return cancelled(fmt::format("{}: CANCELLED: {}", call, message));
     case grpc::StatusCode::DEADLINE_EXCEEDED:
+      return deadlineExceeded(fmt::format("{}: DEADLINE_EXCEEDED: {}", call, message));
+    case grpc::StatusCode::UNAVAILABLE:
     case grpc::StatusCode::ABORTED:
       return {StatusCode::kUnavailable,
               fmt::format("{}: {}: {}", call, grpcCodeName(status.error_code()), message)};

@@ -2,13 +2,14 @@
 // server.
 #include <catch2/catch.hpp>
 
-#include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/dataservice/server_config.hpp>
+#include <crackvis/rpc/credentials.hpp>
 
 namespace crackvis::testing {
 namespace {
 
 using namespace crackvis::dataservice;
+using namespace crackvis::rpc;
 
 TEST_CASE("Secrets are stored as salted PBKDF2 hashes", "[dataservice]") {
   auto hash = hashSecret("correct horse", 2000);

@@ -18,18 +18,6 @@ namespace {
 namespace v1 = crackvis::v1;
 using dataservice::Hyperslab;
 
-std::unique_ptr<v1::DataService::Stub> rawStub(const dataservice::DataServer& server) {
-  const auto tls = dataservice::loadTlsMaterial(clientTls()).value();
-  grpc::SslCredentialsOptions ssl;
-  ssl.pem_root_certs = tls.caPem;
-  ssl.pem_cert_chain = tls.certPem;
-  ssl.pem_private_key = tls.keyPem;
-  grpc::ChannelArguments arguments;
-  arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
-  return v1::DataService::NewStub(
-      grpc::CreateCustomChannel(server.address(), grpc::SslCredentials(ssl), arguments));
-}
-
 v1::ReadRequest bigRead() {
   v1::ReadRequest request;
   request.set_file("big.h5");

@@ -11,7 +11,7 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "service_fixture.hpp"
 #include "support/process.hpp"
-#include <crackvis/dataservice/credentials.hpp>
+#include <crackvis/rpc/credentials.hpp>
 
 namespace crackvis::testing {
 namespace {
@@ -148,13 +148,10 @@ TEST_CASE("Users: tokens and passwords on top of mutual TLS, each with their fol
   // Fewer PBKDF2 iterations than in production keep the test fast; the
   // scheme is the same.
   constexpr int kIterations = 20000;
-  dataservice::UserEntry alice{"alice",
-                               dataservice::hashSecret("alice-token", kIterations).value(),
-                               "",
-                               "",
-                               {"alice", "flat"}};
+  dataservice::UserEntry alice{
+      "alice", rpc::hashSecret("alice-token", kIterations).value(), "", "", {"alice", "flat"}};
   dataservice::UserEntry bob{
-      "bob", "", dataservice::hashSecret("bob's password", kIterations).value(), "", {"bob"}};
+      "bob", "", rpc::hashSecret("bob's password", kIterations).value(), "", {"bob"}};
   dataservice::UserEntry render{"render", "", "", "crackvis-render", {"*"}};
   config.users = {alice, bob, render};
   auto server = startServer(config);

@@ -19,15 +19,6 @@ namespace v1 = crackvis::v1;
 using dataservice::DataType;
 using dataservice::Hyperslab;
 
-std::shared_ptr<grpc::Channel> rawChannel(const dataservice::DataServer& server) {
-  const auto tls = dataservice::loadTlsMaterial(clientTls()).value();
-  grpc::SslCredentialsOptions ssl;
-  ssl.pem_root_certs = tls.caPem;
-  ssl.pem_cert_chain = tls.certPem;
-  ssl.pem_private_key = tls.keyPem;
-  return grpc::CreateChannel(server.address(), grpc::SslCredentials(ssl));
-}
-
 TEST_CASE("ListFiles lists the data root and never a link out of it",
           "[dataservice][integration]") {
   const SampleRoot& sample = sampleRoot();

@@ -130,6 +130,21 @@ dataservice::ServerConfig baseConfig() {
   return config;
 }
 
+std::shared_ptr<grpc::Channel> rawChannel(const dataservice::DataServer& server) {
+  const auto tls = dataservice::loadTlsMaterial(clientTls()).value();
+  grpc::SslCredentialsOptions ssl;
+  ssl.pem_root_certs = tls.caPem;
+  ssl.pem_cert_chain = tls.certPem;
+  ssl.pem_private_key = tls.keyPem;
+  grpc::ChannelArguments arguments;
+  arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
+  return grpc::CreateCustomChannel(server.address(), grpc::SslCredentials(ssl), arguments);
+}
+
+std::unique_ptr<crackvis::v1::DataService::Stub> rawStub(const dataservice::DataServer& server) {
+  return crackvis::v1::DataService::NewStub(rawChannel(server));
+}
+
 std::unique_ptr<dataservice::DataServer> startServer(const dataservice::ServerConfig& config) {
   auto server = dataservice::DataServer::start(config);
   if (!server) {

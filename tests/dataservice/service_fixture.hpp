@@ -9,6 +9,9 @@
 #include <memory>
 #include <string>
 
+#include <grpcpp/grpcpp.h>
+
+#include "crackvis/v1/data.grpc.pb.h"
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/dataservice/data_client.hpp>
@@ -51,6 +54,10 @@ std::unique_ptr<dataservice::DataServer> startServer(const dataservice::ServerCo
 dataservice::ClientOptions clientOptions(const dataservice::DataServer& server,
                                          const std::string& certificate = "client");
 dataservice::DataClient connect(const dataservice::ClientOptions& options);
+// A gRPC channel of its own (no shared subchannel) with the "client"
+// certificate, for tests that speak the protocol directly.
+std::shared_ptr<grpc::Channel> rawChannel(const dataservice::DataServer& server);
+std::unique_ptr<crackvis::v1::DataService::Stub> rawStub(const dataservice::DataServer& server);
 
 // The server still answers: a health check and a valid read with a good
 // client, bit-identical to the file. Fails the test otherwise.

@@ -1,5 +1,6 @@
 #include "server/render_fixture.hpp"
 
+#include <filesystem>
 #include <fstream>
 #include <mutex>
 
@@ -16,6 +17,13 @@ const TempDir& crackRoot() {
   std::call_once(once, [] {
     writeSimulatedCuboidA(dir.file("cuboidA.h5"));
     std::ofstream(dir.file("notes.txt")) << "not HDF5\n";
+    namespace fs = std::filesystem;
+    fs::create_directories(dir.path() / "alice");
+    fs::create_directories(dir.path() / "bob");
+    fs::copy_file(dir.path() / "cuboidA.h5", dir.path() / "alice" / "a.h5");
+    fs::copy_file(dir.path() / "cuboidA.h5", dir.path() / "bob" / "b.h5");
+    fs::create_symlink("../bob/b.h5", dir.path() / "alice" / "link.h5");
+    fs::create_symlink("a.h5", dir.path() / "alice" / "swap.h5");
   });
   return dir;
 }
@@ -25,7 +33,8 @@ namespace {
 std::unique_ptr<service::RenderServer> startRender(const dataservice::DataServer& data,
                                                    const std::string& listen, double graceSeconds,
                                                    int maxSessions,
-                                                   std::vector<dataservice::UserEntry> users) {
+                                                   std::vector<dataservice::UserEntry> users,
+                                                   const std::string& accessLog) {
   service::RenderServerConfig config;
   config.listen = listen;
   config.tls = serverTls();
@@ -34,7 +43,7 @@ std::unique_ptr<service::RenderServer> startRender(const dataservice::DataServer
   config.sessionGraceSeconds = graceSeconds;
   config.maxSessions = maxSessions;
   config.users = std::move(users);
-  config.accessLog = "";
+  config.accessLog = accessLog;
   auto render = service::RenderServer::start(config);
   INFO(render.status().message());
   REQUIRE(render.isOk());
@@ -46,17 +55,17 @@ std::unique_ptr<service::RenderServer> startRender(const dataservice::DataServer
 std::unique_ptr<service::RenderServer> startRenderServer(const dataservice::DataServer& data,
                                                          const std::string& listen,
                                                          double graceSeconds) {
-  return startRender(data, listen, graceSeconds, 8, {});
+  return startRender(data, listen, graceSeconds, 8, {}, "");
 }
 
 Services startServices(double graceSeconds, int maxSessions,
-                       std::vector<dataservice::UserEntry> users) {
+                       std::vector<dataservice::UserEntry> users, const std::string& accessLog) {
   Services services;
   auto dataConfig = baseConfig();
   dataConfig.dataRoot = crackRoot().path().string();
   services.data = startServer(dataConfig);
-  services.render =
-      startRender(*services.data, "127.0.0.1:0", graceSeconds, maxSessions, std::move(users));
+  services.render = startRender(*services.data, "127.0.0.1:0", graceSeconds, maxSessions,
+                                std::move(users), accessLog);
   return services;
 }
 

@@ -15,7 +15,9 @@
 
 namespace crackvis::testing {
 
-// cuboidA.h5 (cuboid3d A at scale 0.3, made once per process) and notes.txt.
+// cuboidA.h5 (cuboid3d A at scale 0.3, made once per process), notes.txt,
+// and users' folders: alice/a.h5 and bob/b.h5 (copies of cuboidA.h5),
+// alice/link.h5 -> ../bob/b.h5 and alice/swap.h5 -> a.h5 (re-pointed by a test).
 const TempDir& crackRoot();
 
 struct Services {
@@ -23,8 +25,10 @@ struct Services {
   std::unique_ptr<service::RenderServer> render;
 };
 
+// `accessLog`: the render server's access log ("": none).
 Services startServices(double graceSeconds = 30.0, int maxSessions = 8,
-                       std::vector<dataservice::UserEntry> users = {});
+                       std::vector<dataservice::UserEntry> users = {},
+                       const std::string& accessLog = "");
 // A render server for an already running data service (a restart); `listen`
 // may name the port the previous one had.
 std::unique_ptr<service::RenderServer> startRenderServer(const dataservice::DataServer& data,

@@ -2,9 +2,11 @@
 // crackvis-render (in process, loopback ports, mutual TLS with certificates
 // from certs/make-dev-certs.sh), real EGL rendering on llvmpipe, real H.264
 // decoded on the test's side. The data is a scaled simulated cuboid A.
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <condition_variable>
+#include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <thread>
@@ -14,13 +16,15 @@
 
 #include "crackvis/v1/render.grpc.pb.h"
 #include "dataservice/service_fixture.hpp"
+#include "grpc/health/v1/health.grpc.pb.h"
 #include "server/render_fixture.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
-#include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/egl_context.hpp>
+#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/rpc/grpc_status.hpp>
 #include <crackvis/service/render_server.hpp>
 #include <crackvis/sim/presets.hpp>
 #include <crackvis/sim/run.hpp>
@@ -72,7 +76,11 @@ struct ReceivedFrame {
 // A stream attached to a session: a reader thread decodes every frame.
 class StreamClient {
  public:
-  StreamClient(v1::RenderService::Stub& stub, const std::string& session) {
+  StreamClient(v1::RenderService::Stub& stub, const std::string& session,
+               const std::string& token = "") {
+    if (!token.empty()) {
+      m_context.AddMetadata("authorization", "Bearer " + token);
+    }
     m_stream = stub.Stream(&m_context);
     v1::ClientEvent attach;
     attach.set_event_id(0);
@@ -338,7 +346,7 @@ TEST_CASE("a session reads the arrays its view colours by: break step, bond forc
     return frames.back().frame.last_event_id() == event && frames.back().frame.full_resolution();
   }));
   CHECK(viridisPixels(stream.frames().back().picture) < 20);  // solid grey particles still
-  CHECK(colouredBy(view).rgb.size() > 0);  // and it takes the next replacement
+  CHECK(colouredBy(view).rgb.size() > 0);                     // and it takes the next replacement
 }
 
 TEST_CASE("a session steps and plays through the fracture", "[render][service][integration]") {
@@ -437,6 +445,20 @@ TEST_CASE("bad requests get a clear status and the server keeps serving",
     StreamClient unknown(*stub, "no-such-session");
     const grpc::Status status = unknown.finish();
     CHECK(status.error_code() == grpc::StatusCode::NOT_FOUND);
+    // A stream whose first message is an event, not attach_session_id.
+    grpc::ClientContext context;
+    auto unattached = stub->Stream(&context);
+    v1::ClientEvent still;
+    still.set_event_id(1);
+    still.mutable_still();
+    REQUIRE(unattached->Write(still));
+    unattached->WritesDone();
+    v1::ServerMessage ignored;
+    while (unattached->Read(&ignored)) {
+    }
+    const grpc::Status first = unattached->Finish();
+    CHECK(first.error_code() == grpc::StatusCode::INVALID_ARGUMENT);
+    CHECK_THAT(first.error_message(), Catch::Contains("attach_session_id"));
   }
   SECTION("a client certificate from another CA is refused") {
     auto other = connect(*services.render, "other-client");
@@ -559,38 +581,241 @@ TEST_CASE("crackvis-render --snapshot draws the cracks of a generated series",
   CHECK(bad.err.find("step 9999 out of range") != std::string::npos);
 }
 
+// Requests as a user: the token travels as "authorization: Bearer".
+class AsUser {
+ public:
+  AsUser(v1::RenderService::Stub& stub, std::string token)
+      : m_stub(stub), m_token(std::move(token)) {}
+
+  grpc::Status open(const pipeline::PipelineDescription& d,
+                    v1::OpenSessionResponse* response = nullptr) {
+    grpc::ClientContext context;
+    prepare(context);
+    v1::OpenSessionRequest request;
+    request.set_pipeline_xml(pipeline::toXml(d));
+    v1::OpenSessionResponse local;
+    return m_stub.OpenSession(&context, request, response != nullptr ? response : &local);
+  }
+  grpc::Status list(const std::string& folder, std::vector<std::string>* paths = nullptr) {
+    grpc::ClientContext context;
+    prepare(context);
+    v1::ListFilesRequest request;
+    request.set_folder(folder);
+    request.set_recursive(true);
+    v1::ListFilesResponse response;
+    const grpc::Status status = m_stub.ListFiles(&context, request, &response);
+    for (const auto& file : response.files()) {
+      if (paths != nullptr) {
+        paths->push_back(file.path());
+      }
+    }
+    return status;
+  }
+  grpc::Status describe(const std::string& file) {
+    grpc::ClientContext context;
+    prepare(context);
+    v1::DescribeRequest request;
+    request.set_file(file);
+    v1::DescribeResponse response;
+    return m_stub.Describe(&context, request, &response);
+  }
+  grpc::Status snapshot(const std::string& session) {
+    grpc::ClientContext context;
+    prepare(context);
+    v1::SnapshotRequest request;
+    request.set_session_id(session);
+    request.set_width(64);
+    request.set_height(48);
+    v1::SnapshotResponse response;
+    return m_stub.Snapshot(&context, request, &response);
+  }
+
+ private:
+  void prepare(grpc::ClientContext& context) const {
+    if (!m_token.empty()) {
+      context.AddMetadata("authorization", "Bearer " + m_token);
+    }
+  }
+  v1::RenderService::Stub& m_stub;
+  std::string m_token;
+};
+
+pipeline::PipelineDescription viewOf(const std::string& file) {
+  auto d = crackView();
+  d.file = file;
+  return d;
+}
+
 TEST_CASE("the render server applies crackvis-data's users: tokens and folders",
           "[render][service][integration]") {
-  dataservice::UserEntry alice;
-  alice.name = "alice";
-  alice.tokenHash = dataservice::hashSecret("alice-token", 1000).value();
-  alice.folders = {"*"};
-  dataservice::UserEntry bob;
-  bob.name = "bob";
-  bob.tokenHash = dataservice::hashSecret("bob-token", 1000).value();
-  bob.folders = {"bob"};
-  auto services = startServices(30.0, 8, {alice, bob});
+  dataservice::UserEntry carol{"carol", rpc::hashToken("carol-token").value(), "", "", {"*"}};
+  dataservice::UserEntry alice{"alice", rpc::hashToken("alice-token").value(), "", "", {"alice"}};
+  dataservice::UserEntry bob{"bob", rpc::hashSecret("bob-token", 1000).value(), "", "", {"bob"}};
+  auto services = startServices(30.0, 8, {carol, alice, bob});
   auto stub = connect(*services.render);
-  auto open = [&](const std::string& token) {
-    grpc::ClientContext context;
-    if (!token.empty()) {
-      context.AddMetadata("authorization", "Bearer " + token);
-    }
-    v1::OpenSessionRequest request;
-    request.set_pipeline_xml(pipeline::toXml(crackView()));
-    v1::OpenSessionResponse response;
-    return stub->OpenSession(&context, request, &response);
-  };
-  CHECK(open("").error_code() == grpc::StatusCode::UNAUTHENTICATED);
-  CHECK(open("wrong").error_code() == grpc::StatusCode::UNAUTHENTICATED);
-  const grpc::Status denied = open("bob-token");
-  CHECK(denied.error_code() == grpc::StatusCode::PERMISSION_DENIED);
-  CHECK(denied.error_message().find("user 'bob' may not read 'cuboidA.h5'") != std::string::npos);
-  CHECK(open("alice-token").ok());
+  AsUser anonymous(*stub, "");
+  AsUser wrong(*stub, "wrong");
+  AsUser asCarol(*stub, "carol-token");
+  AsUser asAlice(*stub, "alice-token");
+  AsUser asBob(*stub, "bob-token");
 
-  grpc::ClientContext listContext;
-  listContext.AddMetadata("authorization", "Bearer bob-token");
-  v1::ListFilesResponse files;
-  REQUIRE(stub->ListFiles(&listContext, v1::ListFilesRequest(), &files).ok());
-  CHECK(files.files_size() == 0);  // bob's folder holds nothing here
+  SECTION("tokens, and the folder rule on the file as named") {
+    CHECK(anonymous.open(crackView()).error_code() == grpc::StatusCode::UNAUTHENTICATED);
+    CHECK(wrong.open(crackView()).error_code() == grpc::StatusCode::UNAUTHENTICATED);
+    const grpc::Status denied = asBob.open(crackView());
+    CHECK(denied.error_code() == grpc::StatusCode::PERMISSION_DENIED);
+    CHECK_THAT(denied.error_message(), Catch::Contains("user 'bob' may not read 'cuboidA.h5'"));
+    CHECK(asCarol.open(crackView()).ok());
+    CHECK(asBob.open(viewOf("bob/b.h5")).ok());
+  }
+  SECTION("listings show each user exactly their files, never a link into another's folder") {
+    std::vector<std::string> bobs;
+    REQUIRE(asBob.list("", &bobs).ok());
+    CHECK(bobs == std::vector<std::string>{"bob/b.h5"});
+    std::vector<std::string> alices;
+    REQUIRE(asAlice.list("", &alices).ok());
+    CHECK(alices == std::vector<std::string>{"alice/a.h5", "alice/swap.h5"});
+    std::vector<std::string> all;
+    REQUIRE(asCarol.list("", &all).ok());
+    CHECK(std::find(all.begin(), all.end(), "alice/link.h5") != all.end());
+    CHECK(std::find(all.begin(), all.end(), "cuboidA.h5") != all.end());
+  }
+  SECTION("another user's folder answers exactly as a missing one") {
+    const grpc::Status foreign = asAlice.list("bob");
+    const grpc::Status missing = asAlice.list("nosuch");
+    CHECK(foreign.error_code() == grpc::StatusCode::NOT_FOUND);
+    CHECK(missing.error_code() == grpc::StatusCode::NOT_FOUND);
+    CHECK(foreign.error_message() == "folder 'bob' not found under the data root");
+    CHECK(missing.error_message() == "folder 'nosuch' not found under the data root");
+  }
+  SECTION("a symlink in alice's folder to bob's file: Describe, OpenSession, replacement") {
+    CHECK(asAlice.describe("alice/a.h5").ok());
+    const grpc::Status described = asAlice.describe("alice/link.h5");
+    CHECK(described.error_code() == grpc::StatusCode::PERMISSION_DENIED);
+    CHECK_THAT(described.error_message(), Catch::Contains("links to 'bob/b.h5'"));
+    const grpc::Status opened = asAlice.open(viewOf("alice/link.h5"));
+    CHECK(opened.error_code() == grpc::StatusCode::PERMISSION_DENIED);
+    CHECK_THAT(opened.error_message(), Catch::Contains("links to 'bob/b.h5'"));
+
+    v1::OpenSessionResponse response;
+    REQUIRE(asAlice.open(viewOf("alice/a.h5"), &response).ok());
+    StreamClient stream(*stub, response.session_id(), "alice-token");
+    REQUIRE(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+    v1::ClientEvent replace;
+    replace.mutable_replace_pipeline()->set_pipeline_xml(pipeline::toXml(viewOf("alice/link.h5")));
+    stream.send(replace);
+    REQUIRE(stream.waitFor([](const auto&, const auto& errors) { return !errors.empty(); }));
+    CHECK(stream.errors()[0].code() == static_cast<int>(grpc::StatusCode::PERMISSION_DENIED));
+    CHECK_THAT(stream.errors()[0].message(), Catch::Contains("bob/b.h5"));
+  }
+  SECTION("a snapshot after the link was re-pointed at bob's file") {
+    v1::OpenSessionResponse response;
+    REQUIRE(asAlice.open(viewOf("alice/swap.h5"), &response).ok());
+    REQUIRE(asAlice.snapshot(response.session_id()).ok());
+    const auto swap = crackRoot().path() / "alice" / "swap.h5";
+    std::filesystem::remove(swap);
+    std::filesystem::create_symlink("../bob/b.h5", swap);
+    const grpc::Status snapshot = asAlice.snapshot(response.session_id());
+    std::filesystem::remove(swap);
+    std::filesystem::create_symlink("a.h5", swap);
+    CHECK(snapshot.error_code() == grpc::StatusCode::PERMISSION_DENIED);
+    CHECK_THAT(snapshot.error_message(), Catch::Contains("links to 'bob/b.h5'"));
+  }
+  SECTION("sessions are capped per user beside the server-wide cap") {
+    std::vector<v1::OpenSessionResponse> sessions(5);
+    for (int i = 0; i < 4; ++i) {
+      REQUIRE(asBob.open(viewOf("bob/b.h5"), &sessions[i]).ok());
+    }
+    const grpc::Status fifth = asBob.open(viewOf("bob/b.h5"), &sessions[4]);
+    CHECK(fifth.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED);
+    CHECK_THAT(fifth.error_message(), Catch::Contains("per user"));
+    CHECK(asCarol.open(crackView()).ok());  // another user still opens one
+  }
+}
+
+TEST_CASE("a number no parser can hold fails only that call, with an access-log line",
+          "[render][service][integration]") {
+  TempDir logs;
+  auto services = startServices(30.0, 8, {}, logs.file("render-access.log"));
+  auto stub = connect(*services.render);
+  std::string xml = pipeline::toXml(crackView());
+  const std::string step = "step=\"-1\"";
+  REQUIRE(xml.find(step) != std::string::npos);
+  xml.replace(xml.find(step), step.size(), "step=\"99999999999999999999\"");
+  const grpc::Status status = openStatus(*stub, xml);
+  CHECK_FALSE(status.ok());
+  // Before the handler boundary this was UNKNOWN, from an escaped exception.
+  CHECK(status.error_code() != grpc::StatusCode::UNKNOWN);
+  std::ifstream in(logs.file("render-access.log"));
+  const std::string log((std::istreambuf_iterator<char>(in)), {});
+  CHECK_THAT(log, Catch::Contains("method=OpenSession"));
+  CHECK_THAT(log,
+             Catch::Contains(fmt::format("status={}", rpc::grpcCodeName(status.error_code()))));
+  // The server still serves.
+  StreamClient stream(*stub, openSession(*stub, crackView()));
+  CHECK(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+}
+
+TEST_CASE("the render server starts and stops like the data server",
+          "[render][service][integration]") {
+  auto services = startServices();
+  SECTION("its health status is SERVING") {
+    const auto tls = testing::clientTls("client");
+    auto read = [](const std::string& path) {
+      std::ifstream in(path);
+      return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    grpc::SslCredentialsOptions ssl{read(tls.ca), read(tls.key), read(tls.cert)};
+    auto health = grpc::health::v1::Health::NewStub(grpc::CreateChannel(
+        fmt::format("localhost:{}", services.render->port()), grpc::SslCredentials(ssl)));
+    grpc::ClientContext context;
+    grpc::health::v1::HealthCheckRequest request;
+    grpc::health::v1::HealthCheckResponse response;
+    REQUIRE(health->Check(&context, request, &response).ok());
+    CHECK(response.status() == grpc::health::v1::HealthCheckResponse::SERVING);
+  }
+  SECTION("a second render server on its port fails with 'address in use'") {
+    service::RenderServerConfig config;
+    config.listen = fmt::format("127.0.0.1:{}", services.render->port());
+    config.tls = serverTls();
+    config.data.target = services.data->address();
+    config.data.tls = clientTls("crackvis-render");
+    config.accessLog = "";
+    auto second = service::RenderServer::start(config);
+    REQUIRE_FALSE(second.isOk());
+    CHECK_THAT(second.status().message(), Catch::Contains("in use"));
+  }
+  SECTION("an IPv6 loopback address is bracketed") {
+    auto v6 = startRenderServer(*services.data, "[::1]:0");
+    CHECK(v6->address() == fmt::format("[::1]:{}", v6->port()));
+  }
+  SECTION("--data-insecure only to a loopback address") {
+    service::RenderServerConfig config;
+    config.listen = "127.0.0.1:0";
+    config.tls = serverTls();
+    config.data.target = "192.0.2.1:50051";
+    config.data.insecure = true;
+    config.accessLog = "";
+    auto refused = service::RenderServer::start(config);
+    REQUIRE_FALSE(refused.isOk());
+    CHECK(refused.status().code() == StatusCode::kFailedPrecondition);
+    CHECK_THAT(refused.status().message(), Catch::Contains("--data-insecure"));
+  }
+  SECTION("wait() returns once shutdown() has stopped the server") {
+    std::atomic<bool> returned{false};
+    std::thread waiter([&] {
+      services.render->wait();
+      returned = true;
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    CHECK_FALSE(returned);
+    services.render->shutdown(0.5);
+    waiter.join();
+    CHECK(returned);
+    auto stub = connect(*services.render);
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(2));
+    v1::ListFilesResponse files;
+    CHECK_FALSE(stub->ListFiles(&context, v1::ListFilesRequest(), &files).ok());
+  }
 }

@@ -10,9 +10,8 @@ namespace crackvis::dataservice {
 namespace fs = std::filesystem;
 
 namespace {
-Status permissionDenied(std::string message) {
-  return {StatusCode::kPermissionDenied, std::move(message)};
-}
+// Longer paths are refused before any file system call (PATH_MAX).
+constexpr std::size_t kMaxPathBytes = 4096;
 }  // namespace
 
 Result<DataRoot> DataRoot::open(const std::string& root) {
@@ -22,7 +21,7 @@ Result<DataRoot> DataRoot::open(const std::string& root) {
   }
   const fs::path canonical = fs::canonical(root, error);
   if (error) {
-    return notFound(fmt::format("data root '{}': {}", root, error.message()));
+    return crackvis::notFound(fmt::format("data root '{}': {}", root, error.message()));
   }
   if (!fs::is_directory(canonical, error)) {
     return invalidArgument(fmt::format("data root '{}' is not a directory", root));
@@ -32,11 +31,15 @@ Result<DataRoot> DataRoot::open(const std::string& root) {
 
 Result<std::string> DataRoot::normalize(std::string_view path) {
   if (path.find('\0') != std::string_view::npos) {
-    return invalidArgument("path contains a NUL character");
+    return invalidArgument(
+        fmt::format("path '{}' contains a NUL character", echoed(path.substr(0, path.find('\0')))));
+  }
+  if (path.size() > kMaxPathBytes) {
+    return invalidArgument(fmt::format("path '{}' is over {} bytes", echoed(path), kMaxPathBytes));
   }
   if (!path.empty() && path.front() == '/') {
     return invalidArgument(
-        fmt::format("path '{}' is absolute; paths are relative to the data root", path));
+        fmt::format("path '{}' is absolute; paths are relative to the data root", echoed(path)));
   }
   std::string normalized;
   size_t start = 0;
@@ -47,8 +50,8 @@ Result<std::string> DataRoot::normalize(std::string_view path) {
     }
     const std::string_view part = path.substr(start, end - start);
     if (part == "..") {
-      return invalidArgument(
-          fmt::format("path '{}' contains '..'; paths must stay inside the data root", path));
+      return invalidArgument(fmt::format(
+          "path '{}' contains '..'; paths must stay inside the data root", echoed(path)));
     }
     if (!part.empty() && part != ".") {
       if (!normalized.empty()) {
@@ -86,28 +89,32 @@ Result<ResolvedPath> DataRoot::resolve(std::string_view path, bool wantFolder) c
   // leaves the root is caught even when its target does not exist.
   const fs::path real = fs::weakly_canonical(joined, error);
   if (error) {
-    return notFound(fmt::format("'{}': {}", *normalized, error.message()));
+    return crackvis::notFound(fmt::format("'{}': {}", echoed(*normalized), error.message()));
   }
   if (!contains(real)) {
-    return permissionDenied(
-        fmt::format("'{}' resolves outside the data root (a symlink leaves it)", *normalized));
+    return permissionDenied(fmt::format("'{}' resolves outside the data root (a symlink leaves it)",
+                                        echoed(*normalized)));
   }
   const fs::file_status status = fs::status(real, error);
   if (error || !fs::exists(status)) {
-    return notFound(fmt::format("{} '{}' not found under the data root",
-                                wantFolder ? "folder" : "file", *normalized));
+    return notFound(*normalized, wantFolder);
   }
   if (wantFolder && !fs::is_directory(status)) {
-    return invalidArgument(fmt::format("'{}' is not a folder", *normalized));
+    return invalidArgument(fmt::format("'{}' is not a folder", echoed(*normalized)));
   }
   if (!wantFolder && !fs::is_regular_file(status)) {
-    return invalidArgument(fmt::format("'{}' is not a regular file", *normalized));
+    return invalidArgument(fmt::format("'{}' is not a regular file", echoed(*normalized)));
   }
   ResolvedPath resolved;
   resolved.requested = *normalized;
   resolved.relative = real == m_root ? std::string() : real.lexically_relative(m_root).string();
   resolved.absolute = real;
   return resolved;
+}
+
+Status DataRoot::notFound(std::string_view normalized, bool folder) {
+  return crackvis::notFound(fmt::format("{} '{}' not found under the data root",
+                                        folder ? "folder" : "file", echoed(normalized)));
 }
 
 Result<ResolvedPath> DataRoot::resolveFile(std::string_view path) const {

@@ -10,12 +10,10 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-Status permissionDenied(std::string message) {
-  return {StatusCode::kPermissionDenied, std::move(message)};
-}
-Status resourceExhausted(std::string message) {
-  return {StatusCode::kResourceExhausted, std::move(message)};
-}
+constexpr const char* kProgram = "crackvis-data";
+// Longer dataset paths are refused before any lookup (HDF5 names are short;
+// a huge one is an attack, and must not come back in a message).
+constexpr std::size_t kMaxDatasetPathBytes = 4096;
 
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -90,25 +88,24 @@ std::vector<Hyperslab> fromProto(const v1::ReadRequest& request) {
   return slabs;
 }
 
-std::string firstValue(const std::multimap<grpc::string_ref, grpc::string_ref>& metadata,
-                       const char* key) {
-  auto it = metadata.find(key);
-  return it == metadata.end() ? std::string() : std::string(it->second.data(), it->second.size());
-}
-
-std::string certificateName(grpc::CallbackServerContext* context) {
-  auto auth = context->auth_context();
-  if (!auth) {
-    return {};
+// Dataset paths are checked here, before the catalogue sees them: a NUL
+// would cut the name HDF5 looks up short.
+Status checkDatasetPaths(const v1::ReadRequest& request) {
+  for (int i = 0; i < request.slabs_size(); ++i) {
+    const std::string& dataset = request.slabs(i).dataset();
+    if (dataset.find('\0') != std::string::npos) {
+      return invalidArgument(
+          fmt::format("Read of {}: hyperslab {}: the dataset path '{}' "
+                      "contains a NUL character",
+                      echoed(request.file()), i, echoed(dataset)));
+    }
+    if (dataset.size() > kMaxDatasetPathBytes) {
+      return invalidArgument(
+          fmt::format("Read of {}: hyperslab {}: the dataset path '{}' is over {} bytes",
+                      echoed(request.file()), i, echoed(dataset), kMaxDatasetPathBytes));
+    }
   }
-  auto names = auth->FindPropertyValues(GRPC_X509_CN_PROPERTY_NAME);
-  return names.empty() ? std::string() : std::string(names.front().data(), names.front().size());
-}
-
-void finishRecord(AccessRecord& record, Clock::time_point start, const Status& status) {
-  record.seconds = secondsSince(start);
-  record.status = std::string(toString(status.code()));
-  record.detail = status.isOk() ? std::string() : status.message();
+  return Status::ok();
 }
 
 // ------------------------------------------------------------- streaming --
@@ -171,18 +168,18 @@ class StreamReactor : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
     if (!ok) {
       // The client went away or the call was cancelled (by the client's
       // deadline or the server's time limit).
-      finish(Status(StatusCode::kUnavailable, cancelReason()), grpc::Status::CANCELLED);
+      finish(cancelled(cancelReason()), grpc::Status::CANCELLED);
       return;
     }
     m_record.bytes += m_pendingBytes;
     m_pendingBytes = 0;
     if (secondsSince(m_start) > m_service.limits().maxCallSeconds) {
       finish(resourceExhausted(fmt::format("{} of {} exceeded the server's limit of {} s per call",
-                                           m_record.method, m_record.file,
+                                           m_record.method, echoed(m_record.file),
                                            m_service.limits().maxCallSeconds)));
       return;
     }
-    writeNext();
+    step();
   }
 
   void OnCancel() override { m_cancelled = true; }
@@ -195,6 +192,25 @@ class StreamReactor : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
   }
 
  protected:
+  // Parses the request and opens the stream (open() of the subclass), then
+  // sends the first chunk; a failure or an exception ends only this call.
+  template <typename Request>
+  void start(const grpc::ByteBuffer& buffer) {
+    bool opened = false;
+    const Status status = rpc::guarded(kProgram, m_record, [&] {
+      Request request;
+      CRACKVIS_RETURN_IF_ERROR(parseRequest(&buffer, request));
+      CRACKVIS_RETURN_IF_ERROR(open(request));
+      opened = true;
+      return Status::ok();
+    });
+    if (!opened) {
+      finish(status.isOk() ? internalError("the stream did not open") : status);
+      return;
+    }
+    step();
+  }
+
   // Authenticates the caller and resolves the file; takes a stream slot.
   Result<ResolvedPath> begin(const std::string& file) {
     m_record.file = file;
@@ -207,7 +223,8 @@ class StreamReactor : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
       return resolved.status();
     }
     auto slot =
-        m_service.streams().acquire(m_context, deadlineAfter(m_service.limits().maxCallSeconds));
+        m_service.streams().acquire(m_context, deadlineAfter(m_service.limits().maxCallSeconds),
+                                    caller->restricted ? caller->name : std::string());
     if (!slot) {
       return slot.status();
     }
@@ -222,19 +239,31 @@ class StreamReactor : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
     this->StartWrite(&m_message);
   }
 
-  void finish(const Status& status) { finish(status, toGrpcStatus(status)); }
+  void finish(const Status& status) {
+    this->Finish(rpc::finishCall(m_service.log(), m_record, m_start, status));
+  }
   void finish(const Status& logged, const grpc::Status& sent) {
-    finishRecord(m_record, m_start, logged);
-    if (!logged.isOk() && sent.error_code() == grpc::StatusCode::CANCELLED) {
-      m_record.status = "CANCELLED";
-    }
-    // Logged before the client sees the status, so a client's calls appear
-    // in the order it made them.
-    m_service.log().record(m_record);
+    rpc::finishCall(m_service.log(), m_record, m_start, logged);
     this->Finish(sent);
   }
 
+  virtual Status open(const v1::ReadRequest& /*request*/) { return internalError("not a Read"); }
+  virtual Status open(const v1::FetchRequest& /*request*/) { return internalError("not a Fetch"); }
   virtual void writeNext() = 0;
+
+ private:
+  // writeNext() at the handler boundary: an exception ends only this call.
+  void step() {
+    bool wrote = false;
+    const Status status = rpc::guarded(kProgram, m_record, [&] {
+      writeNext();
+      wrote = true;
+      return Status::ok();
+    });
+    if (!wrote) {
+      finish(status);
+    }
+  }
 
  private:
   std::string cancelReason() const {
@@ -245,6 +274,7 @@ class StreamReactor : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
     return m_cancelled ? "cancelled by the client or its deadline" : "client went away";
   }
 
+ protected:
   DataServiceImpl& m_service;
   grpc::CallbackServerContext* m_context;
   Clock::time_point m_start;
@@ -260,25 +290,18 @@ class ReadReactor final : public StreamReactor {
   ReadReactor(DataServiceImpl& service, grpc::CallbackServerContext* context,
               const grpc::ByteBuffer& buffer)
       : StreamReactor(service, context, "Read"), m_service(service) {
-    v1::ReadRequest request;
-    Status status = parseRequest(&buffer, request);
-    if (status) {
-      status = open(request);
-    }
-    if (!status) {
-      finish(status);
-      return;
-    }
-    writeNext();
+    start<v1::ReadRequest>(buffer);
   }
 
  private:
-  Status open(const v1::ReadRequest& request) {
+  using StreamReactor::open;
+  Status open(const v1::ReadRequest& request) override {
     if (request.slabs_size() > m_service.limits().maxSlabsPerRead) {
       return invalidArgument(fmt::format("Read of {}: {} hyperslabs, the server's limit is {}",
-                                         request.file(), request.slabs_size(),
+                                         echoed(request.file()), request.slabs_size(),
                                          m_service.limits().maxSlabsPerRead));
     }
+    CRACKVIS_RETURN_IF_ERROR(checkDatasetPaths(request));
     auto resolved = begin(request.file());
     if (!resolved) {
       return resolved.status();
@@ -353,20 +376,12 @@ class FetchReactor final : public StreamReactor {
   FetchReactor(DataServiceImpl& service, grpc::CallbackServerContext* context,
                const grpc::ByteBuffer& buffer)
       : StreamReactor(service, context, "Fetch"), m_service(service) {
-    v1::FetchRequest request;
-    Status status = parseRequest(&buffer, request);
-    if (status) {
-      status = open(request);
-    }
-    if (!status) {
-      finish(status);
-      return;
-    }
-    writeNext();
+    start<v1::FetchRequest>(buffer);
   }
 
  private:
-  Status open(const v1::FetchRequest& request) {
+  using StreamReactor::open;
+  Status open(const v1::FetchRequest& request) override {
     auto resolved = begin(request.file());
     if (!resolved) {
       return resolved.status();
@@ -413,7 +428,7 @@ class FetchReactor final : public StreamReactor {
 // --------------------------------------------------------- StreamRegistry
 
 Result<std::uint64_t> StreamRegistry::acquire(grpc::CallbackServerContext* context,
-                                              Clock::time_point deadline) {
+                                              Clock::time_point deadline, const std::string& user) {
   std::lock_guard lock(m_mutex);
   if (static_cast<int>(m_entries.size()) >= m_limit) {
     return resourceExhausted(fmt::format(
@@ -421,14 +436,29 @@ Result<std::uint64_t> StreamRegistry::acquire(grpc::CallbackServerContext* conte
         "later",
         m_limit));
   }
+  int& own = m_perUser[user];
+  if (!user.empty() && own >= m_perUserLimit) {
+    return resourceExhausted(fmt::format(
+        "user '{}' already has {} streams open, the limit per user (max_streams_per_user); "
+        "retry later",
+        user, own));
+  }
+  ++own;
   const std::uint64_t id = m_nextId++;
-  m_entries.emplace(id, Entry{context, deadline, false});
+  m_entries.emplace(id, Entry{context, deadline, false, user});
   return id;
 }
 
 void StreamRegistry::release(std::uint64_t id) {
   std::lock_guard lock(m_mutex);
-  m_entries.erase(id);
+  auto it = m_entries.find(id);
+  if (it == m_entries.end()) {
+    return;
+  }
+  if (auto user = m_perUser.find(it->second.user); user != m_perUser.end() && --user->second <= 0) {
+    m_perUser.erase(user);
+  }
+  m_entries.erase(it);
 }
 
 int StreamRegistry::cancelOverdue(Clock::time_point now) {
@@ -455,87 +485,87 @@ int StreamRegistry::active() const {
 
 Result<Caller> DataServiceImpl::authenticate(grpc::CallbackServerContext* context,
                                              AccessRecord& record) const {
-  record.peer = context->peer();
-  record.certificateName = certificateName(context);
-  auto caller = m_authenticator.authenticate(
-      firstValue(context->client_metadata(), "authorization"), record.certificateName);
-  if (caller) {
-    record.user = caller->name;
-  }
-  return caller;
+  return rpc::authenticateCall(m_authenticator, *context, record);
 }
 
 Result<ResolvedPath> DataServiceImpl::resolveFor(const Caller& caller,
                                                  const std::string& path) const {
-  // The folders are checked on the path as named (so a user cannot probe
-  // which files exist in another's folder) and on the real path (so a
-  // symlink cannot lend another's folder).
   auto normalized = DataRoot::normalize(path);
   if (!normalized) {
     return normalized.status();
   }
-  if (!caller.mayRead(*normalized)) {
-    return permissionDenied(fmt::format("user '{}' may not read '{}'", caller.name, *normalized));
-  }
+  CRACKVIS_RETURN_IF_ERROR(rpc::checkNamedPath(caller, *normalized));
   auto resolved = m_catalogue.root().resolveFile(*normalized);
   if (!resolved) {
     return resolved.status();
   }
-  if (!caller.mayRead(resolved->relative)) {
-    return permissionDenied(fmt::format("user '{}' may not read '{}' (it links to '{}')",
-                                        caller.name, *normalized, resolved->relative));
-  }
+  CRACKVIS_RETURN_IF_ERROR(rpc::checkResolvedPath(caller, *normalized, resolved->relative));
   return resolved;
+}
+
+template <typename Body>
+grpc::ServerUnaryReactor* DataServiceImpl::unary(grpc::CallbackServerContext* context,
+                                                 const char* method, const std::string& file,
+                                                 const google::protobuf::Message& response,
+                                                 Body&& body) {
+  const auto start = Clock::now();
+  AccessRecord record;
+  record.method = method;
+  record.file = file;
+  const Status status = rpc::guarded(kProgram, record, [&]() -> Status {
+    auto caller = authenticate(context, record);
+    if (!caller) {
+      return caller.status();
+    }
+    return body(*caller);
+  });
+  record.bytes = status.isOk() ? response.ByteSizeLong() : 0;
+  auto* reactor = context->DefaultReactor();
+  reactor->Finish(rpc::finishCall(m_log, record, start, status));
+  return reactor;
 }
 
 grpc::ServerUnaryReactor* DataServiceImpl::ListFiles(grpc::CallbackServerContext* context,
                                                      const v1::ListFilesRequest* request,
                                                      v1::ListFilesResponse* response) {
-  const auto start = Clock::now();
-  AccessRecord record;
-  record.method = "ListFiles";
-  record.file = request->folder();
-  const Status status = [&]() -> Status {
-    auto caller = authenticate(context, record);
-    if (!caller) {
-      return caller.status();
+  return unary(context, "ListFiles", request->folder(), *response, [&](const Caller& caller) {
+    auto folder = DataRoot::normalize(request->folder());
+    if (!folder) {
+      return folder.status();
     }
-    auto files = m_catalogue.listFiles(
-        request->folder(), request->recursive(),
-        [&](const std::string& relative) { return caller->mayRead(relative); });
+    // Another user's folder answers as a missing one: no existence oracle.
+    if (!caller.mayList(*folder)) {
+      return DataRoot::notFound(*folder, /*folder=*/true);
+    }
+    auto files = m_catalogue.listFiles(*folder, request->recursive(), [&](const std::string& real) {
+      return caller.mayRead(real);
+    });
     if (!files) {
       return files.status();
     }
     for (const FileEntry& file : *files) {
+      // The catalogue checked the real path; the name shown must be in the
+      // caller's folders too.
+      auto resolved = m_catalogue.root().resolveFile(file.path);
+      if (!resolved || !rpc::checkResolvedPath(caller, file.path, resolved->relative).isOk()) {
+        continue;
+      }
       v1::FileEntry* entry = response->add_files();
       entry->set_path(file.path);
       entry->set_size_bytes(file.sizeBytes);
       entry->set_modified_unix_seconds(file.modifiedUnixSeconds);
       entry->set_is_hdf5(file.isHdf5);
+      entry->set_resolved_path(resolved->relative);
     }
     return Status::ok();
-  }();
-  record.bytes = status.isOk() ? response->ByteSizeLong() : 0;
-  finishRecord(record, start, status);
-  m_log.record(record);
-  auto* reactor = context->DefaultReactor();
-  reactor->Finish(toGrpcStatus(status));
-  return reactor;
+  });
 }
 
 grpc::ServerUnaryReactor* DataServiceImpl::Describe(grpc::CallbackServerContext* context,
                                                     const v1::DescribeRequest* request,
                                                     v1::DescribeResponse* response) {
-  const auto start = Clock::now();
-  AccessRecord record;
-  record.method = "Describe";
-  record.file = request->file();
-  const Status status = [&]() -> Status {
-    auto caller = authenticate(context, record);
-    if (!caller) {
-      return caller.status();
-    }
-    auto resolved = resolveFor(*caller, request->file());
+  return unary(context, "Describe", request->file(), *response, [&](const Caller& caller) {
+    auto resolved = resolveFor(caller, request->file());
     if (!resolved) {
       return resolved.status();
     }
@@ -545,13 +575,21 @@ grpc::ServerUnaryReactor* DataServiceImpl::Describe(grpc::CallbackServerContext*
     }
     toProto(*description, *response);
     return Status::ok();
-  }();
-  record.bytes = status.isOk() ? response->ByteSizeLong() : 0;
-  finishRecord(record, start, status);
-  m_log.record(record);
-  auto* reactor = context->DefaultReactor();
-  reactor->Finish(toGrpcStatus(status));
-  return reactor;
+  });
+}
+
+grpc::ServerUnaryReactor* DataServiceImpl::Resolve(grpc::CallbackServerContext* context,
+                                                   const v1::ResolveRequest* request,
+                                                   v1::ResolveResponse* response) {
+  return unary(context, "Resolve", request->file(), *response, [&](const Caller& caller) {
+    auto resolved = resolveFor(caller, request->file());
+    if (!resolved) {
+      return resolved.status();
+    }
+    response->set_file(resolved->requested);
+    response->set_resolved_file(resolved->relative);
+    return Status::ok();
+  });
 }
 
 grpc::ServerWriteReactor<grpc::ByteBuffer>* DataServiceImpl::Read(

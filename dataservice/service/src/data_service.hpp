@@ -13,26 +13,34 @@
 #include <grpcpp/grpcpp.h>
 
 #include "crackvis/v1/data.grpc.pb.h"
-#include <crackvis/dataservice/access_log.hpp>
 #include <crackvis/dataservice/catalogue.hpp>
-#include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/dataservice/server_config.hpp>
+#include <crackvis/rpc/access_log.hpp>
+#include <crackvis/rpc/call.hpp>
+#include <crackvis/rpc/credentials.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
 
 namespace crackvis::dataservice {
 
+using rpc::AccessLog;
+using rpc::AccessRecord;
+using rpc::Authenticator;
+using rpc::Caller;
 using rpc::toGrpcStatus;  // the one mapping, shared with the render service
 
-// The streams in progress: counts them against the limit, and cancels those
+// The streams in progress: counts them against the limits (server-wide and
+// per user), and cancels those
 // that run past their time limit even when the client has stopped reading
 // (a stalled client never triggers another write callback).
 class StreamRegistry {
  public:
   using Clock = std::chrono::steady_clock;
 
-  explicit StreamRegistry(int limit) : m_limit(limit) {}
+  StreamRegistry(int limit, int perUserLimit) : m_limit(limit), m_perUserLimit(perUserLimit) {}
 
-  Result<std::uint64_t> acquire(grpc::CallbackServerContext* context, Clock::time_point deadline);
+  // `user` is counted against the per-user limit; "" (users off): none.
+  Result<std::uint64_t> acquire(grpc::CallbackServerContext* context, Clock::time_point deadline,
+                                const std::string& user);
   void release(std::uint64_t id);
   // Cancels every stream past its deadline; returns how many.
   int cancelOverdue(Clock::time_point now);
@@ -43,8 +51,11 @@ class StreamRegistry {
     grpc::CallbackServerContext* context = nullptr;
     Clock::time_point deadline;
     bool cancelled = false;
+    std::string user;
   };
   const int m_limit;
+  const int m_perUserLimit;
+  std::map<std::string, int> m_perUser;
   mutable std::mutex m_mutex;
   std::map<std::uint64_t, Entry> m_entries;
   std::uint64_t m_nextId = 1;
@@ -65,7 +76,7 @@ class DataServiceImpl final : public DataServiceBase {
         m_authenticator(authenticator),
         m_limits(limits),
         m_log(log),
-        m_streams(limits.maxConcurrentStreams) {}
+        m_streams(limits.maxConcurrentStreams, limits.maxStreamsPerUser) {}
 
   grpc::ServerUnaryReactor* ListFiles(grpc::CallbackServerContext* context,
                                       const crackvis::v1::ListFilesRequest* request,
@@ -73,6 +84,9 @@ class DataServiceImpl final : public DataServiceBase {
   grpc::ServerUnaryReactor* Describe(grpc::CallbackServerContext* context,
                                      const crackvis::v1::DescribeRequest* request,
                                      crackvis::v1::DescribeResponse* response) override;
+  grpc::ServerUnaryReactor* Resolve(grpc::CallbackServerContext* context,
+                                    const crackvis::v1::ResolveRequest* request,
+                                    crackvis::v1::ResolveResponse* response) override;
   using DataServiceBase::Fetch;
   using DataServiceBase::Read;
   grpc::ServerWriteReactor<grpc::ByteBuffer>* Read(grpc::CallbackServerContext* context,
@@ -91,6 +105,12 @@ class DataServiceImpl final : public DataServiceBase {
   Result<ResolvedPath> resolveFor(const Caller& caller, const std::string& path) const;
 
  private:
+  // A unary call: its access-log line, the handler boundary, the status.
+  template <typename Body>
+  grpc::ServerUnaryReactor* unary(grpc::CallbackServerContext* context, const char* method,
+                                  const std::string& file,
+                                  const google::protobuf::Message& response, Body&& body);
+
   Catalogue m_catalogue;
   Authenticator& m_authenticator;
   Limits m_limits;

@@ -17,6 +17,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <crackvis/rpc/call.hpp>
+
 namespace crackvis::dataservice {
 namespace {
 
@@ -224,7 +226,7 @@ void RawTlsServer::stop() {
     m_acceptThread.join();
   }
   std::unique_lock lock(m_mutex);
-  for (int fd : m_connectionFds) {
+  for (const auto& [fd, deadline] : m_connections) {
     ::shutdown(fd, SHUT_RDWR);  // wakes a connection blocked on a slow client
   }
   m_idle.wait(lock, [this] { return m_active == 0; });
@@ -233,11 +235,16 @@ void RawTlsServer::stop() {
 void RawTlsServer::acceptLoop() {
   while (!m_stopping) {
     pollfd fds[2] = {{m_listenFd, POLLIN, 0}, {m_wakePipe[0], POLLIN, 0}};
-    if (::poll(fds, 2, -1) < 0 || (fds[1].revents & POLLIN) != 0) {
-      if (errno == EINTR) {
+    const int ready = ::poll(fds, 2, 200);
+    if (ready < 0 || (fds[1].revents & POLLIN) != 0) {
+      if (ready < 0 && errno == EINTR) {
         continue;
       }
       return;
+    }
+    closeStalled();
+    if (ready == 0) {
+      continue;
     }
     sockaddr_storage address{};
     socklen_t length = sizeof(address);
@@ -255,9 +262,27 @@ void RawTlsServer::acceptLoop() {
       continue;
     }
     ++m_active;
-    m_connectionFds.push_back(fd);
+    m_connections[fd] = std::chrono::steady_clock::now() +
+                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(m_limits.handshakeSeconds));
     std::thread([this, fd, peer = peerName(address)] { serve(fd, peer); }).detach();
   }
+}
+
+void RawTlsServer::closeStalled() {
+  const auto now = std::chrono::steady_clock::now();
+  std::lock_guard lock(m_mutex);
+  for (auto& [fd, deadline] : m_connections) {
+    if (now > deadline) {
+      ::shutdown(fd, SHUT_RD);  // its blocked SSL_accept or SSL_read sees the end
+      deadline = std::chrono::steady_clock::time_point::max();
+    }
+  }
+}
+
+void RawTlsServer::requestReceived(int fd) {
+  std::lock_guard lock(m_mutex);
+  m_connections[fd] = std::chrono::steady_clock::time_point::max();
 }
 
 void RawTlsServer::serve(int fd, std::string peer) {
@@ -267,7 +292,7 @@ void RawTlsServer::serve(int fd, std::string peer) {
   record.peer = std::move(peer);
   SSL* ssl = SSL_new(m_context);
   SSL_set_fd(ssl, fd);
-  Status status = [&]() -> Status {
+  Status status = rpc::guarded("crackvis-data", record, [&]() -> Status {
     if (SSL_accept(ssl) != 1) {
       return Status(StatusCode::kUnauthenticated,
                     fmt::format("TLS handshake failed ({})", opensslError()));
@@ -287,12 +312,14 @@ void RawTlsServer::serve(int fd, std::string peer) {
       }
       text.append(buffer, got);
     }
+    requestReceived(fd);
     auto request = parseRequest(text);
     if (!request) {
       return request.status();
     }
     record.file = request->file;
-    auto caller = m_authenticator.authenticate(request->authorization, record.certificateName);
+    auto caller =
+        m_authenticator.authenticate(request->authorization, record.certificateName, record.peer);
     if (!caller) {
       return caller.status();
     }
@@ -301,14 +328,12 @@ void RawTlsServer::serve(int fd, std::string peer) {
     if (!normalized) {
       return normalized.status();
     }
+    CRACKVIS_RETURN_IF_ERROR(rpc::checkNamedPath(*caller, *normalized));
     auto resolved = m_catalogue.root().resolveFile(*normalized);
     if (!resolved) {
       return resolved.status();
     }
-    if (!caller->mayRead(*normalized) || !caller->mayRead(resolved->relative)) {
-      return Status(StatusCode::kPermissionDenied,
-                    fmt::format("user '{}' may not read '{}'", caller->name, *normalized));
-    }
+    CRACKVIS_RETURN_IF_ERROR(rpc::checkResolvedPath(*caller, *normalized, resolved->relative));
     auto reader = m_catalogue.openFetch(*resolved, m_limits.maxFetchBytes);
     if (!reader) {
       return reader.status();
@@ -316,7 +341,7 @@ void RawTlsServer::serve(int fd, std::string peer) {
     const std::uint64_t size = (*reader)->size();
     if (request->offset > size) {
       return invalidArgument(fmt::format("offset {} lies beyond the end of {} ({} bytes)",
-                                         request->offset, *normalized, size));
+                                         request->offset, echoed(*normalized), size));
     }
     const std::uint64_t length = request->length == 0
                                      ? size - request->offset
@@ -340,7 +365,7 @@ void RawTlsServer::serve(int fd, std::string peer) {
       record.bytes = sent;
     }
     return Status::ok();
-  }();
+  });
   if (!status && SSL_is_init_finished(ssl)) {
     const std::string line =
         fmt::format("ERROR {} {}\n", toString(status.code()), status.message());
@@ -351,13 +376,10 @@ void RawTlsServer::serve(int fd, std::string peer) {
   }
   SSL_free(ssl);
   ERR_clear_error();
-  record.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  record.status = std::string(toString(status.code()));
-  record.detail = status.isOk() ? std::string() : status.message();
-  m_log.record(record);
+  rpc::finishCall(m_log, record, start, status);
   {
     std::lock_guard lock(m_mutex);
-    m_connectionFds.remove(fd);
+    m_connections.erase(fd);
   }
   ::close(fd);
   std::lock_guard lock(m_mutex);

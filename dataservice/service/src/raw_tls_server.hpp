@@ -9,22 +9,27 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
-#include <list>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
 
-#include <crackvis/dataservice/access_log.hpp>
 #include <crackvis/dataservice/catalogue.hpp>
-#include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/dataservice/server_config.hpp>
 #include <crackvis/dataservice/tls_material.hpp>
+#include <crackvis/rpc/access_log.hpp>
+#include <crackvis/rpc/credentials.hpp>
 
 typedef struct ssl_ctx_st SSL_CTX;
 
 namespace crackvis::dataservice {
+
+using rpc::AccessLog;
+using rpc::AccessRecord;
+using rpc::Authenticator;
 
 class RawTlsServer {
  public:
@@ -46,6 +51,10 @@ class RawTlsServer {
       : m_catalogue(catalogue), m_authenticator(authenticator), m_limits(limits), m_log(log) {}
   void acceptLoop();
   void serve(int fd, std::string peer);
+  // Shuts the connections down whose handshake and request did not arrive
+  // within handshakeSeconds (an idle TCP connection must not hold a slot).
+  void closeStalled();
+  void requestReceived(int fd);
 
   const Catalogue& m_catalogue;
   const Authenticator& m_authenticator;
@@ -61,7 +70,9 @@ class RawTlsServer {
   std::mutex m_mutex;
   std::condition_variable m_idle;
   int m_active = 0;
-  std::list<int> m_connectionFds;
+  // Open connections and the time by which each must have sent its request
+  // (time_point::max() once it has).
+  std::map<int, std::chrono::steady_clock::time_point> m_connections;
 };
 
 }  // namespace crackvis::dataservice

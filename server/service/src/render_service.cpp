@@ -9,28 +9,30 @@
 #include <random>
 
 #include <fmt/format.h>
-#include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
-#include <grpcpp/health_check_service_interface.h>
 
 #include "crackvis/v1/data.grpc.pb.h"
 #include "crackvis/v1/render.grpc.pb.h"
 #include <crackvis/common/log.hpp>
-#include <crackvis/dataservice/access_log.hpp>
-#include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/dataservice/data_root.hpp>
 #include <crackvis/dataservice/tls_material.hpp>
 #include <crackvis/encode/frame_codec.hpp>
+#include <crackvis/rpc/access_log.hpp>
+#include <crackvis/rpc/call.hpp>
+#include <crackvis/rpc/credentials.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
+#include <crackvis/rpc/server.hpp>
 #include <crackvis/service/render_server.hpp>
 
 namespace crackvis::service {
 namespace {
 
 namespace v1 = crackvis::v1;
-using dataservice::AccessRecord;
-using dataservice::Caller;
+using rpc::AccessRecord;
+using rpc::Caller;
 using rpc::toGrpcStatus;
+
+constexpr const char* kProgram = "crackvis-render";
 
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -43,28 +45,52 @@ std::string newSessionId() {
   return fmt::format("{:016x}{:016x}", generator(), generator());
 }
 
-AccessRecord recordOf(const char* method) {
-  AccessRecord record;
-  record.method = method;
-  return record;
-}
+// crackvis-data as the render server reaches it: its own certificate (and
+// token, if it has one), each call bounded by the configured timeout and the
+// caller's deadline. Shared by the handlers and the sessions' source openers.
+class DataAccess {
+ public:
+  DataAccess(const dataservice::ClientOptions& options, std::shared_ptr<grpc::Channel> channel)
+      : m_options(options), m_stub(v1::DataService::NewStub(std::move(channel))) {}
 
-Status permissionDenied(std::string message) {
-  return {StatusCode::kPermissionDenied, std::move(message)};
-}
+  v1::DataService::Stub& stub() { return *m_stub; }
 
-// The caller's folder rules on a path as named (the data service applies its
-// own rules to the render server's identity).
-Status checkMayRead(const Caller& caller, const std::string& file) {
-  auto normalized = dataservice::DataRoot::normalize(file);
-  if (!normalized) {
-    return normalized.status();
+  template <typename Call>
+  Status call(const char* name, std::chrono::system_clock::time_point deadline, Call call) {
+    grpc::ClientContext client;
+    client.set_deadline(std::min(deadline, std::chrono::system_clock::now() +
+                                               std::chrono::milliseconds(static_cast<std::int64_t>(
+                                                   m_options.timeoutSeconds * 1000))));
+    if (!m_options.token.empty()) {
+      client.AddMetadata("authorization", "Bearer " + m_options.token);
+    }
+    return rpc::fromGrpcStatus(call(&client), fmt::format("crackvis-data {}", name));
   }
-  if (!caller.mayRead(*normalized)) {
-    return permissionDenied(fmt::format("user '{}' may not read '{}'", caller.name, *normalized));
+
+  // The caller's folder rule on the file as named and, asking crackvis-data
+  // where it leads, on the real file (rpc::checkResolvedPath, the rule
+  // crackvis-data applies to its own users): a symlink in the caller's
+  // folder cannot lend another user's file.
+  Status checkAccess(const Caller& caller, const std::string& file,
+                     std::chrono::system_clock::time_point deadline) {
+    auto normalized = dataservice::DataRoot::normalize(file);
+    if (!normalized) {
+      return normalized.status();
+    }
+    CRACKVIS_RETURN_IF_ERROR(rpc::checkNamedPath(caller, *normalized));
+    v1::ResolveRequest request;
+    request.set_file(*normalized);
+    v1::ResolveResponse response;
+    CRACKVIS_RETURN_IF_ERROR(call("Resolve", deadline, [&](grpc::ClientContext* client) {
+      return m_stub->Resolve(client, request, &response);
+    }));
+    return rpc::checkResolvedPath(caller, *normalized, response.resolved_file());
   }
-  return Status::ok();
-}
+
+ private:
+  dataservice::ClientOptions m_options;
+  std::unique_ptr<v1::DataService::Stub> m_stub;
+};
 
 bool finite(double value) {
   return std::isfinite(value);
@@ -137,20 +163,35 @@ Result<SessionEvent> toSessionEvent(const v1::ClientEvent& in) {
 // has been gone longer than the grace period.
 class SessionRegistry {
  public:
-  SessionRegistry(int limit, double graceSeconds) : m_limit(limit), m_grace(graceSeconds) {}
+  SessionRegistry(int limit, int perUserLimit, double graceSeconds)
+      : m_limit(limit), m_perUserLimit(perUserLimit), m_grace(graceSeconds) {}
 
-  Status reserve() {
+  // `perUser`: the owner is a configured user, counted against the
+  // per-user limit (without users every client shares one certificate name).
+  Status reserve(const std::string& owner, bool perUser) {
     std::lock_guard lock(m_mutex);
     if (static_cast<int>(m_sessions.size()) + m_opening >= m_limit) {
-      return {StatusCode::kResourceExhausted,
-              fmt::format("the server has its maximum of {} sessions open", m_limit)};
+      return resourceExhausted(
+          fmt::format("the server has its maximum of {} sessions open", m_limit));
+    }
+    int own = 0;
+    for (const auto& [id, entry] : m_sessions) {
+      own += entry.owner == owner ? 1 : 0;
+    }
+    if (perUser && own + m_openingBy[owner] >= m_perUserLimit) {
+      return resourceExhausted(fmt::format("user '{}' has the maximum of {} sessions per user open",
+                                           owner, m_perUserLimit));
     }
     ++m_opening;
+    ++m_openingBy[owner];
     return Status::ok();
   }
   void add(std::shared_ptr<Session> session, std::string owner) {
     std::lock_guard lock(m_mutex);
     --m_opening;
+    if (--m_openingBy[owner] <= 0) {
+      m_openingBy.erase(owner);
+    }
     if (session) {
       const std::string id = session->id();
       m_sessions[id] = {std::move(session), std::move(owner)};
@@ -161,11 +202,11 @@ class SessionRegistry {
     std::lock_guard lock(m_mutex);
     auto it = m_sessions.find(id);
     if (it == m_sessions.end()) {
-      return notFound(fmt::format("no session '{}' (closed, expired or never opened)", id));
+      return notFound(fmt::format("no session '{}' (closed, expired or never opened)", echoed(id)));
     }
     if (it->second.owner != caller.name) {
       return permissionDenied(
-          fmt::format("session '{}' belongs to another user than '{}'", id, caller.name));
+          fmt::format("session '{}' belongs to another user than '{}'", echoed(id), caller.name));
     }
     return it->second.session;
   }
@@ -235,10 +276,12 @@ class SessionRegistry {
     std::string owner;
   };
   const int m_limit;
+  const int m_perUserLimit;
   const double m_grace;
   mutable std::mutex m_mutex;
   std::map<std::string, Entry> m_sessions;
   int m_opening = 0;
+  std::map<std::string, int> m_openingBy;
 };
 
 // Encodes a stream's frames and keeps its per-second statistics. One per
@@ -346,137 +389,116 @@ v1::ServerMessage toMessage(const SessionNotice& notice) {
 class RenderServiceImpl final : public v1::RenderService::Service {
  public:
   RenderServiceImpl(const RenderServerConfig& config, dataservice::DataClient data,
-                    std::shared_ptr<grpc::Channel> dataChannel, dataservice::AccessLog& log)
+                    std::shared_ptr<grpc::Channel> dataChannel, rpc::AccessLog& log)
       : m_config(config),
         m_authenticator(config.users),
         m_data(std::move(data)),
-        m_dataStub(v1::DataService::NewStub(std::move(dataChannel))),
+        m_dataAccess(std::make_shared<DataAccess>(config.data, std::move(dataChannel))),
         m_log(log),
-        m_sessions(config.maxSessions, config.sessionGraceSeconds) {}
+        m_sessions(config.maxSessions, config.maxSessionsPerUser, config.sessionGraceSeconds) {}
 
   SessionRegistry& sessions() { return m_sessions; }
 
   grpc::Status OpenSession(grpc::ServerContext* context, const v1::OpenSessionRequest* request,
                            v1::OpenSessionResponse* response) override {
-    AccessRecord record = recordOf("OpenSession");
-    const auto start = Clock::now();
-    Status status = openSession(context, *request, *response, record);
-    return finish(record, start, status);
+    return handle(context, "OpenSession", [&](const Caller& caller, AccessRecord& record) {
+      return openSession(*context, caller, *request, *response, record);
+    });
   }
 
   grpc::Status Stream(
       grpc::ServerContext* context,
       grpc::ServerReaderWriter<v1::ServerMessage, v1::ClientEvent>* stream) override {
-    AccessRecord record = recordOf("Stream");
-    const auto start = Clock::now();
-    Status status = runStream(context, stream, record);
-    return finish(record, start, status);
+    return handle(context, "Stream", [&](const Caller& caller, AccessRecord& record) {
+      return runStream(context, stream, caller, record);
+    });
   }
 
   grpc::Status Snapshot(grpc::ServerContext* context, const v1::SnapshotRequest* request,
                         v1::SnapshotResponse* response) override {
-    AccessRecord record = recordOf("Snapshot");
-    const auto start = Clock::now();
-    Status status = snapshot(context, *request, *response, record);
-    return finish(record, start, status);
+    return handle(context, "Snapshot", [&](const Caller& caller, AccessRecord& record) {
+      return snapshot(*context, caller, *request, *response, record);
+    });
   }
 
   grpc::Status CloseSession(grpc::ServerContext* context, const v1::CloseSessionRequest* request,
                             v1::CloseSessionResponse* /*response*/) override {
-    AccessRecord record = recordOf("CloseSession");
-    const auto start = Clock::now();
-    auto caller = authenticate(context, record);
-    Status status = caller ? m_sessions.close(request->session_id(), *caller) : caller.status();
-    return finish(record, start, status);
+    return handle(context, "CloseSession", [&](const Caller& caller, AccessRecord& /*record*/) {
+      return m_sessions.close(request->session_id(), caller);
+    });
   }
 
   grpc::Status ListFiles(grpc::ServerContext* context, const v1::ListFilesRequest* request,
                          v1::ListFilesResponse* response) override {
-    AccessRecord record = recordOf("ListFiles");
-    const auto start = Clock::now();
-    auto caller = authenticate(context, record);
-    if (!caller) {
-      return finish(record, start, caller.status());
-    }
-    record.file = request->folder();
-    v1::ListFilesResponse all;
-    Status status = forward(context, "ListFiles", [&](grpc::ClientContext* client) {
-      return m_dataStub->ListFiles(client, *request, &all);
-    });
-    if (status) {
+    return handle(context, "ListFiles", [&](const Caller& caller, AccessRecord& record) {
+      record.file = request->folder();
+      auto folder = dataservice::DataRoot::normalize(request->folder());
+      if (!folder) {
+        return folder.status();
+      }
+      // Another user's folder answers as a missing one, as crackvis-data's.
+      if (!caller.mayList(*folder)) {
+        return dataservice::DataRoot::notFound(*folder, /*folder=*/true);
+      }
+      v1::ListFilesResponse all;
+      CRACKVIS_RETURN_IF_ERROR(
+          m_dataAccess->call("ListFiles", context->deadline(), [&](grpc::ClientContext* client) {
+            return m_dataAccess->stub().ListFiles(client, *request, &all);
+          }));
+      // Both the name shown and the file it leads to must be the caller's.
       for (const auto& file : all.files()) {
-        if (caller->mayRead(file.path())) {
+        if (!file.resolved_path().empty() &&
+            rpc::checkResolvedPath(caller, file.path(), file.resolved_path()).isOk()) {
           *response->add_files() = file;
         }
       }
-    }
-    return finish(record, start, status);
+      return Status::ok();
+    });
   }
 
   grpc::Status Describe(grpc::ServerContext* context, const v1::DescribeRequest* request,
                         v1::DescribeResponse* response) override {
-    AccessRecord record = recordOf("Describe");
-    const auto start = Clock::now();
-    auto caller = authenticate(context, record);
-    record.file = request->file();
-    Status status = caller ? checkMayRead(*caller, request->file()) : caller.status();
-    if (status) {
-      status = forward(context, "Describe", [&](grpc::ClientContext* client) {
-        return m_dataStub->Describe(client, *request, response);
+    return handle(context, "Describe", [&](const Caller& caller, AccessRecord& record) {
+      record.file = request->file();
+      CRACKVIS_RETURN_IF_ERROR(
+          m_dataAccess->checkAccess(caller, request->file(), context->deadline()));
+      return m_dataAccess->call("Describe", context->deadline(), [&](grpc::ClientContext* client) {
+        return m_dataAccess->stub().Describe(client, *request, response);
       });
-    }
-    return finish(record, start, status);
+    });
   }
 
  private:
-  Result<Caller> authenticate(grpc::ServerContext* context, AccessRecord& record) const {
-    record.peer = context->peer();
-    record.certificateName = rpc::certificateName(*context);
-    auto caller = m_authenticator.authenticate(rpc::metadataValue(*context, "authorization"),
-                                               record.certificateName);
-    if (caller) {
-      record.user = caller->name;
-    }
-    return caller;
-  }
-
-  grpc::Status finish(AccessRecord& record, Clock::time_point start, const Status& status) {
-    record.seconds = secondsSince(start);
-    record.status = std::string(toString(status.code()));
-    record.detail = status.isOk() ? std::string() : status.message();
-    m_log.record(record);
-    return toGrpcStatus(status);
-  }
-
-  // A call to crackvis-data on the caller's behalf, with the render server's
-  // certificate (and its token, if it has one) and the caller's deadline.
-  template <typename Call>
-  Status forward(grpc::ServerContext* context, const char* name, Call call) {
-    grpc::ClientContext client;
-    client.set_deadline(std::min(
-        context->deadline(),
-        std::chrono::system_clock::now() + std::chrono::milliseconds(static_cast<std::int64_t>(
-                                               m_config.data.timeoutSeconds * 1000))));
-    if (!m_config.data.token.empty()) {
-      client.AddMetadata("authorization", "Bearer " + m_config.data.token);
-    }
-    return rpc::fromGrpcStatus(call(&client), fmt::format("crackvis-data {}", name));
+  // Every handler: authenticate, run the body at the handler boundary (an
+  // exception fails only this call), write the access-log line, answer.
+  template <typename Body>
+  grpc::Status handle(grpc::ServerContext* context, const char* method, Body&& body) {
+    const auto start = rpc::CallClock::now();
+    AccessRecord record;
+    record.method = method;
+    const Status status = rpc::guarded(kProgram, record, [&]() -> Status {
+      auto caller = rpc::authenticateCall(m_authenticator, *context, record);
+      if (!caller) {
+        return caller.status();
+      }
+      return body(*caller, record);
+    });
+    return rpc::finishCall(m_log, record, start, status);
   }
 
   Session::SourceOpener opener(const Caller& caller) const {
-    return [data = m_data,
-            caller](const std::string& file) -> Result<std::unique_ptr<source::StepSource>> {
-      CRACKVIS_RETURN_IF_ERROR(checkMayRead(caller, file));
+    return [data = m_data, access = m_dataAccess, caller, timeout = m_config.data.timeoutSeconds](
+               const std::string& file) -> Result<std::unique_ptr<source::StepSource>> {
+      const auto deadline = std::chrono::system_clock::now() +
+                            std::chrono::milliseconds(static_cast<std::int64_t>(timeout * 1000));
+      CRACKVIS_RETURN_IF_ERROR(access->checkAccess(caller, file, deadline));
       return source::openRemoteSource(data, file);
     };
   }
 
-  Status openSession(grpc::ServerContext* context, const v1::OpenSessionRequest& request,
-                     v1::OpenSessionResponse& response, AccessRecord& record) {
-    auto caller = authenticate(context, record);
-    if (!caller) {
-      return caller.status();
-    }
+  Status openSession(const grpc::ServerContext& /*context*/, const Caller& caller,
+                     const v1::OpenSessionRequest& request, v1::OpenSessionResponse& response,
+                     AccessRecord& record) {
     if (request.pipeline_xml().size() > pipeline::kMaxPipelineBytes) {
       return invalidArgument(
           fmt::format("the pipeline is over {} bytes", pipeline::kMaxPipelineBytes));
@@ -486,9 +508,15 @@ class RenderServiceImpl final : public v1::RenderService::Service {
       return description.status();
     }
     record.file = description->file;
-    CRACKVIS_RETURN_IF_ERROR(m_sessions.reserve());
-    auto session = Session::open(newSessionId(), *description, opener(*caller), m_config.limits);
-    m_sessions.add(session ? *session : nullptr, caller->name);
+    CRACKVIS_RETURN_IF_ERROR(m_sessions.reserve(caller.name, caller.restricted));
+    Result<std::shared_ptr<Session>> session = internalError("the session did not open");
+    try {
+      session = Session::open(newSessionId(), *description, opener(caller), m_config.limits);
+    } catch (...) {
+      m_sessions.add(nullptr, caller.name);  // the reservation is given back, then rethrown
+      throw;
+    }
+    m_sessions.add(session ? *session : nullptr, caller.name);
     if (!session) {
       return session.status();
     }
@@ -503,20 +531,16 @@ class RenderServiceImpl final : public v1::RenderService::Service {
 
   Status runStream(grpc::ServerContext* context,
                    grpc::ServerReaderWriter<v1::ServerMessage, v1::ClientEvent>* stream,
-                   AccessRecord& record) {
-    auto caller = authenticate(context, record);
-    if (!caller) {
-      return caller.status();
-    }
+                   const Caller& caller, AccessRecord& record) {
     v1::ClientEvent first;
     if (!stream->Read(&first)) {
-      return {StatusCode::kUnavailable, "the stream ended before attaching to a session"};
+      return unavailable("the stream ended before attaching to a session");
     }
     if (first.event_case() != v1::ClientEvent::kAttachSessionId) {
       return invalidArgument(
           "the first message of a stream attaches to a session (attach_session_id)");
     }
-    auto found = m_sessions.find(first.attach_session_id(), *caller);
+    auto found = m_sessions.find(first.attach_session_id(), caller);
     if (!found) {
       return found.status();
     }
@@ -525,14 +549,21 @@ class RenderServiceImpl final : public v1::RenderService::Service {
     const std::uint64_t attachment = session->attach();
     std::atomic<bool> readerDone{false};
     std::thread reader([&] {
-      v1::ClientEvent event;
-      while (stream->Read(&event)) {
-        auto converted = toSessionEvent(event);
-        if (converted) {
-          session->post(std::move(converted).value());
-        } else {
-          session->reportEventError(event.event_id(), converted.status());
+      // This thread's boundary: an exception ends the stream, not the process.
+      const Status read = rpc::guarded(kProgram, record, [&] {
+        v1::ClientEvent event;
+        while (stream->Read(&event)) {
+          auto converted = toSessionEvent(event);
+          if (converted) {
+            session->post(std::move(converted).value());
+          } else {
+            session->reportEventError(event.event_id(), converted.status());
+          }
         }
+        return Status::ok();
+      });
+      if (!read) {
+        context->TryCancel();
       }
       readerDone = true;
     });
@@ -562,12 +593,11 @@ class RenderServiceImpl final : public v1::RenderService::Service {
         case Session::Next::kTimeout:
           break;
         case Session::Next::kSuperseded:
-          ended = {StatusCode::kUnavailable,
-                   fmt::format("session {}: another stream attached", session->id())};
+          ended = unavailable(fmt::format("session {}: another stream attached", session->id()));
           open = false;
           continue;
         case Session::Next::kClosed:
-          ended = {StatusCode::kUnavailable, fmt::format("session {} closed", session->id())};
+          ended = unavailable(fmt::format("session {} closed", session->id()));
           open = false;
           continue;
       }
@@ -585,17 +615,16 @@ class RenderServiceImpl final : public v1::RenderService::Service {
     return ended;
   }
 
-  Status snapshot(grpc::ServerContext* context, const v1::SnapshotRequest& request,
-                  v1::SnapshotResponse& response, AccessRecord& record) {
-    auto caller = authenticate(context, record);
-    if (!caller) {
-      return caller.status();
-    }
-    auto session = m_sessions.find(request.session_id(), *caller);
+  Status snapshot(const grpc::ServerContext& context, const Caller& caller,
+                  const v1::SnapshotRequest& request, v1::SnapshotResponse& response,
+                  AccessRecord& record) {
+    auto session = m_sessions.find(request.session_id(), caller);
     if (!session) {
       return session.status();
     }
     record.file = (*session)->info().file;
+    // Checked again: a link may have been changed since the session opened.
+    CRACKVIS_RETURN_IF_ERROR(m_dataAccess->checkAccess(caller, record.file, context.deadline()));
     int step = 0;
     auto image = (*session)->snapshot(request.width(), request.height(), &step);
     if (!image) {
@@ -614,10 +643,10 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   }
 
   const RenderServerConfig& m_config;
-  dataservice::Authenticator m_authenticator;
+  rpc::Authenticator m_authenticator;
   dataservice::DataClient m_data;
-  std::unique_ptr<v1::DataService::Stub> m_dataStub;
-  dataservice::AccessLog& m_log;
+  std::shared_ptr<DataAccess> m_dataAccess;
+  rpc::AccessLog& m_log;
   SessionRegistry m_sessions;
 };
 
@@ -650,26 +679,9 @@ dataservice::ClientOptions defaultDataOptions() {
 
 struct RenderServer::Impl {
   RenderServerConfig config;
-  std::unique_ptr<dataservice::AccessLog> log;
+  std::unique_ptr<rpc::AccessLog> log;
   std::unique_ptr<RenderServiceImpl> service;
-  std::unique_ptr<grpc::Server> server;
-  std::string address;
-  int port = 0;
-
-  std::mutex mutex;
-  std::condition_variable stopped;
-  bool stopping = false;
-  std::thread reaper;
-
-  void reap() {
-    std::unique_lock lock(mutex);
-    while (!stopping) {
-      stopped.wait_for(lock, std::chrono::milliseconds(200));
-      lock.unlock();
-      service->sessions().reap();
-      lock.lock();
-    }
-  }
+  std::unique_ptr<rpc::ServerHost> host;  // last: stops before the service goes
 };
 
 RenderServer::RenderServer(std::unique_ptr<Impl> impl) : m_impl(std::move(impl)) {}
@@ -681,36 +693,19 @@ RenderServer::~RenderServer() {
 Result<std::unique_ptr<RenderServer>> RenderServer::start(const RenderServerConfig& config) {
   auto impl = std::make_unique<Impl>();
   impl->config = config;
-  auto listen = dataservice::parseHostPort(config.listen);
-  if (!listen) {
-    return listen.status();
+  auto listener = rpc::prepareListener(config.listen, config.insecure, config.tls);
+  if (!listener) {
+    return listener.status();
   }
-  if (config.insecure && !dataservice::isLoopbackHost(listen->host)) {
-    return failedPrecondition(fmt::format(
-        "--insecure refuses to listen on '{}': without TLS only a loopback address (127.0.0.1, "
-        "::1, localhost) may be bound",
-        config.listen));
+  if (config.data.insecure) {
+    // The token would travel in clear: only to this machine.
+    CRACKVIS_RETURN_IF_ERROR(rpc::requireLoopback(config.data.target, "--data-insecure"));
   }
   if (config.maxSessions < 1) {
     return invalidArgument("max sessions must be at least 1");
   }
-  std::shared_ptr<grpc::ServerCredentials> credentials;
-  if (config.insecure) {
-    std::fprintf(stderr,
-                 "crackvis-render: WARNING: --insecure: no TLS, no client certificates; "
-                 "listening on loopback only (%s)\n",
-                 config.listen.c_str());
-    credentials = grpc::InsecureServerCredentials();
-  } else {
-    auto material = dataservice::loadTlsMaterial(config.tls);
-    if (!material) {
-      return material.status();
-    }
-    grpc::SslServerCredentialsOptions options(
-        GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY);
-    options.pem_root_certs = material->caPem;
-    options.pem_key_cert_pairs.push_back({material->keyPem, material->certPem});
-    credentials = grpc::SslServerCredentials(options);
+  if (config.maxSessionsPerUser < 1) {
+    return invalidArgument("max sessions per user must be at least 1");
   }
   auto data = dataservice::DataClient::connect(impl->config.data);
   if (!data) {
@@ -721,59 +716,45 @@ Result<std::unique_ptr<RenderServer>> RenderServer::start(const RenderServerConf
   if (!channel) {
     return channel.status();
   }
-  auto log = dataservice::AccessLog::open(config.accessLog);
+  auto log = rpc::AccessLog::open(config.accessLog);
   if (!log) {
     return log.status();
   }
   impl->log = std::move(log).value();
   impl->service = std::make_unique<RenderServiceImpl>(impl->config, std::move(data).value(),
                                                       std::move(channel).value(), *impl->log);
-  grpc::EnableDefaultHealthCheckService(true);
-  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
-  grpc::ServerBuilder builder;
-  builder.AddListeningPort(config.listen, credentials, &impl->port);
-  builder.RegisterService(impl->service.get());
-  builder.SetMaxReceiveMessageSize(static_cast<int>(pipeline::kMaxPipelineBytes) + 4096);
-  impl->server = builder.BuildAndStart();
-  if (!impl->server || impl->port == 0) {
-    return Status(StatusCode::kUnavailable,
-                  fmt::format("cannot listen on {} (address in use or not local?)", config.listen));
+  RenderServiceImpl* service = impl->service.get();
+  rpc::ServerSettings settings;
+  settings.program = kProgram;
+  settings.maxReceiveMessageBytes = static_cast<int>(pipeline::kMaxPipelineBytes) + 4096;
+  settings.reapPeriod = std::chrono::milliseconds(200);
+  settings.reap = [service] { service->sessions().reap(); };
+  // Closing the sessions ends their streams (next() returns kClosed).
+  settings.beforeStop = [service] { service->sessions().closeAll(); };
+  auto host = rpc::ServerHost::start(*listener, {service}, std::move(settings));
+  if (!host) {
+    return host.status();
   }
-  impl->address = fmt::format("{}:{}", listen->host, impl->port);
-  Impl* raw = impl.get();
-  impl->reaper = std::thread([raw] { raw->reap(); });
+  impl->host = std::move(host).value();
   return std::unique_ptr<RenderServer>(new RenderServer(std::move(impl)));
 }
 
 const std::string& RenderServer::address() const {
-  return m_impl->address;
+  return m_impl->host->address();
 }
 int RenderServer::port() const {
-  return m_impl->port;
+  return m_impl->host->port();
 }
 int RenderServer::sessionCount() const {
   return m_impl->service->sessions().count();
 }
 
 void RenderServer::shutdown(double graceSeconds) {
-  {
-    std::lock_guard lock(m_impl->mutex);
-    if (m_impl->stopping) {
-      return;
-    }
-    m_impl->stopping = true;
-  }
-  m_impl->stopped.notify_all();
-  // Closing the sessions ends their streams (next() returns kClosed).
-  m_impl->service->sessions().closeAll();
-  m_impl->server->Shutdown(std::chrono::system_clock::now() +
-                           std::chrono::milliseconds(static_cast<int>(graceSeconds * 1000)));
-  m_impl->reaper.join();
+  m_impl->host->shutdown(graceSeconds);
 }
 
 void RenderServer::wait() {
-  std::unique_lock lock(m_impl->mutex);
-  m_impl->stopped.wait(lock, [&] { return m_impl->stopping; });
+  m_impl->host->wait();
 }
 
 }  // namespace crackvis::service

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cassert>
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -25,6 +26,8 @@ enum class StatusCode {
   kResourceExhausted,
   kUnavailable,
   kInternal,
+  kCancelled,         // the caller gave up (it cancelled, or went away)
+  kDeadlineExceeded,  // the call ran out of time
 };
 
 std::string_view toString(StatusCode code);
@@ -59,6 +62,35 @@ inline Status failedPrecondition(std::string message) {
 }
 inline Status internalError(std::string message) {
   return {StatusCode::kInternal, std::move(message)};
+}
+inline Status permissionDenied(std::string message) {
+  return {StatusCode::kPermissionDenied, std::move(message)};
+}
+inline Status unauthenticated(std::string message) {
+  return {StatusCode::kUnauthenticated, std::move(message)};
+}
+inline Status resourceExhausted(std::string message) {
+  return {StatusCode::kResourceExhausted, std::move(message)};
+}
+inline Status unavailable(std::string message) {
+  return {StatusCode::kUnavailable, std::move(message)};
+}
+inline Status cancelled(std::string message) {
+  return {StatusCode::kCancelled, std::move(message)};
+}
+inline Status deadlineExceeded(std::string message) {
+  return {StatusCode::kDeadlineExceeded, std::move(message)};
+}
+
+// A client-supplied name as error messages quote it: at most kMaxEchoedChars
+// characters, then "...", so a 100 KB name does not come back in a status or
+// fill a log line.
+inline constexpr std::size_t kMaxEchoedChars = 200;
+inline std::string echoed(std::string_view name) {
+  if (name.size() <= kMaxEchoedChars) {
+    return std::string(name);
+  }
+  return std::string(name.substr(0, kMaxEchoedChars)) + "...";
 }
 
 // A value or the Status that explains why there is none.
@@ -111,6 +143,10 @@ inline std::string_view toString(StatusCode code) {
       return "UNAVAILABLE";
     case StatusCode::kInternal:
       return "INTERNAL";
+    case StatusCode::kCancelled:
+      return "CANCELLED";
+    case StatusCode::kDeadlineExceeded:
+      return "DEADLINE_EXCEEDED";
   }
   return "UNKNOWN";
 }

@@ -2,7 +2,8 @@
 // rules that keep every request inside it.
 //
 // A path from a client is relative to the root and '/'-separated. It is
-// refused when empty (for a file), absolute, or when any part is "..";
+// refused when empty (for a file), absolute, over 4096 bytes, holds a NUL, or
+// when any part is "..";
 // "." and empty parts are dropped. The path is then resolved with symlinks
 // followed, and refused when the real file lies outside the root, so a
 // symlink may point anywhere inside the root but never out of it. Access
@@ -41,6 +42,10 @@ class DataRoot {
   // Checks a client path's syntax and returns it normalized ("a//./b" ->
   // "a/b"); the empty path stays empty.
   static Result<std::string> normalize(std::string_view path);
+
+  // The NOT_FOUND of a missing file or folder; also the answer for one the
+  // caller may not list, so that the two cannot be told apart.
+  static Status notFound(std::string_view normalized, bool folder);
 
   // Whether a canonical path is the root or lies below it.
   bool contains(const std::filesystem::path& canonical) const;

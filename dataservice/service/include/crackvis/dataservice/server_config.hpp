@@ -17,8 +17,12 @@ struct Limits {
   std::uint64_t maxReadBytes = std::uint64_t{1} << 30;   // per Read call (all slabs)
   std::uint64_t maxFetchBytes = std::uint64_t{1} << 40;  // per Fetch call (the whole file)
   int maxConcurrentStreams = 64;                         // Read and Fetch calls at once
+  int maxStreamsPerUser = 16;  // ... of them for one configured user (not applied without users)
   int maxSlabsPerRead = 4096;
   double maxCallSeconds = 600.0;  // a stream running longer is cancelled
+  // A raw TLS connection must finish its handshake and send its request
+  // within this time, so idle TCP connections cannot hold the slots.
+  double handshakeSeconds = 10.0;
 };
 
 // A user of the per-user layer on top of mutual TLS. A caller is this user

@@ -29,6 +29,7 @@ struct RenderServerConfig {
   // crackvis-data, reached with the render server's own client certificate.
   dataservice::ClientOptions data = defaultDataOptions();
   int maxSessions = 8;
+  int maxSessionsPerUser = 4;  // of maxSessions, for one configured user (none without users)
   double sessionGraceSeconds = 30.0;  // a session without a stream lives this long
   SessionLimits limits;
   std::string accessLog = "-";  // "-": stderr; "": none
@@ -51,8 +52,9 @@ Status validateRenderServerConfig(const RenderServerConfig& config);
 
 class RenderServer {
  public:
-  // Checks the configuration (TLS files, loopback for --insecure, the data
-  // service's TLS files), binds and starts serving. A data service that is
+  // Checks the configuration (TLS files, loopback for --insecure and for
+  // --data-insecure, the data service's TLS files), binds and starts serving
+  // (health status SERVING); "address in use" when the port is taken. A data service that is
   // down is not an error here: sessions report it when they open.
   static Result<std::unique_ptr<RenderServer>> start(const RenderServerConfig& config);
   RenderServer(const RenderServer&) = delete;
@@ -63,8 +65,10 @@ class RenderServer {
   int port() const;
   int sessionCount() const;
 
-  // Closes every session, ends the streams, stops serving; idempotent.
+  // Closes every session, ends the streams, stops serving (NOT_SERVING
+  // first) and waits for the calls to end; idempotent.
   void shutdown(double graceSeconds = 2.0);
+  // Blocks until shutdown() has been called.
   void wait();
 
  private:

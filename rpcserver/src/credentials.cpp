@@ -8,20 +8,19 @@
 #include <openssl/rand.h>
 #include <openssl/sha.h>
 
-#include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/dataservice/data_root.hpp>
+#include <crackvis/rpc/credentials.hpp>
 
-namespace crackvis::dataservice {
+namespace crackvis::rpc {
+
+using dataservice::isWithinFolder;
 namespace {
 
 constexpr std::string_view kScheme = "pbkdf2-sha256";
+constexpr std::string_view kTokenScheme = "sha256$";
 constexpr std::size_t kSaltBytes = 16;
 constexpr std::size_t kHashBytes = 32;
 constexpr std::size_t kMaxCachedCredentials = 4096;
-
-Status unauthenticated(std::string message) {
-  return {StatusCode::kUnauthenticated, std::move(message)};
-}
 
 std::string base64(const unsigned char* data, std::size_t size) {
   std::string out(4 * ((size + 2) / 3) + 1, '\0');
@@ -60,9 +59,14 @@ bool pbkdf2(std::string_view secret, const std::string& salt, int iterations,
                            static_cast<int>(out.size()), out.data()) == 1;
 }
 
-std::string sha256Hex(std::string_view text) {
+std::array<unsigned char, SHA256_DIGEST_LENGTH> sha256(std::string_view text) {
   std::array<unsigned char, SHA256_DIGEST_LENGTH> digest{};
   SHA256(reinterpret_cast<const unsigned char*>(text.data()), text.size(), digest.data());
+  return digest;
+}
+
+std::string sha256Hex(std::string_view text) {
+  const auto digest = sha256(text);
   std::string hex;
   for (unsigned char byte : digest) {
     hex += fmt::format("{:02x}", byte);
@@ -72,6 +76,26 @@ std::string sha256Hex(std::string_view text) {
 
 bool startsWith(std::string_view text, std::string_view prefix) {
   return text.size() >= prefix.size() && text.substr(0, prefix.size()) == prefix;
+}
+
+// "sha256$<base64>": one SHA-256 of the token, compared in constant time.
+bool verifyToken(std::string_view token, std::string_view hash) {
+  std::string expected;
+  if (!unbase64(hash.substr(kTokenScheme.size()), expected) ||
+      expected.size() != SHA256_DIGEST_LENGTH) {
+    return false;
+  }
+  const auto actual = sha256(token);
+  return CRYPTO_memcmp(actual.data(), expected.data(), actual.size()) == 0;
+}
+
+// The peer's address without its port: "ipv4:127.0.0.1:53412" -> "ipv4:127.0.0.1",
+// so that a client's new connections count together.
+std::string peerAddress(std::string_view peer) {
+  const std::size_t colon = peer.rfind(':');
+  const std::size_t scheme = peer.find(':');
+  return std::string(colon == std::string_view::npos || colon == scheme ? peer
+                                                                        : peer.substr(0, colon));
 }
 
 }  // namespace
@@ -96,7 +120,18 @@ Result<std::string> hashSecret(std::string_view secret, int iterations) {
                      base64(hash.data(), hash.size()));
 }
 
+Result<std::string> hashToken(std::string_view token) {
+  if (token.empty()) {
+    return invalidArgument("refusing to hash an empty token");
+  }
+  const auto digest = sha256(token);
+  return std::string(kTokenScheme) + base64(digest.data(), digest.size());
+}
+
 bool verifySecret(std::string_view secret, std::string_view hash) {
+  if (startsWith(hash, kTokenScheme)) {
+    return verifyToken(secret, hash);
+  }
   // scheme$iterations$salt$hash
   std::array<std::string_view, 4> parts;
   std::size_t start = 0;
@@ -150,10 +185,81 @@ bool Caller::mayRead(std::string_view relativePath) const {
   return false;
 }
 
+bool Caller::mayList(std::string_view folder) const {
+  if (!restricted) {
+    return true;
+  }
+  for (const std::string& own : folders) {
+    if (isWithinFolder(folder, own) || isWithinFolder(own, folder)) {
+      return true;
+    }
+  }
+  return false;
+}
+
+Status checkNamedPath(const Caller& caller, std::string_view requested) {
+  if (!caller.mayRead(requested)) {
+    return permissionDenied(
+        fmt::format("user '{}' may not read '{}'", caller.name, echoed(requested)));
+  }
+  return Status::ok();
+}
+
+Status checkResolvedPath(const Caller& caller, std::string_view requested,
+                         std::string_view resolved) {
+  CRACKVIS_RETURN_IF_ERROR(checkNamedPath(caller, requested));
+  if (!caller.mayRead(resolved)) {
+    return permissionDenied(fmt::format("user '{}' may not read '{}' (it links to '{}')",
+                                        caller.name, echoed(requested), echoed(resolved)));
+  }
+  return Status::ok();
+}
+
+Authenticator::Authenticator(std::vector<UserEntry> users) : m_users(std::move(users)) {
+  if (!m_users.empty()) {
+    // A hash of nothing anyone knows, with the default cost: an unknown
+    // name is checked against it, so it takes as long as a known one.
+    auto token = generateToken();
+    auto dummy = token ? hashSecret(*token) : token.status();
+    m_dummyPasswordHash = dummy ? *dummy : std::string();
+  }
+}
+
+Status Authenticator::checkThrottle(const std::string& address) const {
+  std::lock_guard lock(m_mutex);
+  auto it = m_failures.find(address);
+  if (it == m_failures.end()) {
+    return Status::ok();
+  }
+  const double age = std::chrono::duration<double>(Clock::now() - it->second.windowStart).count();
+  if (age > kFailureWindowSeconds) {
+    m_failures.erase(it);
+    return Status::ok();
+  }
+  if (it->second.count >= kMaxFailuresPerPeer) {
+    return resourceExhausted(
+        fmt::format("too many failed sign-ins from {} ({} in {:.0f} s); retry in {:.0f} s", address,
+                    it->second.count, kFailureWindowSeconds, kFailureWindowSeconds - age));
+  }
+  return Status::ok();
+}
+
+void Authenticator::recordFailure(const std::string& address) const {
+  std::lock_guard lock(m_mutex);
+  if (m_failures.size() >= kMaxCachedCredentials) {
+    m_failures.clear();  // bounded memory; a flood of addresses only resets the counts
+  }
+  Failures& failures = m_failures[address];
+  if (failures.count == 0) {
+    failures.windowStart = Clock::now();
+  }
+  ++failures.count;
+}
+
 Result<std::size_t> Authenticator::findUser(std::string_view authorization) const {
   const std::string key = sha256Hex(authorization);
   {
-    std::lock_guard lock(m_cacheMutex);
+    std::lock_guard lock(m_mutex);
     if (auto it = m_verified.find(key); it != m_verified.end()) {
       return it->second;
     }
@@ -179,11 +285,15 @@ Result<std::size_t> Authenticator::findUser(std::string_view authorization) cons
     }
     const std::string_view name(decoded.data(), colon);
     const std::string_view password(decoded.data() + colon + 1, decoded.size() - colon - 1);
-    for (std::size_t i = 0; i < m_users.size() && !match; ++i) {
-      if (m_users[i].name == name && !m_users[i].passwordHash.empty() &&
-          verifySecret(password, m_users[i].passwordHash)) {
-        match = i;
+    std::optional<std::size_t> named;
+    for (std::size_t i = 0; i < m_users.size() && !named; ++i) {
+      if (m_users[i].name == name && !m_users[i].passwordHash.empty()) {
+        named = i;
       }
+    }
+    const std::string& hash = named ? m_users[*named].passwordHash : m_dummyPasswordHash;
+    if (verifySecret(password, hash) && named) {
+      match = named;
     }
     if (!match) {
       return unauthenticated("wrong user name or password");
@@ -193,7 +303,7 @@ Result<std::size_t> Authenticator::findUser(std::string_view authorization) cons
         "unsupported authorization scheme: send 'Bearer <token>' or 'Basic <base64 "
         "name:password>'");
   }
-  std::lock_guard lock(m_cacheMutex);
+  std::lock_guard lock(m_mutex);
   if (m_verified.size() >= kMaxCachedCredentials) {
     m_verified.clear();
   }
@@ -202,7 +312,8 @@ Result<std::size_t> Authenticator::findUser(std::string_view authorization) cons
 }
 
 Result<Caller> Authenticator::authenticate(std::string_view authorization,
-                                           std::string_view certificateName) const {
+                                           std::string_view certificateName,
+                                           std::string_view peer) const {
   Caller caller;
   caller.certificateName = certificateName;
   if (m_users.empty()) {
@@ -211,8 +322,11 @@ Result<Caller> Authenticator::authenticate(std::string_view authorization,
   }
   std::optional<std::size_t> index;
   if (!authorization.empty()) {
+    const std::string address = peerAddress(peer);
+    CRACKVIS_RETURN_IF_ERROR(checkThrottle(address));
     auto found = findUser(authorization);
     if (!found) {
+      recordFailure(address);
       return found.status();
     }
     index = *found;
@@ -226,7 +340,7 @@ Result<Caller> Authenticator::authenticate(std::string_view authorization,
       return unauthenticated(
           fmt::format("no credentials: send 'authorization: Bearer <token>' or Basic name:password "
                       "(client certificate '{}' is no user's)",
-                      certificateName));
+                      echoed(certificateName)));
     }
   }
   const UserEntry& user = m_users[*index];
@@ -236,4 +350,4 @@ Result<Caller> Authenticator::authenticate(std::string_view authorization,
   return caller;
 }
 
-}  // namespace crackvis::dataservice
+}  // namespace crackvis::rpc

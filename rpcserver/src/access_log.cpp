@@ -6,9 +6,9 @@
 #include <fmt/format.h>
 
 #include <crackvis/common/log.hpp>
-#include <crackvis/dataservice/access_log.hpp>
+#include <crackvis/rpc/access_log.hpp>
 
-namespace crackvis::dataservice {
+namespace crackvis::rpc {
 namespace {
 
 using log::quoted;
@@ -41,7 +41,7 @@ std::string AccessLog::format(const AccessRecord& record) {
   std::string line = fmt::format(
       "{} method={} user={} cert={} peer={} file={} bytes={} seconds={:.6f} status={}", utcNow(),
       record.method, quoted(record.user), quoted(record.certificateName), quoted(record.peer),
-      quoted(record.file), record.bytes, record.seconds, record.status);
+      quoted(echoed(record.file)), record.bytes, record.seconds, record.status);
   if (!record.detail.empty()) {
     line += " detail=" + quoted(record.detail);
   }
@@ -58,4 +58,4 @@ void AccessLog::record(const AccessRecord& record) {
   std::fflush(m_file);
 }
 
-}  // namespace crackvis::dataservice
+}  // namespace crackvis::rpc

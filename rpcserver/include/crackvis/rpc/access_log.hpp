@@ -14,14 +14,14 @@
 
 #include <crackvis/common/status.hpp>
 
-namespace crackvis::dataservice {
+namespace crackvis::rpc {
 
 struct AccessRecord {
-  std::string method;  // ListFiles, Describe, Read, Fetch, RawTls
+  std::string method;  // ListFiles, Describe, Read, Fetch, RawTls, OpenSession, Stream, ...
   std::string user;
   std::string certificateName;
   std::string peer;
-  std::string file;
+  std::string file;  // as the client named it (the log quotes at most kMaxEchoedChars)
   std::uint64_t bytes = 0;
   double seconds = 0.0;
   std::string status = "OK";  // a gRPC status name
@@ -47,4 +47,4 @@ class AccessLog {
   bool m_owned = false;
 };
 
-}  // namespace crackvis::dataservice
+}  // namespace crackvis::rpc

@@ -1,0 +1,49 @@
+// The boundary of every RPC handler of both services: the caller's identity
+// from the call, and the end of a call (its access-log line, then its gRPC
+// status). guarded() is the one place an exception from a handler's body is
+// caught: it is logged as an event line and fails only that call, with
+// INTERNAL, so a bug hit by one input never takes the process down.
+#pragma once
+
+#include <chrono>
+#include <exception>
+#include <string_view>
+
+#include <grpcpp/grpcpp.h>
+
+#include <crackvis/common/status.hpp>
+#include <crackvis/rpc/access_log.hpp>
+#include <crackvis/rpc/credentials.hpp>
+
+namespace crackvis::rpc {
+
+using CallClock = std::chrono::steady_clock;
+
+// Authenticates the call; fills the record's peer, certificate and user.
+Result<Caller> authenticateCall(const Authenticator& authenticator,
+                                const grpc::ServerContextBase& context, AccessRecord& record);
+
+// Fills the record's time and status, writes its line (before the client
+// sees the status, so a client's calls appear in the order it made them) and
+// returns the status for gRPC.
+grpc::Status finishCall(AccessLog& log, AccessRecord& record, CallClock::time_point start,
+                        const Status& status);
+
+// The INTERNAL status for an exception that reached a handler's boundary,
+// after an event line naming the program, method and exception.
+Status handlerException(std::string_view program, const AccessRecord& record,
+                        std::string_view what);
+
+// Runs a handler's body; an exception becomes handlerException's status.
+template <typename Body>
+Status guarded(std::string_view program, const AccessRecord& record, Body&& body) noexcept {
+  try {
+    return body();
+  } catch (const std::exception& error) {
+    return handlerException(program, record, error.what());
+  } catch (...) {
+    return handlerException(program, record, "an exception of unknown type");
+  }
+}
+
+}  // namespace crackvis::rpc

@@ -1,0 +1,284 @@
+// The data service under hostile but authenticated use (issue 13 points 1,
+// 4 and 9): fast token checks, throttled sign-in failures, the handler
+// boundary, folder answers that are no existence oracle, per-user stream
+// caps, refused NULs, capped echoes, a busy port and idle raw TLS
+// connections. Each through a real server on loopback.
+#include <chrono>
+#include <functional>
+#include <thread>
+
+#include <arpa/inet.h>
+#include <catch2/catch.hpp>
+#include <fmt/format.h>
+#include <grpcpp/grpcpp.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "crackvis/v1/data.grpc.pb.h"
+#include "service_fixture.hpp"
+#include <crackvis/rpc/access_log.hpp>
+#include <crackvis/rpc/call.hpp>
+#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/rpc/grpc_status.hpp>
+#include <crackvis/rpc/server.hpp>
+
+namespace crackvis::testing {
+namespace {
+
+namespace v1 = crackvis::v1;
+using dataservice::Hyperslab;
+
+double secondsOf(const std::function<void()>& work) {
+  const auto start = std::chrono::steady_clock::now();
+  work();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+TEST_CASE("Tokens are checked with one SHA-256; old PBKDF2 token hashes still work",
+          "[dataservice][rpc]") {
+  const std::string hash = rpc::hashToken("random-token").value();
+  CHECK(hash.rfind("sha256$", 0) == 0);
+  CHECK(rpc::verifySecret("random-token", hash));
+  CHECK_FALSE(rpc::verifySecret("random-token ", hash));
+  CHECK_FALSE(rpc::verifySecret("random-token", "sha256$not base64"));
+  rpc::Authenticator authenticator(
+      {{"fast", hash, "", "", {"*"}},
+       {"old", rpc::hashSecret("old-token", rpc::kDefaultHashIterations).value(), "", "", {"*"}}});
+  CHECK(authenticator.authenticate("Bearer random-token", "", "ipv4:10.0.0.1:1").value().name ==
+        "fast");
+  CHECK(authenticator.authenticate("Bearer old-token", "", "ipv4:10.0.0.1:2").value().name ==
+        "old");
+  // A fresh token check costs microseconds, not a PBKDF2 (tens of ms).
+  rpc::Authenticator fastOnly({{"fast", hash, "", "", {"*"}}});
+  const double fast = secondsOf([&] {
+    for (int i = 0; i < 20; ++i) {
+      CHECK(fastOnly
+                .authenticate(fmt::format("Bearer wrong-{}", i), "",
+                              fmt::format("ipv4:10.0.1.{}:1", i))
+                .status()
+                .code() == StatusCode::kUnauthenticated);
+    }
+  });
+  CHECK(fast < 0.05);
+}
+
+TEST_CASE("Unknown and known user names cost the same", "[dataservice][rpc]") {
+  rpc::Authenticator authenticator(
+      {{"bob", "", rpc::hashSecret("pw", rpc::kDefaultHashIterations).value(), "", {"bob"}}});
+  // base64 of "bob:wrong" and of "nobody:wrong".
+  const std::string knownName = "Basic Ym9iOndyb25n";
+  const std::string unknownName = "Basic bm9ib2R5Ondyb25n";
+  double known = 1e9;
+  double unknown = 1e9;
+  for (int i = 0; i < 3; ++i) {
+    known = std::min(
+        known, secondsOf([&] {
+          CHECK_FALSE(authenticator.authenticate(knownName, "", fmt::format("ipv4:a{}:1", i)));
+        }));
+    unknown = std::min(
+        unknown, secondsOf([&] {
+          CHECK_FALSE(authenticator.authenticate(unknownName, "", fmt::format("ipv4:b{}:1", i)));
+        }));
+  }
+  INFO("known " << known << " s, unknown " << unknown << " s");
+  CHECK(unknown > 0.5 * known);
+  CHECK(known > 0.5 * unknown);
+}
+
+TEST_CASE("Failed sign-ins are throttled per peer address, through the real service",
+          "[dataservice][integration]") {
+  auto config = baseConfig();
+  config.users = {{"bob", "", rpc::hashSecret("bob's password", 1000).value(), "", {"bob"}}};
+  auto server = startServer(config);
+  auto as = [&](const std::string& password) {
+    auto options = clientOptions(*server);
+    options.user = "bob";
+    options.password = password;
+    return connect(options);
+  };
+  for (int i = 0; i < rpc::kMaxFailuresPerPeer; ++i) {
+    CHECK(as("wrong").describe("bob/b.h5").status().code() == StatusCode::kUnauthenticated);
+  }
+  const Status throttled = as("bob's password").describe("bob/b.h5").status();
+  CHECK(throttled.code() == StatusCode::kResourceExhausted);
+  CHECK_THAT(throttled.message(), Catch::Contains("too many failed sign-ins"));
+  // Counted per address: another peer is not held up by this one's failures.
+  rpc::Authenticator authenticator(config.users);
+  const std::string wrong = "Basic Ym9iOndyb25n";              // bob:wrong
+  const std::string right = "Basic Ym9iOmJvYidzIHBhc3N3b3Jk";  // bob:bob's password
+  for (int i = 0; i < rpc::kMaxFailuresPerPeer; ++i) {
+    CHECK_FALSE(authenticator.authenticate(wrong, "", fmt::format("ipv4:192.0.2.1:{}", i)));
+  }
+  CHECK(authenticator.authenticate(right, "", "ipv4:192.0.2.1:99").status().code() ==
+        StatusCode::kResourceExhausted);
+  CHECK(authenticator.authenticate(right, "", "ipv4:192.0.2.2:5").isOk());
+}
+
+TEST_CASE("An exception at a handler's boundary fails only that call", "[dataservice][rpc]") {
+  rpc::AccessRecord record;
+  record.method = "Describe";
+  record.file = "a.h5";
+  const Status status =
+      rpc::guarded("crackvis-test", record, []() -> Status { throw std::runtime_error("boom"); });
+  CHECK(status.code() == StatusCode::kInternal);
+  CHECK_THAT(status.message(), Catch::Contains("Describe"));
+  const Status unknown = rpc::guarded("crackvis-test", record, []() -> Status { throw 42; });
+  CHECK(unknown.code() == StatusCode::kInternal);
+}
+
+TEST_CASE("CANCELLED and DEADLINE_EXCEEDED stay distinct", "[dataservice][rpc]") {
+  CHECK(rpc::fromGrpcStatus(grpc::Status(grpc::StatusCode::CANCELLED, "x"), "Read").code() ==
+        StatusCode::kCancelled);
+  CHECK(
+      rpc::fromGrpcStatus(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, "x"), "Read").code() ==
+      StatusCode::kDeadlineExceeded);
+  CHECK(rpc::fromGrpcStatus(grpc::Status(grpc::StatusCode::UNAVAILABLE, "x"), "Read").code() ==
+        StatusCode::kUnavailable);
+  CHECK(rpc::toGrpcStatus(cancelled("x")).error_code() == grpc::StatusCode::CANCELLED);
+  CHECK(rpc::toGrpcStatus(deadlineExceeded("x")).error_code() ==
+        grpc::StatusCode::DEADLINE_EXCEEDED);
+  // Through a real call: a deadline that passes is DEADLINE_EXCEEDED.
+  auto server = startServer(baseConfig());
+  auto stub = rawStub(*server);
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now());
+  v1::DescribeResponse response;
+  v1::DescribeRequest request;
+  request.set_file("run.h5");
+  const Status late = rpc::fromGrpcStatus(stub->Describe(&context, request, &response), "Describe");
+  CHECK(late.code() == StatusCode::kDeadlineExceeded);
+}
+
+TEST_CASE("Another user's folder answers as a missing one; no listing names a foreign file",
+          "[dataservice][integration]") {
+  auto config = baseConfig();
+  config.users = {{"alice", rpc::hashToken("alice-token").value(), "", "", {"alice"}}};
+  auto server = startServer(config);
+  auto options = clientOptions(*server);
+  options.token = "alice-token";
+  auto alice = connect(options);
+  const Status foreign = alice.listFiles("bob").status();
+  const Status missing = alice.listFiles("nosuch").status();
+  CHECK(foreign.code() == StatusCode::kNotFound);
+  CHECK(missing.code() == StatusCode::kNotFound);
+  CHECK(foreign.message() == "folder 'bob' not found under the data root");
+  CHECK(missing.message() == "folder 'nosuch' not found under the data root");
+  // A file in another's folder is not a folder either: same answer.
+  CHECK(alice.listFiles("bob/b.h5").status().code() == StatusCode::kNotFound);
+  auto own = alice.listFiles("alice");
+  REQUIRE(own.isOk());
+  std::vector<std::string> names;
+  for (const auto& file : *own) {
+    names.push_back(file.path);
+  }
+  // alice/bob-link.h5 -> ../bob/b.h5 is in her folder but leads to bob's file.
+  CHECK(names == std::vector<std::string>{"alice/a.h5"});
+}
+
+TEST_CASE("NULs, huge names and echoes: refused or capped", "[dataservice][integration]") {
+  auto server = startServer(baseConfig());
+  auto client = connect(clientOptions(*server));
+  const Status nul =
+      client.read("run.h5", {Hyperslab::whole(std::string("/bonds/pairs\0/x", 15))}).status();
+  CHECK(nul.code() == StatusCode::kInvalidArgument);
+  CHECK_THAT(nul.message(), Catch::Contains("NUL"));
+  const Status nulFile = client.describe(std::string("run.h5\0.txt", 11)).status();
+  CHECK(nulFile.code() == StatusCode::kInvalidArgument);
+  CHECK_THAT(nulFile.message(), Catch::Contains("NUL"));
+  const std::string longName(3000, 'x');
+  const Status missing = client.describe(longName + ".h5").status();
+  CHECK(missing.code() == StatusCode::kNotFound);
+  CHECK(missing.message().size() < 400);
+  CHECK_THAT(missing.message(), Catch::Contains("..."));
+  const Status huge = client.describe(std::string(100000, 'y')).status();
+  CHECK(huge.code() == StatusCode::kInvalidArgument);
+  CHECK(huge.message().size() < 400);
+  requireServerHealthy(*server);
+}
+
+TEST_CASE("Streams are capped per user beside the server-wide cap", "[dataservice][integration]") {
+  auto config = baseConfig();
+  config.limits.maxStreamsPerUser = 1;
+  config.users = {{"alice", rpc::hashToken("alice-token").value(), "", "", {"*"}},
+                  {"bob", rpc::hashToken("bob-token").value(), "", "", {"*"}}};
+  auto server = startServer(config);
+  auto stub = rawStub(*server);
+  v1::FetchRequest request;
+  request.set_file("big.h5");
+  auto open = [&](grpc::ClientContext& context, const std::string& token) {
+    context.AddMetadata("authorization", "Bearer " + token);
+    return stub->Fetch(&context, request);
+  };
+  grpc::ClientContext first;
+  auto held = open(first, "alice-token");
+  v1::FetchChunk chunk;
+  REQUIRE(held->Read(&chunk));  // alice's one stream is open and stays so
+  grpc::ClientContext second;
+  auto refused = open(second, "alice-token");
+  while (refused->Read(&chunk)) {
+  }
+  const grpc::Status status = refused->Finish();
+  CHECK(status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED);
+  CHECK_THAT(status.error_message(), Catch::Contains("per user"));
+  grpc::ClientContext other;
+  auto bobs = open(other, "bob-token");
+  CHECK(bobs->Read(&chunk));  // bob is not held up by alice's cap
+  other.TryCancel();
+  first.TryCancel();
+}
+
+TEST_CASE("A second server on a busy port fails with 'address in use'",
+          "[dataservice][integration]") {
+  auto server = startServer(baseConfig());
+  auto config = baseConfig();
+  config.listen = fmt::format("127.0.0.1:{}", server->port());
+  auto second = dataservice::DataServer::start(config);
+  REQUIRE_FALSE(second.isOk());
+  CHECK(second.status().code() == StatusCode::kUnavailable);
+  CHECK_THAT(second.status().message(), Catch::Contains("in use"));
+  requireServerHealthy(*server);
+}
+
+TEST_CASE("Server addresses: IPv6 bracketed, plaintext only on loopback", "[dataservice][rpc]") {
+  CHECK(rpc::formatHostPort("::1", 50051) == "[::1]:50051");
+  CHECK(rpc::formatHostPort("127.0.0.1", 50051) == "127.0.0.1:50051");
+  CHECK(rpc::requireLoopback("localhost:50051", "--data-insecure").isOk());
+  const Status remote = rpc::requireLoopback("10.1.2.3:50051", "--data-insecure");
+  CHECK(remote.code() == StatusCode::kFailedPrecondition);
+  CHECK_THAT(remote.message(), Catch::Contains("--data-insecure"));
+}
+
+TEST_CASE("Idle TCP connections to the raw TLS endpoint are closed after the handshake timeout",
+          "[dataservice][integration]") {
+  auto config = baseConfig();
+  config.rawTlsListen = "127.0.0.1:0";
+  config.limits.handshakeSeconds = 0.5;
+  auto server = startServer(config);
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  REQUIRE(fd >= 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(server->rawTlsPort()));
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  REQUIRE(::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof(address)) == 0);
+  // Send nothing: the server must close the connection (perhaps after a TLS
+  // alert) well before the 30 s socket timeout.
+  bool closed = false;
+  const double waited = secondsOf([&] {
+    char buffer[256];
+    for (int round = 0; round < 50 && !closed; ++round) {
+      pollfd ready{fd, POLLIN, 0};
+      if (::poll(&ready, 1, 100) > 0) {
+        closed = ::recv(fd, buffer, sizeof(buffer), 0) <= 0;
+      }
+    }
+  });
+  CHECK(closed);
+  CHECK(waited < 3.0);
+  ::close(fd);
+}
+
+}  // namespace
+}  // namespace crackvis::testing
