@@ -15,8 +15,8 @@
 #include <crackvis/common/log.hpp>
 #include <crackvis/common/service_manager.hpp>
 #include <crackvis/common/termination.hpp>
-#include <crackvis/dataservice/credentials.hpp>
 #include <crackvis/dataservice/data_server.hpp>
+#include <crackvis/rpc/credentials.hpp>
 
 namespace {
 
@@ -42,6 +42,8 @@ struct Flags {
   std::optional<std::uint64_t> maxReadBytes;
   std::optional<std::uint64_t> maxFetchBytes;
   std::optional<int> maxStreams;
+  std::optional<int> maxStreamsPerUser;
+  std::optional<double> handshakeSeconds;
   std::optional<double> maxCallSeconds;
 };
 
@@ -90,6 +92,12 @@ crackvis::Result<ServerConfig> configure(const Flags& flags, const CLI::App& app
   if (flags.maxStreams) {
     config.limits.maxConcurrentStreams = *flags.maxStreams;
   }
+  if (flags.maxStreamsPerUser) {
+    config.limits.maxStreamsPerUser = *flags.maxStreamsPerUser;
+  }
+  if (flags.handshakeSeconds) {
+    config.limits.handshakeSeconds = *flags.handshakeSeconds;
+  }
   if (flags.maxCallSeconds) {
     config.limits.maxCallSeconds = *flags.maxCallSeconds;
   }
@@ -101,7 +109,7 @@ crackvis::Result<ServerConfig> configure(const Flags& flags, const CLI::App& app
 int hashSecretFromStdin() {
   std::string secret;
   std::getline(std::cin, secret);
-  auto hash = crackvis::dataservice::hashSecret(secret);
+  auto hash = crackvis::rpc::hashSecret(secret);
   if (!hash) {
     return fail(hash.status().message());
   }
@@ -110,8 +118,8 @@ int hashSecretFromStdin() {
 }
 
 int newToken() {
-  auto token = crackvis::dataservice::generateToken();
-  auto hash = token ? crackvis::dataservice::hashSecret(*token) : token.status();
+  auto token = crackvis::rpc::generateToken();
+  auto hash = token ? crackvis::rpc::hashToken(*token) : token.status();
   if (!hash) {
     return fail(hash.status().message());
   }
@@ -188,6 +196,10 @@ int main(int argc, char** argv) {
   app.add_option("--max-read-bytes", flags.maxReadBytes, "limit on the bytes of one Read call");
   app.add_option("--max-fetch-bytes", flags.maxFetchBytes, "limit on the size of a fetched file");
   app.add_option("--max-streams", flags.maxStreams, "limit on Read/Fetch calls at once");
+  app.add_option("--max-streams-per-user", flags.maxStreamsPerUser,
+                 "limit on one configured user's Read/Fetch calls at once (default 16)");
+  app.add_option("--handshake-seconds", flags.handshakeSeconds,
+                 "time a raw TLS connection has for its handshake and request (default 10)");
   app.add_option("--max-call-seconds", flags.maxCallSeconds,
                  "a Read or Fetch running longer is cancelled");
   auto* hash = app.add_subcommand(

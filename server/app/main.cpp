@@ -239,6 +239,9 @@ int main(int argc, char** argv) {
                "crackvis-data runs with --insecure (plaintext, loopback)");
   app.add_option("--max-sessions", config.maxSessions, "sessions open at once")
       ->capture_default_str();
+  app.add_option("--max-sessions-per-user", config.maxSessionsPerUser,
+                 "sessions one configured user may have open at once")
+      ->capture_default_str();
   app.add_option("--session-grace", config.sessionGraceSeconds,
                  "seconds a session without a stream is kept for a reconnect")
       ->capture_default_str();

@@ -59,6 +59,12 @@ TEST_CASE("crackvis-data refuses out-of-range limits from flags and file at star
       {"negative streams", with({"--max-streams", "-3"}), "",
        "--max-streams must be at least 1, got -3 (limits.max_concurrent_streams in the "
        "configuration file)"},
+      {"no streams per user", with({"--max-streams-per-user", "0"}), "",
+       "--max-streams-per-user must be at least 1, got 0 (limits.max_streams_per_user in the "
+       "configuration file)"},
+      {"no handshake time in the file", base, R"({"limits": {"handshake_seconds": 0}})",
+       "--handshake-seconds must be between 0.1 and 3600, got 0 (limits.handshake_seconds in "
+       "the configuration file)"},
       {"no read bytes", with({"--max-read-bytes", "0"}), "",
        "--max-read-bytes must be at least 1, got 0 (limits.max_read_bytes in the configuration "
        "file)"},
@@ -107,6 +113,12 @@ TEST_CASE("crackvis-render refuses out-of-range limits from flags and file at st
       {"no sessions", with({"--max-sessions", "0"}), "",
        "--max-sessions must be between 1 and 256, got 0 (limits.max_sessions in the "
        "configuration file)"},
+      {"no sessions per user", with({"--max-sessions-per-user", "0"}), "",
+       "--max-sessions-per-user must be between 1 and 256, got 0 (limits.max_sessions_per_user "
+       "in the configuration file)"},
+      {"no sessions per user in the file", base, R"({"limits": {"max_sessions_per_user": 0}})",
+       "--max-sessions-per-user must be between 1 and 256, got 0 (limits.max_sessions_per_user "
+       "in the configuration file)"},
       {"no grace", with({"--session-grace", "0"}), "",
        "--session-grace must be between 0.1 and 86400, got 0 (limits.session_grace_seconds in "
        "the configuration file)"},

@@ -17,14 +17,17 @@ using config::checkKeys;
 using config::read;
 
 Status readLimits(const json& object, const std::string& where, Limits& limits) {
-  CRACKVIS_RETURN_IF_ERROR(checkKeys(object, where,
-                                     {"max_read_bytes", "max_fetch_bytes", "max_concurrent_streams",
-                                      "max_slabs_per_read", "max_call_seconds"}));
+  CRACKVIS_RETURN_IF_ERROR(checkKeys(
+      object, where,
+      {"max_read_bytes", "max_fetch_bytes", "max_concurrent_streams", "max_streams_per_user",
+       "max_slabs_per_read", "max_call_seconds", "handshake_seconds"}));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_read_bytes", where, limits.maxReadBytes));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_fetch_bytes", where, limits.maxFetchBytes));
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "max_concurrent_streams", where, limits.maxConcurrentStreams));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_streams_per_user", where, limits.maxStreamsPerUser));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_slabs_per_read", where, limits.maxSlabsPerRead));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "handshake_seconds", where, limits.handshakeSeconds));
   return read(object, "max_call_seconds", where, limits.maxCallSeconds);
 }
 
@@ -159,6 +162,11 @@ Status validateServerConfig(const ServerConfig& config) {
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-streams", "limits.max_concurrent_streams"},
                                         limits.maxConcurrentStreams, 1,
                                         std::numeric_limits<int>::max()));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-streams-per-user", "limits.max_streams_per_user"},
+                                        limits.maxStreamsPerUser, 1,
+                                        std::numeric_limits<int>::max()));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--handshake-seconds", "limits.handshake_seconds"},
+                                        limits.handshakeSeconds, 0.1, 3600.0));
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"", "limits.max_slabs_per_read"}, limits.maxSlabsPerRead,
                                         1, std::numeric_limits<int>::max()));
   // Deadlines are computed from it: a week keeps them far from overflow.

@@ -32,10 +32,12 @@ Status readDataService(const json& object, const std::string& where,
 }
 
 Status readLimits(const json& object, const std::string& where, RenderServerConfig& config) {
-  CRACKVIS_RETURN_IF_ERROR(checkKeys(object, where,
-                                     {"max_sessions", "session_grace_seconds", "refine_after_ms",
-                                      "interactive_frame_ms", "max_width", "max_height"}));
+  CRACKVIS_RETURN_IF_ERROR(
+      checkKeys(object, where,
+                {"max_sessions", "max_sessions_per_user", "session_grace_seconds",
+                 "refine_after_ms", "interactive_frame_ms", "max_width", "max_height"}));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_sessions", where, config.maxSessions));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_sessions_per_user", where, config.maxSessionsPerUser));
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "session_grace_seconds", where, config.sessionGraceSeconds));
   CRACKVIS_RETURN_IF_ERROR(read(object, "refine_after_ms", where, config.limits.refineAfterMs));
@@ -96,6 +98,8 @@ Status validateRenderServerConfig(const RenderServerConfig& config) {
   }
   CRACKVIS_RETURN_IF_ERROR(
       checkSetting({"--max-sessions", "limits.max_sessions"}, config.maxSessions, 1, 256));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-sessions-per-user", "limits.max_sessions_per_user"},
+                                        config.maxSessionsPerUser, 1, 256));
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--session-grace", "limits.session_grace_seconds"},
                                         config.sessionGraceSeconds, 0.1, 86400.0));
   const SessionLimits& limits = config.limits;

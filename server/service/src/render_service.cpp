@@ -701,12 +701,9 @@ Result<std::unique_ptr<RenderServer>> RenderServer::start(const RenderServerConf
     // The token would travel in clear: only to this machine.
     CRACKVIS_RETURN_IF_ERROR(rpc::requireLoopback(config.data.target, "--data-insecure"));
   }
-  if (config.maxSessions < 1) {
-    return invalidArgument("max sessions must be at least 1");
-  }
-  if (config.maxSessionsPerUser < 1) {
-    return invalidArgument("max sessions per user must be at least 1");
-  }
+  // The same rules as crackvis-render's flags and file: a server started
+  // from code (tests, the CLI) cannot bypass them.
+  CRACKVIS_RETURN_IF_ERROR(validateRenderServerConfig(config));
   auto data = dataservice::DataClient::connect(impl->config.data);
   if (!data) {
     return Status(data.status().code(),
