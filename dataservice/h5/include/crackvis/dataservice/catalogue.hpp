@@ -29,7 +29,8 @@ std::mutex& hdf5Mutex();
 
 // One validated hyperslab of a Read.
 struct SlabPlan {
-  std::string dataset;
+  std::string dataset;          // as the client named it
+  std::string resolvedDataset;  // the same through hard links only (soft links resolved)
   DataType dtype = DataType::kUnspecified;
   std::vector<std::uint64_t> datasetShape;
   std::vector<std::uint64_t> start;  // one per dimension (empty for a scalar)
