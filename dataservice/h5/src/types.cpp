@@ -164,22 +164,17 @@ Status checkDemDataset(const FileDescription& description, dem::DemDataset id, i
   if (dataset == nullptr) {
     return dem::missingDataset(path);
   }
+  // The element types the layout uses; any other stays kOther.
+  static constexpr std::pair<DataType, dem::h5::ElementType> kLayoutTypes[] = {
+      {DataType::kInt32, dem::h5::ElementType::kInt32},
+      {DataType::kUInt8, dem::h5::ElementType::kUInt8},
+      {DataType::kFloat32, dem::h5::ElementType::kFloat32},
+      {DataType::kFloat64, dem::h5::ElementType::kFloat64}};
   dem::DatasetHeader header;
-  switch (dataset->dtype) {
-    case DataType::kInt32:
-      header.type = dem::h5::ElementType::kInt32;
-      break;
-    case DataType::kUInt8:
-      header.type = dem::h5::ElementType::kUInt8;
-      break;
-    case DataType::kFloat32:
-      header.type = dem::h5::ElementType::kFloat32;
-      break;
-    case DataType::kFloat64:
-      header.type = dem::h5::ElementType::kFloat64;
-      break;
-    default:
-      break;
+  for (const auto& [stored, element] : kLayoutTypes) {
+    if (dataset->dtype == stored) {
+      header.type = element;
+    }
   }
   header.typeName = dataset->dtypeName;
   header.dims = dataset->shape;
