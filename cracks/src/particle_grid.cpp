@@ -1,29 +1,54 @@
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include <crackvis/cracks/particle_grid.hpp>
 
 namespace crackvis::cracks {
+namespace {
+
+// Cells along one axis for an extent, in double so that no extent (a
+// specimen flown apart, or an infinite one from a position that slipped
+// past validation) overflows an integer.
+double cellsAlong(double extent, double size) {
+  if (!std::isfinite(extent) || !(extent > 0.0)) {
+    return 1.0;  // non-finite extents collapse to one cell; callers check distances
+  }
+  return std::floor(extent / size) + 1.0;
+}
+
+}  // namespace
+
 void ParticleGrid::build(std::span<const Vec3> positions, double cellSize) {
   m_positions = positions;
   const auto [lo, hi] = dem::boundingBox(positions);
   // Never more cells than about 2 per particle: a deformed specimen that
   // flies apart must not make the grid explode.
-  double size = cellSize;
+  const double limit = 2.0 * static_cast<double>(positions.size()) + 64.0;
+  double size = std::isfinite(cellSize) && cellSize > 0.0 ? cellSize : 1.0;
+  double cells[3] = {1.0, 1.0, 1.0};
   for (;;) {
-    std::int64_t cells = 1;
     for (int axis = 0; axis < 3; ++axis) {
-      m_dims[axis] =
-          static_cast<std::int64_t>((component(hi, axis) - component(lo, axis)) / size) + 1;
-      cells *= m_dims[axis];
+      cells[axis] = cellsAlong(component(hi, axis) - component(lo, axis), size);
     }
-    if (cells <= 2 * static_cast<std::int64_t>(positions.size()) + 64) {
+    const double total = cells[0] * cells[1] * cells[2];
+    if (total <= limit) {
       break;
     }
-    size *= 1.5;
+    // Grow by at least 1.5, in one go when the box is far too large.
+    size *= std::max(1.5, std::cbrt(total / limit));
+    if (!std::isfinite(size)) {
+      cells[0] = cells[1] = cells[2] = 1.0;
+      size = std::numeric_limits<double>::max();
+      break;
+    }
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    m_dims[axis] = static_cast<std::int64_t>(cells[axis]);
   }
   m_cellSize = size;
-  m_origin = lo;
+  m_origin = {std::isfinite(lo.x) ? lo.x : 0.0, std::isfinite(lo.y) ? lo.y : 0.0,
+              std::isfinite(lo.z) ? lo.z : 0.0};
   const auto cellCount = static_cast<std::size_t>(m_dims[0] * m_dims[1] * m_dims[2]);
   m_cellStart.assign(cellCount + 1, 0);
   std::vector<std::int32_t> cellOf(positions.size());
@@ -46,11 +71,17 @@ void ParticleGrid::build(std::span<const Vec3> positions, double cellSize) {
 }
 
 std::int64_t ParticleGrid::cellCoordinate(double value, int axis) const {
+  // Compared in double before the cast: an infinite or NaN value, or one far
+  // outside the grid, must not reach an integer conversion.
   const double relative = (value - component(m_origin, axis)) / m_cellSize;
   if (!(relative > 0.0)) {
     return 0;
   }
-  return std::min(static_cast<std::int64_t>(relative), m_dims[axis] - 1);
+  const auto last = m_dims[axis] - 1;
+  if (!(relative < static_cast<double>(last))) {
+    return last;
+  }
+  return static_cast<std::int64_t>(relative);
 }
 
 }  // namespace crackvis::cracks

@@ -5,35 +5,13 @@
 #include <fmt/format.h>
 
 #include <crackvis/dem/dem_file.hpp>
+#include <crackvis/dem/layout.hpp>
 
 namespace crackvis::dem {
 namespace {
 
 using h5::ElementType;
 using h5::Handle;
-
-constexpr std::uint64_t kAnyExtent = std::numeric_limits<std::uint64_t>::max();
-
-std::string formatExpected(const std::vector<std::uint64_t>& dims) {
-  std::vector<std::string> parts;
-  for (auto d : dims) {
-    parts.push_back(d == kAnyExtent ? "*" : std::to_string(d));
-  }
-  return fmt::format("[{}]", fmt::join(parts, ","));
-}
-
-bool shapeMatches(const std::vector<std::uint64_t>& actual,
-                  const std::vector<std::uint64_t>& expected) {
-  if (actual.size() != expected.size()) {
-    return false;
-  }
-  for (size_t i = 0; i < actual.size(); ++i) {
-    if (expected[i] != kAnyExtent && expected[i] != actual[i]) {
-      return false;
-    }
-  }
-  return true;
-}
 
 // Step groups are named by their zero-padded index; anything else under
 // /steps is not ours.
@@ -101,12 +79,20 @@ Status DemFileReader::fail(const Status& status) const {
   return {status.code(), fmt::format("{}: {}", m_path, status.message())};
 }
 
-Result<Handle> DemFileReader::openChecked(const std::string& path, ElementType type,
-                                          const std::vector<std::uint64_t>& dims) const {
-  if (!h5::linkExists(m_file.get(), path)) {
-    return fail(failedPrecondition(fmt::format("missing dataset {}", path)));
+Result<Handle> DemFileReader::openChecked(DemDataset id, int step) const {
+  const std::string path = datasetPath(id, step);
+  auto resolved = h5::resolveInFile(m_file.get(), path);
+  if (!resolved) {
+    if (resolved.status().code() == StatusCode::kNotFound) {
+      return fail(missingDataset(path));
+    }
+    return fail(
+        failedPrecondition(fmt::format("dataset {}: {}; crackvis reads only data inside "
+                                       "the file",
+                                       path, resolved.status().message())));
   }
-  Handle dataset = h5::datasetHandle(H5Dopen2(m_file.get(), path.c_str(), H5P_DEFAULT));
+  Handle access = h5::noExternalLinks();
+  Handle dataset = h5::datasetHandle(H5Dopen2(m_file.get(), resolved->c_str(), access.get()));
   if (!dataset.valid()) {
     return fail(failedPrecondition(
         fmt::format("{} is not a readable dataset ({})", path, h5::lastHdf5Error())));
@@ -115,21 +101,11 @@ Result<Handle> DemFileReader::openChecked(const std::string& path, ElementType t
   if (!shape) {
     return fail(shape.status());
   }
-  if (shape->type != type) {
-    return fail(failedPrecondition(fmt::format("dataset {} has dtype {}, expected {}", path,
-                                               shape->typeName, h5::elementTypeName(type))));
-  }
-  if (!shapeMatches(shape->dims, dims)) {
-    std::vector<std::string> known;
-    if (m_info.particleCount >= 0) {
-      known.push_back(fmt::format("N = {}", m_info.particleCount));
-    }
-    if (m_info.bondCount >= 0) {
-      known.push_back(fmt::format("M = {}", m_info.bondCount));
-    }
-    return fail(failedPrecondition(fmt::format(
-        "dataset {} has shape {}, expected {}{}", path, h5::formatDims(shape->dims),
-        formatExpected(dims), known.empty() ? "" : fmt::format(" ({})", fmt::join(known, ", ")))));
+  const LayoutSizes sizes{m_info.particleCount, m_info.bondCount};
+  if (Status valid =
+          checkDatasetHeader(id, path, {shape->type, shape->typeName, shape->dims}, sizes);
+      !valid) {
+    return fail(valid);
   }
   return dataset;
 }
@@ -138,37 +114,19 @@ Status DemFileReader::readStructure() {
   const hid_t root = m_file.get();
   m_info.particleCount = -1;  // unknown until the datasets that carry them are read
   m_info.bondCount = -1;
-  auto format = h5::readStringAttribute(root, "format");
-  if (!format) {
-    return fail(
-        failedPrecondition(fmt::format("not a crackvis-dem file ({})", format.status().message())));
+  RootAttributes attributes;
+  attributes.format = h5::readStringAttribute(root, "format");
+  if (attributes.format) {
+    attributes.version = h5::readIntAttribute(root, "version");
+    attributes.dimension = h5::readIntAttribute(root, "dimension");
   }
-  if (*format != kFormatName) {
-    return fail(failedPrecondition(
-        fmt::format("not a crackvis-dem file (root attribute 'format' is '{}', expected '{}')",
-                    *format, kFormatName)));
-  }
-  m_info.format = *format;
-  auto version = h5::readIntAttribute(root, "version");
-  if (!version) {
-    return fail(failedPrecondition(
-        fmt::format("crackvis-dem file without a version ({})", version.status().message())));
-  }
-  if (*version != kFormatVersion) {
-    return fail(failedPrecondition(
-        fmt::format("unsupported crackvis-dem version {} (this build reads version {})", *version,
-                    kFormatVersion)));
-  }
-  m_info.version = static_cast<int>(*version);
-  auto dimension = h5::readIntAttribute(root, "dimension");
+  auto dimension = checkRootAttributes(attributes);
   if (!dimension) {
     return fail(dimension.status());
   }
-  if (*dimension != 2 && *dimension != 3) {
-    return fail(failedPrecondition(
-        fmt::format("root attribute 'dimension' is {}, expected 2 or 3", *dimension)));
-  }
-  m_info.dimension = static_cast<int>(*dimension);
+  m_info.format = *attributes.format;
+  m_info.version = static_cast<int>(*attributes.version);
+  m_info.dimension = *dimension;
   if (auto units = h5::readStringAttribute(root, "units")) {
     m_info.units = *units;
   }
@@ -178,33 +136,33 @@ Status DemFileReader::readStructure() {
 
   // N and M come from the first dataset that carries them; every other
   // dataset must agree.
-  auto radius = openChecked("/particles/radius", ElementType::kFloat64, {kAnyExtent});
+  auto radius = openChecked(DemDataset::kRadius);
   if (!radius) {
     return radius.status();
   }
   m_info.particleCount = static_cast<std::int64_t>(h5::describeDataset(radius->get())->dims[0]);
-  auto pairs = openChecked("/bonds/pairs", ElementType::kInt32, {kAnyExtent, 2});
+  auto pairs = openChecked(DemDataset::kPairs);
   if (!pairs) {
     return pairs.status();
   }
-  const auto m = h5::describeDataset(pairs->get())->dims[0];
-  m_info.bondCount = static_cast<std::int64_t>(m);
-  for (const char* path : {"/bonds/strength"}) {
-    if (auto dataset = openChecked(path, ElementType::kFloat64, {m}); !dataset) {
+  m_info.bondCount = static_cast<std::int64_t>(h5::describeDataset(pairs->get())->dims[0]);
+  for (DemDataset id : {DemDataset::kStrength, DemDataset::kBreakStep}) {
+    if (auto dataset = openChecked(id); !dataset) {
       return dataset.status();
     }
-  }
-  if (auto dataset = openChecked("/bonds/break_step", ElementType::kInt32, {m}); !dataset) {
-    return dataset.status();
   }
   return Status::ok();
 }
 
 Status DemFileReader::readSteps() {
-  if (!h5::linkExists(m_file.get(), "/steps")) {
-    return fail(failedPrecondition("missing group /steps"));
+  auto stepsPath = h5::resolveInFile(m_file.get(), "/steps");
+  if (!stepsPath) {
+    return fail(
+        failedPrecondition(stepsPath.status().code() == StatusCode::kNotFound
+                               ? std::string("missing group /steps")
+                               : fmt::format("group /steps: {}", stepsPath.status().message())));
   }
-  Handle steps = h5::groupHandle(H5Gopen2(m_file.get(), "/steps", H5P_DEFAULT));
+  Handle steps = h5::groupHandle(H5Gopen2(m_file.get(), stepsPath->c_str(), H5P_DEFAULT));
   if (!steps.valid()) {
     return fail(failedPrecondition(
         fmt::format("/steps is not a readable group ({})", h5::lastHdf5Error())));
@@ -212,6 +170,9 @@ Status DemFileReader::readSteps() {
   auto count = h5::readIntAttribute(steps.get(), "count");
   if (!count) {
     return fail(failedPrecondition(fmt::format("group /steps: {}", count.status().message())));
+  }
+  if (auto planned = h5::readIntAttribute(steps.get(), kPlannedStepsAttribute)) {
+    m_info.plannedSteps = *planned;
   }
   StepNames names;
   if (H5Literate(steps.get(), H5_INDEX_NAME, H5_ITER_INC, nullptr, collectStepName, &names) < 0) {
@@ -224,24 +185,24 @@ Status DemFileReader::readSteps() {
                     names.unexpected)));
   }
   std::sort(names.indices.begin(), names.indices.end());
-  const auto complete = static_cast<int>(*count);
-  if (complete < 0) {
-    return fail(failedPrecondition(fmt::format("/steps attribute 'count' is {}", complete)));
-  }
-  for (int step = 0; step < complete; ++step) {
+  const StepList list = listSteps(*count, [&](int step) -> std::optional<Result<double>> {
     if (!std::binary_search(names.indices.begin(), names.indices.end(), step)) {
-      return fail(failedPrecondition(fmt::format("missing step group {} (/steps says {} steps)",
-                                                 stepGroupPath(step), complete)));
+      return std::nullopt;
     }
-    Handle group =
-        h5::groupHandle(H5Gopen2(m_file.get(), stepGroupPath(step).c_str(), H5P_DEFAULT));
-    auto time = h5::readDoubleAttribute(group.get(), "time");
-    if (!time) {
-      return fail(failedPrecondition(
-          fmt::format("step group {}: {}", stepGroupPath(step), time.status().message())));
+    auto group = h5::resolveInFile(m_file.get(), stepGroupPath(step));
+    if (!group) {
+      return Result<double>(group.status());
     }
-    m_info.steps.push_back({step, *time});
+    Handle handle = h5::groupHandle(H5Gopen2(m_file.get(), group->c_str(), H5P_DEFAULT));
+    return h5::readDoubleAttribute(handle.get(), "time");
+  });
+  if (!list.problem) {
+    return fail(list.problem);
   }
+  for (const auto& [index, time] : list.steps) {
+    m_info.steps.push_back({index, time});
+  }
+  const auto complete = static_cast<int>(*count);
   m_info.incompleteSteps = static_cast<int>(std::count_if(
       names.indices.begin(), names.indices.end(), [&](int i) { return i >= complete; }));
   return Status::ok();
@@ -256,39 +217,36 @@ Result<Lattice> DemFileReader::readLattice() const {
   lattice.bonds.resize(m);
   lattice.strength.resize(m);
   struct Part {
-    const char* path;
-    ElementType type;
-    std::vector<std::uint64_t> dims;
+    DemDataset id;
     void* out;
   };
-  for (const Part& part :
-       {Part{"/particles/radius", ElementType::kFloat64, {n}, lattice.radius.data()},
-        Part{"/bonds/pairs", ElementType::kInt32, {m, 2}, lattice.bonds.data()},
-        Part{"/bonds/strength", ElementType::kFloat64, {m}, lattice.strength.data()}}) {
-    auto dataset = openChecked(part.path, part.type, part.dims);
-    if (!dataset) {
-      return dataset.status();
-    }
-    if (Status read = h5::readDataset(dataset->get(), part.type, part.out); !read) {
-      return fail(Status(read.code(), fmt::format("dataset {}: {}", part.path, read.message())));
-    }
+  for (const Part& part : {Part{DemDataset::kRadius, lattice.radius.data()},
+                           Part{DemDataset::kPairs, lattice.bonds.data()},
+                           Part{DemDataset::kStrength, lattice.strength.data()}}) {
+    CRACKVIS_RETURN_IF_ERROR(readWhole(part.id, 0, part.out));
   }
   if (Status valid = validateLattice(lattice); !valid) {
-    return fail(valid);
+    return fail(failedPrecondition(valid.message()));
   }
   return lattice;
 }
 
-Result<std::vector<std::int32_t>> DemFileReader::readBreakSteps() const {
-  const auto m = static_cast<std::uint64_t>(m_info.bondCount);
-  auto dataset = openChecked("/bonds/break_step", ElementType::kInt32, {m});
+Status DemFileReader::readWhole(DemDataset id, int step, void* out) const {
+  auto dataset = openChecked(id, step);
   if (!dataset) {
     return dataset.status();
   }
-  std::vector<std::int32_t> breakStep(m);
-  if (Status read = h5::readDataset(dataset->get(), ElementType::kInt32, breakStep.data()); !read) {
-    return fail(read);
+  const DatasetSpec& spec = datasetSpec(id);
+  if (Status read = h5::readDataset(dataset->get(), spec.type, out); !read) {
+    return fail(
+        Status(read.code(), fmt::format("dataset {}: {}", datasetPath(id, step), read.message())));
   }
+  return Status::ok();
+}
+
+Result<std::vector<std::int32_t>> DemFileReader::readBreakSteps() const {
+  std::vector<std::int32_t> breakStep(static_cast<std::uint64_t>(m_info.bondCount));
+  CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBreakStep, 0, breakStep.data()));
   for (size_t b = 0; b < breakStep.size(); ++b) {
     if (breakStep[b] < -1) {
       return fail(failedPrecondition(fmt::format(
@@ -298,74 +256,36 @@ Result<std::vector<std::int32_t>> DemFileReader::readBreakSteps() const {
   return breakStep;
 }
 
-Status DemFileReader::checkStepIndex(int step) const {
-  if (step < 0 || step >= stepCount()) {
-    return fail(invalidArgument(
-        fmt::format("step {} out of range (the file has steps 0..{})", step, stepCount() - 1)));
-  }
-  return Status::ok();
-}
-
 Result<StepState> DemFileReader::readStep(int step) const {
-  CRACKVIS_RETURN_IF_ERROR(checkStepIndex(step));
+  CRACKVIS_RETURN_IF_ERROR(checkStepInRange(m_path, step, stepCount()));
   const auto n = static_cast<std::uint64_t>(m_info.particleCount);
   const auto m = static_cast<std::uint64_t>(m_info.bondCount);
-  const std::string group = stepGroupPath(step);
   StepState state;
   state.time = m_info.steps[static_cast<size_t>(step)].time;
   state.positions.resize(n);
   state.bondState.resize(m);
-
-  auto readInto = [&](const std::string& name, ElementType type,
-                      const std::vector<std::uint64_t>& dims, void* out) -> Status {
-    auto dataset = openChecked(group + "/" + name, type, dims);
-    if (!dataset) {
-      return dataset.status();
-    }
-    if (Status read = h5::readDataset(dataset->get(), type, out); !read) {
-      return fail(
-          Status(read.code(), fmt::format("dataset {}/{}: {}", group, name, read.message())));
-    }
-    return Status::ok();
-  };
-  CRACKVIS_RETURN_IF_ERROR(
-      readInto("positions", ElementType::kFloat64, {n, 3}, state.positions.data()));
-  CRACKVIS_RETURN_IF_ERROR(
-      readInto("bond_state", ElementType::kUInt8, {m}, state.bondState.data()));
-  if (h5::linkExists(m_file.get(), group + "/velocities")) {
+  CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kPositions, step, state.positions.data()));
+  CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondState, step, state.bondState.data()));
+  if (h5::linkExists(m_file.get(), datasetPath(DemDataset::kVelocities, step))) {
     state.velocities.resize(n);
-    CRACKVIS_RETURN_IF_ERROR(
-        readInto("velocities", ElementType::kFloat32, {n, 3}, state.velocities.data()));
+    CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kVelocities, step, state.velocities.data()));
   }
-  if (h5::linkExists(m_file.get(), group + "/bond_force")) {
+  if (h5::linkExists(m_file.get(), datasetPath(DemDataset::kBondForce, step))) {
     state.bondForce.resize(m);
-    CRACKVIS_RETURN_IF_ERROR(
-        readInto("bond_force", ElementType::kFloat32, {m}, state.bondForce.data()));
+    CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondForce, step, state.bondForce.data()));
   }
   if (Status valid = validateStep(m_info.dimension, n, m, state); !valid) {
-    return fail(Status(valid.code(), fmt::format("step {}: {}", step, valid.message())));
+    return fail(failedPrecondition(fmt::format("step {}: {}", step, valid.message())));
   }
   return state;
 }
 
 Result<std::vector<std::uint8_t>> DemFileReader::readBondState(int step) const {
-  CRACKVIS_RETURN_IF_ERROR(checkStepIndex(step));
-  const auto m = static_cast<std::uint64_t>(m_info.bondCount);
-  const std::string path = stepGroupPath(step) + "/bond_state";
-  auto dataset = openChecked(path, ElementType::kUInt8, {m});
-  if (!dataset) {
-    return dataset.status();
-  }
-  std::vector<std::uint8_t> state(m);
-  if (Status read = h5::readDataset(dataset->get(), ElementType::kUInt8, state.data()); !read) {
-    return fail(Status(read.code(), fmt::format("dataset {}: {}", path, read.message())));
-  }
-  for (size_t b = 0; b < m; ++b) {
-    if (state[b] > 1) {
-      return fail(failedPrecondition(
-          fmt::format("step {}: state of bond {} is {}, expected 0 (intact) or 1 (broken)", step, b,
-                      state[b])));
-    }
+  CRACKVIS_RETURN_IF_ERROR(checkStepInRange(m_path, step, stepCount()));
+  std::vector<std::uint8_t> state(static_cast<std::uint64_t>(m_info.bondCount));
+  CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondState, step, state.data()));
+  if (Status valid = validateBondStates(state); !valid) {
+    return fail(failedPrecondition(fmt::format("step {}: {}", step, valid.message())));
   }
   return state;
 }
@@ -417,6 +337,10 @@ Result<DemFileWriter> DemFileWriter::create(const std::string& path, const Latti
                                             writer.m_breakStep.data()));
   Handle steps = h5::groupHandle(H5Gopen2(root, "/steps", H5P_DEFAULT));
   CRACKVIS_RETURN_IF_ERROR(h5::writeIntAttribute(steps.get(), "count", 0));
+  if (metadata.plannedSteps > 0) {
+    CRACKVIS_RETURN_IF_ERROR(
+        h5::writeIntAttribute(steps.get(), kPlannedStepsAttribute, metadata.plannedSteps));
+  }
   if (H5Fflush(root, H5F_SCOPE_GLOBAL) < 0) {
     return internalError(fmt::format("{}: flush failed ({})", path, h5::lastHdf5Error()));
   }
@@ -454,6 +378,31 @@ Status DemFileWriter::appendStep(const StepState& step) {
     return breaks;
   }
 
+  // The step's data first, flushed; only then the commit mark, flushed
+  // again. A write that fails (a full disk) leaves the file as the last
+  // commit mark describes it, and the writer closed.
+  Status written = writeStepData(step, breaksChanged);
+  if (written) {
+    written = flush();
+  }
+  if (written) {
+    Handle steps = h5::groupHandle(H5Gopen2(m_file.get(), "/steps", H5P_DEFAULT));
+    written = h5::writeIntAttribute(steps.get(), "count", m_stepCount + 1);
+  }
+  if (written) {
+    written = flush();
+  }
+  if (!written) {
+    m_breakStep = std::move(previous);
+    abandon();
+    return Status(written.code(), fmt::format("{}: step {} not written: {}", m_path, m_stepCount,
+                                              written.message()));
+  }
+  ++m_stepCount;
+  return Status::ok();
+}
+
+Status DemFileWriter::writeStepData(const StepState& step, bool breaksChanged) {
   const hid_t root = m_file.get();
   const std::string path = stepGroupPath(m_stepCount);
   const auto n = static_cast<std::uint64_t>(m_lattice.particleCount());
@@ -461,8 +410,7 @@ Status DemFileWriter::appendStep(const StepState& step) {
   Handle group =
       h5::groupHandle(H5Gcreate2(root, path.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
   if (!group.valid()) {
-    return internalError(
-        fmt::format("{}: cannot create group {} ({})", m_path, path, h5::lastHdf5Error()));
+    return internalError(fmt::format("cannot create group {} ({})", path, h5::lastHdf5Error()));
   }
   CRACKVIS_RETURN_IF_ERROR(h5::writeDoubleAttribute(group.get(), "time", step.time));
   CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(group.get(), "positions", ElementType::kFloat64, {n, 3},
@@ -481,15 +429,21 @@ Status DemFileWriter::appendStep(const StepState& step) {
     CRACKVIS_RETURN_IF_ERROR(
         h5::overwriteDataset(root, "/bonds/break_step", ElementType::kInt32, m_breakStep.data()));
   }
-  // The count is the commit mark: a reader ignores step groups past it, so a
-  // writer killed in the middle of a step leaves the earlier steps valid.
-  Handle steps = h5::groupHandle(H5Gopen2(root, "/steps", H5P_DEFAULT));
-  CRACKVIS_RETURN_IF_ERROR(h5::writeIntAttribute(steps.get(), "count", m_stepCount + 1));
-  if (H5Fflush(root, H5F_SCOPE_GLOBAL) < 0) {
-    return internalError(fmt::format("{}: flush failed ({})", m_path, h5::lastHdf5Error()));
-  }
-  ++m_stepCount;
   return Status::ok();
+}
+
+Status DemFileWriter::flush() {
+  if (H5Fflush(m_file.get(), H5F_SCOPE_GLOBAL) < 0) {
+    return internalError(fmt::format("flush failed ({})", h5::lastHdf5Error()));
+  }
+  return Status::ok();
+}
+
+void DemFileWriter::abandon() {
+  // What HDF5 still holds of the failed step cannot reach the disk either;
+  // the close reports that, and the file stays as its last flush left it.
+  m_file.release();
+  h5::lastHdf5Error();
 }
 
 Status DemFileWriter::close() {

@@ -1,3 +1,5 @@
+#include <algorithm>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -70,7 +72,20 @@ std::string lastHdf5Error() {
   std::string text;
   H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, keepInnermost, &text);
   H5Eclear2(H5E_DEFAULT);
-  return text.empty() ? "no detail from HDF5" : text;
+  if (text.empty()) {
+    return "no detail from HDF5";
+  }
+  // A failed system call comes with a paragraph of buffers and offsets
+  // (over two lines); the system's message is what a user can act on.
+  constexpr std::string_view kSystem = "error message = '";
+  if (const size_t at = text.find(kSystem); at != std::string::npos) {
+    const size_t end = text.find('\'', at + kSystem.size());
+    if (end != std::string::npos) {
+      return text.substr(at + kSystem.size(), end - at - kSystem.size());
+    }
+  }
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  return text;
 }
 
 const char* elementTypeName(ElementType type) {
@@ -105,22 +120,39 @@ hid_t nativeType(ElementType type) {
   return H5I_INVALID_HID;
 }
 
-ElementType classify(hid_t datatype) {
-  const size_t size = H5Tget_size(datatype);
+TypeClass typeClass(hid_t datatype) {
+  TypeClass type;
+  type.bytes = H5Tget_size(datatype);
   switch (H5Tget_class(datatype)) {
-    case H5T_INTEGER: {
-      const bool isSigned = H5Tget_sign(datatype) == H5T_SGN_2;
-      if (size == 4 && isSigned) {
-        return ElementType::kInt32;
-      }
-      if (size == 1 && !isSigned) {
-        return ElementType::kUInt8;
-      }
-      return ElementType::kOther;
-    }
+    case H5T_INTEGER:
+      type.kind = H5Tget_sign(datatype) == H5T_SGN_2 ? TypeClass::kSignedInteger
+                                                     : TypeClass::kUnsignedInteger;
+      break;
     case H5T_FLOAT:
-      return size == 8 ? ElementType::kFloat64
-                       : (size == 4 ? ElementType::kFloat32 : ElementType::kOther);
+      type.kind = TypeClass::kFloat;
+      break;
+    case H5T_STRING:
+      type.kind = TypeClass::kString;
+      break;
+    case H5T_COMPOUND:
+      type.kind = TypeClass::kCompound;
+      break;
+    default:
+      break;
+  }
+  return type;
+}
+
+ElementType classify(hid_t datatype) {
+  const TypeClass type = typeClass(datatype);
+  switch (type.kind) {
+    case TypeClass::kSignedInteger:
+      return type.bytes == 4 ? ElementType::kInt32 : ElementType::kOther;
+    case TypeClass::kUnsignedInteger:
+      return type.bytes == 1 ? ElementType::kUInt8 : ElementType::kOther;
+    case TypeClass::kFloat:
+      return type.bytes == 8 ? ElementType::kFloat64
+                             : (type.bytes == 4 ? ElementType::kFloat32 : ElementType::kOther);
     default:
       return ElementType::kOther;
   }
@@ -128,23 +160,27 @@ ElementType classify(hid_t datatype) {
 
 namespace {
 std::string typeName(hid_t datatype) {
-  const ElementType type = classify(datatype);
-  if (type != ElementType::kOther) {
-    return elementTypeName(type);
+  const ElementType element = classify(datatype);
+  if (element != ElementType::kOther) {
+    return elementTypeName(element);
   }
-  const size_t bits = H5Tget_size(datatype) * 8;
-  switch (H5Tget_class(datatype)) {
-    case H5T_INTEGER:
-      return fmt::format("{}int{}", H5Tget_sign(datatype) == H5T_SGN_2 ? "" : "u", bits);
-    case H5T_FLOAT:
+  const TypeClass type = typeClass(datatype);
+  const size_t bits = type.bytes * 8;
+  switch (type.kind) {
+    case TypeClass::kSignedInteger:
+      return fmt::format("int{}", bits);
+    case TypeClass::kUnsignedInteger:
+      return fmt::format("uint{}", bits);
+    case TypeClass::kFloat:
       return fmt::format("float{}", bits);
-    case H5T_STRING:
+    case TypeClass::kString:
       return "string";
-    case H5T_COMPOUND:
+    case TypeClass::kCompound:
       return "compound";
-    default:
-      return "unsupported type";
+    case TypeClass::kOther:
+      break;
   }
+  return "unsupported type";
 }
 }  // namespace
 
@@ -177,27 +213,93 @@ std::string formatDims(const std::vector<std::uint64_t>& dims) {
   return fmt::format("[{}]", fmt::join(dims, ","));
 }
 
-bool linkExists(hid_t location, const std::string& path) {
-  // H5Lexists fails on a missing intermediate group, so walk the path.
-  std::string prefix;
-  size_t start = path.front() == '/' ? 1 : 0;
-  if (start == 1) {
-    prefix = "/";
-  }
+namespace {
+
+// The parts of a path inside a file; "." and empty parts name the group
+// they are in.
+std::vector<std::string> pathParts(const std::string& path) {
+  std::vector<std::string> parts;
+  size_t start = 0;
   while (start <= path.size()) {
-    const size_t end = path.find('/', start);
-    prefix += path.substr(start, end == std::string::npos ? std::string::npos : end - start);
-    if (H5Lexists(location, prefix.c_str(), H5P_DEFAULT) <= 0) {
-      H5Eclear2(H5E_DEFAULT);
-      return false;
-    }
+    size_t end = path.find('/', start);
     if (end == std::string::npos) {
-      return true;
+      end = path.size();
     }
-    prefix += '/';
+    std::string part = path.substr(start, end - start);
+    if (!part.empty() && part != ".") {
+      parts.push_back(std::move(part));
+    }
     start = end + 1;
   }
-  return true;
+  return parts;
+}
+
+// Resolves `path` (absolute, or relative to the hard-link path `base`) to a
+// path of hard links only; `hops` counts the soft links followed so far.
+Result<std::string> resolveFrom(hid_t file, const std::string& base, const std::string& path,
+                                int& hops) {
+  std::string resolved = !path.empty() && path.front() == '/' ? "" : base;
+  for (const std::string& part : pathParts(path)) {
+    const std::string link = resolved + "/" + part;
+    if (H5Lexists(file, link.c_str(), H5P_DEFAULT) <= 0) {
+      H5Eclear2(H5E_DEFAULT);
+      return notFound(fmt::format("{} does not exist", link));
+    }
+    H5L_info_t info{};
+    if (H5Lget_info(file, link.c_str(), &info, H5P_DEFAULT) < 0) {
+      return failedPrecondition(fmt::format("cannot inspect {} ({})", link, lastHdf5Error()));
+    }
+    if (info.type == H5L_TYPE_HARD) {
+      resolved = link;
+      continue;
+    }
+    if (info.type != H5L_TYPE_SOFT) {
+      return Status(StatusCode::kPermissionDenied,
+                    fmt::format("{} is {} link", link,
+                                info.type == H5L_TYPE_EXTERNAL ? "an external" : "a user-defined"));
+    }
+    if (++hops > kMaxLinkHops) {
+      return failedPrecondition(
+          fmt::format("{}: more than {} soft links in a row (a loop?)", link, kMaxLinkHops));
+    }
+    std::string target(info.u.val_size, '\0');
+    if (H5Lget_val(file, link.c_str(), target.data(), target.size(), H5P_DEFAULT) < 0) {
+      return failedPrecondition(
+          fmt::format("cannot read soft link {} ({})", link, lastHdf5Error()));
+    }
+    target.resize(target.find('\0') == std::string::npos ? target.size() : target.find('\0'));
+    auto followed = resolveFrom(file, resolved, target, hops);
+    if (!followed) {
+      return Status(followed.status().code(), fmt::format("{} is a soft link to {}: {}", link,
+                                                          target, followed.status().message()));
+    }
+    resolved = std::move(*followed);
+  }
+  return resolved.empty() ? std::string("/") : resolved;
+}
+
+herr_t refuseExternalLink(const char*, const char*, const char*, const char*, unsigned*, hid_t,
+                          void*) {
+  return -1;
+}
+
+}  // namespace
+
+Result<std::string> resolveInFile(hid_t file, const std::string& path) {
+  int hops = 0;
+  return resolveFrom(file, "", path, hops);
+}
+
+bool linkExists(hid_t file, const std::string& path) {
+  return resolveInFile(file, path).isOk();
+}
+
+Handle noExternalLinks() {
+  Handle access = propertyListHandle(H5Pcreate(H5P_DATASET_ACCESS));
+  if (access.valid()) {
+    H5Pset_elink_cb(access.get(), refuseExternalLink, nullptr);
+  }
+  return access;
 }
 
 Result<std::string> readStringAttribute(hid_t object, const std::string& name) {
@@ -276,6 +378,15 @@ Status writeDoubleAttribute(hid_t object, const std::string& name, double value)
 }
 
 namespace {
+// A small write waits in the dataset's sieve buffer and reaches the file
+// when the dataset is closed: the close is where a full disk shows.
+Status closeWritten(Handle& dataset, const std::string& name) {
+  if (dataset.reset() < 0) {
+    return internalError(fmt::format("cannot write dataset {} ({})", name, lastHdf5Error()));
+  }
+  return Status::ok();
+}
+
 hid_t fileType(ElementType type) {
   // Files are little-endian whatever the writer, so the data service can
   // stream raw bytes in the documented layout.
@@ -313,7 +424,7 @@ Status writeDataset(hid_t location, const std::string& name, ElementType type,
       H5Dwrite(dataset.get(), nativeType(type), H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
     return internalError(fmt::format("cannot write dataset {} ({})", name, lastHdf5Error()));
   }
-  return Status::ok();
+  return closeWritten(dataset, name);
 }
 
 Status overwriteDataset(hid_t location, const std::string& name, ElementType type,
@@ -323,7 +434,7 @@ Status overwriteDataset(hid_t location, const std::string& name, ElementType typ
       H5Dwrite(dataset.get(), nativeType(type), H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
     return internalError(fmt::format("cannot write dataset {} ({})", name, lastHdf5Error()));
   }
-  return Status::ok();
+  return closeWritten(dataset, name);
 }
 
 Status readDataset(hid_t dataset, ElementType type, void* out) {

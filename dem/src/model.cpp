@@ -74,7 +74,7 @@ std::size_t StepState::brokenBondCount() const {
                                              static_cast<std::uint8_t>(BondState::kBroken)));
 }
 
-Status validateLattice(const Lattice& lattice) {
+Status validateTopology(const Lattice& lattice) {
   if (lattice.dimension != 2 && lattice.dimension != 3) {
     return invalidArgument(fmt::format("dimension is {}, expected 2 or 3", lattice.dimension));
   }
@@ -83,7 +83,17 @@ Status validateLattice(const Lattice& lattice) {
       return invalidArgument(fmt::format(
           "radius of particle {} is {}, expected a positive finite value", i, lattice.radius[i]));
     }
+    if (lattice.radius[i] > kMaxCoordinate) {
+      return invalidArgument(fmt::format("radius of particle {} is {}, beyond {:g} m", i,
+                                         lattice.radius[i], kMaxCoordinate));
+    }
   }
+  CRACKVIS_RETURN_IF_ERROR(checkBondEnds(lattice));
+  return checkDuplicateBonds(lattice);
+}
+
+Status validateLattice(const Lattice& lattice) {
+  CRACKVIS_RETURN_IF_ERROR(validateTopology(lattice));
   if (lattice.strength.size() != lattice.bondCount()) {
     return invalidArgument(fmt::format("{} bond strengths for {} bonds", lattice.strength.size(),
                                        lattice.bondCount()));
@@ -94,8 +104,7 @@ Status validateLattice(const Lattice& lattice) {
           fmt::format("strength of bond {} is {}, expected >= 0", b, lattice.strength[b]));
     }
   }
-  CRACKVIS_RETURN_IF_ERROR(checkBondEnds(lattice));
-  return checkDuplicateBonds(lattice);
+  return Status::ok();
 }
 
 Status validateStep(const Lattice& lattice, const StepState& step) {
@@ -128,15 +137,24 @@ Status validateStep(int dimension, std::size_t n, std::size_t m, const StepState
       return invalidArgument(
           fmt::format("position of particle {} is not finite {}", i, describe(p)));
     }
+    if (std::abs(p.x) > kMaxCoordinate || std::abs(p.y) > kMaxCoordinate ||
+        std::abs(p.z) > kMaxCoordinate) {
+      return invalidArgument(fmt::format("position of particle {} is {}, beyond {:g} m", i,
+                                         describe(p), kMaxCoordinate));
+    }
     if (dimension == 2 && p.z != 0.0) {
       return invalidArgument(
           fmt::format("2D data set but particle {} has z = {} (expected 0)", i, p.z));
     }
   }
-  for (std::size_t b = 0; b < m; ++b) {
-    if (step.bondState[b] > static_cast<std::uint8_t>(BondState::kBroken)) {
+  return validateBondStates(step.bondState);
+}
+
+Status validateBondStates(std::span<const std::uint8_t> bondState) {
+  for (std::size_t b = 0; b < bondState.size(); ++b) {
+    if (bondState[b] > static_cast<std::uint8_t>(BondState::kBroken)) {
       return invalidArgument(fmt::format(
-          "state of bond {} is {}, expected 0 (intact) or 1 (broken)", b, step.bondState[b]));
+          "state of bond {} is {}, expected 0 (intact) or 1 (broken)", b, bondState[b]));
     }
   }
   return Status::ok();

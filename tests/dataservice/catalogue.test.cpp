@@ -1,5 +1,7 @@
 // The catalogue without gRPC: how a Read is split into pieces, and that
 // pieces put back together are the slab.
+#include <chrono>
+
 #include <catch2/catch.hpp>
 
 #include "service_fixture.hpp"
@@ -73,6 +75,77 @@ TEST_CASE("The catalogue describes a 2D file and refuses what it must", "[datase
   auto fetch = catalogue.openFetch(catalogue.root().resolveFile("run.h5").value(), 1 << 30);
   REQUIRE(fetch.isOk());
   CHECK((*fetch)->size() == std::filesystem::file_size(sampleRoot().file("run.h5")));
+}
+
+// A chain of `levels` nested groups /g/g/g/..., with a dataset at the bottom.
+void writeNestedGroups(const std::string& path, int levels) {
+  std::lock_guard lock(hdf5Mutex());
+  namespace h5 = dem::h5;
+  h5::Handle file =
+      h5::fileHandle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  REQUIRE(file.valid());
+  std::vector<h5::Handle> groups;
+  hid_t parent = file.get();
+  for (int level = 0; level < levels; ++level) {
+    groups.push_back(
+        h5::groupHandle(H5Gcreate2(parent, "g", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT)));
+    REQUIRE(groups.back().valid());
+    parent = groups.back().get();
+  }
+  const double value = 1.0;
+  REQUIRE(h5::writeDataset(parent, "bottom", h5::ElementType::kFloat64, {1}, &value).isOk());
+}
+
+TEST_CASE("Describe is bounded in depth, objects and time, and stops when cancelled",
+          "[dataservice]") {
+  TempDir root;
+  writeNestedGroups(root.file("deep.h5"), 1000);
+  writeNestedGroups(root.file("shallow.h5"), 60);
+  Catalogue catalogue(DataRoot::open(root.path().string()).value());
+  const auto deep = catalogue.root().resolveFile("deep.h5").value();
+
+  SECTION("a 1,000-level chain stops at the depth limit, at once") {
+    const auto start = std::chrono::steady_clock::now();
+    auto description = catalogue.describe(deep);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    REQUIRE_FALSE(description.isOk());
+    INFO(description.status().message());
+    CHECK(description.status().code() == StatusCode::kResourceExhausted);
+    CHECK_THAT(description.status().message(),
+               Catch::StartsWith("deep.h5: /g/g/g") &&
+                   Catch::Contains("deeper than 64 levels, Describe's limit"));
+    CHECK(description.status().message().size() < 200);  // the path is not echoed whole
+    CHECK(seconds < 1.0);
+  }
+  SECTION("a chain within the limit is described whole") {
+    auto description = catalogue.describe(catalogue.root().resolveFile("shallow.h5").value());
+    REQUIRE(description.isOk());
+    CHECK(description->groups.size() == 61);  // the root and 60 levels
+    CHECK(description->datasets.size() == 1);
+  }
+  SECTION("the object and time limits") {
+    DescribeOptions options;
+    options.limits.maxObjects = 10;
+    auto objects = catalogue.describe(deep, options);
+    CHECK(objects.status().code() == StatusCode::kResourceExhausted);
+    CHECK_THAT(objects.status().message(), Catch::Contains("more than 10 objects"));
+    options = {};
+    options.limits.maxDepth = 2000;
+    options.limits.maxTime = std::chrono::milliseconds(50);
+    auto timed = catalogue.describe(deep, options);
+    CHECK(timed.status().code() == StatusCode::kResourceExhausted);
+    CHECK_THAT(timed.status().message(), Catch::Contains("longer than 0.05 s"));
+  }
+  SECTION("a cancelled caller stops the walk") {
+    DescribeOptions options;
+    int asked = 0;
+    options.cancelled = [&] { return ++asked > 3; };
+    auto cancelled = catalogue.describe(deep, options);
+    CHECK(cancelled.status().code() == StatusCode::kUnavailable);
+    CHECK_THAT(cancelled.status().message(), Catch::Contains("cancelled"));
+    CHECK(asked == 4);
+  }
 }
 
 }  // namespace

@@ -185,13 +185,16 @@ TEST_CASE("a writer killed without closing leaves its completed steps readable",
         path + ": step 3 out of range (the file has steps 0..2)");
 }
 
-TEST_CASE("reading a step out of range is an invalid argument", "[dem][h5]") {
+TEST_CASE("reading a step out of range is OUT_OF_RANGE with the one step message", "[dem][h5]") {
   TempDir dir;
   const std::string path = dir.file("range.h5");
   testing::writeSampleFile(path, 2, 2);
   auto reader = DemFileReader::open(path);
   REQUIRE(reader.isOk());
-  CHECK(reader->readStep(-1).status().code() == StatusCode::kInvalidArgument);
+  CHECK(reader->readStep(-1).status().code() == StatusCode::kOutOfRange);
+  CHECK(reader->readStep(-1).status().message() ==
+        path + ": step -1 out of range (the file has steps 0..1)");
+  CHECK(reader->readBondState(2).status().code() == StatusCode::kOutOfRange);
   CHECK(reader->readBondState(2).status().message() ==
         path + ": step 2 out of range (the file has steps 0..1)");
 }

@@ -137,3 +137,23 @@ void deleteAttribute(const std::string& file, const std::string& object, const s
   }
 }
 }  // namespace crackvis::testing
+
+namespace crackvis::testing {
+
+void addSoftLink(const std::string& file, const std::string& link, const std::string& target) {
+  auto handle = openForWrite(file);
+  if (H5Lcreate_soft(target.c_str(), handle.get(), link.c_str(), H5P_DEFAULT, H5P_DEFAULT) < 0) {
+    throw std::runtime_error("tamper: cannot create soft link " + link);
+  }
+}
+
+void addExternalLink(const std::string& file, const std::string& link,
+                     const std::string& targetFile, const std::string& targetObject) {
+  auto handle = openForWrite(file);
+  if (H5Lcreate_external(targetFile.c_str(), targetObject.c_str(), handle.get(), link.c_str(),
+                         H5P_DEFAULT, H5P_DEFAULT) < 0) {
+    throw std::runtime_error("tamper: cannot create external link " + link);
+  }
+}
+
+}  // namespace crackvis::testing

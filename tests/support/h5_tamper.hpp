@@ -33,3 +33,11 @@ void truncateFile(const std::string& file, double fraction);
 namespace crackvis::testing {
 void deleteAttribute(const std::string& file, const std::string& object, const std::string& name);
 }  // namespace crackvis::testing
+
+namespace crackvis::testing {
+// Links that lead elsewhere: a soft link to `target` (a path in the same
+// file), and an external link to `targetObject` in `targetFile`.
+void addSoftLink(const std::string& file, const std::string& link, const std::string& target);
+void addExternalLink(const std::string& file, const std::string& link,
+                     const std::string& targetFile, const std::string& targetObject);
+}  // namespace crackvis::testing

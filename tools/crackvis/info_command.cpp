@@ -110,6 +110,8 @@ nlohmann::json toJson(const FileSummary& summary, bool perStep) {
       {"mean_coordination", summary.meanCoordination},
       {"steps", info.steps.size()},
       {"incomplete_steps", info.incompleteSteps},
+      {"planned_steps", info.plannedSteps > 0 ? nlohmann::json(info.plannedSteps) : nullptr},
+      {"stopped_early", info.stoppedEarly()},
   };
   if (summary.rows.empty()) {
     out["time"] = nullptr;
@@ -148,6 +150,10 @@ void printText(const FileSummary& summary, bool perStep) {
     const StepRow& last = summary.rows.back();
     fmt::print("broken bonds  first step: {} ({:.2f} %), last step: {} ({:.2f} %)\n", first.broken,
                percent(first.broken, m), last.broken, percent(last.broken, m));
+  }
+  if (info.stoppedEarly()) {
+    fmt::print("stopped early the run wrote {} of {} planned steps\n", info.steps.size(),
+               info.plannedSteps);
   }
   if (info.incompleteSteps > 0) {
     fmt::print("incomplete    {} step group(s) left unfinished by an interrupted writer\n",

@@ -5,6 +5,7 @@
 #include <optional>
 
 #include <fmt/format.h>
+#include <hdf5.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
@@ -61,6 +62,12 @@ Result<sim::PresetOptions> presetOptions(const SimOptions& options, bool setGive
 }
 
 int runSim(const SimOptions& options, bool setGiven) {
+  // libhdf5 closes what is still open at exit, and crashes on a file whose
+  // metadata it cannot write (a full disk: SIGSEGV in H5F__close_cb). The
+  // writer closes its file itself, or leaves a failed one as its last flush
+  // made it, so the library's exit handler has nothing to do; it must be
+  // turned off before the first HDF5 call.
+  H5dont_atexit();
   auto presetOpts = presetOptions(options, setGiven);
   if (!presetOpts) {
     printError("sim", presetOpts.status().message());

@@ -6,59 +6,27 @@
 
 #include <crackvis/dataservice/remote_dem_file.hpp>
 #include <crackvis/dem/dem_file.hpp>
+#include <crackvis/dem/layout.hpp>
 
 namespace crackvis::dataservice {
 namespace {
 
-const AttributeInfo* findAttribute(const GroupInfo& group, std::string_view name) {
-  for (const AttributeInfo& attribute : group.attributes) {
-    if (attribute.name == name) {
-      return &attribute;
-    }
+// An optional dataset: absent is fine (false), present must be as the
+// layout says.
+Result<bool> optionalDataset(const FileDescription& description, dem::DemDataset id, int step,
+                             const dem::LayoutSizes& sizes) {
+  if (description.findDataset(dem::datasetPath(id, step)) == nullptr) {
+    return false;
   }
-  return nullptr;
-}
-
-Status expectDataset(const FileDescription& description, const std::string& path, DataType dtype,
-                     const std::vector<std::uint64_t>& shape) {
-  const DatasetInfo* dataset = description.findDataset(path);
-  if (dataset == nullptr) {
-    return notFound(fmt::format("{}: missing dataset {}", description.file, path));
-  }
-  if (dataset->dtype != dtype) {
-    return failedPrecondition(fmt::format("{}: dataset {} has dtype {}, expected {}",
-                                          description.file, path, dataset->dtypeName,
-                                          dataTypeName(dtype)));
-  }
-  if (dataset->shape != shape) {
-    return failedPrecondition(fmt::format("{}: dataset {} has shape [{}], expected [{}]",
-                                          description.file, path, fmt::join(dataset->shape, ","),
-                                          fmt::join(shape, ",")));
-  }
-  return Status::ok();
+  CRACKVIS_RETURN_IF_ERROR(checkDemDataset(description, id, step, sizes));
+  return true;
 }
 
 std::string positionsPath(int step) {
-  return dem::stepGroupPath(step) + "/positions";
+  return dem::datasetPath(dem::DemDataset::kPositions, step);
 }
 std::string bondStatePath(int step) {
-  return dem::stepGroupPath(step) + "/bond_state";
-}
-std::string velocitiesPath(int step) {
-  return dem::stepGroupPath(step) + "/velocities";
-}
-std::string bondForcePath(int step) {
-  return dem::stepGroupPath(step) + "/bond_force";
-}
-
-// An optional dataset: absent is fine (false), present must be as specified.
-Result<bool> optionalDataset(const FileDescription& description, const std::string& path,
-                             DataType dtype, const std::vector<std::uint64_t>& shape) {
-  if (description.findDataset(path) == nullptr) {
-    return false;
-  }
-  CRACKVIS_RETURN_IF_ERROR(expectDataset(description, path, dtype, shape));
-  return true;
+  return dem::datasetPath(dem::DemDataset::kBondState, step);
 }
 
 // Every bond must join two existing particles; `first` is the index of
@@ -97,56 +65,40 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   if (!description) {
     return description.status();
   }
-  if (description->format != dem::kFormatName) {
-    return failedPrecondition(
-        fmt::format("{}: not a crackvis-dem file (format '{}')", file, description->format));
-  }
-  if (description->formatVersion != dem::kFormatVersion) {
-    return failedPrecondition(
-        fmt::format("{}: unsupported crackvis-dem version {}", file, description->formatVersion));
+  auto failed = [&](const Status& status) {
+    return status.isOk() ? status
+                         : Status(status.code(), fmt::format("{}: {}", file, status.message()));
+  };
+  auto dimension = dem::checkRootAttributes(demRootAttributes(*description));
+  if (!dimension) {
+    return failed(dimension.status());
   }
   RemoteDemFile remote;
   remote.m_client = client;
   remote.m_file = file;
-  const GroupInfo* root = description->findGroup("/");
-  const AttributeInfo* dimension = root != nullptr ? findAttribute(*root, "dimension") : nullptr;
-  const auto* values =
-      dimension != nullptr ? std::get_if<std::vector<std::int64_t>>(&dimension->value) : nullptr;
-  if (values == nullptr || values->size() != 1 || (values->front() != 2 && values->front() != 3)) {
-    return failedPrecondition(
-        fmt::format("{}: root attribute 'dimension' missing or not 2/3", file));
-  }
-  remote.m_dimension = static_cast<int>(values->front());
-  const DatasetInfo* radius = description->findDataset("/particles/radius");
-  const DatasetInfo* pairs = description->findDataset("/bonds/pairs");
-  if (radius == nullptr || radius->shape.size() != 1 || pairs == nullptr ||
-      pairs->shape.size() != 2) {
-    return failedPrecondition(
-        fmt::format("{}: missing or malformed /particles/radius or /bonds/pairs", file));
-  }
-  remote.m_particles = static_cast<std::int64_t>(radius->shape[0]);
-  remote.m_bonds = static_cast<std::int64_t>(pairs->shape[0]);
-  const auto n = static_cast<std::uint64_t>(remote.m_particles);
-  const auto m = static_cast<std::uint64_t>(remote.m_bonds);
+  remote.m_dimension = *dimension;
+  // N and M from the datasets that carry them, as the local reader does.
+  dem::LayoutSizes sizes;
   CRACKVIS_RETURN_IF_ERROR(
-      expectDataset(*description, "/particles/radius", DataType::kFloat64, {n}));
-  CRACKVIS_RETURN_IF_ERROR(expectDataset(*description, "/bonds/pairs", DataType::kInt32, {m, 2}));
+      failed(checkDemDataset(*description, dem::DemDataset::kRadius, 0, sizes)));
+  sizes.particles =
+      static_cast<std::int64_t>(description->findDataset("/particles/radius")->shape[0]);
+  CRACKVIS_RETURN_IF_ERROR(
+      failed(checkDemDataset(*description, dem::DemDataset::kPairs, 0, sizes)));
+  sizes.bonds = static_cast<std::int64_t>(description->findDataset("/bonds/pairs")->shape[0]);
   for (const StepEntry& step : description->steps) {
-    CRACKVIS_RETURN_IF_ERROR(
-        expectDataset(*description, positionsPath(step.index), DataType::kFloat64, {n, 3}));
-    CRACKVIS_RETURN_IF_ERROR(
-        expectDataset(*description, bondStatePath(step.index), DataType::kUInt8, {m}));
+    for (dem::DemDataset id : {dem::DemDataset::kPositions, dem::DemDataset::kBondState}) {
+      CRACKVIS_RETURN_IF_ERROR(failed(checkDemDataset(*description, id, step.index, sizes)));
+    }
   }
+  remote.m_particles = sizes.particles;
+  remote.m_bonds = sizes.bonds;
   remote.m_description = std::make_shared<const FileDescription>(std::move(*description));
   return remote;
 }
 
 Status RemoteDemFile::checkStep(int step) const {
-  if (step < 0 || step >= stepCount()) {
-    return invalidArgument(
-        fmt::format("{}: step {} out of range (the file has {} steps)", m_file, step, stepCount()));
-  }
-  return Status::ok();
+  return dem::checkStepInRange(m_file, step, stepCount());
 }
 
 Result<std::vector<dem::Bond>> RemoteDemFile::toBonds(const TypedArray& array) const {
@@ -205,8 +157,7 @@ Result<std::shared_ptr<const std::vector<dem::Bond>>> RemoteDemFile::bonds() {
 }
 
 Result<std::vector<std::int32_t>> RemoteDemFile::breakSteps() const {
-  auto present = optionalDataset(*m_description, "/bonds/break_step", DataType::kInt32,
-                                 {static_cast<std::uint64_t>(m_bonds)});
+  auto present = optionalDataset(*m_description, dem::DemDataset::kBreakStep, 0, sizes());
   if (!present) {
     return present.status();
   }
@@ -236,15 +187,14 @@ Result<RemoteStep> RemoteDemFile::readStep(int step, StepExtras extras) {
   // pays nothing for them.
   Result<bool> withVelocities = false;
   if (extras.velocities) {
-    withVelocities =
-        optionalDataset(*m_description, velocitiesPath(step), DataType::kFloat32, {n, 3});
+    withVelocities = optionalDataset(*m_description, dem::DemDataset::kVelocities, step, sizes());
     if (!withVelocities) {
       return withVelocities.status();
     }
   }
   Result<bool> withForce = false;
   if (extras.bondForce) {
-    withForce = optionalDataset(*m_description, bondForcePath(step), DataType::kFloat32, {m});
+    withForce = optionalDataset(*m_description, dem::DemDataset::kBondForce, step, sizes());
     if (!withForce) {
       return withForce.status();
     }
@@ -259,10 +209,10 @@ Result<RemoteStep> RemoteDemFile::readStep(int step, StepExtras extras) {
   const bool readVelocities = *withVelocities;
   const bool readForce = *withForce;
   if (readVelocities) {
-    slabs.push_back(Hyperslab::whole(velocitiesPath(step)));
+    slabs.push_back(Hyperslab::whole(dem::datasetPath(dem::DemDataset::kVelocities, step)));
   }
   if (readForce) {
-    slabs.push_back(Hyperslab::whole(bondForcePath(step)));
+    slabs.push_back(Hyperslab::whole(dem::datasetPath(dem::DemDataset::kBondForce, step)));
   }
   // The request goes out first: the arrays below are allocated (3.5 MB for
   // cuboid A, page faults and zeroing included) while the server opens the

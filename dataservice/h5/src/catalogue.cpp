@@ -32,27 +32,30 @@ Status resourceExhausted(std::string message) {
 
 // The element type of a stored datatype, as the service names it.
 DataType classifyType(hid_t type) {
-  const size_t size = H5Tget_size(type);
-  switch (H5Tget_class(type)) {
-    case H5T_INTEGER: {
-      const bool isSigned = H5Tget_sign(type) == H5T_SGN_2;
-      switch (size) {
-        case 1:
-          return isSigned ? DataType::kInt8 : DataType::kUInt8;
-        case 2:
-          return isSigned ? DataType::kInt16 : DataType::kUInt16;
-        case 4:
-          return isSigned ? DataType::kInt32 : DataType::kUInt32;
-        case 8:
-          return isSigned ? DataType::kInt64 : DataType::kUInt64;
-        default:
-          return DataType::kUnspecified;
-      }
+  const h5::TypeClass stored = h5::typeClass(type);
+  const auto sized = [&](DataType one, DataType two, DataType four, DataType eight) {
+    switch (stored.bytes) {
+      case 1:
+        return one;
+      case 2:
+        return two;
+      case 4:
+        return four;
+      case 8:
+        return eight;
+      default:
+        return DataType::kUnspecified;
     }
-    case H5T_FLOAT:
-      return size == 8 ? DataType::kFloat64
-                       : (size == 4 ? DataType::kFloat32 : DataType::kUnspecified);
-    case H5T_STRING:
+  };
+  switch (stored.kind) {
+    case h5::TypeClass::kSignedInteger:
+      return sized(DataType::kInt8, DataType::kInt16, DataType::kInt32, DataType::kInt64);
+    case h5::TypeClass::kUnsignedInteger:
+      return sized(DataType::kUInt8, DataType::kUInt16, DataType::kUInt32, DataType::kUInt64);
+    case h5::TypeClass::kFloat:
+      return sized(DataType::kUnspecified, DataType::kUnspecified, DataType::kFloat32,
+                   DataType::kFloat64);
+    case h5::TypeClass::kString:
       return DataType::kString;
     default:
       return DataType::kUnspecified;
@@ -202,10 +205,44 @@ Result<std::vector<AttributeInfo>> readAttributes(hid_t object, const std::strin
 struct TreeWalk {
   FileDescription* description = nullptr;
   Status status;
+  const DescribeOptions* options = nullptr;
+  std::chrono::steady_clock::time_point deadline;
+  std::size_t objects = 0;
 };
+
+// A path for a message: a hostile one may be thousands of levels long.
+std::string shortPath(const std::string& path) {
+  constexpr std::size_t kShown = 80;
+  return path.size() <= kShown ? path : path.substr(0, kShown) + "...";
+}
+
+// Whether the walk may go on: a chain of 1,000 nested groups took 9 s under
+// the HDF5 lock (every lookup walks the whole path), so depth, objects and
+// time are bounded, and a caller that went away stops it.
+bool withinBounds(TreeWalk& walk, const std::string& path) {
+  const DescribeLimits& limits = walk.options->limits;
+  const auto depth = static_cast<int>(std::count(path.begin(), path.end(), '/'));
+  if (depth > limits.maxDepth) {
+    walk.status = resourceExhausted(fmt::format("{} lies deeper than {} levels, Describe's limit",
+                                                shortPath(path), limits.maxDepth));
+  } else if (++walk.objects > limits.maxObjects) {
+    walk.status =
+        resourceExhausted(fmt::format("more than {} objects, Describe's limit", limits.maxObjects));
+  } else if (std::chrono::steady_clock::now() > walk.deadline) {
+    walk.status =
+        resourceExhausted(fmt::format("the tree took longer than {} s to walk, Describe's limit",
+                                      std::chrono::duration<double>(limits.maxTime).count()));
+  } else if (walk.options->cancelled && walk.options->cancelled()) {
+    walk.status = Status(StatusCode::kUnavailable, "Describe cancelled by the caller");
+  }
+  return walk.status.isOk();
+}
 
 herr_t visitLink(hid_t root, const char* name, const H5L_info_t* link, void* data) {
   auto* walk = static_cast<TreeWalk*>(data);
+  if (!withinBounds(*walk, std::string("/") + name)) {
+    return 1;  // stop
+  }
   // Soft links name objects that are listed under their hard link; external
   // and user-defined links lead out of the file, which the service never
   // follows.
@@ -260,26 +297,6 @@ herr_t visitLink(hid_t root, const char* name, const H5L_info_t* link, void* dat
   return 0;
 }
 
-const AttributeInfo* findAttribute(const std::vector<AttributeInfo>& attributes,
-                                   std::string_view name) {
-  for (const AttributeInfo& attribute : attributes) {
-    if (attribute.name == name) {
-      return &attribute;
-    }
-  }
-  return nullptr;
-}
-
-std::optional<std::int64_t> integerValue(const AttributeInfo* attribute) {
-  if (attribute != nullptr) {
-    if (const auto* values = std::get_if<std::vector<std::int64_t>>(&attribute->value);
-        values != nullptr && values->size() == 1) {
-      return values->front();
-    }
-  }
-  return std::nullopt;
-}
-
 // The format, version and complete steps of a crackvis-dem file, taken from
 // the attributes already collected.
 void fillDemSummary(FileDescription& description) {
@@ -287,13 +304,11 @@ void fillDemSummary(FileDescription& description) {
   if (root == nullptr) {
     return;
   }
-  if (const AttributeInfo* format = findAttribute(root->attributes, "format"); format != nullptr) {
-    if (const auto* text = std::get_if<std::string>(&format->value)) {
-      description.format = *text;
-    }
+  const dem::RootAttributes attributes = demRootAttributes(description);
+  if (attributes.format) {
+    description.format = *attributes.format;
   }
-  description.formatVersion =
-      static_cast<int>(integerValue(findAttribute(root->attributes, "version")).value_or(0));
+  description.formatVersion = static_cast<int>(attributes.version.isOk() ? *attributes.version : 0);
   if (description.format != dem::kFormatName) {
     return;
   }
@@ -301,78 +316,72 @@ void fillDemSummary(FileDescription& description) {
   if (steps == nullptr) {
     return;
   }
-  const std::int64_t count = integerValue(findAttribute(steps->attributes, "count")).value_or(0);
-  for (std::int64_t k = 0; k < count; ++k) {
-    const std::string path = dem::stepGroupPath(static_cast<int>(k));
-    const GroupInfo* group = description.findGroup(path);
+  const std::int64_t count = steps->integerAttribute("count").value_or(0);
+  // A damaged file: the steps before the first problem are reported.
+  const dem::StepList list = dem::listSteps(count, [&](int k) -> std::optional<Result<double>> {
+    const GroupInfo* group = description.findGroup(dem::stepGroupPath(k));
     if (group == nullptr) {
-      break;  // a damaged file: report the steps that are there
+      return std::nullopt;
     }
-    StepEntry step{static_cast<int>(k), 0.0, path};
-    if (const AttributeInfo* time = findAttribute(group->attributes, "time"); time != nullptr) {
-      if (const auto* values = std::get_if<std::vector<double>>(&time->value);
-          values != nullptr && values->size() == 1) {
-        step.time = values->front();
-      }
+    if (auto time = group->floatAttribute("time")) {
+      return Result<double>(*time);
     }
-    description.steps.push_back(std::move(step));
+    return Result<double>(failedPrecondition("missing attribute 'time'"));
+  });
+  for (const auto& [index, time] : list.steps) {
+    description.steps.push_back({index, time, dem::stepGroupPath(index)});
   }
 }
 
 // ----------------------------------------------------------------- Read --
 
 // Opens a dataset named by a client: the path must be absolute in the file,
-// every link on the way must exist and stay inside the file.
-Result<h5::Handle> openDataset(hid_t file, const std::string& fileName, const std::string& path) {
+// and every link on the way (soft links followed to their ends) must exist
+// and stay inside the file. The dataset is opened by the path of hard links
+// it resolved to, which `resolved` receives.
+Result<h5::Handle> openDataset(hid_t file, const std::string& fileName, const std::string& path,
+                               std::string& resolved) {
   if (path.empty() || path.front() != '/' || path == "/") {
     return invalidArgument(
         fmt::format("dataset '{}' in {}: name a dataset by its absolute path in the file, like "
                     "/steps/000000/positions",
                     path, fileName));
   }
-  std::string prefix;
-  size_t start = 1;
-  while (start <= path.size()) {
-    size_t end = path.find('/', start);
-    if (end == std::string::npos) {
-      end = path.size();
+  if (path.find("//") != std::string::npos) {
+    return invalidArgument(
+        fmt::format("dataset '{}' in {}: empty part in the path", path, fileName));
+  }
+  auto target = h5::resolveInFile(file, path);
+  if (!target) {
+    switch (target.status().code()) {
+      case StatusCode::kNotFound:
+        return notFound(fmt::format("dataset {} missing in {} ({})", path, fileName,
+                                    target.status().message()));
+      case StatusCode::kPermissionDenied:
+        return permissionDenied(
+            fmt::format("dataset {} in {}: {}; the service never follows links out of a file", path,
+                        fileName, target.status().message()));
+      default:
+        return failedPrecondition(
+            fmt::format("dataset {} in {}: {}", path, fileName, target.status().message()));
     }
-    if (end == start) {
-      return invalidArgument(
-          fmt::format("dataset '{}' in {}: empty part in the path", path, fileName));
-    }
-    prefix += "/" + path.substr(start, end - start);
-    if (H5Lexists(file, prefix.c_str(), H5P_DEFAULT) <= 0) {
-      h5::lastHdf5Error();
-      return notFound(fmt::format("dataset {} missing in {}", path, fileName));
-    }
-    H5L_info_t link{};
-    if (H5Lget_info(file, prefix.c_str(), &link, H5P_DEFAULT) < 0) {
-      return failedPrecondition(fmt::format("dataset {} in {}: cannot inspect {} ({})", path,
-                                            fileName, prefix, h5::lastHdf5Error()));
-    }
-    if (link.type != H5L_TYPE_HARD && link.type != H5L_TYPE_SOFT) {
-      return permissionDenied(fmt::format(
-          "dataset {} in {}: {} is an external link; the service never follows links out of "
-          "a file",
-          path, fileName, prefix));
-    }
-    start = end + 1;
   }
   H5O_info_t object{};
-  if (H5Oget_info_by_name2(file, path.c_str(), &object, H5O_INFO_BASIC, H5P_DEFAULT) < 0) {
-    return notFound(fmt::format("dataset {} missing in {} (dangling link: {})", path, fileName,
-                                h5::lastHdf5Error()));
+  if (H5Oget_info_by_name2(file, target->c_str(), &object, H5O_INFO_BASIC, H5P_DEFAULT) < 0) {
+    return notFound(
+        fmt::format("dataset {} missing in {} ({})", path, fileName, h5::lastHdf5Error()));
   }
   if (object.type != H5O_TYPE_DATASET) {
     return invalidArgument(fmt::format("{} in {} is a {}, not a dataset", path, fileName,
                                        object.type == H5O_TYPE_GROUP ? "group" : "named type"));
   }
-  h5::Handle dataset = h5::datasetHandle(H5Dopen2(file, path.c_str(), H5P_DEFAULT));
+  h5::Handle access = h5::noExternalLinks();
+  h5::Handle dataset = h5::datasetHandle(H5Dopen2(file, target->c_str(), access.get()));
   if (!dataset.valid()) {
     return failedPrecondition(
         fmt::format("dataset {} in {}: cannot open ({})", path, fileName, h5::lastHdf5Error()));
   }
+  resolved = std::move(*target);
   return dataset;
 }
 
@@ -398,7 +407,8 @@ std::string formatSigned(const std::vector<std::int64_t>& values) {
 
 Result<SlabPlan> planSlab(hid_t file, const std::string& fileName, const Hyperslab& slab,
                           size_t index) {
-  auto dataset = openDataset(file, fileName, slab.dataset);
+  SlabPlan plan;
+  auto dataset = openDataset(file, fileName, slab.dataset, plan.resolvedDataset);
   if (!dataset) {
     return dataset.status();
   }
@@ -409,7 +419,6 @@ Result<SlabPlan> planSlab(hid_t file, const std::string& fileName, const Hypersl
     return failedPrecondition(fmt::format("dataset {} in {}: {}", slab.dataset, fileName,
                                           shape ? h5::lastHdf5Error() : shape.status().message()));
   }
-  SlabPlan plan;
   plan.dataset = slab.dataset;
   plan.dtype = classifyType(type.get());
   plan.datasetShape = shape->dims;
@@ -635,7 +644,8 @@ Result<std::vector<FileEntry>> Catalogue::listFiles(std::string_view folder, boo
   return entries;
 }
 
-Result<FileDescription> Catalogue::describe(const ResolvedPath& file) const {
+Result<FileDescription> Catalogue::describe(const ResolvedPath& file,
+                                            const DescribeOptions& options) const {
   FileDescription description;
   description.file = file.requested;
   std::error_code error;
@@ -652,7 +662,8 @@ Result<FileDescription> Catalogue::describe(const ResolvedPath& file) const {
                   fmt::format("{}: {}", file.requested, rootAttributes.status().message()));
   }
   description.groups.push_back({"/", std::move(*rootAttributes)});
-  TreeWalk walk{&description, Status::ok()};
+  TreeWalk walk{&description, Status::ok(), &options,
+                std::chrono::steady_clock::now() + options.limits.maxTime};
   const herr_t visited = H5Lvisit(handle->get(), H5_INDEX_NAME, H5_ITER_INC, visitLink, &walk);
   if (!walk.status) {
     return Status(walk.status.code(), fmt::format("{}: {}", file.requested, walk.status.message()));
@@ -707,8 +718,9 @@ Status SlabReader::read(const Piece& piece, void* out) {
   std::lock_guard lock(hdf5Mutex());
   h5::quietHdf5();
   if (m_handles->datasetSlab != piece.slab) {
-    m_handles->dataset =
-        h5::datasetHandle(H5Dopen2(m_handles->file.get(), slab.dataset.c_str(), H5P_DEFAULT));
+    h5::Handle access = h5::noExternalLinks();
+    m_handles->dataset = h5::datasetHandle(
+        H5Dopen2(m_handles->file.get(), slab.resolvedDataset.c_str(), access.get()));
     m_handles->datasetSlab = piece.slab;
   }
   if (!m_handles->dataset.valid()) {

@@ -96,4 +96,89 @@ const GroupInfo* FileDescription::findGroup(std::string_view path) const {
   return nullptr;
 }
 
+const AttributeInfo* GroupInfo::findAttribute(std::string_view name) const {
+  for (const AttributeInfo& attribute : attributes) {
+    if (attribute.name == name) {
+      return &attribute;
+    }
+  }
+  return nullptr;
+}
+
+std::optional<std::int64_t> GroupInfo::integerAttribute(std::string_view name) const {
+  const AttributeInfo* attribute = findAttribute(name);
+  const auto* values =
+      attribute != nullptr ? std::get_if<std::vector<std::int64_t>>(&attribute->value) : nullptr;
+  if (values == nullptr || values->size() != 1 || !attribute->shape.empty()) {
+    return std::nullopt;
+  }
+  return values->front();
+}
+
+std::optional<double> GroupInfo::floatAttribute(std::string_view name) const {
+  const AttributeInfo* attribute = findAttribute(name);
+  const auto* values =
+      attribute != nullptr ? std::get_if<std::vector<double>>(&attribute->value) : nullptr;
+  if (values == nullptr || values->size() != 1 || !attribute->shape.empty()) {
+    return std::nullopt;
+  }
+  return values->front();
+}
+
+namespace {
+
+// Messages as crackvis::dem::h5's attribute readers word them.
+Result<std::int64_t> integerOf(const GroupInfo* group, const char* name) {
+  if (group == nullptr || group->findAttribute(name) == nullptr) {
+    return notFound(fmt::format("missing attribute '{}'", name));
+  }
+  if (auto value = group->integerAttribute(name)) {
+    return *value;
+  }
+  return invalidArgument(fmt::format("attribute '{}' is not a scalar integer", name));
+}
+
+}  // namespace
+
+dem::RootAttributes demRootAttributes(const FileDescription& description) {
+  dem::RootAttributes root;
+  const GroupInfo* group = description.findGroup("/");
+  const AttributeInfo* format = group != nullptr ? group->findAttribute("format") : nullptr;
+  if (format == nullptr) {
+    return root;
+  }
+  if (const auto* text = std::get_if<std::string>(&format->value)) {
+    root.format = *text;
+  } else {
+    root.format = invalidArgument("attribute 'format' is not a scalar string");
+  }
+  root.version = integerOf(group, "version");
+  root.dimension = integerOf(group, "dimension");
+  return root;
+}
+
+Status checkDemDataset(const FileDescription& description, dem::DemDataset id, int step,
+                       const dem::LayoutSizes& sizes) {
+  const std::string path = dem::datasetPath(id, step);
+  const DatasetInfo* dataset = description.findDataset(path);
+  if (dataset == nullptr) {
+    return dem::missingDataset(path);
+  }
+  // The element types the layout uses; any other stays kOther.
+  static constexpr std::pair<DataType, dem::h5::ElementType> kLayoutTypes[] = {
+      {DataType::kInt32, dem::h5::ElementType::kInt32},
+      {DataType::kUInt8, dem::h5::ElementType::kUInt8},
+      {DataType::kFloat32, dem::h5::ElementType::kFloat32},
+      {DataType::kFloat64, dem::h5::ElementType::kFloat64}};
+  dem::DatasetHeader header;
+  for (const auto& [stored, element] : kLayoutTypes) {
+    if (dataset->dtype == stored) {
+      header.type = element;
+    }
+  }
+  header.typeName = dataset->dtypeName;
+  header.dims = dataset->shape;
+  return dem::checkDatasetHeader(id, path, header, sizes);
+}
+
 }  // namespace crackvis::dataservice

@@ -25,7 +25,9 @@ Result<RunSummary> runToFile(SimulationSetup setup, const RunOptions& options) {
   if (!simulator) {
     return simulator.status();
   }
-  auto writer = dem::DemFileWriter::create(options.path, lattice, options.metadata);
+  dem::DemMetadata metadata = options.metadata;
+  metadata.plannedSteps = options.savedSteps;
+  auto writer = dem::DemFileWriter::create(options.path, lattice, metadata);
   if (!writer) {
     return writer.status();
   }

@@ -15,6 +15,16 @@ double millisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
+// A file's data enters a session here, checked by the rules `crackvis info`
+// and `extract` apply (dem::validateTopology, dem::validateStep): whatever a
+// file holds, the extraction and the renderer see only finite, bounded
+// positions and bonds between distinct existing particles.
+Status badData(const std::string& file, const Status& problem, int step = -1) {
+  return failedPrecondition(step < 0
+                                ? fmt::format("{}: {}", file, problem.message())
+                                : fmt::format("{}: step {}: {}", file, step, problem.message()));
+}
+
 class RemoteSource final : public StepSource {
  public:
   explicit RemoteSource(dataservice::RemoteDemFile remote) : m_remote(std::move(remote)) {}
@@ -31,6 +41,9 @@ class RemoteSource final : public StepSource {
     m_lattice.dimension = m_remote.dimension();
     m_lattice.bonds = **bonds;
     m_lattice.radius = std::move(radii).value();
+    if (Status valid = dem::validateTopology(m_lattice); !valid) {
+      return badData(file(), valid);
+    }
     return Status::ok();
   }
 
@@ -59,13 +72,22 @@ class RemoteSource final : public StepSource {
     if (!remote) {
       return remote.status();
     }
+    dem::StepState state;
+    state.time = remote->time;
+    state.positions = std::move(remote->positions);
+    state.bondState = std::move(remote->bondState);
+    state.velocities = std::move(remote->velocities);
+    state.bondForce = std::move(remote->bondForce);
+    if (Status valid = dem::validateStep(m_lattice, state); !valid) {
+      return badData(file(), valid, step);
+    }
     SourceStep out;
     out.index = remote->index;
-    out.time = remote->time;
-    out.positions = std::move(remote->positions);
-    out.bondState = std::move(remote->bondState);
-    out.velocities = std::move(remote->velocities);
-    out.bondForce = std::move(remote->bondForce);
+    out.time = state.time;
+    out.positions = std::move(state.positions);
+    out.bondState = std::move(state.bondState);
+    out.velocities = std::move(state.velocities);
+    out.bondForce = std::move(state.bondForce);
     out.loadMs = millisecondsSince(start);
     return out;
   }
@@ -77,6 +99,8 @@ class RemoteSource final : public StepSource {
   std::vector<std::int32_t> m_breakSteps;
 };
 
+// The local reader validates with the same rules as it reads (readLattice,
+// readStep): FAILED_PRECONDITION "FILE: step K: ..." as above.
 class LocalSource final : public StepSource {
  public:
   LocalSource(std::string path, dem::DemFileReader reader)
@@ -141,14 +165,6 @@ class LocalSource final : public StepSource {
 };
 
 }  // namespace
-
-Status checkStepInRange(const std::string& file, int step, int stepCount) {
-  if (step < 0 || step >= stepCount) {
-    return outOfRange(fmt::format("{}: step {} out of range (the file has steps 0..{})", file, step,
-                                  stepCount - 1));
-  }
-  return Status::ok();
-}
 
 Result<std::unique_ptr<StepSource>> openRemoteSource(const dataservice::DataClient& client,
                                                      const std::string& file) {

@@ -1,4 +1,5 @@
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
@@ -88,4 +89,86 @@ TEST_CASE("crackvis sim --help explains presets and options", "[sim][cli]") {
                            "--steps", "docs/simulator.md"}) {
     CHECK_THAT(help.out, Catch::Contains(text));
   }
+}
+
+namespace {
+
+// A tmpfs of `size` mounted on a fresh directory for the test's lifetime.
+// Mounting needs root, which the test environment has; a failure to mount
+// fails the test rather than skipping it.
+class SmallFileSystem {
+ public:
+  explicit SmallFileSystem(const std::string& size) {
+    auto mounted =
+        runProcess({"mount", "-t", "tmpfs", "-o", "size=" + size, "tmpfs", m_dir.path().string()});
+    INFO("mount: " << mounted.err);
+    REQUIRE(mounted.exitCode == 0);
+    m_mounted = true;
+  }
+  SmallFileSystem(const SmallFileSystem&) = delete;
+  SmallFileSystem& operator=(const SmallFileSystem&) = delete;
+  ~SmallFileSystem() {
+    if (m_mounted) {
+      runProcess({"umount", m_dir.path().string()});
+    }
+  }
+  std::string file(const std::string& name) const { return m_dir.file(name); }
+
+ private:
+  TempDir m_dir;
+  bool m_mounted = false;
+};
+
+}  // namespace
+
+TEST_CASE("crackvis sim on a full disk exits 1 with one line and leaves its steps readable",
+          "[sim][cli]") {
+  SmallFileSystem disk("300k");
+  const std::string path = disk.file("plate.h5");
+  auto run = runProcess({kCli, "sim", "plate2d", "--scale", "0.2", "--steps", "400", "--quiet",
+                         "--threads", "1", "-o", path});
+  INFO("stderr: " << run.err);
+  CHECK(run.exitCode == 1);
+  const auto errors = testing::lines(run.err);
+  REQUIRE(errors.size() == 1);
+  CHECK_THAT(errors[0], Catch::StartsWith("crackvis sim: " + path + ": step ") &&
+                            Catch::Contains("not written"));
+  CHECK_THAT(run.err, !Catch::Contains("HDF5-DIAG"));
+
+  // Every step the count promises is there and valid.
+  auto reader = dem::DemFileReader::open(path);
+  INFO(reader.status().message());
+  REQUIRE(reader.isOk());
+  const int steps = reader->stepCount();
+  CHECK(steps > 0);
+  CHECK(steps < 400);
+  CHECK(reader->info().plannedSteps == 400);
+  CHECK(reader->info().stoppedEarly());
+  for (int step = 0; step < steps; ++step) {
+    INFO("step " << step);
+    CHECK(reader->readStep(step).isOk());
+  }
+
+  auto info = runProcess({kCli, "info", path});
+  CHECK(info.exitCode == 0);
+  CHECK_THAT(info.out, Catch::Contains(fmt::format(
+                           "stopped early the run wrote {} of 400 planned steps", steps)));
+  auto json = runProcess({kCli, "info", "--json", path});
+  CHECK(json.exitCode == 0);
+  CHECK_THAT(json.out, Catch::Contains("\"stopped_early\": true") &&
+                           Catch::Contains("\"planned_steps\": 400"));
+}
+
+TEST_CASE("crackvis info says nothing of an early stop when a run finished", "[sim][cli]") {
+  TempDir dir;
+  const std::string path = dir.file("plate.h5");
+  auto run =
+      runProcess({kCli, "sim", "plate2d", "--scale", "0.2", "--steps", "3", "--quiet", "-o", path});
+  REQUIRE(run.exitCode == 0);
+  auto reader = dem::DemFileReader::open(path);
+  REQUIRE(reader.isOk());
+  CHECK(reader->info().plannedSteps == 3);
+  CHECK_FALSE(reader->info().stoppedEarly());
+  auto info = runProcess({kCli, "info", "--json", path});
+  CHECK_THAT(info.out, Catch::Contains("\"stopped_early\": false"));
 }

@@ -15,12 +15,15 @@
 
 #include <crackvis/common/status.hpp>
 #include <crackvis/dem/h5.hpp>
+#include <crackvis/dem/layout.hpp>
 #include <crackvis/dem/model.hpp>
 
 namespace crackvis::dem {
 
 inline constexpr std::string_view kFormatName = "crackvis-dem";
 inline constexpr int kFormatVersion = 1;
+// The attribute of /steps that records how many steps a writer planned.
+inline constexpr const char* kPlannedStepsAttribute = "planned";
 
 // "/steps/000042": the group that holds step 42.
 std::string stepGroupPath(int step);
@@ -29,6 +32,7 @@ std::string stepGroupPath(int step);
 struct DemMetadata {
   std::string source;  // what produced the file, e.g. "crackvis sim cuboid3d --set A"
   std::string units = "SI";
+  int plannedSteps = 0;  // steps the writer means to write (/steps@planned); 0: not recorded
 };
 
 struct StepInfo {
@@ -48,6 +52,9 @@ struct DemFileInfo {
   std::int64_t bondCount = 0;      // M
   std::vector<StepInfo> steps;     // complete steps, in order
   int incompleteSteps = 0;         // step groups an interrupted writer left unfinished
+  std::int64_t plannedSteps = 0;   // /steps@planned: steps the writer meant to write; 0 unknown
+  // Whether the writer stopped before writing the steps it planned.
+  bool stoppedEarly() const { return plannedSteps > static_cast<std::int64_t>(steps.size()); }
 };
 
 class DemFileReader {
@@ -61,7 +68,9 @@ class DemFileReader {
   int stepCount() const { return static_cast<int>(m_info.steps.size()); }
 
   // Radii, bonds and strengths; validated (bond indices, self and duplicate
-  // bonds, radii).
+  // bonds, radii). Every content problem is FAILED_PRECONDITION naming the
+  // file and the first bad index; a step out of range is OUT_OF_RANGE
+  // (checkStepInRange).
   Result<Lattice> readLattice() const;
   // /bonds/break_step: first step at which each bond is broken, -1 never.
   Result<std::vector<std::int32_t>> readBreakSteps() const;
@@ -75,9 +84,8 @@ class DemFileReader {
   Status fail(const Status& status) const;
   Status readStructure();
   Status readSteps();
-  Result<h5::Handle> openChecked(const std::string& path, h5::ElementType type,
-                                 const std::vector<std::uint64_t>& dims) const;
-  Status checkStepIndex(int step) const;
+  Result<h5::Handle> openChecked(DemDataset id, int step = 0) const;
+  Status readWhole(DemDataset id, int step, void* out) const;
 
   std::string m_path;
   h5::Handle m_file;
@@ -90,9 +98,11 @@ class DemFileWriter {
   static Result<DemFileWriter> create(const std::string& path, const Lattice& lattice,
                                       const DemMetadata& metadata);
 
-  // Writes the next step, updates /bonds/break_step and flushes to disk.
-  // Refuses a step that disagrees with the lattice or that heals a bond
-  // (bonds break for good).
+  // Writes the next step, updates /bonds/break_step and flushes to disk;
+  // only then raises /steps@count (flushed again), so the first `count`
+  // steps are on disk whatever happens next (a full disk, a kill). Refuses a
+  // step that disagrees with the lattice or that heals a bond (bonds break
+  // for good). After a failed write the writer is closed: later calls fail.
   Status appendStep(const StepState& step);
   // Closes the file; the destructor closes too but cannot report errors.
   Status close();
@@ -103,6 +113,9 @@ class DemFileWriter {
  private:
   DemFileWriter() = default;
   Status recordBreaks(const StepState& step, bool& changed);
+  Status writeStepData(const StepState& step, bool breaksChanged);
+  Status flush();
+  void abandon();
 
   std::string m_path;
   h5::Handle m_file;

@@ -49,6 +49,8 @@ class Handle {
 
   hid_t get() const { return m_id; }
   bool valid() const { return m_id >= 0; }
+  // Gives the id up without closing it.
+  hid_t release() { return std::exchange(m_id, H5I_INVALID_HID); }
   // Closes now and reports whether HDF5 could (a file close writes metadata).
   herr_t reset() {
     herr_t result = 0;
@@ -91,6 +93,16 @@ enum class ElementType { kInt32, kUInt8, kFloat32, kFloat64, kOther };
 const char* elementTypeName(ElementType type);
 // Native in-memory HDF5 type for reads and writes.
 hid_t nativeType(ElementType type);
+
+// What a stored datatype holds, whatever its byte order: the one place that
+// looks at HDF5's type classes (the crackvis-dem types below and the data
+// service's wider set are both made from it).
+struct TypeClass {
+  enum Kind { kSignedInteger, kUnsignedInteger, kFloat, kString, kCompound, kOther };
+  Kind kind = kOther;
+  std::size_t bytes = 0;
+};
+TypeClass typeClass(hid_t datatype);
 // Classifies a stored datatype (any byte order).
 ElementType classify(hid_t datatype);
 
@@ -104,7 +116,20 @@ struct DatasetShape {
 Result<DatasetShape> describeDataset(hid_t dataset);
 std::string formatDims(const std::vector<std::uint64_t>& dims);
 
-bool linkExists(hid_t location, const std::string& path);
+// The path of the object `path` names in `file`, through hard links only:
+// soft links on the way are followed inside the file (their targets checked
+// in turn, at most kMaxLinkHops of them). NOT_FOUND when a link on the way
+// is missing or dangles; PERMISSION_DENIED when an external or user-defined
+// link lies anywhere on the chain (soft -> external included), since it
+// would lead out of the file; FAILED_PRECONDITION for a soft-link loop.
+// Open the object by the returned path, never by `path`.
+inline constexpr int kMaxLinkHops = 16;
+Result<std::string> resolveInFile(hid_t file, const std::string& path);
+// Whether `path` names an object of the file by links that stay inside it.
+bool linkExists(hid_t file, const std::string& path);
+// A dataset access property list under which HDF5 refuses to traverse any
+// external link (a second guard behind resolveInFile).
+Handle noExternalLinks();
 
 // Attribute access; strings may be fixed-length or variable-length.
 Result<std::string> readStringAttribute(hid_t object, const std::string& name);

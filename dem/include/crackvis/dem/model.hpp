@@ -93,17 +93,29 @@ struct StepState {
   std::size_t brokenBondCount() const;
 };
 
+// The largest coordinate or radius a data set may hold, m: far beyond any
+// specimen, and small enough that differences and bounding boxes of
+// positions stay finite.
+inline constexpr double kMaxCoordinate = 1e15;
+
 // Checks what a lattice must satisfy whatever its source: dimension 2 or 3,
-// positive finite radii, strengths of length M that are not NaN or negative,
-// bond ends in range, no self-bond, no duplicate bond. The message names the
-// first offending bond or particle.
+// positive finite radii (up to kMaxCoordinate), strengths of length M that
+// are not NaN or negative, bond ends in range, no self-bond, no duplicate
+// bond. The message names the first offending bond or particle.
 Status validateLattice(const Lattice& lattice);
+// The same without the strengths (a view reads no strengths): the one check
+// of radii and bonds that `crackvis info`, `extract` and the render server's
+// step sources share.
+Status validateTopology(const Lattice& lattice);
 
 // Checks a step against its lattice: array lengths agree with N and M,
-// positions finite, z = 0 in 2D, bond states 0 or 1.
+// positions finite and within kMaxCoordinate, z = 0 in 2D, bond states 0
+// or 1.
 Status validateStep(const Lattice& lattice, const StepState& step);
 // The same, for readers that know only the dimension, N and M.
 Status validateStep(int dimension, std::size_t particleCount, std::size_t bondCount,
                     const StepState& step);
+// Bond states 0 or 1 (the last part of validateStep).
+Status validateBondStates(std::span<const std::uint8_t> bondState);
 
 }  // namespace crackvis::dem

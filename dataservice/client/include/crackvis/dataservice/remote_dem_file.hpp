@@ -18,6 +18,7 @@
 
 #include <crackvis/common/status.hpp>
 #include <crackvis/dataservice/data_client.hpp>
+#include <crackvis/dem/layout.hpp>
 #include <crackvis/dem/model.hpp>
 
 namespace crackvis::dataservice {
@@ -72,6 +73,7 @@ class RemoteDemFile {
  private:
   RemoteDemFile() = default;
   Status checkStep(int step) const;
+  dem::LayoutSizes sizes() const { return {m_particles, m_bonds}; }
   Result<std::vector<dem::Bond>> toBonds(const TypedArray& array) const;
   Result<std::vector<dem::Vec3>> toPositions(const TypedArray& array, std::uint64_t expected) const;
   Result<std::vector<std::uint8_t>> toBondState(const TypedArray& array) const;

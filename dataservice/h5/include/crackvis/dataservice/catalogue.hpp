@@ -8,6 +8,7 @@
 // take turns rather than wait for each other's whole request.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -29,7 +30,8 @@ std::mutex& hdf5Mutex();
 
 // One validated hyperslab of a Read.
 struct SlabPlan {
-  std::string dataset;
+  std::string dataset;          // as the client named it
+  std::string resolvedDataset;  // the same through hard links only (soft links resolved)
   DataType dtype = DataType::kUnspecified;
   std::vector<std::uint64_t> datasetShape;
   std::vector<std::uint64_t> start;  // one per dimension (empty for a scalar)
@@ -98,6 +100,21 @@ class FileReader {
   std::string m_name;
 };
 
+// Bounds on one Describe, so that one hostile file cannot hold the HDF5
+// lock for long: RESOURCE_EXHAUSTED past them.
+struct DescribeLimits {
+  int maxDepth = 64;                          // levels of nested groups
+  std::size_t maxObjects = 100'000;           // groups, datasets and other links
+  std::chrono::milliseconds maxTime{10'000};  // walking the tree
+};
+
+struct DescribeOptions {
+  DescribeLimits limits;
+  // Asked between objects; true stops the walk (UNAVAILABLE "cancelled"),
+  // e.g. the gRPC context's IsCancelled.
+  std::function<bool()> cancelled;
+};
+
 class Catalogue {
  public:
   explicit Catalogue(DataRoot root);
@@ -112,8 +129,10 @@ class Catalogue {
                                            const AccessFilter& mayRead) const;
 
   // The whole tree of a file. FAILED_PRECONDITION for a file that is not
-  // HDF5 or that HDF5 cannot open (truncated, corrupt).
-  Result<FileDescription> describe(const ResolvedPath& file) const;
+  // HDF5 or that HDF5 cannot open (truncated, corrupt); RESOURCE_EXHAUSTED
+  // past `options.limits`.
+  Result<FileDescription> describe(const ResolvedPath& file,
+                                   const DescribeOptions& options = {}) const;
 
   // Validates every slab (dataset present and readable, start and count
   // inside its shape) and the total against `maxBytes`, and opens the file.

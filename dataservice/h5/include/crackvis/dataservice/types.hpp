@@ -11,6 +11,9 @@
 #include <variant>
 #include <vector>
 
+#include <crackvis/common/status.hpp>
+#include <crackvis/dem/layout.hpp>
+
 namespace crackvis::dataservice {
 
 // Element types a dataset or attribute can have; numeric values match the
@@ -109,6 +112,11 @@ struct GroupInfo {
   std::string path;  // "/", "/steps", ...
   std::vector<AttributeInfo> attributes;
 
+  const AttributeInfo* findAttribute(std::string_view name) const;
+  // A scalar integer or float attribute's value, if the group has one.
+  std::optional<std::int64_t> integerAttribute(std::string_view name) const;
+  std::optional<double> floatAttribute(std::string_view name) const;
+
   friend bool operator==(const GroupInfo&, const GroupInfo&) = default;
 };
 
@@ -157,6 +165,15 @@ struct Hyperslab {
 
   static Hyperslab whole(std::string dataset) { return {std::move(dataset), {}, {}}; }
 };
+
+// The crackvis-dem layout (crackvis/dem/layout.hpp) checked on a Describe's
+// answer, by the catalogue's step summary and the remote reader alike: the
+// root attributes as the layout check takes them, and one dataset's header
+// against the layout table (FAILED_PRECONDITION "missing dataset P" or the
+// dtype/shape message).
+dem::RootAttributes demRootAttributes(const FileDescription& description);
+Status checkDemDataset(const FileDescription& description, dem::DemDataset id, int step,
+                       const dem::LayoutSizes& sizes);
 
 // "1.50 MiB": sizes in messages and logs.
 std::string formatBytes(std::uint64_t bytes);

@@ -20,6 +20,7 @@
 
 #include <crackvis/common/status.hpp>
 #include <crackvis/dataservice/data_client.hpp>
+#include <crackvis/dem/layout.hpp>
 #include <crackvis/dem/model.hpp>
 
 namespace crackvis::source {
@@ -74,8 +75,9 @@ Result<std::unique_ptr<StepSource>> openRemoteSource(const dataservice::DataClie
 // `path` on this machine.
 Result<std::unique_ptr<StepSource>> openLocalSource(const std::string& path);
 
-// OUT_OF_RANGE "FILE: step K out of range (the file has steps 0..N-1)".
-Status checkStepInRange(const std::string& file, int step, int stepCount);
+// OUT_OF_RANGE "FILE: step K out of range (the file has steps 0..N-1)": the
+// one step check of every reader.
+using dem::checkStepInRange;
 
 class StepCache {
  public:

@@ -1,0 +1,99 @@
+// The crackvis-dem v1 layout (docs/data-format.md) as one table, and the
+// checks every reader of the layout shares: the local reader (HDF5 headers),
+// the remote reader and the data service's catalogue (a Describe's
+// attributes and dataset headers). Each check takes what it needs as plain
+// values, so one message and one status code come out whichever way the file
+// was seen. Messages do not name the file; callers prefix it.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <crackvis/common/status.hpp>
+#include <crackvis/dem/h5.hpp>
+
+namespace crackvis::dem {
+
+// The datasets of the layout.
+enum class DemDataset {
+  kRadius,
+  kPairs,
+  kStrength,
+  kBreakStep,
+  kPositions,   // per step
+  kBondState,   // per step
+  kVelocities,  // per step, optional
+  kBondForce,   // per step, optional
+};
+
+// One extent of a dataset's shape: the particle count N, the bond count M,
+// or a fixed number.
+struct Extent {
+  enum Kind { kParticles, kBonds, kFixed } kind = kFixed;
+  std::uint64_t value = 0;  // for kFixed
+};
+
+struct DatasetSpec {
+  DemDataset id;
+  std::string_view name;  // absolute, or relative to its step group when perStep
+  bool perStep = false;
+  bool required = true;
+  h5::ElementType type = h5::ElementType::kOther;
+  std::vector<Extent> shape;
+};
+
+// Every dataset of the layout, in the order of docs/data-format.md.
+std::span<const DatasetSpec> demLayout();
+const DatasetSpec& datasetSpec(DemDataset id);
+// "/particles/radius", or "/steps/000042/positions" for a per-step dataset.
+std::string datasetPath(DemDataset id, int step = 0);
+
+// N and M where known (-1: not yet, any extent accepted).
+struct LayoutSizes {
+  std::int64_t particles = -1;
+  std::int64_t bonds = -1;
+};
+
+// What a reader saw of a stored dataset.
+struct DatasetHeader {
+  h5::ElementType type = h5::ElementType::kOther;
+  std::string typeName;  // as h5::describeDataset names it
+  std::vector<std::uint64_t> dims;
+};
+
+// FAILED_PRECONDITION "dataset P has dtype T, expected U" or "... has shape
+// [..], expected [..] (N = .., M = ..)"; `path` is datasetPath(id, step).
+Status checkDatasetHeader(DemDataset id, const std::string& path, const DatasetHeader& header,
+                          const LayoutSizes& sizes);
+// FAILED_PRECONDITION "missing dataset P".
+Status missingDataset(const std::string& path);
+
+// The root attributes as read (each may have failed to read).
+struct RootAttributes {
+  Result<std::string> format = notFound("missing attribute 'format'");
+  Result<std::int64_t> version = notFound("missing attribute 'version'");
+  Result<std::int64_t> dimension = notFound("missing attribute 'dimension'");
+};
+// Format, version and dimension; the dimension on success.
+Result<int> checkRootAttributes(const RootAttributes& root);
+
+// The complete steps /steps@count promises. `stepTime(k)` reads the time
+// attribute of step group k; nothing when the group is missing. Lenient
+// callers (a Describe) keep the steps found before the first problem.
+struct StepList {
+  std::vector<std::pair<int, double>> steps;  // index, time
+  Status problem;
+};
+using StepTimeLookup = std::function<std::optional<Result<double>>(int step)>;
+StepList listSteps(std::int64_t count, const StepTimeLookup& stepTime);
+
+// The one step check of every reader: OUT_OF_RANGE "FILE: step K out of
+// range (the file has steps 0..N-1)" ("... has no steps" when empty).
+Status checkStepInRange(const std::string& file, int step, int stepCount);
+
+}  // namespace crackvis::dem
