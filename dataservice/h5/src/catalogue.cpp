@@ -23,13 +23,6 @@ std::mutex& hdf5Mutex() {
 
 namespace {
 
-Status permissionDenied(std::string message) {
-  return {StatusCode::kPermissionDenied, std::move(message)};
-}
-Status resourceExhausted(std::string message) {
-  return {StatusCode::kResourceExhausted, std::move(message)};
-}
-
 // The element type of a stored datatype, as the service names it.
 DataType classifyType(hid_t type) {
   const h5::TypeClass stored = h5::typeClass(type);

@@ -2,10 +2,12 @@
 // whole-file reads of the files under it. The data service's handlers call
 // it after they have checked the caller; it knows nothing of gRPC.
 //
-// Debian's HDF5 is not built thread-safe, so every HDF5 call the catalogue
-// makes holds hdf5Mutex(), one lock per process; a read is split into
-// pieces of about 1 MiB, each read under the lock, so concurrent streams
-// take turns rather than wait for each other's whole request.
+// Every HDF5 call the catalogue makes holds hdf5Mutex(), one lock per
+// process. Debian 12's HDF5 is built thread-safe and serializes itself
+// anyway (dem/src/h5.cpp, docs/protocol.md); the lock keeps the catalogue
+// correct on builds that are not. A read is split into pieces of about
+// 1 MiB, each read under the lock, so concurrent streams take turns rather
+// than wait for each other's whole request.
 #pragma once
 
 #include <chrono>
