@@ -569,7 +569,11 @@ grpc::ServerUnaryReactor* DataServiceImpl::Describe(grpc::CallbackServerContext*
     if (!resolved) {
       return resolved.status();
     }
-    auto description = m_catalogue.describe(*resolved);
+    // A client that gave up (or whose deadline passed) stops the walk: a
+    // hostile file must not hold the HDF5 lock for a caller who is gone.
+    DescribeOptions options;
+    options.cancelled = [context] { return context->IsCancelled(); };
+    auto description = m_catalogue.describe(*resolved, options);
     if (!description) {
       return description.status();
     }
