@@ -41,6 +41,7 @@ struct Flags {
   std::string rawTlsListen;
   std::optional<std::uint64_t> maxReadBytes;
   std::optional<std::uint64_t> maxFetchBytes;
+  std::optional<std::uint64_t> maxMemoryBytes;
   std::optional<int> maxStreams;
   std::optional<int> maxStreamsPerUser;
   std::optional<double> handshakeSeconds;
@@ -88,6 +89,9 @@ crackvis::Result<ServerConfig> configure(const Flags& flags, const CLI::App& app
   }
   if (flags.maxFetchBytes) {
     config.limits.maxFetchBytes = *flags.maxFetchBytes;
+  }
+  if (flags.maxMemoryBytes) {
+    config.limits.maxMemoryBytes = *flags.maxMemoryBytes;
   }
   if (flags.maxStreams) {
     config.limits.maxConcurrentStreams = *flags.maxStreams;
@@ -195,6 +199,9 @@ int main(int argc, char** argv) {
                  "given)");
   app.add_option("--max-read-bytes", flags.maxReadBytes, "limit on the bytes of one Read call");
   app.add_option("--max-fetch-bytes", flags.maxFetchBytes, "limit on the size of a fetched file");
+  app.add_option("--max-memory", flags.maxMemoryBytes,
+                 "bytes all Read and Fetch streams may buffer together; each stream holds one "
+                 "chunk (about 1 MiB), so this caps the streams' memory (default 256 MiB)");
   app.add_option("--max-streams", flags.maxStreams, "limit on Read/Fetch calls at once");
   app.add_option("--max-streams-per-user", flags.maxStreamsPerUser,
                  "limit on one configured user's Read/Fetch calls at once (default 16)");

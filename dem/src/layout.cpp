@@ -176,4 +176,19 @@ Status checkStepInRange(const std::string& file, int step, int stepCount) {
                                 stepCount - 1));
 }
 
+Status checkDeclaredSizes(const std::string& file, const LayoutSizes& sizes,
+                          const SizeLimits& limits) {
+  if (sizes.particles > limits.maxParticles) {
+    return resourceExhausted(
+        fmt::format("{} declares N = {} particles, more than the limit of {} (max_particles)", file,
+                    sizes.particles, limits.maxParticles));
+  }
+  if (sizes.bonds > limits.maxBonds) {
+    return resourceExhausted(
+        fmt::format("{} declares M = {} bonds, more than the limit of {} (max_bonds)", file,
+                    sizes.bonds, limits.maxBonds));
+  }
+  return Status::ok();
+}
+
 }  // namespace crackvis::dem

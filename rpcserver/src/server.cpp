@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
+#include <grpcpp/resource_quota.h>
 #include <grpcpp/security/server_credentials.h>
 
 #include <crackvis/rpc/server.hpp>
@@ -71,6 +72,11 @@ Result<std::unique_ptr<ServerHost>> ServerHost::start(const Listener& listener,
   if (host->m_settings.maxConcurrentStreams > 0) {
     builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS,
                                host->m_settings.maxConcurrentStreams);
+  }
+  if (host->m_settings.maxThreads > 0) {
+    grpc::ResourceQuota quota(host->m_settings.program);
+    quota.SetMaxThreads(host->m_settings.maxThreads);
+    builder.SetResourceQuota(quota);
   }
   // With SO_REUSEPORT a second server on a busy port would bind silently
   // and take half the new connections.

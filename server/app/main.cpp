@@ -86,22 +86,21 @@ int snapshot(const Flags& flags, const RenderServerConfig& config) {
     if (!root) {
       return fail(root.status().message());
     }
-    opener = [root = std::move(root).value()](
+    opener = [root = std::move(root).value(), sizes = config.limits.fileSizes](
                  const std::string& file) -> Result<std::unique_ptr<source::StepSource>> {
       auto resolved = root.resolveFile(file);
       if (!resolved) {
         return resolved.status();
       }
-      return source::openLocalSource(resolved->absolute);
+      return source::openLocalSource(resolved->absolute, sizes);
     };
   } else {
     auto connected = dataservice::DataClient::connect(config.data);
     if (!connected) {
       return fail(connected.status().message());
     }
-    opener = [client = std::move(connected).value()](const std::string& file) {
-      return source::openRemoteSource(client, file);
-    };
+    opener = [client = std::move(connected).value(), sizes = config.limits.fileSizes](
+                 const std::string& file) { return source::openRemoteSource(client, file, sizes); };
   }
   auto session = service::Session::open("snapshot", *description, opener, config.limits);
   if (!session) {
@@ -245,11 +244,20 @@ int main(int argc, char** argv) {
   app.add_option("--session-grace", config.sessionGraceSeconds,
                  "seconds a session without a stream is kept for a reconnect")
       ->capture_default_str();
+  app.add_option("--attach-seconds", config.attachSeconds,
+                 "a stream that has not attached to a session within this time is cancelled")
+      ->capture_default_str();
   app.add_option("--refine-after-ms", config.limits.refineAfterMs,
                  "full-resolution frame this long after the last event")
       ->capture_default_str();
   app.add_option("--interactive-frame-ms", config.limits.interactiveFrameMs,
                  "render-time budget of a reduced-resolution frame while interacting")
+      ->capture_default_str();
+  app.add_option("--max-particles", config.limits.fileSizes.maxParticles,
+                 "refuse files declaring more particles (before allocating for them)")
+      ->capture_default_str();
+  app.add_option("--max-bonds", config.limits.fileSizes.maxBonds,
+                 "refuse files declaring more bonds (before allocating for them)")
       ->capture_default_str();
   app.add_option("--access-log", config.accessLog, "file for access lines; - stderr; empty none")
       ->capture_default_str();

@@ -12,7 +12,8 @@ namespace {
 
 using namespace crackvis::dataservice;
 
-TEST_CASE("A Read is split into pieces of whole rows of at most 1 MiB", "[dataservice]") {
+TEST_CASE("A Read is split into pieces of at most 1 MiB, whole rows where a row fits",
+          "[dataservice]") {
   Catalogue catalogue(DataRoot::open(sampleRoot().root.path().string()).value());
   auto file = catalogue.root().resolveFile("big.h5");
   REQUIRE(file.isOk());
@@ -32,18 +33,14 @@ TEST_CASE("A Read is split into pieces of whole rows of at most 1 MiB", "[datase
   std::vector<int> pieces(2, 0);
   while (auto piece = (*reader)->nextPiece()) {
     CHECK(piece->offset == data[piece->slab].size());
-    if (slabs[piece->slab].rowBytes <= kMaxChunkBytes) {
-      CHECK(piece->bytes <= kMaxChunkBytes);
-    } else {
-      CHECK(piece->rows == 1);  // a row larger than a chunk is a piece of its own
-    }
+    CHECK(piece->bytes <= kMaxChunkBytes);  // also where one row is larger
     std::vector<char> buffer(piece->bytes);
     REQUIRE((*reader)->read(*piece, buffer.data()).isOk());
     data[piece->slab].insert(data[piece->slab].end(), buffer.begin(), buffer.end());
     ++pieces[piece->slab];
   }
   CHECK(pieces[0] == 16);
-  CHECK(pieces[1] == 2);
+  CHECK(pieces[1] == 4);  // each 1.2 MB row in two pieces
   const auto ramp = readDirect<double>(sampleRoot().file("big.h5"), "/ramp");
   REQUIRE(data[0].size() == ramp.size() * 8);
   CHECK(std::memcmp(data[0].data(), ramp.data(), data[0].size()) == 0);
@@ -75,6 +72,56 @@ TEST_CASE("The catalogue describes a 2D file and refuses what it must", "[datase
   auto fetch = catalogue.openFetch(catalogue.root().resolveFile("run.h5").value(), 1 << 30);
   REQUIRE(fetch.isOk());
   CHECK((*fetch)->size() == std::filesystem::file_size(sampleRoot().file("run.h5")));
+}
+
+// A (3, 5, 70000) float64 ramp (value = flat index) in a file of its own.
+void writeRamp3d(const std::string& path) {
+  std::lock_guard lock(hdf5Mutex());
+  namespace h5 = dem::h5;
+  h5::Handle file =
+      h5::fileHandle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  REQUIRE(file.valid());
+  std::vector<double> ramp(3 * 5 * 70000);
+  for (size_t i = 0; i < ramp.size(); ++i) {
+    ramp[i] = static_cast<double>(i);
+  }
+  REQUIRE(
+      h5::writeDataset(file.get(), "ramp3", h5::ElementType::kFloat64, {3, 5, 70000}, ramp.data())
+          .isOk());
+}
+
+TEST_CASE("A slab whose rows exceed a chunk is read in pieces along an inner dimension",
+          "[dataservice]") {
+  TempDir root;
+  writeRamp3d(root.file("ramp3.h5"));
+  Catalogue catalogue(DataRoot::open(root.path().string()).value());
+  const auto file = catalogue.root().resolveFile("ramp3.h5").value();
+  // A row of the slab is 4 x 69990 values (2.2 MB), one index of the second
+  // dimension 69990 values (0.56 MB): pieces run along the second dimension.
+  auto reader = catalogue.openRead(file, {{"/ramp3", {1, 1, 7}, {2, 4, 69990}}}, 1 << 30);
+  INFO(reader.status().message());
+  REQUIRE(reader.isOk());
+  std::vector<double> data;
+  int pieces = 0;
+  while (auto piece = (*reader)->nextPiece()) {
+    CHECK(piece->bytes <= kMaxChunkBytes);
+    CHECK(piece->offset == data.size() * 8);
+    std::vector<double> buffer(piece->bytes / 8);
+    REQUIRE((*reader)->read(*piece, buffer.data()).isOk());
+    data.insert(data.end(), buffer.begin(), buffer.end());
+    ++pieces;
+  }
+  CHECK(pieces == 8);
+  std::vector<double> expected;
+  for (int i = 1; i < 3; ++i) {
+    for (int j = 1; j < 5; ++j) {
+      for (int k = 7; k < 7 + 69990; ++k) {
+        expected.push_back(static_cast<double>((i * 5 + j) * 70000 + k));
+      }
+    }
+  }
+  REQUIRE(data.size() == expected.size());
+  CHECK(data == expected);
 }
 
 // A chain of `levels` nested groups /g/g/g/..., with a dataset at the bottom.

@@ -3,6 +3,7 @@
 // time. The asan preset runs these too: a cancelled stream must leave
 // nothing behind.
 #include <atomic>
+#include <mutex>
 #include <thread>
 
 #include <catch2/catch.hpp>
@@ -10,7 +11,10 @@
 
 #include "crackvis/v1/data.grpc.pb.h"
 #include "service_fixture.hpp"
+#include "support/process.hpp"
+#include <crackvis/dataservice/catalogue.hpp>
 #include <crackvis/dataservice/remote_dem_file.hpp>
+#include <crackvis/dem/h5.hpp>
 
 namespace crackvis::testing {
 namespace {
@@ -67,6 +71,86 @@ TEST_CASE("Streams over the limit are refused with RESOURCE_EXHAUSTED until one 
   CHECK(reader->Finish().error_code() == grpc::StatusCode::CANCELLED);
   REQUIRE(waitUntil([&] { return server->activeStreams() == 0; }));
   requireServerHealthy(*server);
+}
+
+TEST_CASE("Streams share a memory budget (max_memory_bytes): one over it is refused",
+          "[dataservice][integration]") {
+  auto config = baseConfig();
+  config.limits.maxMemoryBytes = dataservice::kStreamBufferBytes;  // room for one stream
+  auto server = startServer(config);
+  auto stub = rawStub(*server);
+  grpc::ClientContext held;
+  auto reader = stub->Read(&held, bigRead());
+  v1::ReadChunk chunk;
+  REQUIRE(reader->Read(&chunk));
+
+  auto client = connect(clientOptions(*server));
+  const Status refused = client.read("run.h5", {Hyperslab::whole("/bonds/pairs")}).status();
+  CHECK(refused.code() == StatusCode::kResourceExhausted);
+  CHECK_THAT(refused.message(), Catch::Contains("max_memory_bytes"));
+
+  held.TryCancel();
+  while (reader->Read(&chunk)) {
+  }
+  REQUIRE(waitUntil([&] { return server->activeStreams() == 0; }));
+  // The reservation went back with the stream.
+  CHECK(client.read("run.h5", {Hyperslab::whole("/bonds/pairs")}).isOk());
+}
+
+// A file of a few KB whose one chunked, never written float64 dataset has
+// one row of 2^27 values (1 GiB when read).
+void writeSparseRow(const std::string& path) {
+  namespace h5 = dem::h5;
+  std::lock_guard lock(dataservice::hdf5Mutex());
+  h5::Handle file =
+      h5::fileHandle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  REQUIRE(file.valid());
+  const hsize_t dims[2] = {1, hsize_t{1} << 27};
+  const hsize_t chunk[2] = {1, hsize_t{1} << 16};
+  h5::Handle space = h5::dataspaceHandle(H5Screate_simple(2, dims, nullptr));
+  h5::Handle create = h5::propertyListHandle(H5Pcreate(H5P_DATASET_CREATE));
+  REQUIRE(H5Pset_chunk(create.get(), 2, chunk) >= 0);
+  h5::Handle dataset = h5::datasetHandle(H5Dcreate2(file.get(), "row", H5T_IEEE_F64LE, space.get(),
+                                                    H5P_DEFAULT, create.get(), H5P_DEFAULT));
+  REQUIRE(dataset.valid());
+}
+
+TEST_CASE("A Read of one 1 GiB row streams in pieces of at most 1 MiB",
+          "[dataservice][integration]") {
+  TempDir root;
+  writeSparseRow(root.file("sparse.h5"));
+  REQUIRE(std::filesystem::file_size(root.file("sparse.h5")) < 64 * 1024);
+  auto config = baseConfig();
+  config.dataRoot = root.path().string();
+  auto server = startServer(config);
+  auto stub = rawStub(*server);
+  v1::ReadRequest request;
+  request.set_file("sparse.h5");
+  request.add_slabs()->set_dataset("/row");  // the whole (1, 2^27) dataset
+  const std::uint64_t before = residentBytes();
+  grpc::ClientContext context;
+  auto reader = stub->Read(&context, request);
+  v1::ReadChunk chunk;
+  std::uint64_t expectedOffset = 0;
+  for (int i = 0; i < 8; ++i) {
+    REQUIRE(reader->Read(&chunk));
+    CHECK(chunk.slab_bytes() == (std::uint64_t{1} << 30));
+    CHECK(chunk.offset() == expectedOffset);
+    CHECK(chunk.data().size() <= dataservice::kMaxChunkBytes);
+    CHECK(chunk.data().find_first_not_of('\0') == std::string::npos);  // the fill value
+    expectedOffset += chunk.data().size();
+  }
+  // Before, the server read the whole row into one buffer first.
+  CHECK(residentBytes() < before + (std::uint64_t{256} << 20));
+  context.TryCancel();
+  while (reader->Read(&chunk)) {
+  }
+  REQUIRE(waitUntil([&] { return server->activeStreams() == 0; }));
+  auto client = connect(clientOptions(*server));
+  auto tail = client.read("sparse.h5", {{"/row", {0, (1 << 27) - 4}, {1, 4}}});
+  INFO(tail.status().message());
+  REQUIRE(tail.isOk());
+  CHECK(tail->front().values<double>().value() == std::vector<double>(4, 0.0));
 }
 
 TEST_CASE("A stream that runs past the time limit is cancelled by the server",

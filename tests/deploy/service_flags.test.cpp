@@ -71,6 +71,9 @@ TEST_CASE("crackvis-data refuses out-of-range limits from flags and file at star
       {"no fetch bytes", with({"--max-fetch-bytes", "0"}), "",
        "--max-fetch-bytes must be at least 1, got 0 (limits.max_fetch_bytes in the "
        "configuration file)"},
+      {"less memory than one stream", with({"--max-memory", "1000"}), "",
+       "--max-memory must be at least 1052672, got 1000 (limits.max_memory_bytes in the "
+       "configuration file)"},
       {"zero call time", with({"--max-call-seconds", "0"}), "",
        "--max-call-seconds must be between 0.001 and 604800, got 0 (limits.max_call_seconds in "
        "the configuration file)"},
@@ -119,6 +122,12 @@ TEST_CASE("crackvis-render refuses out-of-range limits from flags and file at st
       {"no sessions per user in the file", base, R"({"limits": {"max_sessions_per_user": 0}})",
        "--max-sessions-per-user must be between 1 and 256, got 0 (limits.max_sessions_per_user "
        "in the configuration file)"},
+      {"no attach time", with({"--attach-seconds", "0"}), "",
+       "--attach-seconds must be between 0.1 and 3600, got 0 (limits.attach_seconds in the "
+       "configuration file)"},
+      {"no particles in the file", base, R"({"limits": {"max_particles": 0}})",
+       "--max-particles must be at least 1, got 0 (limits.max_particles in the configuration "
+       "file)"},
       {"no grace", with({"--session-grace", "0"}), "",
        "--session-grace must be between 0.1 and 86400, got 0 (limits.session_grace_seconds in "
        "the configuration file)"},

@@ -5,6 +5,7 @@
 // real crackvis-render answers OpenSession so and keeps serving; and the
 // particle grid itself survives such positions.
 #include <cmath>
+#include <filesystem>
 #include <functional>
 #include <limits>
 
@@ -16,6 +17,7 @@
 #include "dataservice/service_fixture.hpp"
 #include "server/render_fixture.hpp"
 #include "support/h5_tamper.hpp"
+#include "support/process.hpp"
 #include "support/sample_files.hpp"
 #include <crackvis/cracks/particle_grid.hpp>
 #include <crackvis/dataservice/catalogue.hpp>
@@ -198,6 +200,64 @@ TEST_CASE("crackvis-render refuses a session on bad numbers and keeps serving",
   const grpc::Status good = openSession(*stub, "cuboidA.h5", -1);
   INFO(good.error_message());
   CHECK(good.ok());
+}
+
+namespace {
+
+constexpr std::uint64_t kDeclaredBonds = 100'000'000;
+
+// good.h5 whose bond datasets declare 10^8 bonds, a file of a few KB.
+std::string writeDeclaringFile() {
+  const SampleData& sample = writeBadFiles();
+  const std::string path = crackRoot().file("declares.h5");
+  std::lock_guard lock(dataservice::hdf5Mutex());
+  writeSample(path, sample);
+  using dem::h5::ElementType;
+  replaceWithSparseDataset(path, "/bonds/pairs", ElementType::kInt32, {kDeclaredBonds, 2});
+  replaceWithSparseDataset(path, "/bonds/strength", ElementType::kFloat64, {kDeclaredBonds});
+  replaceWithSparseDataset(path, "/bonds/break_step", ElementType::kInt32, {kDeclaredBonds});
+  for (int step = 0; step < 3; ++step) {
+    replaceWithSparseDataset(path, fmt::format("/steps/{:06d}/bond_state", step),
+                             ElementType::kUInt8, {kDeclaredBonds});
+  }
+  return path;
+}
+
+}  // namespace
+
+TEST_CASE("a file declaring more bonds than the limit is refused before allocating",
+          "[source][render][service][integration]") {
+  const std::string path = writeDeclaringFile();
+  REQUIRE(std::filesystem::file_size(path) < 256 * 1024);
+  const dem::SizeLimits limits{1'000'000, 50'000'000};
+  SECTION("local and remote step sources") {
+    auto config = baseConfig();
+    config.dataRoot = crackRoot().path().string();
+    auto server = startServer(config);
+    auto client = testing::connect(clientOptions(*server));
+    for (const auto& opened : {source::openLocalSource(path, limits),
+                               source::openRemoteSource(client, "declares.h5", limits)}) {
+      REQUIRE_FALSE(opened.isOk());
+      INFO(opened.status().message());
+      CHECK(opened.status().code() == StatusCode::kResourceExhausted);
+      CHECK_THAT(opened.status().message(),
+                 Catch::Contains("declares M = 100000000 bonds, more than the limit of "
+                                 "50000000 (max_bonds)"));
+    }
+  }
+  SECTION("crackvis-render with its default limits") {
+    auto services = startServices();
+    auto stub = connectRender(*services.render);
+    const std::uint64_t before = residentBytes();
+    const grpc::Status status = openSession(*stub, "declares.h5", 0);
+    INFO(status.error_message());
+    CHECK(status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED);
+    CHECK_THAT(status.error_message(),
+               Catch::Contains("declares.h5") && Catch::Contains("(max_bonds)"));
+    // Before, the session allocated the declared arrays (2.65 GB for this).
+    CHECK(residentBytes() < before + (std::uint64_t{256} << 20));
+    CHECK(openSession(*stub, "good.h5", 0).ok());
+  }
 }
 
 TEST_CASE("the particle grid survives infinite and huge positions", "[cracks]") {

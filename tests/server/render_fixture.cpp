@@ -28,6 +28,24 @@ const TempDir& crackRoot() {
   return dir;
 }
 
+service::RenderServerConfig renderConfig(const dataservice::DataServer& data) {
+  service::RenderServerConfig config;
+  config.listen = "127.0.0.1:0";
+  config.tls = serverTls();
+  config.data.target = data.address();
+  config.data.tls = clientTls("crackvis-render");
+  config.accessLog = "";
+  return config;
+}
+
+std::unique_ptr<service::RenderServer> startRenderServer(
+    const service::RenderServerConfig& config) {
+  auto render = service::RenderServer::start(config);
+  INFO(render.status().message());
+  REQUIRE(render.isOk());
+  return std::move(render).value();
+}
+
 namespace {
 
 std::unique_ptr<service::RenderServer> startRender(const dataservice::DataServer& data,
@@ -35,19 +53,13 @@ std::unique_ptr<service::RenderServer> startRender(const dataservice::DataServer
                                                    int maxSessions,
                                                    std::vector<dataservice::UserEntry> users,
                                                    const std::string& accessLog) {
-  service::RenderServerConfig config;
+  service::RenderServerConfig config = renderConfig(data);
   config.listen = listen;
-  config.tls = serverTls();
-  config.data.target = data.address();
-  config.data.tls = clientTls("crackvis-render");
   config.sessionGraceSeconds = graceSeconds;
   config.maxSessions = maxSessions;
   config.users = std::move(users);
   config.accessLog = accessLog;
-  auto render = service::RenderServer::start(config);
-  INFO(render.status().message());
-  REQUIRE(render.isOk());
-  return std::move(render).value();
+  return startRenderServer(config);
 }
 
 }  // namespace

@@ -35,6 +35,11 @@ std::unique_ptr<service::RenderServer> startRenderServer(const dataservice::Data
                                                          const std::string& listen,
                                                          double graceSeconds = 30.0);
 
+// What startServices gives its render server (loopback, port 0, mutual TLS,
+// no access log), for tests that change a limit, and a server started on it.
+service::RenderServerConfig renderConfig(const dataservice::DataServer& data);
+std::unique_ptr<service::RenderServer> startRenderServer(const service::RenderServerConfig& config);
+
 // A 320x240 view of the file's last step: particles hidden, cracks red on black.
 pipeline::PipelineDescription crackView();
 

@@ -743,17 +743,44 @@ TEST_CASE("a number no parser can hold fails only that call, with an access-log 
   REQUIRE(xml.find(step) != std::string::npos);
   xml.replace(xml.find(step), step.size(), "step=\"99999999999999999999\"");
   const grpc::Status status = openStatus(*stub, xml);
-  CHECK_FALSE(status.ok());
-  // Before the handler boundary this was UNKNOWN, from an escaped exception.
-  CHECK(status.error_code() != grpc::StatusCode::UNKNOWN);
+  INFO(status.error_message());
+  // Before the range-checked conversions this was UNKNOWN, from an escaped
+  // std::stoll exception.
+  CHECK(status.error_code() == grpc::StatusCode::INVALID_ARGUMENT);
+  CHECK_THAT(status.error_message(), Catch::Contains("line ") && Catch::Contains("data") &&
+                                         Catch::Contains("step") &&
+                                         Catch::Contains("99999999999999999999"));
   std::ifstream in(logs.file("render-access.log"));
   const std::string log((std::istreambuf_iterator<char>(in)), {});
   CHECK_THAT(log, Catch::Contains("method=OpenSession"));
   CHECK_THAT(log,
              Catch::Contains(fmt::format("status={}", rpc::grpcCodeName(status.error_code()))));
-  // The server still serves.
+  // The same numbers in a pipeline replacement fail only that event; the
+  // session goes on.
   StreamClient stream(*stub, openSession(*stub, crackView()));
-  CHECK(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+  std::string opacity = pipeline::toXml(crackView());
+  const std::string key = "opacity=\"";
+  const size_t at = opacity.find(key, opacity.find("<particles"));
+  REQUIRE(at != std::string::npos);
+  const size_t value = at + key.size();
+  opacity.replace(value, opacity.find('"', value) - value, "1e-400");
+  for (const std::string& bad : {xml, opacity}) {
+    v1::ClientEvent replace;
+    replace.mutable_replace_pipeline()->set_pipeline_xml(bad);
+    stream.send(replace);
+  }
+  REQUIRE(stream.waitFor([](const auto&, const auto& errors) { return errors.size() >= 2; }));
+  for (const auto& error : stream.errors()) {
+    INFO(error.message());
+    CHECK(error.code() == static_cast<int>(grpc::StatusCode::INVALID_ARGUMENT));
+    CHECK_THAT(error.message(), Catch::Contains("line "));
+  }
+  CHECK_THAT(stream.errors()[1].message(),
+             Catch::Contains("particles") && Catch::Contains("opacity"));
+  const auto good = stream.rotate(0.05);
+  CHECK(stream.waitFor([&](const auto& frames, const auto&) {
+    return !frames.empty() && frames.back().frame.last_event_id() == good;
+  }));
 }
 
 TEST_CASE("the render server starts and stops like the data server",
@@ -818,4 +845,55 @@ TEST_CASE("the render server starts and stops like the data server",
     v1::ListFilesResponse files;
     CHECK_FALSE(stub->ListFiles(&context, v1::ListFilesRequest(), &files).ok());
   }
+}
+
+TEST_CASE("streams that never attach are cancelled, and cannot pin a thread each",
+          "[render][service][integration]") {
+  auto services = startServices();
+  TempDir logs;
+  auto config = renderConfig(*services.data);
+  config.attachSeconds = 2.0;
+  config.accessLog = logs.file("render-access.log");
+  auto render = startRenderServer(config);
+  auto stub = connect(*render);
+  const int before = threadCount();
+  constexpr int kStreams = 150;
+  std::vector<std::unique_ptr<grpc::ClientContext>> contexts;
+  std::vector<std::unique_ptr<grpc::ClientReaderWriter<v1::ClientEvent, v1::ServerMessage>>>
+      streams;
+  const auto start = std::chrono::steady_clock::now();
+  for (int i = 0; i < kStreams; ++i) {
+    contexts.push_back(std::make_unique<grpc::ClientContext>());
+    streams.push_back(stub->Stream(contexts.back().get()));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  // Before, each waiting stream held a thread of its own (500 streams, 517).
+  const int during = threadCount();
+  INFO("threads before " << before << ", while waiting " << during);
+  CHECK(during - before < 100);
+  int timedOut = 0;
+  for (auto& stream : streams) {
+    v1::ServerMessage ignored;
+    while (stream->Read(&ignored)) {
+    }
+    const grpc::Status status = stream->Finish();
+    INFO(status.error_message());
+    if (status.error_code() == grpc::StatusCode::CANCELLED) {
+      ++timedOut;  // the server cancelled it; its access-log line says why
+    } else {
+      // Beyond the handler threads gRPC refuses the call outright.
+      CHECK(status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED);
+    }
+  }
+  CHECK(timedOut > 0);
+  std::ifstream in(logs.file("render-access.log"));
+  const std::string log((std::istreambuf_iterator<char>(in)), {});
+  CHECK_THAT(log, Catch::Contains("method=Stream") && Catch::Contains("status=DEADLINE_EXCEEDED") &&
+                      Catch::Contains("within 2 s (attach_seconds)"));
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  CHECK(seconds < 10.0);
+  // The server still opens a session and streams it.
+  StreamClient stream(*stub, openSession(*stub, crackView()));
+  CHECK(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
 }

@@ -1,5 +1,6 @@
 #include "support/h5_tamper.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <stdexcept>
 
@@ -66,6 +67,30 @@ void replaceDataset(const std::string& file, const std::string& path, h5::Elemen
   }
   std::vector<double> zeros(count + 1, 0.0);  // large enough for any element type
   check(h5::writeDataset(handle.get(), path, type, dims, zeros.data()));
+}
+
+void replaceWithSparseDataset(const std::string& file, const std::string& path,
+                              h5::ElementType type, const std::vector<std::uint64_t>& dims) {
+  auto handle = openForWrite(file);
+  if (h5::linkExists(handle.get(), path) &&
+      H5Ldelete(handle.get(), path.c_str(), H5P_DEFAULT) < 0) {
+    throw std::runtime_error("tamper: cannot delete " + path);
+  }
+  std::vector<hsize_t> shape(dims.begin(), dims.end());
+  std::vector<hsize_t> chunk(shape.size(), 1);
+  chunk[0] = std::min<hsize_t>(shape[0], 4096);
+  h5::Handle space =
+      h5::dataspaceHandle(H5Screate_simple(static_cast<int>(shape.size()), shape.data(), nullptr));
+  h5::Handle create = h5::propertyListHandle(H5Pcreate(H5P_DATASET_CREATE));
+  if (H5Pset_chunk(create.get(), static_cast<int>(chunk.size()), chunk.data()) < 0) {
+    throw std::runtime_error("tamper: cannot set chunks for " + path);
+  }
+  h5::Handle dataset =
+      h5::datasetHandle(H5Dcreate2(handle.get(), path.c_str(), h5::nativeType(type), space.get(),
+                                   H5P_DEFAULT, create.get(), H5P_DEFAULT));
+  if (!dataset.valid()) {
+    throw std::runtime_error("tamper: cannot create " + path);
+  }
 }
 
 void setElement(const std::string& file, const std::string& path, std::uint64_t index,

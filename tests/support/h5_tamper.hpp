@@ -20,6 +20,10 @@ void deleteLink(const std::string& file, const std::string& path);
 // Replaces a dataset by one of another type and shape, filled with zeros.
 void replaceDataset(const std::string& file, const std::string& path, dem::h5::ElementType type,
                     const std::vector<std::uint64_t>& dims);
+// The same as a chunked dataset that is never written: it declares `dims`
+// but the file stays a few KB (what a hostile file declaring 10^8 bonds is).
+void replaceWithSparseDataset(const std::string& file, const std::string& path,
+                              dem::h5::ElementType type, const std::vector<std::uint64_t>& dims);
 // Overwrites one element of an existing dataset (converted to its type).
 void setElement(const std::string& file, const std::string& path, std::uint64_t index,
                 double value);

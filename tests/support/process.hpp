@@ -2,6 +2,7 @@
 // stderr: how CLI tests see exactly what a user sees.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,11 @@ struct ProcessResult {
 };
 
 ProcessResult runProcess(const std::vector<std::string>& argv);
+
+// This process's resident memory and thread count (/proc/self), for tests
+// that show a hostile input does not make a server grow.
+std::uint64_t residentBytes();
+int threadCount();
 
 // Non-empty lines of a text.
 std::vector<std::string> lines(const std::string& text);

@@ -684,23 +684,69 @@ SlabReader::~SlabReader() {
   m_handles.reset();
 }
 
+namespace {
+
+// The first dimension a piece of `slab` runs along: the outermost one whose
+// inner block (one index of it, everything after it) fits in a chunk.
+std::size_t splitDimension(const SlabPlan& slab) {
+  std::uint64_t inner = elementSize(slab.dtype);
+  std::size_t dimension = slab.count.size() - 1;
+  while (dimension > 0 && inner * slab.count[dimension] <= kMaxChunkBytes) {
+    inner *= slab.count[dimension];
+    --dimension;
+  }
+  return dimension;
+}
+
+std::uint64_t innerBytes(const SlabPlan& slab, std::size_t dimension) {
+  std::uint64_t bytes = elementSize(slab.dtype);
+  for (std::size_t d = dimension + 1; d < slab.count.size(); ++d) {
+    bytes *= slab.count[d];
+  }
+  return bytes;
+}
+
+}  // namespace
+
 std::optional<Piece> SlabReader::nextPiece() {
   while (m_cursorSlab < m_slabs.size()) {
     const SlabPlan& slab = m_slabs[m_cursorSlab];
-    const std::uint64_t rowsTotal = slab.count.empty() ? 1 : slab.count[0];
-    if (m_cursorRow >= rowsTotal || slab.bytes == 0) {
+    if (slab.bytes == 0 || m_cursorOffset >= slab.bytes) {
       ++m_cursorSlab;
-      m_cursorRow = 0;
+      m_cursor.clear();
+      m_cursorOffset = 0;
       continue;
     }
-    const std::uint64_t rowsPerPiece = std::max<std::uint64_t>(1, kMaxChunkBytes / slab.rowBytes);
     Piece piece;
     piece.slab = m_cursorSlab;
-    piece.firstRow = m_cursorRow;
-    piece.rows = std::min(rowsPerPiece, rowsTotal - m_cursorRow);
-    piece.offset = m_cursorRow * slab.rowBytes;
-    piece.bytes = piece.rows * slab.rowBytes;
-    m_cursorRow += piece.rows;
+    piece.offset = m_cursorOffset;
+    if (slab.count.empty()) {  // a scalar: one piece
+      piece.bytes = slab.bytes;
+      m_cursorOffset = slab.bytes;
+      return piece;
+    }
+    const std::size_t rank = slab.count.size();
+    if (m_cursor.empty()) {
+      m_cursor.assign(rank, 0);
+    }
+    const std::size_t along = splitDimension(slab);
+    const std::uint64_t inner = innerBytes(slab, along);
+    const std::uint64_t run = std::min(std::max<std::uint64_t>(1, kMaxChunkBytes / inner),
+                                       slab.count[along] - m_cursor[along]);
+    piece.start = m_cursor;
+    piece.count.assign(rank, 1);
+    for (std::size_t d = along + 1; d < rank; ++d) {
+      piece.count[d] = slab.count[d];
+    }
+    piece.count[along] = run;
+    piece.bytes = run * inner;
+    // Advance in row-major order: carry into the dimensions before `along`.
+    m_cursorOffset += piece.bytes;
+    m_cursor[along] += run;
+    for (std::size_t d = along; d > 0 && m_cursor[d] == slab.count[d]; --d) {
+      m_cursor[d] = 0;
+      ++m_cursor[d - 1];
+    }
     return piece;
   }
   return std::nullopt;
@@ -726,9 +772,10 @@ Status SlabReader::read(const Piece& piece, void* out) {
                      H5P_DEFAULT, out);
   } else {
     std::vector<hsize_t> start(slab.start.begin(), slab.start.end());
-    std::vector<hsize_t> count(slab.count.begin(), slab.count.end());
-    start[0] += piece.firstRow;
-    count[0] = piece.rows;
+    std::vector<hsize_t> count(piece.count.begin(), piece.count.end());
+    for (std::size_t d = 0; d < start.size(); ++d) {
+      start[d] += piece.start[d];
+    }
     h5::Handle fileSpace = h5::dataspaceHandle(H5Dget_space(m_handles->dataset.get()));
     h5::Handle memorySpace = h5::dataspaceHandle(
         H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr));

@@ -20,7 +20,8 @@ Status readLimits(const json& object, const std::string& where, Limits& limits) 
   CRACKVIS_RETURN_IF_ERROR(checkKeys(
       object, where,
       {"max_read_bytes", "max_fetch_bytes", "max_concurrent_streams", "max_streams_per_user",
-       "max_slabs_per_read", "max_call_seconds", "handshake_seconds"}));
+       "max_slabs_per_read", "max_call_seconds", "handshake_seconds", "max_memory_bytes"}));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_memory_bytes", where, limits.maxMemoryBytes));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_read_bytes", where, limits.maxReadBytes));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_fetch_bytes", where, limits.maxFetchBytes));
   CRACKVIS_RETURN_IF_ERROR(
@@ -165,6 +166,10 @@ Status validateServerConfig(const ServerConfig& config) {
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-streams-per-user", "limits.max_streams_per_user"},
                                         limits.maxStreamsPerUser, 1,
                                         std::numeric_limits<int>::max()));
+  // One stream's buffer must fit, or no Read could ever run.
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-memory", "limits.max_memory_bytes"},
+                                        limits.maxMemoryBytes, std::uint64_t{kStreamBufferBytes},
+                                        kNoMax));
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--handshake-seconds", "limits.handshake_seconds"},
                                         limits.handshakeSeconds, 0.1, 3600.0));
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"", "limits.max_slabs_per_read"}, limits.maxSlabsPerRead,

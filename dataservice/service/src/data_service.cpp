@@ -112,6 +112,9 @@ Status checkDatasetPaths(const v1::ReadRequest& request) {
 
 // The bulk bytes of one chunk, handed to gRPC inside a slice that frees
 // them when gRPC is done with them.
+static_assert(kStreamBufferBytes >= kMaxChunkBytes + 64,
+              "a stream's reservation covers one chunk and its header");
+
 class ChunkData {
  public:
   explicit ChunkData(std::size_t size) : m_data(new char[size]), m_size(size) {}
@@ -327,48 +330,26 @@ class ReadReactor final : public StreamReactor {
     return chunk.SerializeAsString();
   }
 
+  // Every piece is at most one chunk (SlabReader splits rows that are
+  // larger), so a call holds one chunk's buffer whatever the dataset's shape.
   void writeNext() override {
-    // A piece larger than a chunk (a single huge row) is sent in slices.
-    if (m_sliceOffset >= m_buffer.size()) {
-      auto piece = m_reader->nextPiece();
-      if (!piece) {
-        finish(Status::ok());
-        return;
-      }
-      m_piece = *piece;
-      if (m_piece.bytes <= kMaxChunkBytes) {
-        ChunkData data(m_piece.bytes);
-        if (Status status = m_reader->read(m_piece, data.data()); !status) {
-          finish(status);
-          return;
-        }
-        write(header(m_piece.offset), 6, std::move(data));
-        return;
-      }
-      m_buffer.resize(m_piece.bytes);
-      m_sliceOffset = 0;
-      if (Status status = m_reader->read(m_piece, m_buffer.data()); !status) {
-        finish(status);
-        return;
-      }
+    auto piece = m_reader->nextPiece();
+    if (!piece) {
+      finish(Status::ok());
+      return;
     }
-    const size_t slice = std::min(kMaxChunkBytes, m_buffer.size() - m_sliceOffset);
-    ChunkData data(slice);
-    std::memcpy(data.data(), m_buffer.data() + m_sliceOffset, slice);
-    const std::uint64_t offset = m_piece.offset + m_sliceOffset;
-    m_sliceOffset += slice;
-    if (m_sliceOffset >= m_buffer.size()) {
-      m_buffer.clear();
-      m_sliceOffset = 0;
+    m_piece = std::move(*piece);
+    ChunkData data(m_piece.bytes);
+    if (Status status = m_reader->read(m_piece, data.data()); !status) {
+      finish(status);
+      return;
     }
-    write(header(offset), 6, std::move(data));
+    write(header(m_piece.offset), 6, std::move(data));
   }
 
   DataServiceImpl& m_service;
   std::unique_ptr<SlabReader> m_reader;
   Piece m_piece;
-  std::vector<char> m_buffer;
-  size_t m_sliceOffset = 0;
 };
 
 class FetchReactor final : public StreamReactor {
@@ -436,6 +417,11 @@ Result<std::uint64_t> StreamRegistry::acquire(grpc::CallbackServerContext* conte
         "later",
         m_limit));
   }
+  if (m_reservedBytes + kStreamBufferBytes > m_memoryLimit) {
+    return resourceExhausted(fmt::format(
+        "the server's streams already buffer {} of its {} budget (max_memory_bytes); retry later",
+        formatBytes(m_reservedBytes), formatBytes(m_memoryLimit)));
+  }
   int& own = m_perUser[user];
   if (!user.empty() && own >= m_perUserLimit) {
     return resourceExhausted(fmt::format(
@@ -444,6 +430,7 @@ Result<std::uint64_t> StreamRegistry::acquire(grpc::CallbackServerContext* conte
         user, own));
   }
   ++own;
+  m_reservedBytes += kStreamBufferBytes;
   const std::uint64_t id = m_nextId++;
   m_entries.emplace(id, Entry{context, deadline, false, user});
   return id;
@@ -458,7 +445,13 @@ void StreamRegistry::release(std::uint64_t id) {
   if (auto user = m_perUser.find(it->second.user); user != m_perUser.end() && --user->second <= 0) {
     m_perUser.erase(user);
   }
+  m_reservedBytes -= kStreamBufferBytes;
   m_entries.erase(it);
+}
+
+std::uint64_t StreamRegistry::reservedBytes() const {
+  std::lock_guard lock(m_mutex);
+  return m_reservedBytes;
 }
 
 int StreamRegistry::cancelOverdue(Clock::time_point now) {

@@ -36,15 +36,19 @@ class StreamRegistry {
  public:
   using Clock = std::chrono::steady_clock;
 
-  StreamRegistry(int limit, int perUserLimit) : m_limit(limit), m_perUserLimit(perUserLimit) {}
+  StreamRegistry(int limit, int perUserLimit, std::uint64_t memoryLimit)
+      : m_limit(limit), m_perUserLimit(perUserLimit), m_memoryLimit(memoryLimit) {}
 
   // `user` is counted against the per-user limit; "" (users off): none.
+  // Each stream reserves kStreamBufferBytes of the memory budget until it is
+  // released.
   Result<std::uint64_t> acquire(grpc::CallbackServerContext* context, Clock::time_point deadline,
                                 const std::string& user);
   void release(std::uint64_t id);
   // Cancels every stream past its deadline; returns how many.
   int cancelOverdue(Clock::time_point now);
   int active() const;
+  std::uint64_t reservedBytes() const;
 
  private:
   struct Entry {
@@ -55,6 +59,8 @@ class StreamRegistry {
   };
   const int m_limit;
   const int m_perUserLimit;
+  const std::uint64_t m_memoryLimit;
+  std::uint64_t m_reservedBytes = 0;
   std::map<std::string, int> m_perUser;
   mutable std::mutex m_mutex;
   std::map<std::uint64_t, Entry> m_entries;
@@ -76,7 +82,7 @@ class DataServiceImpl final : public DataServiceBase {
         m_authenticator(authenticator),
         m_limits(limits),
         m_log(log),
-        m_streams(limits.maxConcurrentStreams, limits.maxStreamsPerUser) {}
+        m_streams(limits.maxConcurrentStreams, limits.maxStreamsPerUser, limits.maxMemoryBytes) {}
 
   grpc::ServerUnaryReactor* ListFiles(grpc::CallbackServerContext* context,
                                       const crackvis::v1::ListFilesRequest* request,

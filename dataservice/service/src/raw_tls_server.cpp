@@ -1,6 +1,7 @@
 #include "raw_tls_server.hpp"
 
 #include <cerrno>
+#include <charconv>
 #include <chrono>
 #include <cstring>
 
@@ -120,24 +121,26 @@ Result<Request> parseRequest(const std::string& text) {
     }
     const size_t colon = line.find(": ");
     if (colon == std::string::npos) {
-      return invalidArgument(fmt::format("malformed request line '{}'", line));
+      return invalidArgument(fmt::format("malformed request line '{}'", echoed(line)));
     }
     const std::string key = line.substr(0, colon);
     const std::string value = line.substr(colon + 2);
-    try {
-      if (key == "file") {
-        request.file = value;
-      } else if (key == "offset") {
-        request.offset = std::stoull(value);
-      } else if (key == "length") {
-        request.length = std::stoull(value);
-      } else if (key == "authorization") {
-        request.authorization = value;
-      } else {
-        return invalidArgument(fmt::format("unknown request field '{}'", key));
+    // Whole unsigned decimals only: std::stoull would take "-1" as 2^64 - 1.
+    auto number = [&](std::uint64_t& out) {
+      const char* last = value.data() + value.size();
+      const auto [stop, error] = std::from_chars(value.data(), last, out);
+      return error == std::errc() && stop == last && !value.empty();
+    };
+    if (key == "file") {
+      request.file = value;
+    } else if (key == "offset" || key == "length") {
+      if (!number(key == "offset" ? request.offset : request.length)) {
+        return invalidArgument(fmt::format("{} '{}' is not a whole number", key, echoed(value)));
       }
-    } catch (const std::exception&) {
-      return invalidArgument(fmt::format("'{}' is not a number", value));
+    } else if (key == "authorization") {
+      request.authorization = value;
+    } else {
+      return invalidArgument(fmt::format("unknown request field '{}'", echoed(key)));
     }
   }
   return request;

@@ -34,12 +34,17 @@ Status readDataService(const json& object, const std::string& where,
 Status readLimits(const json& object, const std::string& where, RenderServerConfig& config) {
   CRACKVIS_RETURN_IF_ERROR(
       checkKeys(object, where,
-                {"max_sessions", "max_sessions_per_user", "session_grace_seconds",
-                 "refine_after_ms", "interactive_frame_ms", "max_width", "max_height"}));
+                {"max_sessions", "max_sessions_per_user", "session_grace_seconds", "attach_seconds",
+                 "refine_after_ms", "interactive_frame_ms", "max_width", "max_height",
+                 "max_particles", "max_bonds"}));
+  CRACKVIS_RETURN_IF_ERROR(
+      read(object, "max_particles", where, config.limits.fileSizes.maxParticles));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_bonds", where, config.limits.fileSizes.maxBonds));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_sessions", where, config.maxSessions));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_sessions_per_user", where, config.maxSessionsPerUser));
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "session_grace_seconds", where, config.sessionGraceSeconds));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "attach_seconds", where, config.attachSeconds));
   CRACKVIS_RETURN_IF_ERROR(read(object, "refine_after_ms", where, config.limits.refineAfterMs));
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "interactive_frame_ms", where, config.limits.interactiveFrameMs));
@@ -102,12 +107,20 @@ Status validateRenderServerConfig(const RenderServerConfig& config) {
                                         config.maxSessionsPerUser, 1, 256));
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--session-grace", "limits.session_grace_seconds"},
                                         config.sessionGraceSeconds, 0.1, 86400.0));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--attach-seconds", "limits.attach_seconds"},
+                                        config.attachSeconds, 0.1, 3600.0));
   const SessionLimits& limits = config.limits;
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--refine-after-ms", "limits.refine_after_ms"},
                                         limits.refineAfterMs, 0.0, 5000.0));
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--interactive-frame-ms", "limits.interactive_frame_ms"},
                                         limits.interactiveFrameMs, 1.0, 1000.0));
   // The schema's frame sizes: a larger limit could never be used.
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-particles", "limits.max_particles"},
+                                        limits.fileSizes.maxParticles, std::int64_t{1},
+                                        std::numeric_limits<std::int64_t>::max()));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-bonds", "limits.max_bonds"},
+                                        limits.fileSizes.maxBonds, std::int64_t{0},
+                                        std::numeric_limits<std::int64_t>::max()));
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"", "limits.max_width"}, limits.maxWidth, 16, 7680));
   return checkSetting({"", "limits.max_height"}, limits.maxHeight, 16, 7680);
 }

@@ -159,6 +159,52 @@ Result<SessionEvent> toSessionEvent(const v1::ClientEvent& in) {
   return invalidArgument(fmt::format("event {}: no event set", in.event_id()));
 }
 
+// Streams that have not sent their first (attaching) message yet. Each holds
+// one of gRPC's handler threads while it waits, so one past its time is
+// cancelled by the reaper: 500 streams that never attach cannot pin 500
+// threads for ever.
+class AttachWatch {
+ public:
+  explicit AttachWatch(double seconds) : m_seconds(seconds) {}
+
+  std::uint64_t add(grpc::ServerContext* context) {
+    std::lock_guard lock(m_mutex);
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                             std::chrono::duration<double>(m_seconds));
+    m_waiting.emplace(++m_next, Waiting{context, deadline});
+    return m_next;
+  }
+  // Called before the handler returns, so the reaper never sees a context
+  // that has gone. False when the reaper had cancelled the stream.
+  bool remove(std::uint64_t id) {
+    std::lock_guard lock(m_mutex);
+    return m_waiting.erase(id) == 1;
+  }
+  void cancelOverdue() {
+    std::lock_guard lock(m_mutex);
+    const auto now = Clock::now();
+    for (auto it = m_waiting.begin(); it != m_waiting.end();) {
+      if (now > it->second.deadline) {
+        it->second.context->TryCancel();
+        it = m_waiting.erase(it);
+      } else {
+        ++it;
+      }
+    }
+  }
+  double seconds() const { return m_seconds; }
+
+ private:
+  struct Waiting {
+    grpc::ServerContext* context;
+    Clock::time_point deadline;
+  };
+  const double m_seconds;
+  std::mutex m_mutex;
+  std::map<std::uint64_t, Waiting> m_waiting;
+  std::uint64_t m_next = 0;
+};
+
 // The sessions of a server, with their owners; closes those whose stream
 // has been gone longer than the grace period.
 class SessionRegistry {
@@ -395,9 +441,11 @@ class RenderServiceImpl final : public v1::RenderService::Service {
         m_data(std::move(data)),
         m_dataAccess(std::make_shared<DataAccess>(config.data, std::move(dataChannel))),
         m_log(log),
-        m_sessions(config.maxSessions, config.maxSessionsPerUser, config.sessionGraceSeconds) {}
+        m_sessions(config.maxSessions, config.maxSessionsPerUser, config.sessionGraceSeconds),
+        m_attaching(config.attachSeconds) {}
 
   SessionRegistry& sessions() { return m_sessions; }
+  AttachWatch& attaching() { return m_attaching; }
 
   grpc::Status OpenSession(grpc::ServerContext* context, const v1::OpenSessionRequest* request,
                            v1::OpenSessionResponse* response) override {
@@ -487,12 +535,13 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   }
 
   Session::SourceOpener opener(const Caller& caller) const {
-    return [data = m_data, access = m_dataAccess, caller, timeout = m_config.data.timeoutSeconds](
+    return [data = m_data, access = m_dataAccess, caller, timeout = m_config.data.timeoutSeconds,
+            sizes = m_config.limits.fileSizes](
                const std::string& file) -> Result<std::unique_ptr<source::StepSource>> {
       const auto deadline = std::chrono::system_clock::now() +
                             std::chrono::milliseconds(static_cast<std::int64_t>(timeout * 1000));
       CRACKVIS_RETURN_IF_ERROR(access->checkAccess(caller, file, deadline));
-      return source::openRemoteSource(data, file);
+      return source::openRemoteSource(data, file, sizes);
     };
   }
 
@@ -533,8 +582,14 @@ class RenderServiceImpl final : public v1::RenderService::Service {
                    grpc::ServerReaderWriter<v1::ServerMessage, v1::ClientEvent>* stream,
                    const Caller& caller, AccessRecord& record) {
     v1::ClientEvent first;
-    if (!stream->Read(&first)) {
-      return unavailable("the stream ended before attaching to a session");
+    const std::uint64_t watched = m_attaching.add(context);
+    const bool attached = stream->Read(&first);
+    const bool timedOut = !m_attaching.remove(watched);
+    if (!attached) {
+      return timedOut ? deadlineExceeded(fmt::format(
+                            "the stream sent no attach_session_id within {} s (attach_seconds)",
+                            m_attaching.seconds()))
+                      : unavailable("the stream ended before attaching to a session");
     }
     if (first.event_case() != v1::ClientEvent::kAttachSessionId) {
       return invalidArgument(
@@ -648,6 +703,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   std::shared_ptr<DataAccess> m_dataAccess;
   rpc::AccessLog& m_log;
   SessionRegistry m_sessions;
+  AttachWatch m_attaching;
 };
 
 Result<std::shared_ptr<grpc::Channel>> dataChannel(const dataservice::ClientOptions& options) {
@@ -725,7 +781,14 @@ Result<std::unique_ptr<RenderServer>> RenderServer::start(const RenderServerConf
   settings.program = kProgram;
   settings.maxReceiveMessageBytes = static_cast<int>(pipeline::kMaxPipelineBytes) + 4096;
   settings.reapPeriod = std::chrono::milliseconds(200);
-  settings.reap = [service] { service->sessions().reap(); };
+  settings.reap = [service] {
+    service->sessions().reap();
+    service->attaching().cancelOverdue();
+  };
+  // Each stream holds a handler thread and a reader thread: cap what many
+  // clients opening calls can make us create (gRPC refuses calls beyond it
+  // with RESOURCE_EXHAUSTED).
+  settings.maxThreads = 4 * config.maxSessions + 32;
   // Closing the sessions ends their streams (next() returns kClosed).
   settings.beforeStop = [service] { service->sessions().closeAll(); };
   auto host = rpc::ServerHost::start(*listener, {service}, std::move(settings));

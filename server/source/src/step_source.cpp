@@ -167,21 +167,27 @@ class LocalSource final : public StepSource {
 }  // namespace
 
 Result<std::unique_ptr<StepSource>> openRemoteSource(const dataservice::DataClient& client,
-                                                     const std::string& file) {
+                                                     const std::string& file,
+                                                     const dem::SizeLimits& limits) {
   auto remote = dataservice::RemoteDemFile::open(client, file);
   if (!remote) {
     return remote.status();
   }
+  CRACKVIS_RETURN_IF_ERROR(
+      dem::checkDeclaredSizes(file, {remote->particleCount(), remote->bondCount()}, limits));
   auto source = std::make_unique<RemoteSource>(std::move(remote).value());
   CRACKVIS_RETURN_IF_ERROR(source->load());
   return std::unique_ptr<StepSource>(std::move(source));
 }
 
-Result<std::unique_ptr<StepSource>> openLocalSource(const std::string& path) {
+Result<std::unique_ptr<StepSource>> openLocalSource(const std::string& path,
+                                                    const dem::SizeLimits& limits) {
   auto reader = dem::DemFileReader::open(path);
   if (!reader) {
     return reader.status();
   }
+  CRACKVIS_RETURN_IF_ERROR(dem::checkDeclaredSizes(
+      path, {reader->info().particleCount, reader->info().bondCount}, limits));
   auto source = std::make_unique<LocalSource>(path, std::move(reader).value());
   CRACKVIS_RETURN_IF_ERROR(source->load());
   return std::unique_ptr<StepSource>(std::move(source));

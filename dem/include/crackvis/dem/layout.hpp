@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -58,6 +59,19 @@ struct LayoutSizes {
   std::int64_t particles = -1;
   std::int64_t bonds = -1;
 };
+
+// The most particles and bonds a reader will allocate for, so that a tiny
+// file declaring 10^8 bonds cannot make a server allocate gigabytes. The
+// default accepts everything (a CLI reading the user's own file); servers
+// set their configured limits.
+struct SizeLimits {
+  std::int64_t maxParticles = std::numeric_limits<std::int64_t>::max();
+  std::int64_t maxBonds = std::numeric_limits<std::int64_t>::max();
+};
+// RESOURCE_EXHAUSTED "FILE declares N = 100000000 bonds, more than the limit
+// of 1000 (max_bonds)" before anything of that size is allocated.
+Status checkDeclaredSizes(const std::string& file, const LayoutSizes& sizes,
+                          const SizeLimits& limits);
 
 // What a reader saw of a stored dataset.
 struct DatasetHeader {

@@ -46,6 +46,7 @@ struct ServerSettings {
   std::string program;  // "crackvis-data", for messages and the plaintext warning
   int maxReceiveMessageBytes = 4 << 20;
   int maxConcurrentStreams = 0;  // per connection; 0: gRPC's default
+  int maxThreads = 0;            // gRPC's handler threads (sync services); 0: unbounded
   std::chrono::milliseconds reapPeriod{100};
   std::function<void()> reap;        // run every reapPeriod on the reaper thread; may be empty
   std::function<void()> beforeStop;  // run by shutdown() before gRPC stops; may be empty

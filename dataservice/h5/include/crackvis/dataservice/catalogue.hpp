@@ -42,14 +42,16 @@ struct SlabPlan {
   std::uint64_t rowBytes = 0;  // bytes of one index of the first dimension
 };
 
-// The part of a slab read in one go: whole rows of the first dimension,
-// at most kMaxChunkBytes unless a single row is larger.
+// The part of a slab read in one go, at most kMaxChunkBytes whatever the
+// dataset's shape: whole rows of the first dimension where a row fits, else
+// a run along the first dimension whose inner block fits, the indices before
+// it fixed. A piece is contiguous in the slab's row-major bytes.
 struct Piece {
   std::size_t slab = 0;
   std::uint64_t offset = 0;  // within the slab, bytes
   std::uint64_t bytes = 0;
-  std::uint64_t firstRow = 0;
-  std::uint64_t rows = 0;
+  std::vector<std::uint64_t> start;  // within the slab, one per dimension
+  std::vector<std::uint64_t> count;  // the piece's shape
 };
 
 // An open, validated Read: the file stays open until the reader is
@@ -78,7 +80,8 @@ class SlabReader {
   std::vector<SlabPlan> m_slabs;
   std::uint64_t m_totalBytes = 0;
   std::size_t m_cursorSlab = 0;
-  std::uint64_t m_cursorRow = 0;
+  std::vector<std::uint64_t> m_cursor;  // the next piece's start in the current slab
+  std::uint64_t m_cursorOffset = 0;     // its offset in bytes
 };
 
 // An open file streamed as stored (Fetch).

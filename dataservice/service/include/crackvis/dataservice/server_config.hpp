@@ -13,6 +13,10 @@
 
 namespace crackvis::dataservice {
 
+// What one Read or Fetch stream buffers at most: one chunk of data (1 MiB,
+// kMaxChunkBytes) and its message header.
+inline constexpr std::uint64_t kStreamBufferBytes = (std::uint64_t{1} << 20) + 4096;
+
 struct Limits {
   std::uint64_t maxReadBytes = std::uint64_t{1} << 30;   // per Read call (all slabs)
   std::uint64_t maxFetchBytes = std::uint64_t{1} << 40;  // per Fetch call (the whole file)
@@ -23,6 +27,10 @@ struct Limits {
   // A raw TLS connection must finish its handshake and send its request
   // within this time, so idle TCP connections cannot hold the slots.
   double handshakeSeconds = 10.0;
+  // Bytes of data buffered by all Read and Fetch streams together. A stream
+  // holds at most one chunk (about 1 MiB) whatever it reads, and reserves it
+  // from this budget when it starts; past it, RESOURCE_EXHAUSTED.
+  std::uint64_t maxMemoryBytes = std::uint64_t{256} << 20;
 };
 
 // A user of the per-user layer on top of mutual TLS. A caller is this user

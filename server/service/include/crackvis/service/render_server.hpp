@@ -31,6 +31,7 @@ struct RenderServerConfig {
   int maxSessions = 8;
   int maxSessionsPerUser = 4;  // of maxSessions, for one configured user (none without users)
   double sessionGraceSeconds = 30.0;  // a session without a stream lives this long
+  double attachSeconds = 10.0;        // a stream must attach to a session within this time
   SessionLimits limits;
   std::string accessLog = "-";  // "-": stderr; "": none
 };
@@ -38,8 +39,10 @@ struct RenderServerConfig {
 // Reads a JSON configuration (deploy/config/render.json shows one): listen,
 // tls {ca, cert, key}, insecure, users_from (a crackvis-data configuration
 // whose users apply here too), data_service {target, ca, cert, key, token,
-// insecure, server_name}, limits {max_sessions, session_grace_seconds,
-// refine_after_ms, interactive_frame_ms, max_width, max_height}, access_log.
+// insecure, server_name}, limits {max_sessions, max_sessions_per_user,
+// session_grace_seconds, attach_seconds, refine_after_ms,
+// interactive_frame_ms, max_width, max_height, max_particles, max_bonds},
+// access_log.
 // Unknown keys are errors; values are range-checked by
 // validateRenderServerConfig once flags are applied.
 Result<RenderServerConfig> loadRenderServerConfig(const std::string& path);

@@ -47,6 +47,9 @@ struct SessionLimits {
   // Bounds of what waits for a slow or absent stream reader.
   std::size_t maxQueuedEvents = 256;  // beyond: an event is refused (RESOURCE_EXHAUSTED)
   std::size_t maxQueuedErrors = 64;   // beyond: event errors are dropped
+  // A file declaring more is refused before its arrays are allocated
+  // (RESOURCE_EXHAUSTED); ten million particles with 6-8 bonds each fit.
+  dem::SizeLimits fileSizes{16'000'000, 80'000'000};
 };
 
 struct CameraEvent {

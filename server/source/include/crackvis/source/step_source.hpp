@@ -69,11 +69,15 @@ class StepSource {
   virtual Result<SourceStep> read(int step) = 0;
 };
 
-// `file` relative to the data service's root.
+// `file` relative to the data service's root. A file declaring more
+// particles or bonds than `limits` is refused (RESOURCE_EXHAUSTED) before
+// its arrays are allocated.
 Result<std::unique_ptr<StepSource>> openRemoteSource(const dataservice::DataClient& client,
-                                                     const std::string& file);
+                                                     const std::string& file,
+                                                     const dem::SizeLimits& limits = {});
 // `path` on this machine.
-Result<std::unique_ptr<StepSource>> openLocalSource(const std::string& path);
+Result<std::unique_ptr<StepSource>> openLocalSource(const std::string& path,
+                                                    const dem::SizeLimits& limits = {});
 
 // OUT_OF_RANGE "FILE: step K out of range (the file has steps 0..N-1)": the
 // one step check of every reader.
