@@ -124,25 +124,6 @@ TEST_CASE("A slab whose rows exceed a chunk is read in pieces along an inner dim
   CHECK(data == expected);
 }
 
-// A chain of `levels` nested groups /g/g/g/..., with a dataset at the bottom.
-void writeNestedGroups(const std::string& path, int levels) {
-  std::lock_guard lock(hdf5Mutex());
-  namespace h5 = dem::h5;
-  h5::Handle file =
-      h5::fileHandle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
-  REQUIRE(file.valid());
-  std::vector<h5::Handle> groups;
-  hid_t parent = file.get();
-  for (int level = 0; level < levels; ++level) {
-    groups.push_back(
-        h5::groupHandle(H5Gcreate2(parent, "g", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT)));
-    REQUIRE(groups.back().valid());
-    parent = groups.back().get();
-  }
-  const double value = 1.0;
-  REQUIRE(h5::writeDataset(parent, "bottom", h5::ElementType::kFloat64, {1}, &value).isOk());
-}
-
 TEST_CASE("Describe is bounded in depth, objects and time, and stops when cancelled",
           "[dataservice]") {
   TempDir root;

@@ -2,8 +2,13 @@
 // 4 and 9): fast token checks, throttled sign-in failures, the handler
 // boundary, folder answers that are no existence oracle, per-user stream
 // caps, refused NULs, capped echoes, a busy port and idle raw TLS
-// connections. Each through a real server on loopback.
+// connections; and user B's Read latency while user A describes a hostile
+// file. Each through a real server on loopback.
+#include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <thread>
 
@@ -281,4 +286,80 @@ TEST_CASE("Idle TCP connections to the raw TLS endpoint are closed after the han
 }
 
 }  // namespace
+}  // namespace crackvis::testing
+
+namespace crackvis::testing {
+namespace {
+
+struct StallFigures {
+  double describeSeconds = 0.0;  // one Describe of the hostile file, as A sees it
+  double medianReadMs = 0.0;     // user B's Reads meanwhile
+  double maxReadMs = 0.0;
+  int reads = 0;
+};
+
+// User A describes a 600-level chain over and over for `seconds`; user B
+// reads one step's positions meanwhile, each Read timed.
+StallFigures measureStall(const dataservice::Limits& limits, const TempDir& root, double seconds) {
+  auto config = baseConfig();
+  config.dataRoot = root.path().string();
+  config.limits = limits;
+  auto server = startServer(config);
+  auto clientA = connect(clientOptions(*server));
+  auto clientB = connect(clientOptions(*server));
+  StallFigures figures;
+  std::atomic<bool> done{false};
+  std::thread userA([&] {
+    while (!done) {
+      const double took = secondsOf([&] { (void)clientA.describe("deep.h5"); });
+      figures.describeSeconds = std::max(figures.describeSeconds, took);
+    }
+  });
+  std::vector<double> readMs;
+  const auto end = std::chrono::steady_clock::now() +
+                   std::chrono::milliseconds(static_cast<int>(seconds * 1000));
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));  // A is walking
+  while (std::chrono::steady_clock::now() < end) {
+    readMs.push_back(
+        1000.0 * secondsOf([&] {
+          REQUIRE(clientB.read("run.h5", {Hyperslab::whole("/steps/000001/positions")}).isOk());
+        }));
+  }
+  done = true;
+  userA.join();
+  std::sort(readMs.begin(), readMs.end());
+  figures.reads = static_cast<int>(readMs.size());
+  figures.medianReadMs = readMs[readMs.size() / 2];
+  figures.maxReadMs = readMs.back();
+  return figures;
+}
+
+}  // namespace
+
+TEST_CASE("User B's Reads are not held up by user A describing a hostile file",
+          "[dataservice][integration]") {
+  TempDir root;
+  writeNestedGroups(root.file("deep.h5"), 600);
+  std::filesystem::copy_file(sampleRoot().file("run.h5"), root.file("run.h5"));
+  // Before issue 13.6 Describe walked any depth: the limits of that time.
+  dataservice::Limits unbounded;
+  unbounded.describe.maxDepth = 100'000;
+  unbounded.describe.maxObjects = 100'000'000;
+  unbounded.describe.maxTime = std::chrono::milliseconds(3'600'000);
+  const StallFigures before = measureStall(unbounded, root, 3.0);
+  const StallFigures after = measureStall(dataservice::Limits{}, root, 3.0);
+  // The figures docs/benchmarks.md quotes (ctest -V -R "User B").
+  std::printf(
+      "user B's Read while user A describes a 600-level chain: before: Describe %.2f s, "
+      "Read median %.1f ms, max %.0f ms (%d reads); after: Describe %.3f s, Read median "
+      "%.1f ms, max %.0f ms (%d reads)\n",
+      before.describeSeconds, before.medianReadMs, before.maxReadMs, before.reads,
+      after.describeSeconds, after.medianReadMs, after.maxReadMs, after.reads);
+  // Unbounded, each of B's Reads waits for a whole walk of A's; bounded, A's
+  // Describe is refused at level 65 and B's Reads take turns with it.
+  CHECK(before.describeSeconds > 0.3);
+  CHECK(after.describeSeconds < 0.5);
+  CHECK(after.maxReadMs < before.maxReadMs / 4);
+}
+
 }  // namespace crackvis::testing

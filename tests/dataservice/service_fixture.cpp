@@ -208,6 +208,24 @@ std::vector<std::byte> fileBytes(const std::string& path) {
   return out;
 }
 
+void writeNestedGroups(const std::string& path, int levels) {
+  std::lock_guard lock(dataservice::hdf5Mutex());
+  namespace h5 = dem::h5;
+  h5::Handle file =
+      h5::fileHandle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  REQUIRE(file.valid());
+  std::vector<h5::Handle> groups;
+  hid_t parent = file.get();
+  for (int level = 0; level < levels; ++level) {
+    groups.push_back(
+        h5::groupHandle(H5Gcreate2(parent, "g", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT)));
+    REQUIRE(groups.back().valid());
+    parent = groups.back().get();
+  }
+  const double value = 1.0;
+  REQUIRE(h5::writeDataset(parent, "bottom", h5::ElementType::kFloat64, {1}, &value).isOk());
+}
+
 void requireServerHealthy(const dataservice::DataServer& server) {
   auto client = connect(clientOptions(server));
   const Status health = client.checkHealth();

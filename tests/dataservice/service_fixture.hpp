@@ -63,6 +63,11 @@ std::unique_ptr<crackvis::v1::DataService::Stub> rawStub(const dataservice::Data
 // client, bit-identical to the file. Fails the test otherwise.
 void requireServerHealthy(const dataservice::DataServer& server);
 
+// A hostile file: a chain of `levels` nested groups /g/g/g/... with a
+// dataset at the bottom (every lookup walks the whole path, so describing
+// it unbounded costs levels^2).
+void writeNestedGroups(const std::string& path, int levels);
+
 // Reads a whole dataset straight from a file (holding the HDF5 lock).
 template <typename T>
 std::vector<T> readDirect(const std::string& file, const std::string& dataset);

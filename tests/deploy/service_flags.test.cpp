@@ -87,6 +87,9 @@ TEST_CASE("crackvis-data refuses out-of-range limits from flags and file at star
       {"no streams in the file", base, R"({"limits": {"max_concurrent_streams": 0}})",
        "--max-streams must be at least 1, got 0 (limits.max_concurrent_streams in the "
        "configuration file)"},
+      {"no describe time in the file", base, R"({"limits": {"describe_max_seconds": 0}})",
+       "limits.describe_max_seconds in the configuration file must be between 0.001 and 3600, "
+       "got 0"},
       {"no slabs in the file", base, R"({"limits": {"max_slabs_per_read": 0}})",
        "limits.max_slabs_per_read in the configuration file must be at least 1, got 0"},
       {"no root",

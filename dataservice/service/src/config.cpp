@@ -1,3 +1,4 @@
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <type_traits>
@@ -20,7 +21,19 @@ Status readLimits(const json& object, const std::string& where, Limits& limits) 
   CRACKVIS_RETURN_IF_ERROR(checkKeys(
       object, where,
       {"max_read_bytes", "max_fetch_bytes", "max_concurrent_streams", "max_streams_per_user",
-       "max_slabs_per_read", "max_call_seconds", "handshake_seconds", "max_memory_bytes"}));
+       "max_slabs_per_read", "max_call_seconds", "handshake_seconds", "max_memory_bytes",
+       "describe_max_depth", "describe_max_objects", "describe_max_seconds"}));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "describe_max_depth", where, limits.describe.maxDepth));
+  std::uint64_t objects = limits.describe.maxObjects;
+  CRACKVIS_RETURN_IF_ERROR(read(object, "describe_max_objects", where, objects));
+  limits.describe.maxObjects = objects;
+  double seconds = std::chrono::duration<double>(limits.describe.maxTime).count();
+  CRACKVIS_RETURN_IF_ERROR(read(object, "describe_max_seconds", where, seconds));
+  // Out of range (or not finite) becomes -1 ms, which validateServerConfig
+  // refuses, naming the key.
+  const bool usable = std::isfinite(seconds) && seconds >= 0.0 && seconds <= 1e6;
+  limits.describe.maxTime =
+      std::chrono::milliseconds(usable ? static_cast<std::int64_t>(seconds * 1000) : -1);
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_memory_bytes", where, limits.maxMemoryBytes));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_read_bytes", where, limits.maxReadBytes));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_fetch_bytes", where, limits.maxFetchBytes));
@@ -166,6 +179,14 @@ Status validateServerConfig(const ServerConfig& config) {
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-streams-per-user", "limits.max_streams_per_user"},
                                         limits.maxStreamsPerUser, 1,
                                         std::numeric_limits<int>::max()));
+  CRACKVIS_RETURN_IF_ERROR(
+      checkSetting({"", "limits.describe_max_depth"}, limits.describe.maxDepth, 1, 100'000));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"", "limits.describe_max_objects"},
+                                        std::uint64_t{limits.describe.maxObjects}, std::uint64_t{1},
+                                        std::uint64_t{100'000'000}));
+  CRACKVIS_RETURN_IF_ERROR(
+      checkSetting({"", "limits.describe_max_seconds"},
+                   std::chrono::duration<double>(limits.describe.maxTime).count(), 0.001, 3600.0));
   // One stream's buffer must fit, or no Read could ever run.
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-memory", "limits.max_memory_bytes"},
                                         limits.maxMemoryBytes, std::uint64_t{kStreamBufferBytes},

@@ -565,6 +565,7 @@ grpc::ServerUnaryReactor* DataServiceImpl::Describe(grpc::CallbackServerContext*
     // A client that gave up (or whose deadline passed) stops the walk: a
     // hostile file must not hold the HDF5 lock for a caller who is gone.
     DescribeOptions options;
+    options.limits = m_limits.describe;
     options.cancelled = [context] { return context->IsCancelled(); };
     auto description = m_catalogue.describe(*resolved, options);
     if (!description) {

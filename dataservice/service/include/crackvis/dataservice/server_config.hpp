@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <crackvis/common/status.hpp>
+#include <crackvis/dataservice/catalogue.hpp>
 #include <crackvis/dataservice/tls_material.hpp>
 
 namespace crackvis::dataservice {
@@ -31,6 +32,10 @@ struct Limits {
   // holds at most one chunk (about 1 MiB) whatever it reads, and reserves it
   // from this budget when it starts; past it, RESOURCE_EXHAUSTED.
   std::uint64_t maxMemoryBytes = std::uint64_t{256} << 20;
+  // One Describe holds the HDF5 lock while it walks a file's tree: bounded
+  // in depth, objects and time (limits.describe_max_depth, _max_objects,
+  // _max_seconds).
+  DescribeLimits describe;
 };
 
 // A user of the per-user layer on top of mutual TLS. A caller is this user
