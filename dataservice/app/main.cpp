@@ -42,6 +42,7 @@ struct Flags {
   std::optional<std::uint64_t> maxReadBytes;
   std::optional<std::uint64_t> maxFetchBytes;
   std::optional<std::uint64_t> maxMemoryBytes;
+  std::optional<int> hdf5Workers;
   std::optional<int> maxStreams;
   std::optional<int> maxStreamsPerUser;
   std::optional<double> handshakeSeconds;
@@ -92,6 +93,9 @@ crackvis::Result<ServerConfig> configure(const Flags& flags, const CLI::App& app
   }
   if (flags.maxMemoryBytes) {
     config.limits.maxMemoryBytes = *flags.maxMemoryBytes;
+  }
+  if (flags.hdf5Workers) {
+    config.limits.hdf5Workers = *flags.hdf5Workers;
   }
   if (flags.maxStreams) {
     config.limits.maxConcurrentStreams = *flags.maxStreams;
@@ -199,6 +203,9 @@ int main(int argc, char** argv) {
                  "given)");
   app.add_option("--max-read-bytes", flags.maxReadBytes, "limit on the bytes of one Read call");
   app.add_option("--max-fetch-bytes", flags.maxFetchBytes, "limit on the size of a fetched file");
+  app.add_option("--hdf5-workers", flags.hdf5Workers,
+                 "processes that make the HDF5 calls, so that a libhdf5 fault on a corrupt file "
+                 "ends only the call on it (default 4)");
   app.add_option("--max-memory", flags.maxMemoryBytes,
                  "bytes all Read and Fetch streams may buffer together; each stream holds one "
                  "chunk (about 1 MiB), so this caps the streams' memory (default 256 MiB)");

@@ -31,18 +31,6 @@ v1::ReadRequest bigRead() {
   return request;
 }
 
-bool waitUntil(const std::function<bool()>& condition, double seconds = 10.0) {
-  const auto end = std::chrono::steady_clock::now() +
-                   std::chrono::milliseconds(static_cast<int>(seconds * 1000));
-  while (std::chrono::steady_clock::now() < end) {
-    if (condition()) {
-      return true;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return condition();
-}
-
 TEST_CASE("Streams over the limit are refused with RESOURCE_EXHAUSTED until one ends",
           "[dataservice][integration]") {
   auto config = baseConfig();

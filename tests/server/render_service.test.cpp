@@ -213,17 +213,6 @@ double meanDifference(const encode::RgbFrame& a, const encode::RgbFrame& b) {
   return sum / static_cast<double>(a.rgb.size());
 }
 
-bool waitUntil(const std::function<bool()>& done, double seconds) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-  while (std::chrono::steady_clock::now() < end) {
-    if (done()) {
-      return true;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return done();
-}
-
 }  // namespace
 
 TEST_CASE("a session streams frames that follow the client's events",

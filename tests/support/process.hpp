@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,10 @@ ProcessResult runProcess(const std::vector<std::string>& argv);
 // that show a hostile input does not make a server grow.
 std::uint64_t residentBytes();
 int threadCount();
+
+// Polls `condition` every 10 ms until it holds or `seconds` have passed;
+// its last answer.
+bool waitUntil(const std::function<bool()>& condition, double seconds = 10.0);
 
 // Non-empty lines of a text.
 std::vector<std::string> lines(const std::string& text);

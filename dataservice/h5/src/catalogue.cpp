@@ -708,32 +708,32 @@ std::uint64_t innerBytes(const SlabPlan& slab, std::size_t dimension) {
 
 }  // namespace
 
-std::optional<Piece> SlabReader::nextPiece() {
-  while (m_cursorSlab < m_slabs.size()) {
-    const SlabPlan& slab = m_slabs[m_cursorSlab];
-    if (slab.bytes == 0 || m_cursorOffset >= slab.bytes) {
-      ++m_cursorSlab;
-      m_cursor.clear();
-      m_cursorOffset = 0;
+std::optional<Piece> PieceCursor::next(const std::vector<SlabPlan>& slabs) {
+  while (m_slab < slabs.size()) {
+    const SlabPlan& slab = slabs[m_slab];
+    if (slab.bytes == 0 || m_offset >= slab.bytes) {
+      ++m_slab;
+      m_start.clear();
+      m_offset = 0;
       continue;
     }
     Piece piece;
-    piece.slab = m_cursorSlab;
-    piece.offset = m_cursorOffset;
+    piece.slab = m_slab;
+    piece.offset = m_offset;
     if (slab.count.empty()) {  // a scalar: one piece
       piece.bytes = slab.bytes;
-      m_cursorOffset = slab.bytes;
+      m_offset = slab.bytes;
       return piece;
     }
     const std::size_t rank = slab.count.size();
-    if (m_cursor.empty()) {
-      m_cursor.assign(rank, 0);
+    if (m_start.empty()) {
+      m_start.assign(rank, 0);
     }
     const std::size_t along = splitDimension(slab);
     const std::uint64_t inner = innerBytes(slab, along);
     const std::uint64_t run = std::min(std::max<std::uint64_t>(1, kMaxChunkBytes / inner),
-                                       slab.count[along] - m_cursor[along]);
-    piece.start = m_cursor;
+                                       slab.count[along] - m_start[along]);
+    piece.start = m_start;
     piece.count.assign(rank, 1);
     for (std::size_t d = along + 1; d < rank; ++d) {
       piece.count[d] = slab.count[d];
@@ -741,16 +741,71 @@ std::optional<Piece> SlabReader::nextPiece() {
     piece.count[along] = run;
     piece.bytes = run * inner;
     // Advance in row-major order: carry into the dimensions before `along`.
-    m_cursorOffset += piece.bytes;
-    m_cursor[along] += run;
-    for (std::size_t d = along; d > 0 && m_cursor[d] == slab.count[d]; --d) {
-      m_cursor[d] = 0;
-      ++m_cursor[d - 1];
+    m_offset += piece.bytes;
+    m_start[along] += run;
+    for (std::size_t d = along; d > 0 && m_start[d] == slab.count[d]; --d) {
+      m_start[d] = 0;
+      ++m_start[d - 1];
     }
     return piece;
   }
   return std::nullopt;
 }
+
+std::optional<Piece> SlabReader::nextPiece() {
+  return m_pieces.next(m_slabs);
+}
+
+namespace {
+
+// Reads `piece` of `slab` from an open dataset; the caller holds the lock.
+Status readSlabPiece(hid_t dataset, const std::string& file, const SlabPlan& slab,
+                     const Piece& piece, void* out) {
+  herr_t result = 0;
+  if (slab.count.empty()) {  // a scalar, still one value (it may have changed since the plan)
+    h5::Handle space = h5::dataspaceHandle(H5Dget_space(dataset));
+    if (!space.valid() || H5Sget_simple_extent_npoints(space.get()) != 1) {
+      return failedPrecondition(
+          fmt::format("dataset {} in {}: no longer a scalar", slab.dataset, file));
+    }
+    result = H5Dread(dataset, littleEndianType(slab.dtype), H5S_ALL, H5S_ALL, H5P_DEFAULT, out);
+  } else {
+    if (piece.start.size() != slab.count.size() || piece.count.size() != slab.count.size()) {
+      return invalidArgument(
+          fmt::format("dataset {} in {}: a piece of rank {} of a slab of rank {}", slab.dataset,
+                      file, piece.count.size(), slab.count.size()));
+    }
+    std::vector<hsize_t> start(slab.start.begin(), slab.start.end());
+    std::vector<hsize_t> count(piece.count.begin(), piece.count.end());
+    for (std::size_t d = 0; d < start.size(); ++d) {
+      start[d] += piece.start[d];
+    }
+    h5::Handle fileSpace = h5::dataspaceHandle(H5Dget_space(dataset));
+    h5::Handle memorySpace = h5::dataspaceHandle(
+        H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr));
+    if (!fileSpace.valid() || !memorySpace.valid() ||
+        H5Sselect_hyperslab(fileSpace.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(),
+                            nullptr) < 0 ||
+        H5Sselect_valid(fileSpace.get()) <= 0 ||
+        static_cast<std::uint64_t>(H5Sget_select_npoints(memorySpace.get())) *
+                elementSize(slab.dtype) !=
+            piece.bytes) {
+      return failedPrecondition(
+          fmt::format("dataset {} in {}: cannot select the piece (the file may have changed; {})",
+                      slab.dataset, file, h5::lastHdf5Error()));
+    }
+    result = H5Dread(dataset, littleEndianType(slab.dtype), memorySpace.get(), fileSpace.get(),
+                     H5P_DEFAULT, out);
+  }
+  if (result < 0) {
+    return failedPrecondition(
+        fmt::format("dataset {} in {}: read failed, the file may be truncated or corrupt ({})",
+                    slab.dataset, file, h5::lastHdf5Error()));
+  }
+  return Status::ok();
+}
+
+}  // namespace
 
 Status SlabReader::read(const Piece& piece, void* out) {
   const SlabPlan& slab = m_slabs.at(piece.slab);
@@ -766,34 +821,32 @@ Status SlabReader::read(const Piece& piece, void* out) {
     return failedPrecondition(fmt::format("dataset {} in {}: cannot open ({})", slab.dataset,
                                           m_file, h5::lastHdf5Error()));
   }
-  herr_t result = 0;
-  if (slab.count.empty()) {  // a scalar
-    result = H5Dread(m_handles->dataset.get(), littleEndianType(slab.dtype), H5S_ALL, H5S_ALL,
-                     H5P_DEFAULT, out);
-  } else {
-    std::vector<hsize_t> start(slab.start.begin(), slab.start.end());
-    std::vector<hsize_t> count(piece.count.begin(), piece.count.end());
-    for (std::size_t d = 0; d < start.size(); ++d) {
-      start[d] += piece.start[d];
-    }
-    h5::Handle fileSpace = h5::dataspaceHandle(H5Dget_space(m_handles->dataset.get()));
-    h5::Handle memorySpace = h5::dataspaceHandle(
-        H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr));
-    if (!fileSpace.valid() || !memorySpace.valid() ||
-        H5Sselect_hyperslab(fileSpace.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(),
-                            nullptr) < 0) {
-      return internalError(fmt::format("dataset {} in {}: cannot select the hyperslab ({})",
-                                       slab.dataset, m_file, h5::lastHdf5Error()));
-    }
-    result = H5Dread(m_handles->dataset.get(), littleEndianType(slab.dtype), memorySpace.get(),
-                     fileSpace.get(), H5P_DEFAULT, out);
+  return readSlabPiece(m_handles->dataset.get(), m_file, slab, piece, out);
+}
+
+Status Catalogue::readPiece(const ResolvedPath& file, const SlabPlan& slab, const Piece& piece,
+                            void* out) const {
+  std::lock_guard lock(hdf5Mutex());
+  h5::quietHdf5();
+  auto handle = m_openFiles->open(file);
+  if (!handle) {
+    return handle.status();
   }
-  if (result < 0) {
-    return failedPrecondition(
-        fmt::format("dataset {} in {}: read failed, the file may be truncated or corrupt ({})",
-                    slab.dataset, m_file, h5::lastHdf5Error()));
+  h5::Handle access = h5::noExternalLinks();
+  h5::Handle dataset =
+      h5::datasetHandle(H5Dopen2(handle->get(), slab.resolvedDataset.c_str(), access.get()));
+  if (!dataset.valid()) {
+    return failedPrecondition(fmt::format("dataset {} in {}: cannot open ({})", slab.dataset,
+                                          file.requested, h5::lastHdf5Error()));
   }
-  return Status::ok();
+  // The plan came from a Describe-time view of the file: check that the
+  // dataset still has the type the piece's size assumes.
+  h5::Handle type = h5::datatypeHandle(H5Dget_type(dataset.get()));
+  if (!type.valid() || classifyType(type.get()) != slab.dtype) {
+    return failedPrecondition(fmt::format("dataset {} in {}: its type changed since the Read began",
+                                          slab.dataset, file.requested));
+  }
+  return readSlabPiece(dataset.get(), file.requested, slab, piece, out);
 }
 
 Result<std::unique_ptr<SlabReader>> Catalogue::openRead(const ResolvedPath& file,

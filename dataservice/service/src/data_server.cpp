@@ -11,6 +11,7 @@ struct DataServer::Impl {
   ServerConfig config;
   std::unique_ptr<rpc::AccessLog> log;
   std::unique_ptr<rpc::Authenticator> authenticator;
+  std::unique_ptr<Hdf5Workers> workers;  // outlives the service that calls it
   std::unique_ptr<DataServiceImpl> service;
   std::unique_ptr<RawTlsServer> raw;
   std::unique_ptr<rpc::ServerHost> host;
@@ -21,12 +22,15 @@ struct DataServer::Impl {
     if (++round % 10 == 0) {
       // Once a second: files no call needs any more are not held open
       // (nor, if deleted, their disk space).
-      service->catalogue().closeIdleFiles();
+      service->catalogue().closeIdleFiles();  // the workers close theirs themselves
     }
   }
 };
 
 Result<std::unique_ptr<DataServer>> DataServer::start(const ServerConfig& config) {
+  // The same rules as crackvis-data's flags and file: a server started from
+  // code (tests, the CLI's benchmark) cannot bypass them.
+  CRACKVIS_RETURN_IF_ERROR(validateServerConfig(config));
   auto impl = std::make_unique<Impl>();
   impl->config = config;
   if (!config.rawTlsListen.empty() && config.insecure) {
@@ -46,8 +50,17 @@ Result<std::unique_ptr<DataServer>> DataServer::start(const ServerConfig& config
   }
   impl->log = std::move(*log);
   impl->authenticator = std::make_unique<rpc::Authenticator>(config.users);
+  Hdf5Workers::Settings workerSettings;
+  workerSettings.workers = config.limits.hdf5Workers;
+  workerSettings.pieceTime =
+      std::chrono::milliseconds(static_cast<std::int64_t>(config.limits.hdf5CallSeconds * 1000));
+  auto workers = Hdf5Workers::start(*root, workerSettings);
+  if (!workers) {
+    return workers.status();
+  }
+  impl->workers = std::move(*workers);
   impl->service = std::make_unique<DataServiceImpl>(
-      Catalogue(std::move(*root)), *impl->authenticator, config.limits, *impl->log);
+      Catalogue(std::move(*root)), *impl->workers, *impl->authenticator, config.limits, *impl->log);
   if (!config.rawTlsListen.empty()) {
     auto material = loadTlsMaterial(config.tls);
     if (!material) {
@@ -100,6 +113,15 @@ int DataServer::rawTlsPort() const {
 
 int DataServer::activeStreams() const {
   return m_impl->service->streams().active();
+}
+
+std::vector<int> DataServer::hdf5WorkerPids() const {
+  const auto pids = m_impl->workers->pids();
+  return {pids.begin(), pids.end()};
+}
+
+int DataServer::hdf5WorkersReplaced() const {
+  return m_impl->workers->replaced();
 }
 
 void DataServer::shutdown(double graceSeconds) {

@@ -4,6 +4,8 @@
 
 #include <fmt/format.h>
 
+#include "describe_proto.hpp"
+
 namespace crackvis::dataservice {
 namespace v1 = crackvis::v1;
 using Clock = std::chrono::steady_clock;
@@ -25,57 +27,6 @@ Clock::time_point deadlineAfter(double seconds) {
 }
 
 // ------------------------------------------------------------ conversion --
-
-v1::DataType toProto(DataType type) {
-  return static_cast<v1::DataType>(static_cast<int>(type));
-}
-
-void toProto(const AttributeInfo& in, v1::Attribute& out) {
-  out.set_name(in.name);
-  out.set_dtype(toProto(in.dtype));
-  for (auto d : in.shape) {
-    out.add_shape(d);
-  }
-  out.set_truncated(in.truncated);
-  if (const auto* text = std::get_if<std::string>(&in.value)) {
-    out.set_text(*text);
-  } else if (const auto* integers = std::get_if<std::vector<std::int64_t>>(&in.value)) {
-    out.mutable_integers()->mutable_values()->Add(integers->begin(), integers->end());
-  } else if (const auto* floats = std::get_if<std::vector<double>>(&in.value)) {
-    out.mutable_floats()->mutable_values()->Add(floats->begin(), floats->end());
-  }
-}
-
-void toProto(const FileDescription& in, v1::DescribeResponse& out) {
-  out.set_file(in.file);
-  out.set_size_bytes(in.sizeBytes);
-  for (const GroupInfo& group : in.groups) {
-    v1::Group* g = out.add_groups();
-    g->set_path(group.path);
-    for (const AttributeInfo& attribute : group.attributes) {
-      toProto(attribute, *g->add_attributes());
-    }
-  }
-  for (const DatasetInfo& dataset : in.datasets) {
-    v1::Dataset* d = out.add_datasets();
-    d->set_path(dataset.path);
-    d->set_dtype(toProto(dataset.dtype));
-    d->set_dtype_name(dataset.dtypeName);
-    d->mutable_shape()->Add(dataset.shape.begin(), dataset.shape.end());
-    d->mutable_chunk_shape()->Add(dataset.chunkShape.begin(), dataset.chunkShape.end());
-    for (const AttributeInfo& attribute : dataset.attributes) {
-      toProto(attribute, *d->add_attributes());
-    }
-  }
-  out.set_format(in.format);
-  out.set_format_version(in.formatVersion);
-  for (const StepEntry& step : in.steps) {
-    v1::Step* s = out.add_steps();
-    s->set_index(step.index);
-    s->set_time(step.time);
-    s->set_group(step.group);
-  }
-}
 
 std::vector<Hyperslab> fromProto(const v1::ReadRequest& request) {
   std::vector<Hyperslab> slabs;
@@ -309,18 +260,19 @@ class ReadReactor final : public StreamReactor {
     if (!resolved) {
       return resolved.status();
     }
-    auto reader = m_service.catalogue().openRead(*resolved, fromProto(request),
-                                                 m_service.limits().maxReadBytes);
-    if (!reader) {
-      return reader.status();
+    auto plan = m_service.workers().planRead(*resolved, fromProto(request),
+                                             m_service.limits().maxReadBytes);
+    if (!plan) {
+      return plan.status();
     }
-    m_reader = std::move(*reader);
+    m_file = std::move(*resolved);
+    m_plan = std::move(*plan);
     return Status::ok();
   }
 
   // The chunk's fields but its data (field 6).
   std::string header(std::uint64_t offset) {
-    const SlabPlan& slab = m_reader->slabs()[m_piece.slab];
+    const SlabPlan& slab = m_plan.slabs[m_piece.slab];
     v1::ReadChunk chunk;
     chunk.set_slab_index(static_cast<std::uint32_t>(m_piece.slab));
     chunk.set_dtype(toProto(slab.dtype));
@@ -330,17 +282,20 @@ class ReadReactor final : public StreamReactor {
     return chunk.SerializeAsString();
   }
 
-  // Every piece is at most one chunk (SlabReader splits rows that are
-  // larger), so a call holds one chunk's buffer whatever the dataset's shape.
+  // Every piece is at most one chunk (rows larger than a chunk are split),
+  // so a call holds one chunk's buffer whatever the dataset's shape. Each
+  // piece is read by whichever HDF5 worker is free.
   void writeNext() override {
-    auto piece = m_reader->nextPiece();
+    auto piece = m_pieces.next(m_plan.slabs);
     if (!piece) {
       finish(Status::ok());
       return;
     }
     m_piece = std::move(*piece);
     ChunkData data(m_piece.bytes);
-    if (Status status = m_reader->read(m_piece, data.data()); !status) {
+    if (Status status =
+            m_service.workers().readPiece(m_file, m_plan.slabs[m_piece.slab], m_piece, data.data());
+        !status) {
       finish(status);
       return;
     }
@@ -348,7 +303,9 @@ class ReadReactor final : public StreamReactor {
   }
 
   DataServiceImpl& m_service;
-  std::unique_ptr<SlabReader> m_reader;
+  ResolvedPath m_file;
+  ReadPlan m_plan;
+  PieceCursor m_pieces;
   Piece m_piece;
 };
 
@@ -562,16 +519,18 @@ grpc::ServerUnaryReactor* DataServiceImpl::Describe(grpc::CallbackServerContext*
     if (!resolved) {
       return resolved.status();
     }
-    // A client that gave up (or whose deadline passed) stops the walk: a
-    // hostile file must not hold the HDF5 lock for a caller who is gone.
-    DescribeOptions options;
-    options.limits = m_limits.describe;
-    options.cancelled = [context] { return context->IsCancelled(); };
-    auto description = m_catalogue.describe(*resolved, options);
-    if (!description) {
-      return description.status();
+    // A client that gave up (or whose deadline passed) stops the walk (its
+    // worker is replaced): a hostile file must not hold a worker for a
+    // caller who is gone.
+    auto described = m_workers.describe(*resolved, m_limits.describe,
+                                        [context] { return context->IsCancelled(); });
+    if (!described) {
+      return described.status();
     }
-    toProto(*description, *response);
+    if (!response->ParseFromString(*described)) {
+      return internalError(fmt::format("Describe of {}: an HDF5 worker sent an unreadable answer",
+                                       echoed(request->file())));
+    }
     return Status::ok();
   });
 }

@@ -13,6 +13,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "crackvis/v1/data.grpc.pb.h"
+#include "hdf5_workers.hpp"
 #include <crackvis/dataservice/catalogue.hpp>
 #include <crackvis/dataservice/server_config.hpp>
 #include <crackvis/rpc/access_log.hpp>
@@ -76,9 +77,12 @@ using DataServiceBase = crackvis::v1::DataService::WithRawCallbackMethod_Read<
 
 class DataServiceImpl final : public DataServiceBase {
  public:
-  DataServiceImpl(Catalogue catalogue, Authenticator& authenticator, const Limits& limits,
-                  AccessLog& log)
+  // Every HDF5 call goes to `workers`; the catalogue here only lists files
+  // and streams them as stored.
+  DataServiceImpl(Catalogue catalogue, Hdf5Workers& workers, Authenticator& authenticator,
+                  const Limits& limits, AccessLog& log)
       : m_catalogue(std::move(catalogue)),
+        m_workers(workers),
         m_authenticator(authenticator),
         m_limits(limits),
         m_log(log),
@@ -102,6 +106,7 @@ class DataServiceImpl final : public DataServiceBase {
 
   // Shared by the handlers and the stream reactors.
   const Catalogue& catalogue() const { return m_catalogue; }
+  Hdf5Workers& workers() { return m_workers; }
   const Limits& limits() const { return m_limits; }
   AccessLog& log() { return m_log; }
   StreamRegistry& streams() { return m_streams; }
@@ -118,6 +123,7 @@ class DataServiceImpl final : public DataServiceBase {
                                   const google::protobuf::Message& response, Body&& body);
 
   Catalogue m_catalogue;
+  Hdf5Workers& m_workers;
   Authenticator& m_authenticator;
   Limits m_limits;
   AccessLog& m_log;

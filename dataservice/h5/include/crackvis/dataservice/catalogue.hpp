@@ -54,6 +54,20 @@ struct Piece {
   std::vector<std::uint64_t> count;  // the piece's shape
 };
 
+// Walks the pieces of a Read's slabs: slab order, then byte order. Pure
+// arithmetic, so a process that holds only the plans (the data service,
+// whose HDF5 work runs in worker processes) splits a Read as the reader does.
+class PieceCursor {
+ public:
+  // The next piece, or nothing when every slab is done.
+  std::optional<Piece> next(const std::vector<SlabPlan>& slabs);
+
+ private:
+  std::size_t m_slab = 0;
+  std::vector<std::uint64_t> m_start;  // the next piece's start in the current slab
+  std::uint64_t m_offset = 0;          // its offset in bytes
+};
+
 // An open, validated Read: the file stays open until the reader is
 // destroyed; pieces come in slab order, then byte order.
 class SlabReader {
@@ -79,9 +93,7 @@ class SlabReader {
   std::unique_ptr<Handles> m_handles;
   std::vector<SlabPlan> m_slabs;
   std::uint64_t m_totalBytes = 0;
-  std::size_t m_cursorSlab = 0;
-  std::vector<std::uint64_t> m_cursor;  // the next piece's start in the current slab
-  std::uint64_t m_cursorOffset = 0;     // its offset in bytes
+  PieceCursor m_pieces;
 };
 
 // An open file streamed as stored (Fetch).
@@ -144,6 +156,13 @@ class Catalogue {
   Result<std::unique_ptr<SlabReader>> openRead(const ResolvedPath& file,
                                                const std::vector<Hyperslab>& slabs,
                                                std::uint64_t maxBytes) const;
+
+  // Reads one piece of a slab that openRead() planned (possibly in another
+  // process: the plan is data) into `out` (piece.bytes long). The dataset is
+  // opened by the plan's hard-link path; a file changed since the plan gives
+  // an error, never a read outside `out`.
+  Status readPiece(const ResolvedPath& file, const SlabPlan& slab, const Piece& piece,
+                   void* out) const;
 
   // Opens a file for streaming as stored; it must be HDF5 and at most
   // `maxBytes` long.

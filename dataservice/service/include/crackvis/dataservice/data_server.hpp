@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <crackvis/common/status.hpp>
 #include <crackvis/dataservice/server_config.hpp>
@@ -29,6 +30,10 @@ class DataServer {
   int rawTlsPort() const;  // 0 when the raw TLS baseline is off
   // Read and Fetch calls in progress (for tests: a cancelled call must end).
   int activeStreams() const;
+  // The HDF5 worker processes now, and how many have been replaced (after
+  // a fault, a time limit or a cancelled caller) since start.
+  std::vector<int> hdf5WorkerPids() const;
+  int hdf5WorkersReplaced() const;
 
   // Stops accepting calls, gives running ones `graceSeconds` to finish and
   // cancels the rest; idempotent.

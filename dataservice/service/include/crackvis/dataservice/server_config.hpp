@@ -36,6 +36,14 @@ struct Limits {
   // in depth, objects and time (limits.describe_max_depth, _max_objects,
   // _max_seconds).
   DescribeLimits describe;
+  // Processes that make every HDF5 call (Describe, Read), so that a libhdf5
+  // fault on a corrupt file ends only the call on it (limits.hdf5_workers,
+  // --hdf5-workers). Also how many HDF5 calls run at once.
+  int hdf5Workers = 4;
+  // A worker that has not answered a plan or a piece (at most 1 MiB) in this
+  // time is stuck in libhdf5 on a corrupt file: it is killed and replaced
+  // (limits.hdf5_call_seconds). Describe gets describe.maxTime on top.
+  double hdf5CallSeconds = 30.0;
 };
 
 // A user of the per-user layer on top of mutual TLS. A caller is this user

@@ -1,0 +1,626 @@
+#include "hdf5_workers.hpp"
+
+#include <algorithm>
+#include <csignal>
+#include <cstring>
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <poll.h>
+#include <sys/prctl.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "crackvis/v1/data.pb.h"
+#include "describe_proto.hpp"
+#include <crackvis/common/log.hpp>
+
+namespace crackvis::dataservice {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr const char* kProgram = "crackvis-data";
+constexpr int kWorkerSocket = 3;  // the one descriptor a worker keeps
+
+enum Kind : std::uint32_t { kDescribe = 1, kPlan = 2, kPiece = 3, kOk = 100, kError = 101 };
+
+// ------------------------------------------------------------------ wire --
+// Little-endian fields in a string: what crosses the socket between the
+// service and a worker (both the same build of the same program).
+
+class WireWriter {
+ public:
+  void u64(std::uint64_t value) { m_out.append(reinterpret_cast<const char*>(&value), 8); }
+  void text(std::string_view value) {
+    u64(value.size());
+    m_out.append(value);
+  }
+  template <typename T>
+  void numbers(const std::vector<T>& values) {
+    u64(values.size());
+    for (T value : values) {
+      u64(static_cast<std::uint64_t>(value));
+    }
+  }
+  std::string take() { return std::move(m_out); }
+
+ private:
+  std::string m_out;
+};
+
+class WireReader {
+ public:
+  explicit WireReader(std::string_view in) : m_in(in) {}
+  std::uint64_t u64() {
+    std::uint64_t value = 0;
+    if (m_in.size() < 8) {
+      m_ok = false;
+      return 0;
+    }
+    std::memcpy(&value, m_in.data(), 8);
+    m_in.remove_prefix(8);
+    return value;
+  }
+  std::string text() {
+    const std::uint64_t size = u64();
+    if (size > m_in.size()) {
+      m_ok = false;
+      return {};
+    }
+    std::string value(m_in.substr(0, size));
+    m_in.remove_prefix(size);
+    return value;
+  }
+  template <typename T>
+  std::vector<T> numbers() {
+    const std::uint64_t size = u64();
+    if (size > m_in.size() / 8) {
+      m_ok = false;
+      return {};
+    }
+    std::vector<T> values(size);
+    for (T& value : values) {
+      value = static_cast<T>(u64());
+    }
+    return values;
+  }
+  bool ok() const { return m_ok; }
+
+ private:
+  std::string_view m_in;
+  bool m_ok = true;
+};
+
+void put(WireWriter& out, const ResolvedPath& file) {
+  out.text(file.requested);
+  out.text(file.relative);
+  out.text(file.absolute.string());
+}
+ResolvedPath getPath(WireReader& in) {
+  ResolvedPath file;
+  file.requested = in.text();
+  file.relative = in.text();
+  file.absolute = in.text();
+  return file;
+}
+
+void put(WireWriter& out, const SlabPlan& slab) {
+  out.text(slab.dataset);
+  out.text(slab.resolvedDataset);
+  out.u64(static_cast<std::uint64_t>(slab.dtype));
+  out.numbers(slab.datasetShape);
+  out.numbers(slab.start);
+  out.numbers(slab.count);
+  out.u64(slab.bytes);
+  out.u64(slab.rowBytes);
+}
+SlabPlan getSlab(WireReader& in) {
+  SlabPlan slab;
+  slab.dataset = in.text();
+  slab.resolvedDataset = in.text();
+  slab.dtype = static_cast<DataType>(in.u64());
+  slab.datasetShape = in.numbers<std::uint64_t>();
+  slab.start = in.numbers<std::uint64_t>();
+  slab.count = in.numbers<std::uint64_t>();
+  slab.bytes = in.u64();
+  slab.rowBytes = in.u64();
+  return slab;
+}
+
+void put(WireWriter& out, const Piece& piece) {
+  out.u64(piece.slab);
+  out.u64(piece.offset);
+  out.u64(piece.bytes);
+  out.numbers(piece.start);
+  out.numbers(piece.count);
+}
+Piece getPiece(WireReader& in) {
+  Piece piece;
+  piece.slab = in.u64();
+  piece.offset = in.u64();
+  piece.bytes = in.u64();
+  piece.start = in.numbers<std::uint64_t>();
+  piece.count = in.numbers<std::uint64_t>();
+  return piece;
+}
+
+std::string encodeStatus(const Status& status) {
+  WireWriter out;
+  out.u64(static_cast<std::uint64_t>(status.code()));
+  out.text(status.message());
+  return out.take();
+}
+Status decodeStatus(std::string_view payload) {
+  WireReader in(payload);
+  const auto code = static_cast<StatusCode>(in.u64());
+  std::string message = in.text();
+  if (!in.ok() || code == StatusCode::kOk) {
+    return internalError("an HDF5 worker sent an unreadable error");
+  }
+  return Status(code, std::move(message));
+}
+
+// ---------------------------------------------------------------- frames --
+// A frame: kind (4 bytes), 4 bytes of padding, payload length (8 bytes),
+// payload.
+
+struct FrameHeader {
+  std::uint32_t kind = 0;
+  std::uint32_t padding = 0;
+  std::uint64_t length = 0;
+};
+
+bool sendAll(int socket, const void* data, std::size_t size) {
+  const auto* bytes = static_cast<const char*>(data);
+  while (size > 0) {
+    const ssize_t sent = ::send(socket, bytes, size, MSG_NOSIGNAL);
+    if (sent < 0) {
+      if (errno == EINTR) {
+        continue;
+      }
+      return false;
+    }
+    bytes += sent;
+    size -= static_cast<std::size_t>(sent);
+  }
+  return true;
+}
+
+bool sendFrame(int socket, std::uint32_t kind, std::string_view payload) {
+  const FrameHeader header{kind, 0, payload.size()};
+  return sendAll(socket, &header, sizeof header) && sendAll(socket, payload.data(), payload.size());
+}
+
+enum class Wait { kReady, kClosed, kTimeout, kCancelled };
+
+// Reads exactly `size` bytes, waiting at most until `deadline` and asking
+// `cancelled` every 100 ms.
+Wait receiveAll(int socket, void* data, std::size_t size, Clock::time_point deadline,
+                const std::function<bool()>& cancelled) {
+  auto* bytes = static_cast<char*>(data);
+  while (size > 0) {
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    if (left.count() <= 0) {
+      return Wait::kTimeout;
+    }
+    pollfd ready{socket, POLLIN, 0};
+    const int polled =
+        ::poll(&ready, 1, static_cast<int>(std::min<std::int64_t>(left.count(), 100)));
+    if (polled < 0 && errno != EINTR) {
+      return Wait::kClosed;
+    }
+    if (polled <= 0) {
+      if (cancelled && cancelled()) {
+        return Wait::kCancelled;
+      }
+      continue;
+    }
+    const ssize_t got = ::recv(socket, bytes, size, 0);
+    if (got == 0 || (got < 0 && errno != EINTR && errno != EAGAIN)) {
+      return Wait::kClosed;
+    }
+    if (got > 0) {
+      bytes += got;
+      size -= static_cast<std::size_t>(got);
+    }
+  }
+  return Wait::kReady;
+}
+
+// --------------------------------------------------------------- worker --
+
+// What a worker answers to one request: kOk and its payload, or kError and
+// an encoded Status.
+std::pair<std::uint32_t, std::string> serve(const Catalogue& catalogue, std::uint32_t kind,
+                                            std::string_view payload) {
+  WireReader in(payload);
+  const ResolvedPath file = getPath(in);
+  auto failed = [](const Status& status) { return std::pair{kError, encodeStatus(status)}; };
+  switch (kind) {
+    case kDescribe: {
+      DescribeOptions options;
+      options.limits.maxDepth = static_cast<int>(in.u64());
+      options.limits.maxObjects = in.u64();
+      options.limits.maxTime = std::chrono::milliseconds(in.u64());
+      if (!in.ok()) {
+        break;
+      }
+      auto description = catalogue.describe(file, options);
+      if (!description) {
+        return failed(description.status());
+      }
+      crackvis::v1::DescribeResponse response;
+      toProto(*description, response);
+      return {kOk, response.SerializeAsString()};
+    }
+    case kPlan: {
+      const std::uint64_t count = in.u64();
+      if (count > payload.size()) {
+        break;
+      }
+      std::vector<Hyperslab> slabs(count);
+      for (Hyperslab& slab : slabs) {
+        slab.dataset = in.text();
+        slab.start = in.numbers<std::int64_t>();
+        slab.count = in.numbers<std::int64_t>();
+      }
+      const std::uint64_t maxBytes = in.u64();
+      if (!in.ok()) {
+        break;
+      }
+      auto reader = catalogue.openRead(file, slabs, maxBytes);
+      if (!reader) {
+        return failed(reader.status());
+      }
+      WireWriter out;
+      out.u64((*reader)->totalBytes());
+      out.u64((*reader)->slabs().size());
+      for (const SlabPlan& slab : (*reader)->slabs()) {
+        put(out, slab);
+      }
+      return {kOk, out.take()};
+    }
+    case kPiece: {
+      const SlabPlan slab = getSlab(in);
+      const Piece piece = getPiece(in);
+      if (!in.ok() || piece.bytes > kMaxChunkBytes) {
+        break;
+      }
+      std::string data(piece.bytes, '\0');
+      if (Status read = catalogue.readPiece(file, slab, piece, data.data()); !read) {
+        return failed(read);
+      }
+      return {kOk, std::move(data)};
+    }
+    default:
+      break;
+  }
+  return failed(internalError("an HDF5 worker got a request it cannot read"));
+}
+
+[[noreturn]] void runWorker(const DataRoot& root) {
+  const Catalogue catalogue(root);
+  for (;;) {
+    pollfd ready{kWorkerSocket, POLLIN, 0};
+    const int polled = ::poll(&ready, 1, 1000);
+    if (polled == 0) {
+      catalogue.closeIdleFiles();  // a writer is not kept out by an idle worker
+      continue;
+    }
+    if (polled < 0) {
+      if (errno == EINTR) {
+        continue;
+      }
+      ::_exit(1);
+    }
+    FrameHeader header;
+    const auto forever = Clock::now() + std::chrono::hours(24 * 365);
+    if (receiveAll(kWorkerSocket, &header, sizeof header, forever, {}) != Wait::kReady ||
+        header.length > (std::uint64_t{64} << 20)) {
+      ::_exit(0);  // the service closed the socket (or speaks nonsense): done
+    }
+    std::string payload(header.length, '\0');
+    if (receiveAll(kWorkerSocket, payload.data(), payload.size(), forever, {}) != Wait::kReady) {
+      ::_exit(0);
+    }
+    const auto [kind, answer] = serve(catalogue, header.kind, payload);
+    if (!sendFrame(kWorkerSocket, kind, answer)) {
+      ::_exit(0);
+    }
+  }
+}
+
+// The child's side of fork(): keep only the socket, die with the service,
+// take signals with their default actions, serve.
+[[noreturn]] void workerMain(int socket, pid_t service, const DataRoot& root) {
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+  ::prctl(PR_SET_DUMPABLE, 0);  // no core files of users' data when libhdf5 faults
+  if (::getppid() != service) {
+    ::_exit(0);  // the service died before the line above
+  }
+  sigset_t none;
+  sigemptyset(&none);
+  ::pthread_sigmask(SIG_SETMASK, &none, nullptr);
+  // Handlers the service installed (a test framework's, a sanitizer's) must
+  // not run in a worker: a fault ends it, and the service reports that.
+  for (int signal = 1; signal < NSIG; ++signal) {
+    if (signal != SIGKILL && signal != SIGSTOP) {
+      ::signal(signal, SIG_DFL);
+    }
+  }
+  ::signal(SIGPIPE, SIG_IGN);
+  if (socket != kWorkerSocket) {
+    ::dup2(socket, kWorkerSocket);  // without O_CLOEXEC
+  } else {
+    ::fcntl(kWorkerSocket, F_SETFD, 0);
+  }
+  // The service's listening sockets, connections and files must not live on
+  // in a worker.
+  ::close_range(kWorkerSocket + 1, ~0U, 0);
+  runWorker(root);
+}
+
+std::string describeExit(int status) {
+  if (WIFSIGNALED(status)) {
+    const int signal = WTERMSIG(status);
+    const char* name = ::sigabbrev_np(signal);
+    return fmt::format("killed by SIG{} (signal {})", name != nullptr ? name : "?", signal);
+  }
+  if (WIFEXITED(status)) {
+    return fmt::format("exited with status {}", WEXITSTATUS(status));
+  }
+  return "ended";
+}
+
+}  // namespace
+
+// ------------------------------------------------------------ supervisor --
+
+Hdf5Workers::Hdf5Workers(DataRoot root, Settings settings)
+    : m_root(std::move(root)), m_settings(settings) {}
+
+Result<std::unique_ptr<Hdf5Workers>> Hdf5Workers::start(const DataRoot& root, Settings settings) {
+  if (settings.workers < 1) {
+    return invalidArgument("at least one HDF5 worker is needed");
+  }
+  std::unique_ptr<Hdf5Workers> workers(new Hdf5Workers(root, settings));
+  workers->m_workers.resize(static_cast<std::size_t>(settings.workers));
+  for (Worker& worker : workers->m_workers) {
+    CRACKVIS_RETURN_IF_ERROR(workers->spawn(worker));
+  }
+  return workers;
+}
+
+Hdf5Workers::~Hdf5Workers() {
+  for (Worker& worker : m_workers) {
+    if (worker.socket >= 0) {
+      ::close(worker.socket);
+    }
+    if (worker.pid > 0) {
+      ::kill(worker.pid, SIGKILL);
+      int status = 0;
+      while (::waitpid(worker.pid, &status, 0) < 0 && errno == EINTR) {
+      }
+    }
+  }
+}
+
+Status Hdf5Workers::spawn(Worker& worker) {
+  auto started = startWorker();
+  if (!started) {
+    return started.status();
+  }
+  std::lock_guard lock(m_mutex);
+  worker.pid = started->first;
+  worker.socket = started->second;
+  return Status::ok();
+}
+
+Result<std::pair<pid_t, int>> Hdf5Workers::startWorker() {
+  int sockets[2];
+  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sockets) != 0) {
+    return unavailable(
+        fmt::format("cannot make a socket for an HDF5 worker: {}", std::strerror(errno)));
+  }
+  const pid_t service = ::getpid();
+  pid_t pid = -1;
+  {
+    // No HDF5 call of this process is in progress while the lock is held,
+    // so the child's copy of libhdf5 is in a consistent state.
+    std::lock_guard lock(hdf5Mutex());
+    pid = ::fork();
+    if (pid == 0) {
+      hdf5Mutex().unlock();  // the child's copy; it never leaves workerMain
+      ::close(sockets[0]);
+      workerMain(sockets[1], service, m_root);
+    }
+  }
+  ::close(sockets[1]);
+  if (pid < 0) {
+    ::close(sockets[0]);
+    return unavailable(fmt::format("cannot start an HDF5 worker: {}", std::strerror(errno)));
+  }
+  return std::pair{pid, sockets[0]};
+}
+
+Hdf5Workers::Worker* Hdf5Workers::checkOut() {
+  std::unique_lock lock(m_mutex);
+  for (;;) {
+    for (Worker& worker : m_workers) {
+      if (!worker.busy && worker.pid > 0) {
+        worker.busy = true;
+        return &worker;
+      }
+    }
+    const bool anyAlive = std::any_of(m_workers.begin(), m_workers.end(),
+                                      [](const Worker& worker) { return worker.pid > 0; });
+    if (!anyAlive) {
+      return nullptr;
+    }
+    m_idle.wait(lock);
+  }
+}
+
+void Hdf5Workers::checkIn(Worker* worker) {
+  {
+    std::lock_guard lock(m_mutex);
+    worker->busy = false;
+  }
+  m_idle.notify_one();
+}
+
+std::string Hdf5Workers::replace(Worker& worker, const std::string& file, const std::string& why) {
+  ::kill(worker.pid, SIGKILL);  // a no-op for one that has died already
+  int status = 0;
+  while (::waitpid(worker.pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  const std::string ended = describeExit(status);
+  ::close(worker.socket);
+  const pid_t old = worker.pid;
+  {
+    std::lock_guard lock(m_mutex);
+    worker.pid = -1;
+    worker.socket = -1;
+    ++m_replaced;
+  }
+  const Status spawned = spawn(worker);
+  log::event(stderr, kProgram, "hdf5_worker_replaced",
+             {{"pid", std::to_string(old)},
+              {"file", echoed(file)},
+              {"why", why},
+              {"ended", ended},
+              {"new_pid", spawned ? std::to_string(worker.pid) : std::string("none")}});
+  return ended;
+}
+
+Status Hdf5Workers::call(std::uint32_t kind, const std::string& request, const std::string& file,
+                         Clock::time_point deadline, const std::function<bool()>& isCancelled,
+                         Answer answer) {
+  Worker* worker = checkOut();
+  if (worker == nullptr) {
+    return unavailable("no HDF5 worker is running (they could not be restarted)");
+  }
+  // Every way out gives the worker back (replaced when it failed).
+  struct Return {
+    Hdf5Workers* workers;
+    Worker* worker;
+    ~Return() { workers->checkIn(worker); }
+  } giveBack{this, worker};
+
+  FrameHeader header;
+  Wait waited = Wait::kClosed;
+  if (sendFrame(worker->socket, kind, request)) {
+    waited = receiveAll(worker->socket, &header, sizeof header, deadline, isCancelled);
+  }
+  const bool sized = answer.bytes == nullptr || header.kind != kOk || header.length == answer.size;
+  if (waited == Wait::kReady && sized && header.length <= (std::uint64_t{256} << 20)) {
+    std::string text;
+    std::string& into = answer.text != nullptr ? *answer.text : text;
+    void* target = nullptr;
+    if (header.kind == kOk && answer.bytes != nullptr) {
+      target = answer.bytes;
+    } else {
+      into.resize(header.length);
+      target = into.data();
+    }
+    waited = receiveAll(worker->socket, target, header.length, deadline, isCancelled);
+    if (waited == Wait::kReady) {
+      return header.kind == kOk ? Status::ok() : decodeStatus(into);
+    }
+  } else if (waited == Wait::kReady) {
+    replace(*worker, file, "malformed answer");
+    return internalError(fmt::format("{}: an HDF5 worker answered out of turn", echoed(file)));
+  }
+  switch (waited) {
+    case Wait::kCancelled:
+      replace(*worker, file, "caller cancelled");
+      return cancelled(fmt::format("{}: cancelled by the caller", echoed(file)));
+    case Wait::kTimeout: {
+      replace(*worker, file, "time limit");
+      return deadlineExceeded(fmt::format(
+          "{}: libhdf5 did not finish in time; its worker process was replaced (the file may be "
+          "corrupt)",
+          echoed(file)));
+    }
+    default: {
+      const std::string ended = replace(*worker, file, "died");
+      return failedPrecondition(fmt::format(
+          "{}: libhdf5 faulted on this file (its worker process {}) and was replaced; the file "
+          "is probably corrupt",
+          echoed(file), ended));
+    }
+  }
+}
+
+Result<std::string> Hdf5Workers::describe(const ResolvedPath& file, const DescribeLimits& limits,
+                                          const std::function<bool()>& cancelled) {
+  WireWriter request;
+  put(request, file);
+  request.u64(static_cast<std::uint64_t>(limits.maxDepth));
+  request.u64(limits.maxObjects);
+  request.u64(static_cast<std::uint64_t>(limits.maxTime.count()));
+  std::string answer;
+  // The walk bounds itself by limits.maxTime; opening the file comes first.
+  const auto deadline = Clock::now() + limits.maxTime + m_settings.pieceTime;
+  CRACKVIS_RETURN_IF_ERROR(
+      call(kDescribe, request.take(), file.requested, deadline, cancelled, {&answer, nullptr, 0}));
+  return answer;
+}
+
+Result<ReadPlan> Hdf5Workers::planRead(const ResolvedPath& file,
+                                       const std::vector<Hyperslab>& slabs,
+                                       std::uint64_t maxBytes) {
+  WireWriter request;
+  put(request, file);
+  request.u64(slabs.size());
+  for (const Hyperslab& slab : slabs) {
+    request.text(slab.dataset);
+    request.numbers(slab.start);
+    request.numbers(slab.count);
+  }
+  request.u64(maxBytes);
+  std::string answer;
+  CRACKVIS_RETURN_IF_ERROR(call(kPlan, request.take(), file.requested,
+                                Clock::now() + m_settings.pieceTime, {}, {&answer, nullptr, 0}));
+  WireReader in(answer);
+  ReadPlan plan;
+  plan.totalBytes = in.u64();
+  const std::uint64_t count = in.u64();
+  for (std::uint64_t i = 0; i < count && in.ok(); ++i) {
+    plan.slabs.push_back(getSlab(in));
+  }
+  if (!in.ok()) {
+    return internalError(
+        fmt::format("{}: an HDF5 worker sent an unreadable plan", echoed(file.requested)));
+  }
+  return plan;
+}
+
+Status Hdf5Workers::readPiece(const ResolvedPath& file, const SlabPlan& slab, const Piece& piece,
+                              void* out) {
+  WireWriter request;
+  put(request, file);
+  put(request, slab);
+  put(request, piece);
+  return call(kPiece, request.take(), file.requested, Clock::now() + m_settings.pieceTime, {},
+              {nullptr, out, piece.bytes});
+}
+
+std::vector<pid_t> Hdf5Workers::pids() const {
+  std::lock_guard lock(m_mutex);
+  std::vector<pid_t> out;
+  for (const Worker& worker : m_workers) {
+    out.push_back(worker.pid);
+  }
+  return out;
+}
+
+int Hdf5Workers::replaced() const {
+  std::lock_guard lock(m_mutex);
+  return m_replaced;
+}
+
+}  // namespace crackvis::dataservice

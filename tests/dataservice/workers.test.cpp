@@ -1,0 +1,180 @@
+// crackvis-data's HDF5 work in supervised worker processes (issue 13.7),
+// through a real server on loopback: a worker that dies with SIGSEGV in the
+// middle of a call fails only that call and is replaced; one stuck in
+// libhdf5 is replaced at the call's time limit; a caller that gives up frees
+// its worker; and a corpus of corrupt files costs the service nothing.
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <future>
+#include <map>
+#include <random>
+#include <thread>
+
+#include <catch2/catch.hpp>
+#include <fmt/format.h>
+#include <sys/types.h>
+
+#include "service_fixture.hpp"
+#include "support/process.hpp"
+
+namespace crackvis::testing {
+namespace {
+
+using dataservice::Hyperslab;
+
+dataservice::ServerConfig oneWorker() {
+  auto config = baseConfig();
+  config.limits.hdf5Workers = 1;
+  return config;
+}
+
+}  // namespace
+
+TEST_CASE("A worker that dies with SIGSEGV fails only its call and is replaced",
+          "[dataservice][integration]") {
+  auto server = startServer(oneWorker());
+  const int pid = server->hdf5WorkerPids().at(0);
+  REQUIRE(pid > 0);
+  auto client = connect(clientOptions(*server));
+  // Stopped, the worker takes the request but cannot answer; the fault
+  // arrives while the call waits for it, as a libhdf5 crash would.
+  REQUIRE(::kill(pid, SIGSTOP) == 0);
+  auto describe = std::async(std::launch::async, [&] { return client.describe("run.h5"); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  REQUIRE(::kill(pid, SIGSEGV) == 0);
+  REQUIRE(::kill(pid, SIGCONT) == 0);
+  const auto result = describe.get();
+  REQUIRE_FALSE(result.isOk());
+  INFO(result.status().message());
+  CHECK(result.status().code() == StatusCode::kFailedPrecondition);
+  CHECK_THAT(result.status().message(), Catch::StartsWith("run.h5: libhdf5 faulted on this file") &&
+                                            Catch::Contains("killed by SIGSEGV (signal 11)"));
+  CHECK(server->hdf5WorkersReplaced() == 1);
+  const int replacement = server->hdf5WorkerPids().at(0);
+  CHECK(replacement > 0);
+  CHECK(replacement != pid);
+  // The next calls are served by the new worker.
+  CHECK(client.describe("run.h5").isOk());
+  requireServerHealthy(*server);
+}
+
+TEST_CASE("A worker stuck in libhdf5 is replaced at the call's time limit",
+          "[dataservice][integration]") {
+  auto config = oneWorker();
+  config.limits.hdf5CallSeconds = 0.5;
+  auto server = startServer(config);
+  const int pid = server->hdf5WorkerPids().at(0);
+  auto client = connect(clientOptions(*server));
+  REQUIRE(::kill(pid, SIGSTOP) == 0);  // as a worker in an endless loop
+  const auto start = std::chrono::steady_clock::now();
+  const Status stuck = client.read("run.h5", {Hyperslab::whole("/bonds/pairs")}).status();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  INFO(stuck.message());
+  CHECK(stuck.code() == StatusCode::kDeadlineExceeded);
+  CHECK_THAT(stuck.message(), Catch::Contains("did not finish in time") &&
+                                  Catch::Contains("worker process was replaced"));
+  CHECK(seconds < 5.0);
+  CHECK(server->hdf5WorkersReplaced() == 1);
+  CHECK(server->hdf5WorkerPids().at(0) != pid);
+  requireServerHealthy(*server);
+}
+
+TEST_CASE("A caller that gives up on a slow Describe frees its worker",
+          "[dataservice][integration]") {
+  TempDir root;
+  writeNestedGroups(root.file("deep.h5"), 1000);  // seconds of walking, unbounded
+  std::filesystem::copy_file(sampleRoot().file("run.h5"), root.file("run.h5"));
+  auto config = oneWorker();
+  config.dataRoot = root.path().string();
+  config.limits.describe.maxDepth = 100'000;
+  auto server = startServer(config);
+  auto options = clientOptions(*server);
+  options.timeoutSeconds = 0.3;
+  auto impatient = connect(options);
+  CHECK(impatient.describe("deep.h5").status().code() == StatusCode::kDeadlineExceeded);
+  // The walk is not left running for nobody: the one worker is free again.
+  REQUIRE(waitUntil([&] { return server->hdf5WorkersReplaced() == 1; }, 2.0));
+  auto client = connect(clientOptions(*server));
+  CHECK(client.read("run.h5", {Hyperslab::whole("/bonds/pairs")}).isOk());
+}
+
+namespace {
+
+// Copies of `source` with 1-8 bytes overwritten at random in the part of the
+// file HDF5 reads first (superblock, object headers, B-trees, heaps), and
+// the libhdf5 faults the fuzzer found (tests/fuzz/crashes).
+std::vector<std::string> writeCorruptCorpus(const std::string& source, const TempDir& root,
+                                            int count) {
+  std::ifstream in(source, std::ios::binary);
+  const std::string original((std::istreambuf_iterator<char>(in)), {});
+  std::mt19937 random(20261124);
+  std::vector<std::string> names;
+  const std::size_t span = std::min<std::size_t>(original.size(), 64 * 1024);
+  for (int i = 0; i < count; ++i) {
+    std::string damaged = original;
+    const int bytes = std::uniform_int_distribution<int>(1, 8)(random);
+    for (int b = 0; b < bytes; ++b) {
+      damaged[std::uniform_int_distribution<std::size_t>(0, span - 1)(random)] =
+          static_cast<char>(std::uniform_int_distribution<int>(0, 255)(random));
+    }
+    names.push_back(fmt::format("corrupt-{:03d}.h5", i));
+    std::ofstream(root.file(names.back()), std::ios::binary) << damaged;
+  }
+  const std::filesystem::path crashes =
+      std::filesystem::path(CRACKVIS_SOURCE_DIR) / "tests" / "fuzz" / "crashes";
+  for (const auto& entry : std::filesystem::directory_iterator(crashes)) {
+    names.push_back(entry.path().filename().string());
+    std::filesystem::copy_file(entry.path(), root.file(names.back()));
+  }
+  return names;
+}
+
+}  // namespace
+
+TEST_CASE("A corpus of corrupt files costs the data service nothing",
+          "[dataservice][integration]") {
+  TempDir root;
+  const auto names = writeCorruptCorpus(sampleRoot().file("run.h5"), root, 300);
+  std::filesystem::copy_file(sampleRoot().file("run.h5"), root.file("run.h5"));
+  auto config = baseConfig();
+  config.dataRoot = root.path().string();
+  config.limits.hdf5Workers = 2;
+  config.limits.hdf5CallSeconds = 2.0;
+  config.limits.describe.maxTime = std::chrono::milliseconds(2000);
+  auto server = startServer(config);
+  auto client = connect(clientOptions(*server));
+  std::map<std::string, int> outcomes;
+  for (const std::string& name : names) {
+    const Status described = client.describe(name).status();
+    const Status read = client.read(name, {Hyperslab::whole("/steps/000000/positions")}).status();
+    for (const Status& status : {described, read}) {
+      ++outcomes[std::string(toString(status.code()))];
+      // Every call is answered by the service itself: never a lost
+      // connection, never an internal error.
+      INFO(name << ": " << status.message());
+      CHECK(status.code() != StatusCode::kUnavailable);
+      CHECK(status.code() != StatusCode::kInternal);
+    }
+  }
+  std::string tally;
+  for (const auto& [code, count] : outcomes) {
+    tally += fmt::format(" {}={}", code, count);
+  }
+  std::printf("corrupt corpus: %zu files, calls:%s; HDF5 workers replaced: %d\n", names.size(),
+              tally.c_str(), server->hdf5WorkersReplaced());
+  CHECK(outcomes["OK"] > 0);  // some damage lands where nothing reads it
+  CHECK(outcomes["FAILED_PRECONDITION"] > 0);
+  // Zero service deaths: it still serves the intact file, bit for bit.
+  auto intact = client.read("run.h5", {Hyperslab::whole("/steps/000001/positions")});
+  INFO(intact.status().message());
+  REQUIRE(intact.isOk());
+  CHECK(intact->front().values<double>().value() ==
+        readDirect<double>(root.file("run.h5"), "/steps/000001/positions"));
+  CHECK(client.checkHealth().isOk());
+}
+
+}  // namespace crackvis::testing
