@@ -534,9 +534,41 @@ class Catalogue::OpenFiles {
     // A second handle, kept: it shares the file the caller's handle opened.
     h5::Handle kept = h5::fileHandle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
     if (kept.valid()) {
-      m_files.emplace(path, File{std::move(kept), identityOf(info), now});
+      m_files.emplace(path, File{std::move(kept), identityOf(info), now, {}});
     }
     return handle;
+  }
+
+  // A dataset of a kept file, opened once while the file is unchanged
+  // (identity checked as open() does); nothing when the file is not kept.
+  struct KeptDataset {
+    hid_t dataset;
+    DataType dtype;
+  };
+  std::optional<KeptDataset> keptDataset(const ResolvedPath& file, const std::string& name) {
+    const auto now = Clock::now();
+    struct stat info {};
+    auto kept = m_files.find(file.absolute.string());
+    if (kept == m_files.end() || ::stat(file.absolute.c_str(), &info) != 0 ||
+        !(kept->second.identity == identityOf(info))) {
+      return std::nullopt;
+    }
+    kept->second.lastUsed = now;
+    auto& datasets = kept->second.datasets;
+    if (auto found = datasets.find(name); found != datasets.end()) {
+      return KeptDataset{found->second.first.get(), found->second.second};
+    }
+    h5::Handle access = h5::noExternalLinks();
+    h5::Handle dataset =
+        h5::datasetHandle(H5Dopen2(kept->second.handle.get(), name.c_str(), access.get()));
+    if (!dataset.valid()) {
+      return std::nullopt;  // the caller opens it the slow way and reports why
+    }
+    h5::Handle type = h5::datatypeHandle(H5Dget_type(dataset.get()));
+    const DataType dtype = type.valid() ? classifyType(type.get()) : DataType::kUnspecified;
+    const hid_t id = dataset.get();
+    datasets.emplace(name, std::pair{std::move(dataset), dtype});
+    return KeptDataset{id, dtype};
   }
 
   void closeIdle(Clock::time_point now) {
@@ -556,6 +588,9 @@ class Catalogue::OpenFiles {
     h5::Handle handle;
     Identity identity;
     Clock::time_point lastUsed;
+    // Datasets a piece was read from, with the type the piece checked:
+    // pieces of one Read come one by one, each its own request.
+    std::map<std::string, std::pair<h5::Handle, DataType>> datasets;
   };
 
   static std::int64_t nanoseconds(const timespec& time) {
@@ -828,6 +863,18 @@ Status Catalogue::readPiece(const ResolvedPath& file, const SlabPlan& slab, cons
                             void* out) const {
   std::lock_guard lock(hdf5Mutex());
   h5::quietHdf5();
+  // The plan came from an earlier view of the file: the dataset must still
+  // have the type the piece's size assumes.
+  const auto changedType = [&] {
+    return failedPrecondition(fmt::format("dataset {} in {}: its type changed since the Read began",
+                                          slab.dataset, file.requested));
+  };
+  if (auto kept = m_openFiles->keptDataset(file, slab.resolvedDataset)) {
+    if (kept->dtype != slab.dtype) {
+      return changedType();
+    }
+    return readSlabPiece(kept->dataset, file.requested, slab, piece, out);
+  }
   auto handle = m_openFiles->open(file);
   if (!handle) {
     return handle.status();
@@ -839,12 +886,9 @@ Status Catalogue::readPiece(const ResolvedPath& file, const SlabPlan& slab, cons
     return failedPrecondition(fmt::format("dataset {} in {}: cannot open ({})", slab.dataset,
                                           file.requested, h5::lastHdf5Error()));
   }
-  // The plan came from a Describe-time view of the file: check that the
-  // dataset still has the type the piece's size assumes.
   h5::Handle type = h5::datatypeHandle(H5Dget_type(dataset.get()));
   if (!type.valid() || classifyType(type.get()) != slab.dtype) {
-    return failedPrecondition(fmt::format("dataset {} in {}: its type changed since the Read began",
-                                          slab.dataset, file.requested));
+    return changedType();
   }
   return readSlabPiece(dataset.get(), file.requested, slab, piece, out);
 }

@@ -293,9 +293,15 @@ class ReadReactor final : public StreamReactor {
     }
     m_piece = std::move(*piece);
     ChunkData data(m_piece.bytes);
-    if (Status status =
-            m_service.workers().readPiece(m_file, m_plan.slabs[m_piece.slab], m_piece, data.data());
-        !status) {
+    const bool first = m_first;
+    m_first = false;
+    if (first && m_plan.firstPiece.size() == m_piece.bytes) {
+      // It came with the plan.
+      std::memcpy(data.data(), m_plan.firstPiece.data(), m_piece.bytes);
+      m_plan.firstPiece = std::string();
+    } else if (Status status = m_service.workers().readPiece(m_file, m_plan.slabs[m_piece.slab],
+                                                             m_piece, data.data());
+               !status) {
       finish(status);
       return;
     }
@@ -306,6 +312,7 @@ class ReadReactor final : public StreamReactor {
   ResolvedPath m_file;
   ReadPlan m_plan;
   PieceCursor m_pieces;
+  bool m_first = true;
   Piece m_piece;
 };
 

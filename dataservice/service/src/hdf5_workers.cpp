@@ -7,6 +7,7 @@
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <poll.h>
+#include <sys/mman.h>
 #include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
@@ -24,7 +25,16 @@ using Clock = std::chrono::steady_clock;
 constexpr const char* kProgram = "crackvis-data";
 constexpr int kWorkerSocket = 3;  // the one descriptor a worker keeps
 
-enum Kind : std::uint32_t { kDescribe = 1, kPlan = 2, kPiece = 3, kOk = 100, kError = 101 };
+// kOkShared: a piece's bytes are in the worker's shared buffer, not in the
+// frame (two copies through the socket cost a view's Read a third more).
+enum Kind : std::uint32_t {
+  kDescribe = 1,
+  kPlan = 2,
+  kPiece = 3,
+  kOk = 100,
+  kError = 101,
+  kOkShared = 102
+};
 
 // ------------------------------------------------------------------ wire --
 // Little-endian fields in a string: what crosses the socket between the
@@ -188,9 +198,13 @@ bool sendAll(int socket, const void* data, std::size_t size) {
   return true;
 }
 
+// One send for the header and the payload: requests and most answers are
+// small, and each system call is a wake-up of the other side.
 bool sendFrame(int socket, std::uint32_t kind, std::string_view payload) {
   const FrameHeader header{kind, 0, payload.size()};
-  return sendAll(socket, &header, sizeof header) && sendAll(socket, payload.data(), payload.size());
+  std::string frame(reinterpret_cast<const char*>(&header), sizeof header);
+  frame.append(payload);
+  return sendAll(socket, frame.data(), frame.size());
 }
 
 enum class Wait { kReady, kClosed, kTimeout, kCancelled };
@@ -201,6 +215,16 @@ Wait receiveAll(int socket, void* data, std::size_t size, Clock::time_point dead
                 const std::function<bool()>& cancelled) {
   auto* bytes = static_cast<char*>(data);
   while (size > 0) {
+    // What has arrived already is taken without a poll first.
+    const ssize_t got = ::recv(socket, bytes, size, MSG_DONTWAIT);
+    if (got > 0) {
+      bytes += got;
+      size -= static_cast<std::size_t>(got);
+      continue;
+    }
+    if (got == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
+      return Wait::kClosed;
+    }
     const auto left =
         std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
     if (left.count() <= 0) {
@@ -212,19 +236,8 @@ Wait receiveAll(int socket, void* data, std::size_t size, Clock::time_point dead
     if (polled < 0 && errno != EINTR) {
       return Wait::kClosed;
     }
-    if (polled <= 0) {
-      if (cancelled && cancelled()) {
-        return Wait::kCancelled;
-      }
-      continue;
-    }
-    const ssize_t got = ::recv(socket, bytes, size, 0);
-    if (got == 0 || (got < 0 && errno != EINTR && errno != EAGAIN)) {
-      return Wait::kClosed;
-    }
-    if (got > 0) {
-      bytes += got;
-      size -= static_cast<std::size_t>(got);
+    if (polled <= 0 && cancelled && cancelled()) {
+      return Wait::kCancelled;
     }
   }
   return Wait::kReady;
@@ -235,7 +248,7 @@ Wait receiveAll(int socket, void* data, std::size_t size, Clock::time_point dead
 // What a worker answers to one request: kOk and its payload, or kError and
 // an encoded Status.
 std::pair<std::uint32_t, std::string> serve(const Catalogue& catalogue, std::uint32_t kind,
-                                            std::string_view payload) {
+                                            std::string_view payload, void* shared) {
   WireReader in(payload);
   const ResolvedPath file = getPath(in);
   auto failed = [](const Status& status) { return std::pair{kError, encodeStatus(status)}; };
@@ -281,6 +294,13 @@ std::pair<std::uint32_t, std::string> serve(const Catalogue& catalogue, std::uin
       for (const SlabPlan& slab : (*reader)->slabs()) {
         put(out, slab);
       }
+      // The first piece comes with the plan, in the shared buffer: one
+      // round trip fewer for every Read (a view's has seven). If it cannot
+      // be read now, the service asks for it again and gets the error then.
+      PieceCursor cursor;
+      const auto first = cursor.next((*reader)->slabs());
+      const bool read = first && (*reader)->read(*first, shared).isOk();
+      out.u64(read ? first->bytes : 0);
       return {kOk, out.take()};
     }
     case kPiece: {
@@ -289,11 +309,10 @@ std::pair<std::uint32_t, std::string> serve(const Catalogue& catalogue, std::uin
       if (!in.ok() || piece.bytes > kMaxChunkBytes) {
         break;
       }
-      std::string data(piece.bytes, '\0');
-      if (Status read = catalogue.readPiece(file, slab, piece, data.data()); !read) {
+      if (Status read = catalogue.readPiece(file, slab, piece, shared); !read) {
         return failed(read);
       }
-      return {kOk, std::move(data)};
+      return {kOkShared, {}};
     }
     default:
       break;
@@ -301,7 +320,7 @@ std::pair<std::uint32_t, std::string> serve(const Catalogue& catalogue, std::uin
   return failed(internalError("an HDF5 worker got a request it cannot read"));
 }
 
-[[noreturn]] void runWorker(const DataRoot& root) {
+[[noreturn]] void runWorker(const DataRoot& root, void* shared) {
   const Catalogue catalogue(root);
   for (;;) {
     pollfd ready{kWorkerSocket, POLLIN, 0};
@@ -326,7 +345,7 @@ std::pair<std::uint32_t, std::string> serve(const Catalogue& catalogue, std::uin
     if (receiveAll(kWorkerSocket, payload.data(), payload.size(), forever, {}) != Wait::kReady) {
       ::_exit(0);
     }
-    const auto [kind, answer] = serve(catalogue, header.kind, payload);
+    const auto [kind, answer] = serve(catalogue, header.kind, payload, shared);
     if (!sendFrame(kWorkerSocket, kind, answer)) {
       ::_exit(0);
     }
@@ -335,7 +354,7 @@ std::pair<std::uint32_t, std::string> serve(const Catalogue& catalogue, std::uin
 
 // The child's side of fork(): keep only the socket, die with the service,
 // take signals with their default actions, serve.
-[[noreturn]] void workerMain(int socket, pid_t service, const DataRoot& root) {
+[[noreturn]] void workerMain(int socket, pid_t service, const DataRoot& root, void* shared) {
   ::prctl(PR_SET_PDEATHSIG, SIGKILL);
   ::prctl(PR_SET_DUMPABLE, 0);  // no core files of users' data when libhdf5 faults
   if (::getppid() != service) {
@@ -360,7 +379,7 @@ std::pair<std::uint32_t, std::string> serve(const Catalogue& catalogue, std::uin
   // The service's listening sockets, connections and files must not live on
   // in a worker.
   ::close_range(kWorkerSocket + 1, ~0U, 0);
-  runWorker(root);
+  runWorker(root, shared);
 }
 
 std::string describeExit(int status) {
@@ -399,6 +418,9 @@ Hdf5Workers::~Hdf5Workers() {
     if (worker.socket >= 0) {
       ::close(worker.socket);
     }
+    if (worker.shared != nullptr) {
+      ::munmap(worker.shared, kMaxChunkBytes);
+    }
     if (worker.pid > 0) {
       ::kill(worker.pid, SIGKILL);
       int status = 0;
@@ -414,16 +436,27 @@ Status Hdf5Workers::spawn(Worker& worker) {
     return started.status();
   }
   std::lock_guard lock(m_mutex);
-  worker.pid = started->first;
-  worker.socket = started->second;
+  worker.pid = started->pid;
+  worker.socket = started->socket;
+  worker.shared = started->shared;
   return Status::ok();
 }
 
-Result<std::pair<pid_t, int>> Hdf5Workers::startWorker() {
+Result<Hdf5Workers::Started> Hdf5Workers::startWorker() {
   int sockets[2];
   if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sockets) != 0) {
     return unavailable(
         fmt::format("cannot make a socket for an HDF5 worker: {}", std::strerror(errno)));
+  }
+  // The worker's piece buffer, shared with the service: mapped before the
+  // fork, so both see the same pages.
+  void* shared =
+      ::mmap(nullptr, kMaxChunkBytes, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+  if (shared == MAP_FAILED) {
+    ::close(sockets[0]);
+    ::close(sockets[1]);
+    return unavailable(
+        fmt::format("cannot map a buffer for an HDF5 worker: {}", std::strerror(errno)));
   }
   const pid_t service = ::getpid();
   pid_t pid = -1;
@@ -435,15 +468,16 @@ Result<std::pair<pid_t, int>> Hdf5Workers::startWorker() {
     if (pid == 0) {
       hdf5Mutex().unlock();  // the child's copy; it never leaves workerMain
       ::close(sockets[0]);
-      workerMain(sockets[1], service, m_root);
+      workerMain(sockets[1], service, m_root, shared);
     }
   }
   ::close(sockets[1]);
   if (pid < 0) {
     ::close(sockets[0]);
+    ::munmap(shared, kMaxChunkBytes);
     return unavailable(fmt::format("cannot start an HDF5 worker: {}", std::strerror(errno)));
   }
-  return std::pair{pid, sockets[0]};
+  return Started{pid, sockets[0], shared};
 }
 
 Hdf5Workers::Worker* Hdf5Workers::checkOut() {
@@ -479,11 +513,13 @@ std::string Hdf5Workers::replace(Worker& worker, const std::string& file, const 
   }
   const std::string ended = describeExit(status);
   ::close(worker.socket);
+  ::munmap(worker.shared, kMaxChunkBytes);
   const pid_t old = worker.pid;
   {
     std::lock_guard lock(m_mutex);
     worker.pid = -1;
     worker.socket = -1;
+    worker.shared = nullptr;
     ++m_replaced;
   }
   const Status spawned = spawn(worker);
@@ -515,20 +551,38 @@ Status Hdf5Workers::call(std::uint32_t kind, const std::string& request, const s
   if (sendFrame(worker->socket, kind, request)) {
     waited = receiveAll(worker->socket, &header, sizeof header, deadline, isCancelled);
   }
-  const bool sized = answer.bytes == nullptr || header.kind != kOk || header.length == answer.size;
-  if (waited == Wait::kReady && sized && header.length <= (std::uint64_t{256} << 20)) {
+  if (waited == Wait::kReady && header.kind == kOkShared) {
+    // A piece, in the worker's buffer: it wrote all of it before answering.
+    if (answer.bytes != nullptr && header.length == 0 && answer.size <= kMaxChunkBytes) {
+      std::memcpy(answer.bytes, worker->shared, answer.size);
+      return Status::ok();
+    }
+    replace(*worker, file, "malformed answer");
+    return internalError(fmt::format("{}: an HDF5 worker answered out of turn", echoed(file)));
+  }
+  const bool known = header.kind == kOk || header.kind == kError;
+  if (waited == Wait::kReady && known && answer.bytes == nullptr &&
+      header.length <= (std::uint64_t{256} << 20)) {
     std::string text;
     std::string& into = answer.text != nullptr ? *answer.text : text;
-    void* target = nullptr;
-    if (header.kind == kOk && answer.bytes != nullptr) {
-      target = answer.bytes;
-    } else {
-      into.resize(header.length);
-      target = into.data();
-    }
-    waited = receiveAll(worker->socket, target, header.length, deadline, isCancelled);
+    into.resize(header.length);
+    waited = receiveAll(worker->socket, into.data(), header.length, deadline, isCancelled);
     if (waited == Wait::kReady) {
-      return header.kind == kOk ? Status::ok() : decodeStatus(into);
+      if (header.kind != kOk) {
+        return decodeStatus(into);
+      }
+      if (answer.shared && !answer.shared(worker->shared)) {
+        return internalError(
+            fmt::format("{}: an HDF5 worker sent an unreadable answer", echoed(file)));
+      }
+      return Status::ok();
+    }
+  } else if (waited == Wait::kReady && header.kind == kError &&
+             header.length <= (std::uint64_t{1} << 20)) {
+    std::string error(header.length, '\0');
+    waited = receiveAll(worker->socket, error.data(), header.length, deadline, isCancelled);
+    if (waited == Wait::kReady) {
+      return decodeStatus(error);
     }
   } else if (waited == Wait::kReady) {
     replace(*worker, file, "malformed answer");
@@ -565,8 +619,8 @@ Result<std::string> Hdf5Workers::describe(const ResolvedPath& file, const Descri
   std::string answer;
   // The walk bounds itself by limits.maxTime; opening the file comes first.
   const auto deadline = Clock::now() + limits.maxTime + m_settings.pieceTime;
-  CRACKVIS_RETURN_IF_ERROR(
-      call(kDescribe, request.take(), file.requested, deadline, cancelled, {&answer, nullptr, 0}));
+  CRACKVIS_RETURN_IF_ERROR(call(kDescribe, request.take(), file.requested, deadline, cancelled,
+                                {&answer, nullptr, 0, {}}));
   return answer;
 }
 
@@ -583,19 +637,25 @@ Result<ReadPlan> Hdf5Workers::planRead(const ResolvedPath& file,
   }
   request.u64(maxBytes);
   std::string answer;
-  CRACKVIS_RETURN_IF_ERROR(call(kPlan, request.take(), file.requested,
-                                Clock::now() + m_settings.pieceTime, {}, {&answer, nullptr, 0}));
-  WireReader in(answer);
   ReadPlan plan;
-  plan.totalBytes = in.u64();
-  const std::uint64_t count = in.u64();
-  for (std::uint64_t i = 0; i < count && in.ok(); ++i) {
-    plan.slabs.push_back(getSlab(in));
-  }
-  if (!in.ok()) {
-    return internalError(
-        fmt::format("{}: an HDF5 worker sent an unreadable plan", echoed(file.requested)));
-  }
+  // Taken while the worker is still this call's: its buffer holds the first
+  // piece.
+  Answer into{&answer, nullptr, 0, {}};
+  into.shared = [&](const void* shared) {
+    WireReader in(answer);
+    plan.totalBytes = in.u64();
+    const std::uint64_t count = in.u64();
+    for (std::uint64_t i = 0; i < count && in.ok(); ++i) {
+      plan.slabs.push_back(getSlab(in));
+    }
+    const std::uint64_t first = in.u64();
+    if (in.ok() && first > 0 && first <= kMaxChunkBytes) {
+      plan.firstPiece.assign(static_cast<const char*>(shared), first);
+    }
+    return in.ok();
+  };
+  CRACKVIS_RETURN_IF_ERROR(
+      call(kPlan, request.take(), file.requested, Clock::now() + m_settings.pieceTime, {}, into));
   return plan;
 }
 
@@ -606,7 +666,7 @@ Status Hdf5Workers::readPiece(const ResolvedPath& file, const SlabPlan& slab, co
   put(request, slab);
   put(request, piece);
   return call(kPiece, request.take(), file.requested, Clock::now() + m_settings.pieceTime, {},
-              {nullptr, out, piece.bytes});
+              {nullptr, out, piece.bytes, {}});
 }
 
 std::vector<pid_t> Hdf5Workers::pids() const {

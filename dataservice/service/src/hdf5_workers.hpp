@@ -13,7 +13,8 @@
 // HDF5 call of this process is half done in the copy; the child keeps only
 // its socket, dies with its parent (PR_SET_PDEATHSIG) and runs nothing but
 // the catalogue. Requests and answers are length-prefixed frames on a Unix
-// stream socket. Private to the service library.
+// stream socket; a piece's bytes come back through a buffer the two share.
+// Private to the service library.
 #pragma once
 
 #include <chrono>
@@ -38,6 +39,9 @@ namespace crackvis::dataservice {
 struct ReadPlan {
   std::vector<SlabPlan> slabs;
   std::uint64_t totalBytes = 0;
+  // The first piece (PieceCursor's first), read with the plan; empty when
+  // there is none or it could not be read then.
+  std::string firstPiece;
 };
 
 class Hdf5Workers {
@@ -73,7 +77,13 @@ class Hdf5Workers {
   struct Worker {
     pid_t pid = -1;
     int socket = -1;
+    void* shared = nullptr;  // kMaxChunkBytes the worker reads pieces into
     bool busy = false;
+  };
+  struct Started {
+    pid_t pid;
+    int socket;
+    void* shared;
   };
   // What a call's answer is written into: a string, or a caller's buffer of
   // a known size (a piece, read straight from the socket).
@@ -81,11 +91,14 @@ class Hdf5Workers {
     std::string* text = nullptr;
     void* bytes = nullptr;
     std::uint64_t size = 0;
+    // Run on a text answer while the worker is still the call's, with its
+    // shared buffer; false: the answer is unreadable.
+    std::function<bool(const void* shared)> shared;
   };
 
   Hdf5Workers(DataRoot root, Settings settings);
   Status spawn(Worker& worker);
-  Result<std::pair<pid_t, int>> startWorker();  // forks one: its pid and socket
+  Result<Started> startWorker();  // maps a buffer and forks a worker
   Worker* checkOut();
   void checkIn(Worker* worker);
   // Sends a request and waits for its answer; a worker that dies, overruns
