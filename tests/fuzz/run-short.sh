@@ -14,7 +14,7 @@ cd "$(dirname "$0")/../.."
 seconds="${FUZZ_SECONDS:-60}"
 build="${FUZZ_BUILD_DIR:-build/fuzz}"
 jobs="${FUZZ_JOBS:-2}"
-all_targets=(pipeline dem_reader read_request)
+all_targets=(pipeline dem_reader read_request render_events)
 targets=("$@")
 ((${#targets[@]} > 0)) || targets=("${all_targets[@]}")
 

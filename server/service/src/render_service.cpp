@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <grpcpp/grpcpp.h>
 
+#include "client_events.hpp"
 #include "crackvis/v1/data.grpc.pb.h"
 #include "crackvis/v1/render.grpc.pb.h"
 #include <crackvis/common/log.hpp>
@@ -91,73 +92,6 @@ class DataAccess {
   dataservice::ClientOptions m_options;
   std::unique_ptr<v1::DataService::Stub> m_stub;
 };
-
-bool finite(double value) {
-  return std::isfinite(value);
-}
-
-Result<SessionEvent> toSessionEvent(const v1::ClientEvent& in) {
-  SessionEvent out;
-  out.id = in.event_id();
-  out.received = Clock::now();
-  switch (in.event_case()) {
-    case v1::ClientEvent::kCamera: {
-      const auto& camera = in.camera();
-      if (!finite(camera.dx()) || !finite(camera.dy()) || std::abs(camera.dx()) > 100 ||
-          std::abs(camera.dy()) > 100) {
-        return invalidArgument(
-            fmt::format("camera event {}: dx, dy must be finite view fractions", in.event_id()));
-      }
-      CameraEvent event{render::CameraMove::kRotate, camera.dx(), camera.dy()};
-      switch (camera.kind()) {
-        case v1::CameraEvent::ROTATE:
-          break;
-        case v1::CameraEvent::PAN:
-          event.move = render::CameraMove::kPan;
-          break;
-        case v1::CameraEvent::ZOOM:
-          event.move = render::CameraMove::kZoom;
-          break;
-        case v1::CameraEvent::RESET:
-          event.move = render::CameraMove::kReset;
-          break;
-        default:
-          return invalidArgument(fmt::format(
-              "camera event {}: kind must be ROTATE, PAN, ZOOM or RESET", in.event_id()));
-      }
-      out.what = event;
-      return out;
-    }
-    case v1::ClientEvent::kResize:
-      out.what = ResizeEvent{in.resize().width(), in.resize().height()};
-      return out;
-    case v1::ClientEvent::kSetStep:
-      out.what = SetStepEvent{in.set_step().step()};
-      return out;
-    case v1::ClientEvent::kPlay:
-      out.what = PlayEvent{in.play().playing(), in.play().fps(), in.play().loop()};
-      return out;
-    case v1::ClientEvent::kReplacePipeline:
-      if (in.replace_pipeline().pipeline_xml().size() > pipeline::kMaxPipelineBytes) {
-        return invalidArgument(fmt::format("event {}: the pipeline is over {} bytes", in.event_id(),
-                                           pipeline::kMaxPipelineBytes));
-      }
-      out.what = ReplacePipelineEvent{in.replace_pipeline().pipeline_xml()};
-      return out;
-    case v1::ClientEvent::kStill:
-      out.what = StillEvent{};
-      return out;
-    case v1::ClientEvent::kRequestKeyframe:
-      out.what = KeyframeEvent{};
-      return out;
-    case v1::ClientEvent::kAttachSessionId:
-      return invalidArgument(
-          fmt::format("event {}: a stream attaches once, in its first message", in.event_id()));
-    case v1::ClientEvent::EVENT_NOT_SET:
-      break;
-  }
-  return invalidArgument(fmt::format("event {}: no event set", in.event_id()));
-}
 
 // Streams that have not sent their first (attaching) message yet. Each holds
 // one of gRPC's handler threads while it waits, so one past its time is
@@ -609,10 +543,14 @@ class RenderServiceImpl final : public v1::RenderService::Service {
         v1::ClientEvent event;
         while (stream->Read(&event)) {
           auto converted = toSessionEvent(event);
+          Status valid = converted.status();
           if (converted) {
+            valid = checkEvent(*converted, m_config.limits);  // before it is queued
+          }
+          if (valid) {
             session->post(std::move(converted).value());
           } else {
-            session->reportEventError(event.event_id(), converted.status());
+            session->reportEventError(event.event_id(), valid);
           }
         }
         return Status::ok();

@@ -16,17 +16,6 @@ double millisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-Status checkViewSize(int width, int height, const SessionLimits& limits) {
-  if (width < 16 || height < 16 || width > limits.maxWidth || height > limits.maxHeight ||
-      width % 2 != 0 || height % 2 != 0) {
-    return invalidArgument(
-        fmt::format("view size {}x{}: width and height must be even and within "
-                    "16x16..{}x{}",
-                    width, height, limits.maxWidth, limits.maxHeight));
-  }
-  return Status::ok();
-}
-
 // What an event is, for the log and error messages.
 const char* eventName(const SessionEvent& event) {
   static constexpr const char* kNames[] = {"camera",           "resize", "set_step", "play",
@@ -191,6 +180,10 @@ struct Session::Worker {
 
   void apply(const SessionEvent& event) {
     lastEventId = std::max(lastEventId, event.id);
+    if (Status status = checkEvent(event, session.m_limits); !status) {
+      reject(event, status);
+      return;
+    }
     std::visit([&](const auto& what) { handle(event, what); }, event.what);
   }
 
@@ -204,10 +197,6 @@ struct Session::Worker {
   }
 
   void handle(const SessionEvent& event, const ResizeEvent& resize) {
-    if (Status status = checkViewSize(resize.width, resize.height, session.m_limits); !status) {
-      reject(event, status);
-      return;
-    }
     if (Status status = ensureRenderer(resize.width, resize.height); !status) {
       reject(event, status);
       return;
@@ -231,10 +220,6 @@ struct Session::Worker {
   }
 
   void handle(const SessionEvent& event, const PlayEvent& play) {
-    if (play.fps < 0.0 || play.fps > 240.0) {
-      reject(event, invalidArgument(fmt::format("play fps {} outside 0..240", play.fps)));
-      return;
-    }
     playing = play.playing;
     loop = play.loop;
     playFps = play.fps > 0.0 ? play.fps : description().stream.fps;

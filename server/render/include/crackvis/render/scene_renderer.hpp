@@ -21,6 +21,7 @@
 #include <crackvis/common/status.hpp>
 #include <crackvis/cracks/extractor.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
+#include <crackvis/render/camera_move.hpp>
 #include <crackvis/scene/scene_input.hpp>
 
 namespace crackvis::render {
@@ -43,11 +44,6 @@ void resample(const Image& in, int width, int height, Image& out);
 // What one step needs besides the description (made by a
 // scene::ScenePipeline or by hand in tests).
 using SceneInput = scene::SceneInput;
-
-// Camera moves in view units, so that a client's mouse deltas map the same
-// way at any window size: dx, dy are fractions of the view's width and height,
-// x to the right and y downwards (screen convention).
-enum class CameraMove { kRotate, kPan, kZoom, kReset };
 
 class SceneRenderer {
  public:

@@ -31,57 +31,10 @@
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/scene_renderer.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
+#include <crackvis/service/session_event.hpp>
 #include <crackvis/source/step_source.hpp>
 
 namespace crackvis::service {
-
-using Clock = std::chrono::steady_clock;
-
-struct SessionLimits {
-  int maxWidth = 3840;
-  int maxHeight = 2160;
-  double refineAfterMs = 50.0;       // full resolution this long after the last event
-  double interactiveFrameMs = 35.0;  // render budget of a reduced frame
-  int maxReduction = 8;
-  std::size_t cacheSteps = 8;
-  // Bounds of what waits for a slow or absent stream reader.
-  std::size_t maxQueuedEvents = 256;  // beyond: an event is refused (RESOURCE_EXHAUSTED)
-  std::size_t maxQueuedErrors = 64;   // beyond: event errors are dropped
-  // A file declaring more is refused before its arrays are allocated
-  // (RESOURCE_EXHAUSTED); ten million particles with 6-8 bonds each fit.
-  dem::SizeLimits fileSizes{16'000'000, 80'000'000};
-};
-
-struct CameraEvent {
-  render::CameraMove move = render::CameraMove::kRotate;
-  double dx = 0.0;
-  double dy = 0.0;
-};
-struct ResizeEvent {
-  int width = 0;
-  int height = 0;
-};
-struct SetStepEvent {
-  int step = 0;  // -1: the last
-};
-struct PlayEvent {
-  bool playing = false;
-  double fps = 0.0;  // 0: the description's stream fps
-  bool loop = false;
-};
-struct ReplacePipelineEvent {
-  std::string xml;
-};
-struct StillEvent {};
-struct KeyframeEvent {};
-
-struct SessionEvent {
-  std::uint64_t id = 0;
-  Clock::time_point received = Clock::now();
-  std::variant<CameraEvent, ResizeEvent, SetStepEvent, PlayEvent, ReplacePipelineEvent, StillEvent,
-               KeyframeEvent>
-      what;
-};
 
 struct FrameTimings {
   double loadMs = 0.0;
