@@ -421,14 +421,24 @@ TEST_CASE("bad requests get a clear status and the server keeps serving",
     StreamClient stream(*stub, openSession(*stub, crackView()));
     v1::ClientEvent replace;
     replace.mutable_replace_pipeline()->set_pipeline_xml("<pipeline><nonsense/></pipeline>");
-    stream.send(replace);
+    const auto replaceId = stream.send(replace);
     v1::ClientEvent resize;
     resize.mutable_resize()->set_width(7);
     resize.mutable_resize()->set_height(100000);
-    stream.send(resize);
+    const auto resizeId = stream.send(resize);
     REQUIRE(stream.waitFor([](const auto&, const auto& errors) { return errors.size() >= 2; }));
-    CHECK(stream.errors()[0].code() == static_cast<int>(grpc::StatusCode::INVALID_ARGUMENT));
-    CHECK(stream.errors()[1].message().find("7x100000") != std::string::npos);
+    // The resize is refused where it is queued, the pipeline on the session's
+    // thread: their errors may come in either order.
+    const auto errors = stream.errors();
+    auto errorOf = [&](auto id) {
+      const auto found = std::find_if(errors.begin(), errors.end(),
+                                      [&](const auto& error) { return error.event_id() == id; });
+      REQUIRE(found != errors.end());
+      return *found;
+    };
+    CHECK(errorOf(replaceId).code() == static_cast<int>(grpc::StatusCode::INVALID_ARGUMENT));
+    CHECK(errorOf(resizeId).code() == static_cast<int>(grpc::StatusCode::INVALID_ARGUMENT));
+    CHECK(errorOf(resizeId).message().find("7x100000") != std::string::npos);
   }
   SECTION("a stream to an unknown session, and one that does not attach first") {
     StreamClient unknown(*stub, "no-such-session");
