@@ -1,16 +1,26 @@
-// crackvis generate: a lattice block written as a one-step crackvis-dem file,
-// the starting point of a simulation and the sample data of the demo.
+// crackvis generate: a lattice block or a dense random packing written as a
+// one-step crackvis-dem file, the starting point of a simulation and the
+// sample data of the demo and the tests.
+#include <charconv>
+
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include <crackvis/common/progress.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/lattice_generator.hpp>
+#include <crackvis/dem/random_packing.hpp>
 
 namespace crackvis::cli {
 namespace {
 
 struct GenerateOptions {
+  std::string packing = "lattice";
   std::string lattice = "fcc";
+  int dimension = 3;  // random packings
+  std::string radiusRange;
+  double solidFraction = 0.6;
+  double interactionRange = 1.1;
   std::vector<int> sites;
   std::vector<double> box;
   double radius = 1e-3;
@@ -57,37 +67,128 @@ Result<dem::BlockSpec> makeSpec(const GenerateOptions& options) {
   return spec;
 }
 
-int runGenerate(const GenerateOptions& options) {
+// "RMIN:RMAX" in metres.
+Result<std::pair<double, double>> parseRadiusRange(const std::string& text) {
+  const auto colon = text.find(':');
+  double lo = 0.0;
+  double hi = 0.0;
+  auto parse = [](std::string_view part, double& value) {
+    const auto [end, error] = std::from_chars(part.data(), part.data() + part.size(), value);
+    return error == std::errc{} && end == part.data() + part.size();
+  };
+  if (colon == std::string::npos || !parse(std::string_view(text).substr(0, colon), lo) ||
+      !parse(std::string_view(text).substr(colon + 1), hi) || !(lo > 0.0) || !(hi >= lo)) {
+    return invalidArgument(fmt::format(
+        "--radius-range '{}' is not RMIN:RMAX with 0 < RMIN <= RMAX (metres, e.g. 5e-4:1e-3)",
+        text));
+  }
+  return std::pair{lo, hi};
+}
+
+// A random packing's box: --box, or 20 largest diameters along each axis.
+Result<dem::RandomPackingSpec> makeRandomSpec(const GenerateOptions& options) {
+  dem::RandomPackingSpec spec;
+  spec.dimension = options.dimension;
+  spec.radiusMin = options.radius;
+  spec.radiusMax = options.radius;
+  if (!options.radiusRange.empty()) {
+    auto range = parseRadiusRange(options.radiusRange);
+    if (!range) {
+      return range.status();
+    }
+    std::tie(spec.radiusMin, spec.radiusMax) = *range;
+  }
+  spec.solidFraction = options.solidFraction;
+  spec.interactionRange = options.interactionRange;
+  spec.strength = options.strength;
+  spec.seed = options.seed;
+  if (!options.sites.empty()) {
+    return invalidArgument("--sites is for lattices; give a random packing's size with --box");
+  }
+  if (options.box.empty()) {
+    const double side = 40.0 * spec.radiusMax;
+    spec.box = {side, side, options.dimension == 3 ? side : 0.0};
+  } else if (static_cast<int>(options.box.size()) != options.dimension) {
+    return invalidArgument(fmt::format("--box needs {} values for a {}D packing, got {}",
+                                       options.dimension, options.dimension, options.box.size()));
+  } else {
+    spec.box = {options.box[0], options.box[1], options.dimension == 3 ? options.box[2] : 0.0};
+  }
+  CRACKVIS_RETURN_IF_ERROR(dem::validate(spec));
+  return spec;
+}
+
+struct Generated {
+  dem::Lattice lattice;
+  std::vector<dem::Vec3> positions;
+  std::string summary;
+};
+
+Result<Generated> generateLattice(const GenerateOptions& options) {
   auto spec = makeSpec(options);
   if (!spec) {
-    printError("generate", spec.status().message());
-    return kExitFailure;
+    return spec.status();
   }
   auto block = dem::generateBlock(*spec);
   if (!block) {
-    printError("generate", block.status().message());
-    return kExitFailure;
+    return block.status();
   }
-  auto writer = dem::DemFileWriter::create(options.output, block->lattice, {invocation(), "SI"});
+  std::string summary =
+      fmt::format("{} lattice, {} particles, {} bonds, block {:.6g} x {:.6g} x {:.6g} m",
+                  options.lattice, block->lattice.particleCount(), block->lattice.bondCount(),
+                  block->extent.x, block->extent.y, block->extent.z);
+  return Generated{std::move(block->lattice), std::move(block->positions), std::move(summary)};
+}
+
+Result<Generated> generateRandom(const GenerateOptions& options) {
+  auto spec = makeRandomSpec(options);
+  if (!spec) {
+    return spec.status();
+  }
+  ProgressBar progress("generate", 100);
+  progress.setEnabled(!options.quiet);
+  auto packing = dem::generateRandomPacking(*spec, [&](double done) {
+    progress.update(static_cast<std::int64_t>(100.0 * done), "relaxing overlaps");
+  });
+  progress.finish();
+  if (!packing) {
+    return packing.status();
+  }
+  const std::size_t n = packing->lattice.particleCount();
+  std::string summary = fmt::format(
+      "random {}D packing, {} particles (radius {:.4g}..{:.4g} m), {} bonds (mean coordination "
+      "{:.2f}), solid fraction {:.3f}, box {:.6g} x {:.6g} x {:.6g} m",
+      spec->dimension, n, spec->radiusMin, spec->radiusMax, packing->lattice.bondCount(),
+      n > 0 ? 2.0 * static_cast<double>(packing->lattice.bondCount()) / static_cast<double>(n)
+            : 0.0,
+      packing->solidFraction, spec->box.x, spec->box.y, spec->box.z);
+  return Generated{std::move(packing->lattice), std::move(packing->positions), std::move(summary)};
+}
+
+Status writeOneStep(const std::string& path, const Generated& generated) {
+  auto writer = dem::DemFileWriter::create(path, generated.lattice, {invocation(), "SI"});
   if (!writer) {
-    printError("generate", writer.status().message());
-    return kExitFailure;
+    return writer.status();
   }
   dem::StepState initial;
-  initial.positions = block->positions;
-  initial.bondState.assign(block->lattice.bondCount(), 0);
-  if (Status status = writer->appendStep(initial); !status) {
-    printError("generate", status.message());
+  initial.positions = generated.positions;
+  initial.bondState.assign(generated.lattice.bondCount(), 0);
+  CRACKVIS_RETURN_IF_ERROR(writer->appendStep(initial));
+  return writer->close();
+}
+
+int runGenerate(const GenerateOptions& options) {
+  auto generated = options.packing == "random" ? generateRandom(options) : generateLattice(options);
+  if (!generated) {
+    printError("generate", generated.status().message());
     return kExitFailure;
   }
-  if (Status status = writer->close(); !status) {
+  if (Status status = writeOneStep(options.output, *generated); !status) {
     printError("generate", status.message());
     return kExitFailure;
   }
   if (!options.quiet) {
-    std::printf("wrote %s: %s lattice, %zu particles, %zu bonds, block %.6g x %.6g x %.6g m\n",
-                options.output.c_str(), options.lattice.c_str(), block->lattice.particleCount(),
-                block->lattice.bondCount(), block->extent.x, block->extent.y, block->extent.z);
+    std::printf("wrote %s: %s\n", options.output.c_str(), generated->summary.c_str());
   }
   return kExitOk;
 }
@@ -98,8 +199,15 @@ Command addGenerateCommand(CLI::App& parent) {
   auto options = std::make_shared<GenerateOptions>();
   auto* command = parent.add_subcommand(
       "generate",
-      "Write a lattice block of monodisperse spheres, bonded to their nearest neighbours, as a "
-      "one-step crackvis-dem file (all bonds intact).");
+      "Write a lattice block of monodisperse spheres bonded to their nearest neighbours, or a "
+      "dense random packing (monodisperse or polydisperse) bonded by an interaction-range rule, "
+      "as a one-step crackvis-dem file (all bonds intact).");
+  command
+      ->add_option("--packing", options->packing,
+                   "lattice (--lattice) or random: spheres (disks in 2D) placed at random and "
+                   "relaxed until they no longer overlap")
+      ->check(CLI::IsMember({"lattice", "random"}))
+      ->capture_default_str();
   command->add_option("--lattice", options->lattice, "fcc, hcp (3D) or triangular (2D)")
       ->check(CLI::IsMember({"fcc", "hcp", "triangular"}))
       ->capture_default_str();
@@ -111,8 +219,27 @@ Command addGenerateCommand(CLI::App& parent) {
                                   "Fill a box of this size in metres (X Y [Z]) instead of --sites");
   sites->excludes(box);
   box->excludes(sites);
-  command->add_option("-r,--radius", options->radius, "Sphere radius in metres")
-      ->check(CLI::PositiveNumber)
+  auto* radius = command->add_option("-r,--radius", options->radius, "Sphere radius in metres")
+                     ->check(CLI::PositiveNumber)
+                     ->capture_default_str();
+  auto* radiusRange = command->add_option(
+      "--radius-range", options->radiusRange,
+      "random: radii drawn uniformly from RMIN:RMAX metres (e.g. 5e-4:1e-3, a 1:2 polydisperse "
+      "packing) instead of one --radius");
+  radiusRange->excludes(radius);
+  command->add_option("--dimension", options->dimension, "random: 3 (spheres) or 2 (disks)")
+      ->check(CLI::IsMember({2, 3}))
+      ->capture_default_str();
+  command
+      ->add_option("--solid-fraction", options->solidFraction,
+                   "random: volume (2D: area) of the spheres over the box's; up to about 0.6 in "
+                   "3D and 0.8 in 2D")
+      ->check(CLI::Range(0.01, 0.84))
+      ->capture_default_str();
+  command
+      ->add_option("--interaction-range", options->interactionRange,
+                   "random: bond every pair closer than this times the sum of their radii")
+      ->check(CLI::Range(1.0, 2.0))
       ->capture_default_str();
   command
       ->add_option("--jitter", options->jitter,
@@ -122,13 +249,16 @@ Command addGenerateCommand(CLI::App& parent) {
   command->add_option("--strength", options->strength, "Tensile strength R_n of every bond, N")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  command->add_option("--seed", options->seed, "Seed of the jitter")->capture_default_str();
+  command->add_option("--seed", options->seed, "Seed of the jitter or the random packing")
+      ->capture_default_str();
   command->add_option("-o,--output", options->output, "Output HDF5 file")->required();
-  command->add_flag("-q,--quiet", options->quiet, "Print nothing on success");
+  command->add_flag("-q,--quiet", options->quiet, "Print nothing on success, no progress bar");
   command->footer(
-      "Example: crackvis generate --lattice fcc --sites 21 21 21 --radius 0.002 -o block.h5");
+      "Examples:\n  crackvis generate --lattice fcc --sites 21 21 21 --radius 0.002 -o block.h5\n"
+      "  crackvis generate --packing random --radius-range 5e-4:1e-3 --solid-fraction 0.6 "
+      "--box 0.03 0.03 0.03 -o random.h5");
   return {command, [options] {
-            if (options->sites.empty() && options->box.empty()) {
+            if (options->packing == "lattice" && options->sites.empty() && options->box.empty()) {
               // Default: an FCC block of 4 x 4 x 4 cubic cells, or a 20 x 20 2D patch.
               options->sites = dem::dimensionOf(*dem::parseLatticeKind(options->lattice)) == 3
                                    ? std::vector<int>{9, 9, 9}
