@@ -20,6 +20,8 @@ readonly PACKAGES=(
   libcli11-dev libspdlog-dev libfmt-dev nlohmann-json3-dev libtbb-dev
   # cracks/: kd-tree, global Voronoi baseline, VTK adapters
   libnanoflann-dev voro++-dev libvtk9-dev
+  # cracks/: Delaunay and regular triangulations of packings that are no lattice
+  libcgal-dev
   # dataservice/, server/: gRPC with TLS
   libgrpc++-dev libgrpc-dev protobuf-compiler protobuf-compiler-grpc libprotobuf-dev libssl-dev openssl
   # server/: off-screen rendering (EGL + Mesa llvmpipe), pipeline schemas, encoding

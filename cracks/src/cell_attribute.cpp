@@ -7,8 +7,9 @@ namespace {
 
 class CellAttributeExtractor final : public CrackExtractor {
  public:
-  CellAttributeExtractor(const BondGraph& graph, int dimension, const ExtractOptions& options)
-      : m_decomposition(graph, dimension),
+  CellAttributeExtractor(const BondGraph& graph, int dimension, const ExtractOptions& options,
+                         const ExplicitCells* cells)
+      : m_decomposition(graph, dimension, cells),
         m_options(options),
         m_pointOf(graph.particleCount(), -1) {}
 
@@ -72,8 +73,9 @@ class CellAttributeExtractor final : public CrackExtractor {
 }  // namespace
 
 std::unique_ptr<CrackExtractor> makeCellAttribute(const BondGraph& graph, int dimension,
-                                                  const ExtractOptions& options) {
-  return std::make_unique<CellAttributeExtractor>(graph, dimension, options);
+                                                  const ExtractOptions& options,
+                                                  const ExplicitCells* cells) {
+  return std::make_unique<CellAttributeExtractor>(graph, dimension, options, cells);
 }
 
 }  // namespace crackvis::cracks

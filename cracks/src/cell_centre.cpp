@@ -36,8 +36,9 @@ std::int64_t quadKey(ParticleIndex a, ParticleIndex b) {
 
 class CellCentreExtractor final : public CrackExtractor {
  public:
-  CellCentreExtractor(const BondGraph& graph, int dimension, const ExtractOptions& options)
-      : m_decomposition(graph, dimension),
+  CellCentreExtractor(const BondGraph& graph, int dimension, const ExtractOptions& options,
+                      const ExplicitCells* cells)
+      : m_decomposition(graph, dimension, cells),
         m_merge(options.mergeOctahedra && dimension == 3),
         m_pointOfCell() {}
 
@@ -423,8 +424,9 @@ class CellCentreExtractor final : public CrackExtractor {
 }  // namespace
 
 std::unique_ptr<CrackExtractor> makeCellCentre(const BondGraph& graph, int dimension,
-                                               const ExtractOptions& options) {
-  return std::make_unique<CellCentreExtractor>(graph, dimension, options);
+                                               const ExtractOptions& options,
+                                               const ExplicitCells* cells) {
+  return std::make_unique<CellCentreExtractor>(graph, dimension, options, cells);
 }
 
 }  // namespace crackvis::cracks

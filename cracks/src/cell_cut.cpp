@@ -16,8 +16,8 @@ namespace {
 
 class CellCutExtractor final : public CrackExtractor {
  public:
-  CellCutExtractor(const BondGraph& graph, int dimension)
-      : m_decomposition(graph, dimension), m_pointOfBond(graph.bondCount(), -1) {}
+  CellCutExtractor(const BondGraph& graph, int dimension, const ExplicitCells* cells)
+      : m_decomposition(graph, dimension, cells), m_pointOfBond(graph.bondCount(), -1) {}
 
   Method method() const override { return Method::kCellCut; }
   const LatticeDecomposition* decomposition() const override { return &m_decomposition; }
@@ -178,8 +178,8 @@ class CellCutExtractor final : public CrackExtractor {
 }  // namespace
 
 std::unique_ptr<CrackExtractor> makeCellCut(const BondGraph& graph, int dimension,
-                                            const ExtractOptions&) {
-  return std::make_unique<CellCutExtractor>(graph, dimension);
+                                            const ExtractOptions&, const ExplicitCells* cells) {
+  return std::make_unique<CellCutExtractor>(graph, dimension, cells);
 }
 
 }  // namespace crackvis::cracks

@@ -33,8 +33,20 @@ Result<StepInput> DemSeries::load(int step) {
     return state.status();
   }
   m_state = std::move(state).value();
-  return StepInput{m_state.positions, m_state.bondState, m_lattice.radius, m_state.bondForce,
-                   m_breakSteps};
+  // The first step is the reference configuration a triangulation is made in.
+  if (m_reference.empty()) {
+    if (step == 0) {
+      m_reference = m_state.positions;
+    } else {
+      auto first = m_reader.readStep(0);
+      if (!first) {
+        return first.status();
+      }
+      m_reference = std::move(first->positions);
+    }
+  }
+  return StepInput{m_state.positions, m_state.bondState, m_lattice.radius,
+                   m_state.bondForce, m_breakSteps,      m_reference};
 }
 
 Result<std::vector<int>> parseStepRange(const std::string& text, int stepCount) {

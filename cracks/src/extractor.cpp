@@ -31,8 +31,38 @@ Result<Method> parseMethod(std::string_view name) {
       name));
 }
 
+std::string_view toString(Decomposition decomposition) {
+  switch (decomposition) {
+    case Decomposition::kAuto:
+      return "auto";
+    case Decomposition::kLattice:
+      return "lattice";
+    case Decomposition::kTriangulation:
+      return "triangulation";
+  }
+  return "unknown";
+}
+
+Result<Decomposition> parseDecomposition(std::string_view name) {
+  for (auto kind : {Decomposition::kAuto, Decomposition::kLattice, Decomposition::kTriangulation}) {
+    if (name == toString(kind)) {
+      return kind;
+    }
+  }
+  return invalidArgument(
+      fmt::format("unknown decomposition '{}' (expected auto, lattice or triangulation)", name));
+}
+
 std::unique_ptr<CrackExtractor> makeExtractor(Method method, const BondGraph& graph, int dimension,
                                               const ExtractOptions& options) {
+  Decomposition kind = options.decomposition;
+  if (kind == Decomposition::kAuto) {
+    kind =
+        isLatticeGraph(graph, dimension) ? Decomposition::kLattice : Decomposition::kTriangulation;
+  }
+  if (kind == Decomposition::kTriangulation) {
+    return makeTriangulated(method, graph, dimension, options);
+  }
   switch (method) {
     case Method::kCellAttribute:
       return makeCellAttribute(graph, dimension, options);

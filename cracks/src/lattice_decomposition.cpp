@@ -48,14 +48,54 @@ std::uint64_t above(std::size_t index) {
 
 }  // namespace
 
-LatticeDecomposition::LatticeDecomposition(const BondGraph& graph, int dimension)
+ExplicitCells::ExplicitCells(std::size_t particleCount,
+                             std::vector<std::array<dem::ParticleIndex, 4>> list)
+    : cells(std::move(list)), offsets(particleCount + 1, 0) {
+  for (const auto& cell : cells) {
+    for (ParticleIndex p : cell) {
+      if (p >= 0) {
+        ++offsets[static_cast<std::size_t>(p) + 1];
+      }
+    }
+  }
+  for (std::size_t i = 1; i < offsets.size(); ++i) {
+    offsets[i] += offsets[i - 1];
+  }
+  cellsOfParticle.resize(static_cast<std::size_t>(offsets.back()));
+  std::vector<std::int32_t> fill(offsets.begin(), offsets.end() - 1);
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    for (ParticleIndex p : cells[c]) {
+      if (p >= 0) {
+        cellsOfParticle[static_cast<std::size_t>(fill[static_cast<std::size_t>(p)]++)] =
+            static_cast<std::int32_t>(c);
+      }
+    }
+  }
+}
+
+std::size_t ExplicitCells::memoryBytes() const {
+  return cells.capacity() * sizeof(cells[0]) +
+         (offsets.capacity() + cellsOfParticle.capacity()) * sizeof(std::int32_t);
+}
+
+LatticeDecomposition::LatticeDecomposition(const BondGraph& graph, int dimension,
+                                           const ExplicitCells* explicitCells)
     : m_graph(graph),
       m_dimension(dimension),
+      m_explicit(explicitCells),
       m_head(graph.particleCount(), -1),
       m_processed(graph.particleCount()),
       m_seenState(graph.bondCount()) {}
 
 void LatticeDecomposition::enumerateCandidates(ParticleIndex v, std::vector<Candidate>& out) const {
+  if (m_explicit != nullptr) {
+    const CellType type = m_dimension == 2 ? CellType::kTriangle : CellType::kTetrahedron;
+    for (std::int32_t c : m_explicit->of(v)) {
+      const auto& nodes = m_explicit->cells[static_cast<std::size_t>(c)];
+      out.push_back({type, {nodes[0], nodes[1], nodes[2], nodes[3], -1, -1}});
+    }
+    return;
+  }
   NeighbourGraph local;
   if (!buildNeighbourGraph(m_graph, v, local)) {
     return;

@@ -29,14 +29,30 @@ Box defaultDomain(std::span<const Vec3> positions, std::span<const double> radiu
 
 namespace {
 
-bool clipByNeighbours(const BondGraph& graph, std::span<const Vec3> positions, dem::ParticleIndex i,
-                      ConvexCell& cell) {
+// The offset of the plane between i and j along n = x_j - x_i: the bisector
+// for equal radii, the radical (power) plane |x - x_i|^2 - r_i^2 =
+// |x - x_j|^2 - r_j^2 for unequal ones (radius empty: bisector).
+double planeOffset(std::span<const Vec3> positions, std::span<const double> radius,
+                   dem::ParticleIndex i, dem::ParticleIndex j, Vec3 n) {
+  const Vec3 xi = positions[static_cast<std::size_t>(i)];
+  const Vec3 xj = positions[static_cast<std::size_t>(j)];
+  double offset = 0.5 * dem::dot(n, xi + xj);
+  if (!radius.empty()) {
+    const double ri = radius[static_cast<std::size_t>(i)];
+    const double rj = radius[static_cast<std::size_t>(j)];
+    offset += 0.5 * (ri * ri - rj * rj);
+  }
+  return offset;
+}
+
+bool clipByNeighbours(const BondGraph& graph, std::span<const Vec3> positions,
+                      std::span<const double> radius, dem::ParticleIndex i, ConvexCell& cell) {
   const Vec3 xi = positions[static_cast<std::size_t>(i)];
   for (dem::BondIndex b : graph.bondsOf(i)) {
-    const Vec3 xj = positions[static_cast<std::size_t>(graph.otherEnd(b, i))];
-    const Vec3 n = xj - xi;
-    // Keep the half-space closer to i: dot(n, x) <= dot(n, (xi + xj) / 2).
-    if (!cell.clip(n, 0.5 * dem::dot(n, xi + xj), b, 1e-12 * dem::dot(n, n))) {
+    const dem::ParticleIndex j = graph.otherEnd(b, i);
+    const Vec3 n = positions[static_cast<std::size_t>(j)] - xi;
+    // Keep the half-space closer to i (in power distance).
+    if (!cell.clip(n, planeOffset(positions, radius, i, j, n), b, 1e-12 * dem::dot(n, n))) {
       return false;
     }
   }
@@ -46,9 +62,10 @@ bool clipByNeighbours(const BondGraph& graph, std::span<const Vec3> positions, d
 }  // namespace
 
 void computeLocalVoronoiCell(const BondGraph& graph, std::span<const Vec3> positions,
-                             dem::ParticleIndex i, const Box& box, ConvexCell& cell) {
+                             dem::ParticleIndex i, const Box& box, ConvexCell& cell,
+                             std::span<const double> radius) {
   cell.reset(box.lo, box.hi);
-  clipByNeighbours(graph, positions, i, cell);
+  clipByNeighbours(graph, positions, radius, i, cell);
 }
 
 namespace {
@@ -93,9 +110,11 @@ bool clipPolygon(std::vector<Vec3>& polygon, std::vector<Vec3>& scratch, Vec3 no
 
 void computeLocalVoronoiFace(const BondGraph& graph, std::span<const Vec3> positions,
                              dem::ParticleIndex i, dem::BondIndex b, const Box& box,
-                             std::vector<Vec3>& polygon, std::vector<Vec3>& scratch) {
+                             std::vector<Vec3>& polygon, std::vector<Vec3>& scratch,
+                             std::span<const double> radius) {
   const Vec3 xi = positions[static_cast<std::size_t>(i)];
-  const Vec3 xj = positions[static_cast<std::size_t>(graph.otherEnd(b, i))];
+  const dem::ParticleIndex j = graph.otherEnd(b, i);
+  const Vec3 xj = positions[static_cast<std::size_t>(j)];
   const Vec3 n = xj - xi;
   const double length = dem::norm(n);
   polygon.clear();
@@ -110,16 +129,22 @@ void computeLocalVoronoiFace(const BondGraph& graph, std::span<const Vec3> posit
   u = (1.0 / dem::norm(u)) * u;
   const Vec3 w = cross(unit, u);
   const double half = 2.0 * dem::norm(box.hi - box.lo) + length;
-  const Vec3 mid = 0.5 * (xi + xj);
+  // The point of the (power) plane on the line x_i x_j.
+  const bool bisector =
+      radius.empty() || radius[static_cast<std::size_t>(i)] == radius[static_cast<std::size_t>(j)];
+  const Vec3 mid = bisector ? 0.5 * (xi + xj)
+                            : xi + (planeOffset(positions, radius, i, j, n) - dem::dot(n, xi)) /
+                                       (length * length) * n;
   polygon = {mid + half * (-1.0 * u - w), mid + half * (u - w), mid + half * (u + w),
              mid + half * (w - u)};
   for (dem::BondIndex other : graph.bondsOf(i)) {
     if (other == b) {
       continue;
     }
-    const Vec3 xk = positions[static_cast<std::size_t>(graph.otherEnd(other, i))];
-    const Vec3 nk = xk - xi;
-    if (!clipPolygon(polygon, scratch, nk, 0.5 * dem::dot(nk, xi + xk), 1e-12 * dem::dot(nk, nk))) {
+    const dem::ParticleIndex k = graph.otherEnd(other, i);
+    const Vec3 nk = positions[static_cast<std::size_t>(k)] - xi;
+    if (!clipPolygon(polygon, scratch, nk, planeOffset(positions, radius, i, k, nk),
+                     1e-12 * dem::dot(nk, nk))) {
       return;
     }
   }
@@ -134,6 +159,12 @@ void computeLocalVoronoiFace(const BondGraph& graph, std::span<const Vec3> posit
 }
 
 namespace {
+
+// A particle near a vertex under the sphere test, with r_k^2 - r_i^2.
+struct Candidate {
+  Vec3 position;
+  double powerShift;
+};
 
 // One face of an end particle's cell that the output may need.
 struct FaceRecord {
@@ -170,11 +201,11 @@ class LocalVoronoiExtractor final : public CrackExtractor {
                                      : defaultDomain(step.positions, step.radius, m_dimension);
     std::vector<dem::ParticleIndex> ends = endParticles(step.bondState);
     if (m_options.validate) {
-      double largest = 0.0;
+      m_largestRadius = 0.0;
       for (double r : step.radius) {
-        largest = std::max(largest, r);
+        m_largestRadius = std::max(m_largestRadius, r);
       }
-      m_grid.build(step.positions, 2.0 * largest);
+      m_grid.build(step.positions, 2.0 * m_largestRadius);
     }
     // Cells of the end particles, on all cores, in blocks of particles.
     const std::size_t blockCount = (ends.size() + kBlockSize - 1) / kBlockSize;
@@ -235,10 +266,15 @@ class LocalVoronoiExtractor final : public CrackExtractor {
   // which become 1 (valid) or 0. Every sphere
   // lies within twice the farthest vertex's distance of x_i, so one grid
   // query per cell finds all particles that could violate any of them.
-  void validateVertices(std::span<const Vec3> positions, dem::ParticleIndex i,
-                        const std::vector<Vec3>& vertices, std::vector<char>& valid,
-                        std::vector<Vec3>& candidates) const {
+  //
+  // With unequal radii the test is on power distances: a vertex of i's cell
+  // fails when some particle k has |v - x_k|^2 - (r_k^2 - r_i^2) <
+  // (keep |v - x_i|)^2; for equal radii that is the plain empty-sphere test.
+  void validateVertices(std::span<const Vec3> positions, std::span<const double> radius,
+                        dem::ParticleIndex i, const std::vector<Vec3>& vertices,
+                        std::vector<char>& valid, std::vector<Candidate>& candidates) const {
     const Vec3 xi = positions[static_cast<std::size_t>(i)];
+    const double ri2 = radius[static_cast<std::size_t>(i)] * radius[static_cast<std::size_t>(i)];
     auto project = [&](Vec3 v) {
       if (m_dimension == 2) {
         v.z = 0.0;  // the prism's vertices stand for the 2D vertex below them
@@ -254,12 +290,13 @@ class LocalVoronoiExtractor final : public CrackExtractor {
     if (farthest == 0.0) {
       return;
     }
-    const double reach = 2.0 * farthest;
+    const double reach = 2.0 * farthest + m_largestRadius;
     candidates.clear();
     m_grid.forEachNear(xi, reach, [&](std::int32_t k) {
       const Vec3 xk = positions[static_cast<std::size_t>(k)];
       if (k != i && dem::dot(xk - xi, xk - xi) <= reach * reach) {
-        candidates.push_back(xk);
+        const double rk = radius[static_cast<std::size_t>(k)];
+        candidates.push_back({xk, rk * rk - ri2});
       }
     });
     const double keep = 1.0 - m_options.validationTolerance;
@@ -271,9 +308,9 @@ class LocalVoronoiExtractor final : public CrackExtractor {
       const Vec3 vertex = project(vertices[v]);
       const Vec3 toCentre = vertex - xi;
       const double inner2 = dem::dot(toCentre, toCentre) * keep * keep;
-      for (const Vec3& xk : candidates) {
-        const Vec3 d = xk - vertex;
-        if (dem::dot(d, d) < inner2) {
+      for (const Candidate& k : candidates) {
+        const Vec3 d = k.position - vertex;
+        if (dem::dot(d, d) - k.powerShift < inner2) {
           valid[v] = 0;
           break;
         }
@@ -285,7 +322,7 @@ class LocalVoronoiExtractor final : public CrackExtractor {
   struct Scratch {
     ConvexCell cell;
     std::vector<char> valid;
-    std::vector<Vec3> candidates;
+    std::vector<Candidate> candidates;
     std::vector<Vec3> polygon;
     std::vector<Vec3> clipBuffer;
     std::vector<Vec3> faceVertices;
@@ -321,7 +358,8 @@ class LocalVoronoiExtractor final : public CrackExtractor {
       if (step.bondState[static_cast<std::size_t>(b)] == 0) {
         continue;
       }
-      computeLocalVoronoiFace(m_graph, step.positions, i, b, box, s.polygon, s.clipBuffer);
+      computeLocalVoronoiFace(m_graph, step.positions, i, b, box, s.polygon, s.clipBuffer,
+                              step.radius);
       if (s.polygon.size() >= 3) {
         s.faces.push_back({b, s.faceVertices.size()});
         s.faceVertices.insert(s.faceVertices.end(), s.polygon.begin(), s.polygon.end());
@@ -330,7 +368,7 @@ class LocalVoronoiExtractor final : public CrackExtractor {
     s.faces.push_back({-1, s.faceVertices.size()});  // sentinel: end of the last face
     s.valid.assign(s.faceVertices.size(), m_options.validate ? 2 : 1);
     if (m_options.validate) {
-      validateVertices(step.positions, i, s.faceVertices, s.valid, s.candidates);
+      validateVertices(step.positions, step.radius, i, s.faceVertices, s.valid, s.candidates);
     }
     for (std::size_t f = 0; f + 1 < s.faces.size(); ++f) {
       const std::size_t first = s.faces[f].second;
@@ -346,7 +384,7 @@ class LocalVoronoiExtractor final : public CrackExtractor {
   // The whole cell, when the faces of intact bonds are wanted too.
   void collectCellFaces(const StepInput& step, const Box& box, dem::ParticleIndex i, Scratch& s,
                         CellBlock& block) const {
-    computeLocalVoronoiCell(m_graph, step.positions, i, box, s.cell);
+    computeLocalVoronoiCell(m_graph, step.positions, i, box, s.cell, step.radius);
     const auto& vertices = s.cell.vertices();
     std::vector<std::pair<dem::BondIndex, std::size_t>> faces;
     for (std::size_t f = 0; f < s.cell.faceCount(); ++f) {
@@ -362,7 +400,7 @@ class LocalVoronoiExtractor final : public CrackExtractor {
           s.valid[static_cast<std::size_t>(v)] = 2;  // to test
         }
       }
-      validateVertices(step.positions, i, vertices, s.valid, s.candidates);
+      validateVertices(step.positions, step.radius, i, vertices, s.valid, s.candidates);
     }
     std::sort(faces.begin(), faces.end());
     for (const auto& [bond, f] : faces) {
@@ -463,6 +501,7 @@ class LocalVoronoiExtractor final : public CrackExtractor {
   int m_dimension;
   ExtractOptions m_options;
   ParticleGrid m_grid;
+  double m_largestRadius = 0.0;
   std::vector<std::int32_t> m_rankOf;  // [N] rank among end particles, -1 if none
   std::vector<dem::BondIndex> m_broken;
   PrimitiveList m_faceLines;

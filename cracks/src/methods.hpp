@@ -1,4 +1,6 @@
-// Factories of the four methods (one .cpp each), for extractor.cpp.
+// Factories of the four methods (one .cpp each), for extractor.cpp. The
+// cell-based ones take the cells of a triangulation for packings that are no
+// lattice (triangulated_extractor.cpp); without them they use the lattice's.
 #pragma once
 
 #include <crackvis/cracks/extractor.hpp>
@@ -6,13 +8,21 @@
 namespace crackvis::cracks {
 
 std::unique_ptr<CrackExtractor> makeCellAttribute(const BondGraph& graph, int dimension,
-                                                  const ExtractOptions& options);
+                                                  const ExtractOptions& options,
+                                                  const ExplicitCells* cells = nullptr);
 std::unique_ptr<CrackExtractor> makeCellCut(const BondGraph& graph, int dimension,
-                                            const ExtractOptions& options);
+                                            const ExtractOptions& options,
+                                            const ExplicitCells* cells = nullptr);
 std::unique_ptr<CrackExtractor> makeLocalVoronoi(const BondGraph& graph, int dimension,
                                                  const ExtractOptions& options);
 std::unique_ptr<CrackExtractor> makeCellCentre(const BondGraph& graph, int dimension,
-                                               const ExtractOptions& options);
+                                               const ExtractOptions& options,
+                                               const ExplicitCells* cells = nullptr);
+
+// Any method on the cells of a triangulation of the reference configuration,
+// for packings whose bonds span no lattice.
+std::unique_ptr<CrackExtractor> makeTriangulated(Method method, const BondGraph& graph,
+                                                 int dimension, const ExtractOptions& options);
 
 // Primitives made by one block of work items. Work is cut into blocks of a
 // fixed size (not per thread), blocks run on all cores, and their outputs are

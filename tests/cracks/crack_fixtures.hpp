@@ -16,7 +16,9 @@ struct PlantedCrack {
   std::vector<std::uint8_t> state;
   std::unique_ptr<cracks::BondGraph> graph;
 
-  cracks::StepInput input() const { return {block.positions, state, block.lattice.radius, {}, {}}; }
+  cracks::StepInput input() const {
+    return {block.positions, state, block.lattice.radius, {}, {}, {}};
+  }
   std::size_t brokenCount() const {
     return static_cast<std::size_t>(std::count(state.begin(), state.end(), 1));
   }

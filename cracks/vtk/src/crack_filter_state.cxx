@@ -172,7 +172,9 @@ bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptio
     m_options = options;
     m_extractor = makeExtractor(method, *m_graph, m_dimension, options);
   }
-  const StepInput step{m_positions, m_state, m_radius, m_force, m_breakStep};
+  // No reference configuration: a pipeline has one time step at a time, so
+  // a triangulation is made in the first one the filter sees.
+  const StepInput step{m_positions, m_state, m_radius, m_force, m_breakStep, {}};
   if (Status status = m_extractor->extract(step, mesh); !status) {
     error = status.message();
     return false;

@@ -225,8 +225,8 @@ const source::StepSource& ScenePipeline::source() const {
 }
 
 cracks::StepInput ScenePipeline::stepInput(const source::SourceStep& step) const {
-  return {step.positions, step.bondState, source().lattice().radius, step.bondForce,
-          source().breakSteps()};
+  return {step.positions, step.bondState,        source().lattice().radius,
+          step.bondForce, source().breakSteps(), m_state.initial->positions};
 }
 
 SceneInput ScenePipeline::input() const {

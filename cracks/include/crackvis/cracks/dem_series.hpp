@@ -20,8 +20,9 @@ class DemSeries {
   const BondGraph& graph() const { return *m_graph; }
   int stepCount() const { return m_reader.stepCount(); }
 
-  // Reads step k; the returned input views this object's buffers and stays
-  // valid until the next load.
+  // Reads step k (and once step 0, the reference configuration); the
+  // returned input views this object's buffers and stays valid until the
+  // next load.
   Result<StepInput> load(int step);
   const dem::StepState& state() const { return m_state; }
 
@@ -33,6 +34,7 @@ class DemSeries {
   std::vector<std::int32_t> m_breakSteps;
   std::unique_ptr<BondGraph> m_graph;
   dem::StepState m_state;
+  std::vector<dem::Vec3> m_reference;
 };
 
 // Parses "A", "A:B" or "A:B:K" (inclusive, stride K; negative A or B count

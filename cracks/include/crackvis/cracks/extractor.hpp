@@ -32,6 +32,20 @@ enum class Method { kCellAttribute, kCellCut, kLocalVoronoi, kCellCentre };
 std::string_view toString(Method method);
 Result<Method> parseMethod(std::string_view name);
 
+// How space is divided into cells (docs/methods.md, "Any packing"):
+//  - lattice: the cells the bonds span (tetrahedra and octahedra in 3D,
+//    triangles in 2D), found from the bond graph alone;
+//  - triangulation: the Delaunay triangulation of the reference
+//    configuration's centres, regular (weighted by r^2) for unequal radii;
+//    triangulation edges that were never bonded count as bonded through
+//    their common bonded neighbours;
+//  - auto: lattice when the bonds span lattice cells (isLatticeGraph), else
+//    triangulation.
+enum class Decomposition { kAuto, kLattice, kTriangulation };
+
+std::string_view toString(Decomposition decomposition);
+Result<Decomposition> parseDecomposition(std::string_view name);
+
 // An axis-aligned box (the domain that clips local Voronoi cells).
 using Box = dem::Bounds;
 
@@ -42,9 +56,14 @@ struct StepInput {
   std::span<const double> radius;           // [N]
   std::span<const float> bondForce;         // [M] optional
   std::span<const std::int32_t> breakStep;  // [M] optional
+  // [N] optional: the configuration the cells of a triangulation are made
+  // in (the file's first step); the positions of the first step extracted
+  // when empty.
+  std::span<const Vec3> referencePositions;
 };
 
 struct ExtractOptions {
+  Decomposition decomposition = Decomposition::kAuto;
   // cell attribute: decompose the whole lattice instead of the fractured
   // region, and the fewest broken bonds a cell needs to be output.
   bool globalDecomposition = false;
@@ -79,7 +98,15 @@ class CrackExtractor {
   virtual const LatticeDecomposition* decomposition() const { return nullptr; }
   // Bonds the last step found inconsistent (local Voronoi only).
   virtual std::size_t inconsistentBondCount() const { return 0; }
+  // What the extractor divides space with (lattice or triangulation) once
+  // it has seen a step.
+  virtual Decomposition decompositionKind() const { return Decomposition::kLattice; }
 };
+
+// Whether the bonds span lattice cells: at least 98 % of the bonds of a
+// sample of particles lie on a lattice cell found from the graph alone. A
+// random packing's bonds do not (its 4-cliques fill a small part of space).
+bool isLatticeGraph(const BondGraph& graph, int dimension);
 
 // The graph must outlive the extractor.
 std::unique_ptr<CrackExtractor> makeExtractor(Method method, const BondGraph& graph, int dimension,

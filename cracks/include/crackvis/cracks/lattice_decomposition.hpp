@@ -9,6 +9,10 @@
 // never removed; their broken-bond masks follow the state they are given, so
 // stepping back in time stays correct (the decomposition is then a superset).
 //
+// With ExplicitCells (a triangulation of a packing that is no lattice; every
+// cell edge must then be an edge of the graph), the cells come from that list
+// instead of the graph's cliques; everything else works the same.
+//
 // Each cell knows its bonds (bondOf); the cells of a bond are found through
 // per-particle lists in which each cell is linked under its lowest particle
 // (cellsOfBond).
@@ -25,9 +29,27 @@ namespace crackvis::cracks {
 
 using CellIndex = std::int32_t;
 
+// Cells given as node lists (tetrahedra, or triangles with the fourth node
+// -1), with the cells of each particle in CSR form.
+struct ExplicitCells {
+  std::vector<std::array<dem::ParticleIndex, 4>> cells;  // nodes ascending
+  std::vector<std::int32_t> offsets;                     // [N + 1]
+  std::vector<std::int32_t> cellsOfParticle;             // ids into cells
+
+  ExplicitCells() = default;
+  ExplicitCells(std::size_t particleCount, std::vector<std::array<dem::ParticleIndex, 4>> cells);
+  std::span<const std::int32_t> of(dem::ParticleIndex p) const {
+    return {cellsOfParticle.data() + offsets[static_cast<std::size_t>(p)],
+            cellsOfParticle.data() + offsets[static_cast<std::size_t>(p) + 1]};
+  }
+  std::size_t memoryBytes() const;
+};
+
 class LatticeDecomposition {
  public:
-  LatticeDecomposition(const BondGraph& graph, int dimension);
+  // `explicitCells`, when given, must outlive the decomposition.
+  LatticeDecomposition(const BondGraph& graph, int dimension,
+                       const ExplicitCells* explicitCells = nullptr);
 
   // Every cell of the lattice.
   void buildGlobal(std::span<const std::uint8_t> bondState);
@@ -88,6 +110,7 @@ class LatticeDecomposition {
 
   const BondGraph& m_graph;
   int m_dimension;
+  const ExplicitCells* m_explicit;
   std::vector<LatticeCell> m_cells;
   // One bit per particle or bond.
   class Bits {

@@ -1,0 +1,247 @@
+// Crack extraction on packings whose bonds span no lattice (random and
+// polydisperse packings, what Yade, ESyS-Particle and LAMMPS users run).
+//
+// Space is divided by the Delaunay (equal radii) or regular (unequal radii)
+// triangulation of the reference configuration, made once. Its edges that
+// are no bond become "virtual bonds" appended after the file's M bonds, so
+// the four methods run unchanged on the extended graph with the
+// triangulation's cells; local Voronoi then clips each cell by every
+// triangulation neighbour, which makes it the (power) Voronoi cell.
+//
+// The rule for a never-bonded neighbour pair (i, j): it counts as bonded
+// through every common bonded neighbour k (paths i-k-j of two bonds), and
+// breaks when the last such path has a broken bond. Material that holds
+// together around the pair keeps it closed; a crack that cuts every path
+// between i and j opens it with the real bonds around it. A pair with no such
+// path (at the specimen's surface, or in a void) never breaks. A bonded pair
+// that is no triangulation neighbour keeps its bond, but no cell holds it,
+// so it makes no face of its own (cell methods) or none that exists (local
+// Voronoi reports it inconsistent).
+#include <algorithm>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "methods.hpp"
+#include <crackvis/cracks/triangulation.hpp>
+
+namespace crackvis::cracks {
+namespace {
+
+class TriangulatedExtractor final : public CrackExtractor {
+ public:
+  TriangulatedExtractor(Method method, const BondGraph& graph, int dimension,
+                        const ExtractOptions& options)
+      : m_method(method), m_graph(graph), m_dimension(dimension), m_options(options) {}
+
+  Method method() const override { return m_method; }
+  Decomposition decompositionKind() const override { return Decomposition::kTriangulation; }
+  const LatticeDecomposition* decomposition() const override {
+    return m_inner ? m_inner->decomposition() : nullptr;
+  }
+  std::size_t inconsistentBondCount() const override {
+    return m_inner ? m_inner->inconsistentBondCount() : 0;
+  }
+  std::size_t memoryBytes() const override {
+    std::size_t bytes = m_bonds.capacity() * sizeof(dem::Bond) + m_cells.memoryBytes() +
+                        m_supportStart.capacity() * sizeof(std::int32_t) +
+                        m_support.capacity() * sizeof(m_support[0]) + m_state.capacity() +
+                        m_force.capacity() * sizeof(float) +
+                        m_breakStep.capacity() * sizeof(std::int32_t);
+    if (m_extended) {
+      bytes += m_extended->memoryBytes();
+    }
+    return m_inner ? bytes + m_inner->memoryBytes() : bytes;
+  }
+
+  Status extract(const StepInput& step, CrackMesh& out) override {
+    CRACKVIS_RETURN_IF_ERROR(checkStepInput(m_graph, step));
+    if (!m_inner) {
+      CRACKVIS_RETURN_IF_ERROR(build(step));
+    }
+    extendStep(step);
+    StepInput extended = step;
+    extended.bondState = m_state;
+    extended.bondForce = step.bondForce.empty() ? std::span<const float>{} : m_force;
+    extended.breakStep = step.breakStep.empty() ? std::span<const std::int32_t>{} : m_breakStep;
+    CRACKVIS_RETURN_IF_ERROR(m_inner->extract(extended, out));
+    hideVirtualBondIds(out);
+    return Status::ok();
+  }
+
+ private:
+  Status build(const StepInput& step) {
+    const std::span<const Vec3> reference =
+        step.referencePositions.empty() ? step.positions : step.referencePositions;
+    if (reference.size() != m_graph.particleCount()) {
+      return invalidArgument(fmt::format("{} reference positions for N = {} particles",
+                                         reference.size(), m_graph.particleCount()));
+    }
+    auto triangulation = triangulate(reference, step.radius, m_dimension);
+    if (!triangulation) {
+      return triangulation.status();
+    }
+    m_bonds.assign(m_graph.bonds().begin(), m_graph.bonds().end());
+    m_supportStart.assign(1, 0);
+    for (const dem::Bond& edge : triangulation->edges) {
+      if (!m_graph.bonded(edge.first, edge.second)) {
+        m_bonds.push_back(edge);
+        addSupport(edge);
+      }
+    }
+    m_extended.emplace(m_graph.particleCount(), m_bonds);
+    m_cells = ExplicitCells(m_graph.particleCount(), std::move(triangulation->cells));
+    m_inner = makeInner();
+    return Status::ok();
+  }
+
+  // The two-bond paths i-k-j between the ends of a never-bonded edge: both
+  // bond lists are sorted by their other end, so one merge finds the k.
+  void addSupport(const dem::Bond& edge) {
+    const auto first = m_graph.bondsOf(edge.first);
+    const auto second = m_graph.bondsOf(edge.second);
+    auto a = first.begin();
+    auto b = second.begin();
+    while (a != first.end() && b != second.end()) {
+      const dem::ParticleIndex ka = m_graph.otherEnd(*a, edge.first);
+      const dem::ParticleIndex kb = m_graph.otherEnd(*b, edge.second);
+      if (ka < kb) {
+        ++a;
+      } else if (kb < ka) {
+        ++b;
+      } else {
+        m_support.push_back({*a, *b});
+        ++a;
+        ++b;
+      }
+    }
+    m_supportStart.push_back(static_cast<std::int32_t>(m_support.size()));
+  }
+
+  std::unique_ptr<CrackExtractor> makeInner() const {
+    switch (m_method) {
+      case Method::kCellAttribute:
+        return makeCellAttribute(*m_extended, m_dimension, m_options, &m_cells);
+      case Method::kCellCut:
+        return makeCellCut(*m_extended, m_dimension, m_options, &m_cells);
+      case Method::kLocalVoronoi:
+        return makeLocalVoronoi(*m_extended, m_dimension, m_options);
+      case Method::kCellCentre:
+        return makeCellCentre(*m_extended, m_dimension, m_options, &m_cells);
+    }
+    return nullptr;
+  }
+
+  // The step's arrays over the extended bonds: a virtual bond is broken when
+  // every path that held it has a broken bond, since the step the last one
+  // broke; it carries no force.
+  void extendStep(const StepInput& step) {
+    const std::size_t m = m_graph.bondCount();
+    const std::size_t virtualCount = m_bonds.size() - m;
+    m_state.assign(step.bondState.begin(), step.bondState.end());
+    m_state.resize(m_bonds.size(), 0);
+    if (!step.breakStep.empty()) {
+      m_breakStep.assign(step.breakStep.begin(), step.breakStep.end());
+      m_breakStep.resize(m_bonds.size(), -1);
+    }
+    if (!step.bondForce.empty()) {
+      m_force.assign(step.bondForce.begin(), step.bondForce.end());
+      m_force.resize(m_bonds.size(), 0.0f);
+    }
+    for (std::size_t v = 0; v < virtualCount; ++v) {
+      const auto first = static_cast<std::size_t>(m_supportStart[v]);
+      const auto last = static_cast<std::size_t>(m_supportStart[v + 1]);
+      bool broken = first < last;
+      std::int32_t brokeAt = -1;
+      for (std::size_t s = first; s < last && broken; ++s) {
+        const auto [a, b] = m_support[s];
+        const bool aBroken = step.bondState[static_cast<std::size_t>(a)] != 0;
+        const bool bBroken = step.bondState[static_cast<std::size_t>(b)] != 0;
+        broken = aBroken || bBroken;
+        if (broken && !step.breakStep.empty()) {
+          brokeAt = std::max(brokeAt, pathBreakStep(step, aBroken ? a : -1, bBroken ? b : -1));
+        }
+      }
+      m_state[m + v] = broken ? 1 : 0;
+      if (!step.breakStep.empty()) {
+        m_breakStep[m + v] = broken ? brokeAt : -1;
+      }
+    }
+  }
+
+  // The step a path of two bonds broke: its first broken bond's.
+  static std::int32_t pathBreakStep(const StepInput& step, dem::BondIndex a, dem::BondIndex b) {
+    std::int32_t at = -1;
+    for (dem::BondIndex bond : {a, b}) {
+      if (bond >= 0) {
+        const std::int32_t s = step.breakStep[static_cast<std::size_t>(bond)];
+        at = at < 0 ? s : (s < 0 ? at : std::min(at, s));
+      }
+    }
+    return at;
+  }
+
+  // A virtual bond is no bond of the file: its faces get bond_id -1.
+  void hideVirtualBondIds(CrackMesh& out) const {
+    const auto m = static_cast<double>(m_graph.bondCount());
+    for (auto* arrays : {&out.cellData, &out.pointData}) {
+      for (AttributeArray& array : *arrays) {
+        if (array.name == "bond_id") {
+          for (double& id : array.values) {
+            id = id >= m ? -1.0 : id;
+          }
+        }
+      }
+    }
+  }
+
+  Method m_method;
+  const BondGraph& m_graph;
+  int m_dimension;
+  ExtractOptions m_options;
+  std::vector<dem::Bond> m_bonds;  // the graph's M bonds, then the virtual ones
+  std::optional<BondGraph> m_extended;
+  ExplicitCells m_cells;
+  std::vector<std::int32_t> m_supportStart;  // [virtual + 1]
+  std::vector<std::array<dem::BondIndex, 2>> m_support;
+  std::unique_ptr<CrackExtractor> m_inner;
+  std::vector<std::uint8_t> m_state;
+  std::vector<float> m_force;
+  std::vector<std::int32_t> m_breakStep;
+};
+
+}  // namespace
+
+std::unique_ptr<CrackExtractor> makeTriangulated(Method method, const BondGraph& graph,
+                                                 int dimension, const ExtractOptions& options) {
+  return std::make_unique<TriangulatedExtractor>(method, graph, dimension, options);
+}
+
+bool isLatticeGraph(const BondGraph& graph, int dimension) {
+  const std::size_t n = graph.particleCount();
+  if (n == 0 || graph.bondCount() == 0) {
+    return true;
+  }
+  constexpr std::size_t kSample = 256;
+  const std::size_t stride = std::max<std::size_t>(1, n / kSample);
+  std::vector<dem::ParticleIndex> sample;
+  for (std::size_t i = 0; i < n; i += stride) {
+    sample.push_back(static_cast<dem::ParticleIndex>(i));
+  }
+  const std::vector<std::uint8_t> intact(graph.bondCount(), 0);
+  LatticeDecomposition cells(graph, dimension);
+  cells.addCellsAround(sample, intact);
+  std::size_t bonds = 0;
+  std::size_t covered = 0;
+  std::vector<CellIndex> found;
+  for (dem::ParticleIndex p : sample) {
+    for (dem::BondIndex b : graph.bondsOf(p)) {
+      cells.cellsOfBond(b, found);
+      ++bonds;
+      covered += found.empty() ? 0 : 1;
+    }
+  }
+  return bonds == 0 || static_cast<double>(covered) >= 0.98 * static_cast<double>(bonds);
+}
+
+}  // namespace crackvis::cracks
