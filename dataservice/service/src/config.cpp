@@ -70,13 +70,11 @@ Status readUser(const json& object, const std::string& where, UserEntry& user) {
 }  // namespace
 
 Result<ServerConfig> parseServerConfig(const std::string& text, const std::string& origin) {
-  json root;
-  try {
-    root = json::parse(text);
-  } catch (const json::parse_error& e) {
-    return invalidArgument(
-        fmt::format("{}: not valid JSON (byte {}): {}", origin, e.byte, e.what()));
+  auto document = config::parseDocument(text, origin);
+  if (!document) {
+    return document.status();
   }
+  const json& root = *document;
   ServerConfig config;
   CRACKVIS_RETURN_IF_ERROR(checkKeys(root, origin,
                                      {"listen", "data_root", "tls", "insecure", "limits", "users",

@@ -56,13 +56,11 @@ Status readLimits(const json& object, const std::string& where, RenderServerConf
 
 Result<RenderServerConfig> parseRenderServerConfig(const std::string& text,
                                                    const std::string& origin) {
-  json root;
-  try {
-    root = json::parse(text);
-  } catch (const json::parse_error& e) {
-    return invalidArgument(
-        fmt::format("{}: not valid JSON (byte {}): {}", origin, e.byte, e.what()));
+  auto document = config::parseDocument(text, origin);
+  if (!document) {
+    return document.status();
   }
+  const json& root = *document;
   RenderServerConfig config;
   CRACKVIS_RETURN_IF_ERROR(checkKeys(
       root, origin,

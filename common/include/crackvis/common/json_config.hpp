@@ -32,6 +32,17 @@ inline Status checkKeys(const nlohmann::json& object, const std::string& where,
   return Status::ok();
 }
 
+// The JSON document of a configuration file's text; INVALID_ARGUMENT naming
+// `origin` and the byte where parsing stopped.
+inline Result<nlohmann::json> parseDocument(const std::string& text, const std::string& origin) {
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    return invalidArgument(
+        fmt::format("{}: not valid JSON (byte {}): {}", origin, e.byte, e.what()));
+  }
+}
+
 // Reads object[key] into `out` when present; leaves `out` alone otherwise.
 template <typename T>
 Status read(const nlohmann::json& object, const char* key, const std::string& where, T& out) {
