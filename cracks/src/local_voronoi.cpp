@@ -197,8 +197,7 @@ class LocalVoronoiExtractor final : public CrackExtractor {
     CRACKVIS_RETURN_IF_ERROR(checkStepInput(m_graph, step));
     out.clear();
     out.dimension = m_dimension;
-    const Box box = m_options.domain ? *m_options.domain
-                                     : defaultDomain(step.positions, step.radius, m_dimension);
+    const Box box = m_options.domain ? *m_options.domain : grownDefaultDomain(step);
     std::vector<dem::ParticleIndex> ends = endParticles(step.bondState);
     if (m_options.validate) {
       m_largestRadius = 0.0;
@@ -227,6 +226,17 @@ class LocalVoronoiExtractor final : public CrackExtractor {
   }
 
  private:
+  Box grownDefaultDomain(const StepInput& step) const {
+    Box box = defaultDomain(step.positions, step.radius, m_dimension);
+    if (m_options.domainMargin > 0.0 && !step.radius.empty()) {
+      const double margin =
+          m_options.domainMargin * *std::max_element(step.radius.begin(), step.radius.end());
+      box.lo = box.lo - Vec3{margin, margin, m_dimension == 3 ? margin : 0.0};
+      box.hi = box.hi + Vec3{margin, margin, m_dimension == 3 ? margin : 0.0};
+    }
+    return box;
+  }
+
   // The broken bonds, and the particles at their ends with their rank.
   std::vector<dem::ParticleIndex> endParticles(std::span<const std::uint8_t> state) {
     m_rankOf.assign(m_graph.particleCount(), -1);

@@ -32,7 +32,11 @@ class TriangulatedExtractor final : public CrackExtractor {
  public:
   TriangulatedExtractor(Method method, const BondGraph& graph, int dimension,
                         const ExtractOptions& options)
-      : m_method(method), m_graph(graph), m_dimension(dimension), m_options(options) {}
+      : m_method(method), m_graph(graph), m_dimension(dimension), m_options(options) {
+    if (!m_options.domain && m_options.domainMargin == 0.0) {
+      m_options.domainMargin = 1.0;
+    }
+  }
 
   Method method() const override { return m_method; }
   Decomposition decompositionKind() const override { return Decomposition::kTriangulation; }

@@ -76,8 +76,12 @@ struct ExtractOptions {
   // decomposition), with bond_state 0, for display.
   bool includeIntactFaces = false;
   // local Voronoi: the clipping domain; default: the bounding box of the
-  // particle centres (see defaultDomain).
+  // particle centres (see defaultDomain) grown by domainMargin times the
+  // largest radius. A triangulated packing uses a margin of 1, so the faces
+  // of bonds at the specimen's surface reach its particles' extent instead
+  // of lying outside the centres' box.
   std::optional<Box> domain;
+  double domainMargin = 0.0;
   // cell centre: use the centroid of each whole octahedron instead of its two
   // pyramids (on an undeformed FCC lattice the faces are then the Voronoi faces).
   bool mergeOctahedra = false;
