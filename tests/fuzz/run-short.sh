@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets with clang in their own tree and runs each for
 # a short while; exits 1 if any target crashes (its reproducer is kept under
-# the build tree and its path printed). What CI runs after ctest.
+# the build tree and its path printed). What CI runs before ctest.
 #
 #   tests/fuzz/run-short.sh                  # every target, 60 s each
 #   FUZZ_SECONDS=600 tests/fuzz/run-short.sh pipeline   # one target, longer

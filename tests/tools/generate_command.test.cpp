@@ -1,3 +1,5 @@
+#include <algorithm>
+
 #include <catch2/catch.hpp>
 
 #include "support/process.hpp"
@@ -61,4 +63,37 @@ TEST_CASE("crackvis generate rejects bad options with one clear line", "[cli][ge
   CHECK_THAT(unwritable.err,
              Catch::StartsWith("crackvis generate: /nonexistent/dir/x.h5: cannot create file"));
   CHECK(testing::lines(unwritable.err).size() == 1);
+}
+
+TEST_CASE("crackvis generate --packing random writes a polydisperse random packing",
+          "[cli][generate]") {
+  TempDir dir;
+  const std::string path = dir.file("random.h5");
+  auto run = runProcess({kCli, "generate", "--packing", "random", "--radius-range", "5e-4:1e-3",
+                         "--solid-fraction", "0.55", "--box", "0.012", "0.012", "0.012", "--seed",
+                         "4", "-o", path});
+  REQUIRE(run.exitCode == 0);
+  CHECK_THAT(run.out, Catch::Contains("random 3D packing"));
+  CHECK_THAT(run.out, Catch::Contains("solid fraction 0.55"));
+  auto reader = dem::DemFileReader::open(path);
+  REQUIRE(reader.isOk());
+  auto lattice = reader->readLattice();
+  REQUIRE(lattice.isOk());
+  const auto [lo, hi] = std::minmax_element(lattice->radius.begin(), lattice->radius.end());
+  CHECK(*lo >= 5e-4);
+  CHECK(*hi <= 1e-3);
+  CHECK(*hi > 1.5 * *lo);
+  CHECK(lattice->bondCount() > 2 * lattice->particleCount());
+  CHECK(dem::validateLattice(*lattice).isOk());
+
+  auto reversed = runProcess({kCli, "generate", "--packing", "random", "--radius-range",
+                              "1e-3:5e-4", "-o", dir.file("x.h5")});
+  CHECK(reversed.exitCode == 1);
+  CHECK(reversed.err ==
+        "crackvis generate: --radius-range '1e-3:5e-4' is not RMIN:RMAX with 0 < RMIN <= RMAX "
+        "(metres, e.g. 5e-4:1e-3)\n");
+  auto tooDense = runProcess(
+      {kCli, "generate", "--packing", "random", "--solid-fraction", "0.7", "-o", dir.file("x.h5")});
+  CHECK(tooDense.exitCode == 1);
+  CHECK_THAT(tooDense.err, Catch::Contains("solid fraction 0.7 is outside (0, 0.64]"));
 }
