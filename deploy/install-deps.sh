@@ -43,7 +43,7 @@ readonly PACKAGES=(
 # libglvnd loads at run time. apt brings each library's own dependencies.
 readonly RUNTIME_PACKAGES=(
   libhdf5-103-1 libgrpc++1.51 libgrpc29 libabsl20220623 libprotobuf32 libssl3 libfmt9
-  libtbb12 libvoro++1 libvtk9.1 libxml2
+  libtbb12 libvoro++1 libvtk9.1 libxml2 libgmp10
   libavcodec59 libavutil57 libswscale6
   libegl1 libegl-mesa0 libgl1-mesa-dri
 )
