@@ -12,6 +12,8 @@
 #include "support/process.hpp"
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
+#include <crackvis/dem/dem_file.hpp>
+#include <crackvis/dem/random_packing.hpp>
 
 using crackvis::testing::runProcess;
 using crackvis::testing::TempDir;
@@ -145,4 +147,85 @@ TEST_CASE("crackvis snapshot renders a step to PNG off screen", "[cli][snapshot]
   auto range = runProcess({kCli, "snapshot", data, "-s", "7", "-o", dir.file("x.png")});
   CHECK(range.exitCode == 1);
   CHECK_THAT(range.err, Catch::Contains("step 7 out of range (the file has steps 0..2)"));
+}
+
+namespace {
+
+// A random packing (crackvis-dem, two steps): intact, then a through crack at
+// x = 0.01 plus `scattered` isolated broken bonds far from it.
+void writeCrackedRandomPacking(const std::string& path, int scattered) {
+  crackvis::dem::RandomPackingSpec spec;
+  spec.box = {0.02, 0.01, 0.01};
+  spec.radiusMin = 3e-4;
+  spec.radiusMax = 6e-4;
+  spec.solidFraction = 0.55;
+  auto packing = crackvis::dem::generateRandomPacking(spec);
+  REQUIRE(packing.isOk());
+  auto writer = crackvis::dem::DemFileWriter::create(path, packing->lattice, {"test", "SI"});
+  REQUIRE(writer.isOk());
+  crackvis::dem::StepState step;
+  step.positions = packing->positions;
+  step.bondState.assign(packing->lattice.bondCount(), 0);
+  REQUIRE(writer->appendStep(step).isOk());
+  int isolated = 0;
+  for (std::size_t b = 0; b < step.bondState.size(); ++b) {
+    const auto& bond = packing->lattice.bonds[b];
+    const double xa = packing->positions[static_cast<std::size_t>(bond.first)].x;
+    const double xb = packing->positions[static_cast<std::size_t>(bond.second)].x;
+    if ((xa - 0.01) * (xb - 0.01) < 0.0) {
+      step.bondState[b] = 1;
+    } else if (xa < 0.004 && b % 97 == 0 && isolated < scattered) {
+      step.bondState[b] = 1;
+      ++isolated;
+    }
+  }
+  step.time = 1e-3;
+  REQUIRE(writer->appendStep(step).isOk());
+  REQUIRE(writer->close().isOk());
+}
+
+}  // namespace
+
+TEST_CASE("crackvis extract on a random packing: the main crack, its coverage, scattered damage",
+          "[cli][extract][packing]") {
+  TempDir dir;
+  const std::string data = dir.file("random.h5");
+  writeCrackedRandomPacking(data, 6);
+  auto json = runProcess(
+      {kCli, "extract", data, "-m", "cell-centre", "-s", "1", "--metrics", "--json", "-q"});
+  REQUIRE(json.exitCode == 0);
+  CHECK(json.err.empty());
+  const auto report = nlohmann::json::parse(json.out);
+  CHECK(report["decomposition"] == "triangulation");
+  const auto& row = report["steps"][0];
+  CHECK(row["mapped_fraction"].get<double>() >= 0.99);
+  CHECK(row["largest_component_coverage"].get<double>() >= 0.9);
+  const auto& components = row["component_list"];
+  REQUIRE(components.size() >= 2);  // the main crack and scattered pieces
+  CHECK(std::abs(components[0]["normal"][0].get<double>()) > 0.95);
+  CHECK(components[0]["area"].get<double>() > 20.0 * components[1]["area"].get<double>());
+
+  SECTION("--largest 1 keeps the main crack only") {
+    const std::string out = dir.file("main.vtp");
+    auto run = runProcess({kCli, "extract", data, "-m", "cell-centre", "-s", "1", "--largest", "1",
+                           "-o", out, "--metrics", "--json", "-q"});
+    REQUIRE(run.exitCode == 0);
+    const auto kept = nlohmann::json::parse(run.out)["steps"][0];
+    CHECK(kept["components"] == 1);
+    CHECK(kept["polygons"].get<int>() < row["polygons"].get<int>());
+    vtkNew<vtkXMLPolyDataReader> reader;
+    reader->SetFileName(out.c_str());
+    reader->Update();
+    CHECK(reader->GetOutput()->GetNumberOfPolys() == kept["polygons"].get<int>());
+  }
+  SECTION("the lattice's cells on a random packing: a warning that names the cause") {
+    auto run = runProcess({kCli, "extract", data, "-m", "cell-cut", "-s", "1", "--decomposition",
+                           "lattice", "--metrics", "--json", "-q"});
+    REQUIRE(run.exitCode == 0);
+    CHECK_THAT(run.err, Catch::StartsWith("crackvis extract: warning: only "));
+    CHECK_THAT(run.err, Catch::Contains("span no lattice"));
+    CHECK(std::count(run.err.begin(), run.err.end(), '\n') == 1);
+    CHECK_THAT(nlohmann::json::parse(run.out)["warning"].get<std::string>(),
+               Catch::Contains("span no lattice"));
+  }
 }

@@ -8,6 +8,8 @@
 
 #include "commands.hpp"
 #include <crackvis/common/progress.hpp>
+#include <crackvis/cracks/bond_mapping.hpp>
+#include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/dem_series.hpp>
 #include <crackvis/cracks/mesh_writers.hpp>
 #include <crackvis/cracks/metrics.hpp>
@@ -26,7 +28,25 @@ struct ExtractCommandOptions {
   bool json = false;
   bool quiet = false;
   cracks::ExtractOptions extract;
+  std::string decomposition = "auto";
   bool noValidation = false;
+  cracks::ComponentFilter components;
+};
+
+// What a step's crack is made of beyond the surface metrics: its components
+// (largest first), the largest one's coverage, and the broken bonds mapped.
+struct StepSummary {
+  cracks::CrackComponents components;
+  double coverage = 0.0;
+  cracks::BondMapping mapping;
+};
+
+// The lowest mapped fraction of the run, for the one warning at its end.
+struct MappingWarning {
+  int step = -1;
+  cracks::BondMapping mapping;
+  std::string cause;
+  std::size_t steps = 0;  // steps below kMappedWarning
 };
 
 // Where step k goes: a single step is written to OUTPUT itself; a series to
@@ -84,8 +104,21 @@ class OutputPlan {
   fs::path m_folder;
 };
 
+nlohmann::json componentJson(const cracks::CrackComponent& c) {
+  auto vec = [](cracks::Vec3 v) { return nlohmann::json::array({v.x, v.y, v.z}); };
+  return {{"area", c.area},
+          {"primitives", c.primitives},
+          {"box", {{"lo", vec(c.box.lo)}, {"hi", vec(c.box.hi)}}},
+          {"centroid", vec(c.centroid)},
+          {"normal", vec(c.normal)}};
+}
+
 nlohmann::json metricsJson(int step, double time, std::size_t broken,
-                           const cracks::SurfaceMetrics& m) {
+                           const cracks::SurfaceMetrics& m, const StepSummary& summary) {
+  nlohmann::json components = nlohmann::json::array();
+  for (const auto& component : summary.components.components) {
+    components.push_back(componentJson(component));
+  }
   return {{"step", step},
           {"time", time},
           {"broken_bonds", broken},
@@ -100,19 +133,68 @@ nlohmann::json metricsJson(int step, double time, std::size_t broken,
           {"cut_particles", m.cutParticles},
           {"components", m.components},
           {"non_manifold_edges", m.nonManifoldEdges},
-          {"inconsistent_bonds", m.inconsistentBonds}};
+          {"inconsistent_bonds", m.inconsistentBonds},
+          {"mapped_bonds", summary.mapping.mapped},
+          {"mapped_fraction", summary.mapping.fraction()},
+          {"largest_component_coverage", summary.coverage},
+          {"component_list", components}};
 }
 
 void printMetricsHeader() {
-  std::printf("%6s %12s %8s %9s %12s %12s %10s %10s %6s %6s %6s\n", "step", "time [s]", "broken",
-              "polygons", "area", "total depth", "max depth", "max d/r", "comp", "n-man", "incon");
+  std::printf("%6s %12s %8s %9s %12s %12s %10s %10s %6s %6s %6s %7s %12s %7s\n", "step", "time [s]",
+              "broken", "polygons", "area", "total depth", "max depth", "max d/r", "comp", "n-man",
+              "incon", "mapped", "main area", "cover");
 }
 
-void printMetricsRow(int step, double time, std::size_t broken, const cracks::SurfaceMetrics& m) {
-  std::printf("%6d %12.6g %8zu %9zu %12.6g %12.6g %10.4g %10.4f %6zu %6zu %6zu\n", step, time,
-              broken, m.polygons + (m.polygons == 0 ? m.lines : 0), m.area, m.totalDepth,
-              m.maxDepth, m.maxRelativeDepth, m.components, m.nonManifoldEdges,
-              m.inconsistentBonds);
+void printMetricsRow(int step, double time, std::size_t broken, const cracks::SurfaceMetrics& m,
+                     const StepSummary& summary) {
+  const double mainArea =
+      summary.components.components.empty() ? 0.0 : summary.components.components[0].area;
+  std::printf(
+      "%6d %12.6g %8zu %9zu %12.6g %12.6g %10.4g %10.4f %6zu %6zu %6zu %6.1f%% %12.6g "
+      "%6.1f%%\n",
+      step, time, broken, m.polygons + (m.polygons == 0 ? m.lines : 0), m.area, m.totalDepth,
+      m.maxDepth, m.maxRelativeDepth, m.components, m.nonManifoldEdges, m.inconsistentBonds,
+      100.0 * summary.mapping.fraction(), mainArea, 100.0 * summary.coverage);
+}
+
+StepSummary summarise(const cracks::CrackMesh& mesh, const cracks::StepInput& input,
+                      const cracks::CrackExtractor& extractor, bool withComponents,
+                      bool withCoverage) {
+  StepSummary summary;
+  if (withComponents) {
+    summary.components = cracks::findComponents(mesh);
+  }
+  if (withCoverage && !summary.components.components.empty()) {
+    summary.coverage =
+        cracks::sectionCoverage(mesh, summary.components, 0, input.positions, input.radius);
+  }
+  summary.mapping = cracks::mapBrokenBonds(mesh, input.bondState, extractor);
+  return summary;
+}
+
+void noteMapping(int step, const cracks::BondMapping& mapping,
+                 const cracks::CrackExtractor& extractor, const cracks::BondGraph& graph,
+                 int dimension, const cracks::StepInput& input,
+                 const cracks::ExtractOptions& options, MappingWarning& warning) {
+  if (mapping.fraction() >= cracks::kMappedWarning) {
+    return;
+  }
+  ++warning.steps;
+  if (warning.step < 0 || mapping.fraction() < warning.mapping.fraction()) {
+    warning.step = step;
+    warning.mapping = mapping;
+    warning.cause =
+        cracks::diagnoseMapping(mapping, extractor, graph, dimension, input.radius, options);
+  }
+}
+
+std::string warningText(const MappingWarning& warning) {
+  return fmt::format(
+      "only {:.1f} % of the {} broken bonds at step {} became surface elements ({} step{} below "
+      "{:.0f} %): {}",
+      100.0 * warning.mapping.fraction(), warning.mapping.broken, warning.step, warning.steps,
+      warning.steps == 1 ? "" : "s", 100.0 * cracks::kMappedWarning, warning.cause);
 }
 
 int runExtract(ExtractCommandOptions options) {
@@ -146,6 +228,12 @@ int runExtract(ExtractCommandOptions options) {
     }
   }
   options.extract.validate = !options.noValidation;
+  auto decomposition = cracks::parseDecomposition(options.decomposition);
+  if (!decomposition) {
+    printError("extract", decomposition.status().message());
+    return kExitUsage;
+  }
+  options.extract.decomposition = *decomposition;
   const int dimension = (*series)->lattice().dimension;
   auto extractor = cracks::makeExtractor(*method, (*series)->graph(), dimension, options.extract);
   ProgressBar progress(fmt::format("extract {}", options.method),
@@ -157,6 +245,7 @@ int runExtract(ExtractCommandOptions options) {
     printMetricsHeader();
   }
   cracks::CrackMesh mesh;
+  MappingWarning warning;
   for (std::size_t k = 0; k < steps->size(); ++k) {
     const int step = (*steps)[k];
     auto input = (*series)->load(step);
@@ -170,6 +259,13 @@ int runExtract(ExtractCommandOptions options) {
     }
     const double time = (*series)->info().steps[static_cast<std::size_t>(step)].time;
     const std::size_t broken = (*series)->state().brokenBondCount();
+    // Mapping and components are judged on the whole crack, before a
+    // component filter drops pieces.
+    const StepSummary summary = summarise(
+        mesh, *input, *extractor, options.metrics || options.components.active(), options.metrics);
+    noteMapping(step, summary.mapping, *extractor, (*series)->graph(), dimension, *input,
+                options.extract, warning);
+    cracks::keepComponents(mesh, summary.components, options.components);
     if (!options.output.empty()) {
       const auto [path, relative] = plan.fileFor(step, mesh);
       if (Status status = cracks::writeMesh(mesh, path); !status) {
@@ -181,9 +277,9 @@ int runExtract(ExtractCommandOptions options) {
     if (options.metrics) {
       const auto metrics = cracks::computeMetrics(mesh, input->positions, input->radius);
       if (options.json) {
-        metricRows.push_back(metricsJson(step, time, broken, metrics));
+        metricRows.push_back(metricsJson(step, time, broken, metrics, summary));
       } else {
-        printMetricsRow(step, time, broken, metrics);
+        printMetricsRow(step, time, broken, metrics, summary);
       }
     }
     progress.update(
@@ -197,12 +293,19 @@ int runExtract(ExtractCommandOptions options) {
       return kExitFailure;
     }
   }
+  const std::string decompositionUsed(cracks::toString(extractor->decompositionKind()));
   if (options.metrics && options.json) {
-    std::printf(
-        "%s\n",
-        nlohmann::json{{"file", options.file}, {"method", options.method}, {"steps", metricRows}}
-            .dump(2)
-            .c_str());
+    nlohmann::json report{{"file", options.file},
+                          {"method", options.method},
+                          {"decomposition", decompositionUsed},
+                          {"steps", metricRows}};
+    if (warning.step >= 0) {
+      report["warning"] = warningText(warning);
+    }
+    std::printf("%s\n", report.dump(2).c_str());
+  }
+  if (warning.step >= 0) {
+    std::fprintf(stderr, "crackvis extract: warning: %s\n", warningText(warning).c_str());
   }
   if (!options.quiet && !options.output.empty()) {
     std::fprintf(stderr, "wrote %s (%zu step%s)\n", options.output.c_str(), steps->size(),
@@ -234,7 +337,9 @@ Command addExtractCommand(CLI::App& parent) {
                       ".vtu, .stl, .obj (OUT_NNNNNN.ext per step when several)");
   command->add_flag("--metrics", options->metrics,
                     "Print per step: area, cut depth into particles, components, non-manifold "
-                    "edges, inconsistent bonds");
+                    "edges, inconsistent bonds, the broken bonds mapped to surface elements, the "
+                    "largest component's area and its coverage of the specimen's section; with "
+                    "--json also every component's area, box, centroid and best-fit plane");
   command->add_flag("--json", options->json, "Print the metrics as JSON");
   command->add_flag("-q,--quiet", options->quiet, "No progress bar");
   command->add_flag("--global", options->extract.globalDecomposition,
@@ -258,11 +363,29 @@ Command addExtractCommand(CLI::App& parent) {
       "local-voronoi: also output the faces of intact bonds (the local decomposition)");
   command->add_flag("--merge-octahedra", options->extract.mergeOctahedra,
                     "cell-centre: one centre per octahedron instead of one per pyramid");
+  command
+      ->add_option("--decomposition", options->decomposition,
+                   "auto: the lattice's cells when the bonds span a lattice, else a Delaunay "
+                   "(regular for unequal radii) triangulation of the first step; lattice; "
+                   "triangulation")
+      ->check(CLI::IsMember({"auto", "lattice", "triangulation"}))
+      ->capture_default_str();
+  command
+      ->add_option("--min-component", options->components.minArea,
+                   "Keep only crack components of at least this area (m^2; 2D: length, m)")
+      ->check(CLI::NonNegativeNumber);
+  command
+      ->add_option("--largest", options->components.largest,
+                   "Keep only the K largest crack components (the main crack: 1)")
+      ->check(CLI::PositiveNumber);
   command->footer(
       "Examples:\n"
       "  crackvis extract run.h5 -m local-voronoi -s 0:-1:10 -o cracks.pvd\n"
       "  crackvis extract run.h5 -m cell-cut -s -1 -o last.stl\n"
-      "  crackvis extract run.h5 -m cell-centre --metrics --json -s 100:199");
+      "  crackvis extract run.h5 -m cell-centre --metrics --json -s 100:199\n"
+      "  crackvis extract random.h5 -m local-voronoi -s -1 --largest 1 -o main-crack.vtp\n"
+      "A warning on stderr (and in the JSON) says when fewer than 95 % of the broken bonds became "
+      "surface elements, and why that is likely.");
   return {command, [options] { return runExtract(*options); }};
 }
 

@@ -1,0 +1,41 @@
+// How many of a step's broken bonds became a surface element: a method that
+// silently maps few broken bonds to faces (a packing that is no lattice,
+// validation refusing faces) misleads more than one that fails. Every run
+// reports this fraction; below kMappedWarning it warns, naming the likely
+// cause.
+//
+// A broken bond of the file (index < M; virtual bonds of a triangulation do
+// not count) is mapped when:
+//  - local Voronoi, cell centre: a surface primitive (polygon; 2D segment not
+//    flagged inconsistent) carries its bond_id;
+//  - cell cut: a surface primitive uses its point (point data bond_id);
+//  - cell attribute: a cell of the decomposition holds it.
+#pragma once
+
+#include <span>
+#include <string>
+
+#include <crackvis/cracks/extractor.hpp>
+
+namespace crackvis::cracks {
+
+inline constexpr double kMappedWarning = 0.95;
+
+struct BondMapping {
+  std::size_t broken = 0;
+  std::size_t mapped = 0;
+  double fraction() const {
+    return broken == 0 ? 1.0 : static_cast<double>(mapped) / static_cast<double>(broken);
+  }
+};
+
+BondMapping mapBrokenBonds(const CrackMesh& mesh, std::span<const std::uint8_t> bondState,
+                           const CrackExtractor& extractor);
+
+// The likely cause of a low fraction, as a phrase for a warning ("the bonds
+// span no lattice ..."); empty when the fraction is at least kMappedWarning.
+std::string diagnoseMapping(const BondMapping& mapping, const CrackExtractor& extractor,
+                            const BondGraph& graph, int dimension, std::span<const double> radius,
+                            const ExtractOptions& options);
+
+}  // namespace crackvis::cracks

@@ -1,0 +1,63 @@
+// Connected pieces of a crack surface, to tell the main crack from scattered
+// damage: in a tension run most broken bonds are isolated, and each makes a
+// small surface piece of its own away from the main crack.
+//
+// A component is a set of surface primitives (polygons in 3D, segments of
+// lines not flagged inconsistent in 2D) connected through shared points,
+// after welding points that coincide within 1e-9 of the mesh size (the same
+// rule as SurfaceMetrics::components). For each: its area (2D: length),
+// bounding box, area-weighted centroid and best-fit plane (the least-squares
+// plane of the surface, through the second moments of its triangles; in 2D
+// the best-fit line in the xy plane).
+//
+// Coverage: the component's area projected onto its best-fit plane over the
+// specimen's cross-section there. Both are rasterised on the plane with cells
+// of a quarter of the smallest radius, so a folded or doubled surface counts
+// once. The section is the convex hull of the centres within two largest
+// radii of the plane, projected onto it: where every method is defined (the
+// cells of a decomposition end at the centres' hull).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <crackvis/cracks/crack_mesh.hpp>
+
+namespace crackvis::cracks {
+
+struct CrackComponent {
+  std::size_t primitives = 0;
+  double area = 0.0;  // m^2 (2D: length, m)
+  dem::Bounds box;
+  Vec3 centroid;
+  Vec3 normal;  // unit normal of the best-fit plane (2D: of the best-fit line, z = 0)
+};
+
+struct CrackComponents {
+  std::vector<CrackComponent> components;  // largest area first
+  // The component of each polygon (3D) or line (2D) of the mesh, in mesh
+  // order, as an index into `components`; -1 for inconsistency marks.
+  std::vector<std::int32_t> ofPrimitive;
+};
+
+CrackComponents findComponents(const CrackMesh& mesh);
+
+// Fraction (0..1) of the specimen's section by component c's best-fit plane
+// that the component covers in projection onto that plane.
+double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::size_t c,
+                       std::span<const Vec3> positions, std::span<const double> radius);
+
+// Which components to keep: those of at least `minArea`, and of those the
+// `largest` biggest (0: all).
+struct ComponentFilter {
+  double minArea = 0.0;
+  int largest = 0;
+  bool active() const { return minArea > 0.0 || largest > 0; }
+};
+
+// Drops the surface primitives of the components the filter does not keep,
+// with their cell data; inconsistency marks, vertices and volume cells stay.
+void keepComponents(CrackMesh& mesh, const CrackComponents& set, const ComponentFilter& filter);
+
+}  // namespace crackvis::cracks
