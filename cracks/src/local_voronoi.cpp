@@ -4,7 +4,9 @@
 // its faces fail validation or do not exist, reported as inconsistent.
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include "methods.hpp"
@@ -160,10 +162,37 @@ void computeLocalVoronoiFace(const BondGraph& graph, std::span<const Vec3> posit
 
 namespace {
 
+// A face vertex carried by particles: their mean position plus an offset.
+struct Carrier {
+  static constexpr int kMax = 8;
+  std::array<dem::ParticleIndex, kMax> particles{};
+  int count = 0;
+  Vec3 offset;
+
+  Vec3 at(std::span<const Vec3> x) const {
+    Vec3 mean{};
+    for (int k = 0; k < count; ++k) {
+      mean = mean + x[static_cast<std::size_t>(particles[static_cast<std::size_t>(k)])];
+    }
+    return offset + (1.0 / count) * mean;
+  }
+};
+
 // A particle near a vertex under the sphere test, with r_k^2 - r_i^2.
 struct Candidate {
   Vec3 position;
   double powerShift;
+};
+
+// Per-thread buffers, reused from particle to particle.
+struct Scratch {
+  ConvexCell cell;
+  std::vector<char> valid;
+  std::vector<Candidate> candidates;
+  std::vector<Vec3> polygon;
+  std::vector<Vec3> clipBuffer;
+  std::vector<Vec3> faceVertices;
+  std::vector<std::pair<dem::BondIndex, std::size_t>> faces;  // bond, first vertex
 };
 
 // One face of an end particle's cell that the output may need.
@@ -190,14 +219,25 @@ class LocalVoronoiExtractor final : public CrackExtractor {
   std::size_t inconsistentBondCount() const override { return m_inconsistent; }
   std::size_t memoryBytes() const override {
     return m_grid.memoryBytes() + m_rankOf.capacity() * sizeof(std::int32_t) +
-           m_broken.capacity() * sizeof(dem::BondIndex);
+           m_broken.capacity() * sizeof(dem::BondIndex) +
+           m_faceOf.size() * (sizeof(std::uint64_t) + sizeof(std::int32_t) + 16) +
+           m_faces.capacity() * sizeof(MaterialFace) + m_carriers.capacity() * sizeof(Carrier);
   }
 
   Status extract(const StepInput& step, CrackMesh& out) override {
     CRACKVIS_RETURN_IF_ERROR(checkStepInput(m_graph, step));
     out.clear();
     out.dimension = m_dimension;
-    const Box box = m_options.domain ? *m_options.domain : grownDefaultDomain(step);
+    if (!step.referencePositions.empty() && !m_options.includeIntactFaces) {
+      if (step.referencePositions.size() != step.positions.size()) {
+        return invalidArgument(fmt::format("{} reference positions for N = {} particles",
+                                           step.referencePositions.size(), step.positions.size()));
+      }
+      extractMaterial(step, out);
+      return Status::ok();
+    }
+    const Box box =
+        m_options.domain ? *m_options.domain : grownDefaultDomain(step.positions, step.radius);
     std::vector<dem::ParticleIndex> ends = endParticles(step.bondState);
     if (m_options.validate) {
       m_largestRadius = 0.0;
@@ -226,15 +266,181 @@ class LocalVoronoiExtractor final : public CrackExtractor {
   }
 
  private:
-  Box grownDefaultDomain(const StepInput& step) const {
-    Box box = defaultDomain(step.positions, step.radius, m_dimension);
-    if (m_options.domainMargin > 0.0 && !step.radius.empty()) {
+  Box grownDefaultDomain(std::span<const Vec3> positions, std::span<const double> radius) const {
+    Box box = defaultDomain(positions, radius, m_dimension);
+    if (m_options.domainMargin > 0.0 && !radius.empty()) {
       const double margin =
-          m_options.domainMargin * *std::max_element(step.radius.begin(), step.radius.end());
+          m_options.domainMargin * *std::max_element(radius.begin(), radius.end());
       box.lo = box.lo - Vec3{margin, margin, m_dimension == 3 ? margin : 0.0};
       box.hi = box.hi + Vec3{margin, margin, m_dimension == 3 ? margin : 0.0};
     }
     return box;
+  }
+
+  // Material surfaces: with a reference configuration, each face is made
+  // once, in the reference geometry (where it is validated too), when its
+  // bond is first seen broken, and then carried by its particles: every
+  // vertex is stored as a combination of particle positions, so the face
+  // follows the specimen however far the crack opens and nothing is
+  // recomputed per step but the carried points.
+  void extractMaterial(const StepInput& step, CrackMesh& out) {
+    const std::span<const Vec3> reference = step.referencePositions;
+    if (!m_referenceReady) {
+      m_referenceBox =
+          m_options.domain ? *m_options.domain : grownDefaultDomain(reference, step.radius);
+      m_largestRadius = 0.0;
+      for (double r : step.radius) {
+        m_largestRadius = std::max(m_largestRadius, r);
+      }
+      if (m_options.validate) {
+        m_grid.build(reference, 2.0 * m_largestRadius);
+      }
+      m_referenceReady = true;
+    }
+    const std::vector<dem::ParticleIndex> ends = endParticles(step.bondState);
+    // Faces not made yet, on all cores in blocks of end particles, then
+    // remembered in block order (the same for any thread count).
+    const std::size_t blockCount = (ends.size() + kBlockSize - 1) / kBlockSize;
+    std::vector<std::vector<NewFace>> made(blockCount);
+    tbb::parallel_for(std::size_t{0}, blockCount, [&](std::size_t k) {
+      Scratch scratch;
+      for (std::size_t e = k * kBlockSize; e < std::min(ends.size(), (k + 1) * kBlockSize); ++e) {
+        makeMissingFaces(step, ends[e], scratch, made[k]);
+      }
+    });
+    for (auto& block : made) {
+      for (NewFace& face : block) {
+        const auto index = static_cast<std::int32_t>(m_faces.size());
+        m_faces.push_back({face.valid, static_cast<std::int32_t>(m_carriers.size()),
+                           static_cast<std::int32_t>(face.carriers.size())});
+        m_carriers.insert(m_carriers.end(), face.carriers.begin(), face.carriers.end());
+        m_faceOf.emplace(faceKey(face.particle, face.bond), index);
+      }
+    }
+    std::vector<dem::BondIndex> faceBonds;
+    std::vector<dem::BondIndex> inconsistent;
+    m_faceLines.clear();
+    for (dem::BondIndex bond : m_broken) {
+      const dem::Bond& pair = m_graph.bond(bond);
+      const MaterialFace* first = materialFace(pair.first, bond);
+      const MaterialFace* second = materialFace(pair.second, bond);
+      if (first != nullptr && second != nullptr && first->valid && second->valid &&
+          first->count >= 2) {
+        addCarriedFace(*first, step.positions, out);
+        faceBonds.push_back(bond);
+      } else {
+        inconsistent.push_back(bond);
+      }
+    }
+    finish(step, faceBonds, inconsistent, out);
+  }
+
+  struct NewFace {
+    dem::ParticleIndex particle;
+    dem::BondIndex bond;
+    bool valid;
+    std::vector<Carrier> carriers;
+  };
+  struct MaterialFace {
+    bool valid;
+    std::int32_t first;  // into m_carriers
+    std::int32_t count;
+  };
+
+  static std::uint64_t faceKey(dem::ParticleIndex i, dem::BondIndex b) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(i)) << 32) |
+           static_cast<std::uint32_t>(b);
+  }
+  const MaterialFace* materialFace(dem::ParticleIndex i, dem::BondIndex b) const {
+    const auto found = m_faceOf.find(faceKey(i, b));
+    return found == m_faceOf.end() ? nullptr : &m_faces[static_cast<std::size_t>(found->second)];
+  }
+
+  // The faces of i's broken bonds that were never made, in the reference
+  // geometry: clipped, validated, their vertices turned into carriers.
+  void makeMissingFaces(const StepInput& step, dem::ParticleIndex i, Scratch& s,
+                        std::vector<NewFace>& out) const {
+    const std::span<const Vec3> reference = step.referencePositions;
+    for (dem::BondIndex b : m_graph.bondsOf(i)) {
+      if (step.bondState[static_cast<std::size_t>(b)] == 0 || m_faceOf.count(faceKey(i, b)) != 0) {
+        continue;
+      }
+      computeLocalVoronoiFace(m_graph, reference, i, b, m_referenceBox, s.polygon, s.clipBuffer,
+                              step.radius);
+      NewFace face{i, b, s.polygon.size() >= 3, {}};
+      if (face.valid && m_options.validate) {
+        s.valid.assign(s.polygon.size(), 2);
+        validateVertices(reference, step.radius, i, s.polygon, s.valid, s.candidates);
+        face.valid = std::all_of(s.valid.begin(), s.valid.end(), [](char v) { return v != 0; });
+      }
+      const dem::ParticleIndex j = m_graph.otherEnd(b, i);
+      for (std::size_t k = 0; k < s.polygon.size(); ++k) {
+        // In 2D the prism's side face stands for an edge: its lower vertices.
+        if (m_dimension == 2 && s.polygon[k].z >= 0.0) {
+          continue;
+        }
+        face.carriers.push_back(carrierOf(reference, step.radius, i, j, s.polygon[k]));
+      }
+      out.push_back(std::move(face));
+    }
+  }
+
+  // A vertex of face (i, j) carried by the particles that define it: those
+  // at the least power distance from it (within 1e-6 relative), among i, j
+  // and their neighbours. It moves by the mean of their displacements since
+  // the reference: a rigid translation moves it with them, an opening crack
+  // by a fraction of the opening, so faces stay between the halves. The set
+  // depends on the vertex alone, not on the face, so faces that share a
+  // vertex keep sharing it (also where more than four particles define it,
+  // as at an FCC lattice's octahedral holes).
+  Carrier carrierOf(std::span<const Vec3> x, std::span<const double> radius, dem::ParticleIndex i,
+                    dem::ParticleIndex j, Vec3 v) const {
+    if (m_dimension == 2) {
+      v.z = 0.0;
+    }
+    auto power = [&](dem::ParticleIndex k) {
+      const Vec3 d = v - x[static_cast<std::size_t>(k)];
+      const double r = radius.empty() ? 0.0 : radius[static_cast<std::size_t>(k)];
+      return dem::dot(d, d) - r * r;
+    };
+    const double least = std::min(power(i), power(j));
+    const double tolerance = 1e-6 * std::max(dem::dot(v - x[static_cast<std::size_t>(i)],
+                                                      v - x[static_cast<std::size_t>(i)]),
+                                             1e-300);
+    Carrier carrier;
+    auto consider = [&](dem::ParticleIndex k) {
+      if (carrier.count < Carrier::kMax && power(k) <= least + tolerance &&
+          std::find(carrier.particles.begin(), carrier.particles.begin() + carrier.count, k) ==
+              carrier.particles.begin() + carrier.count) {
+        carrier.particles[static_cast<std::size_t>(carrier.count++)] = k;
+      }
+    };
+    consider(i);
+    consider(j);
+    for (dem::ParticleIndex end : {i, j}) {
+      for (dem::BondIndex b : m_graph.bondsOf(end)) {
+        consider(m_graph.otherEnd(b, end));
+      }
+    }
+    std::sort(carrier.particles.begin(), carrier.particles.begin() + carrier.count);
+    Vec3 mean{};
+    for (int k = 0; k < carrier.count; ++k) {
+      mean = mean + x[static_cast<std::size_t>(carrier.particles[static_cast<std::size_t>(k)])];
+    }
+    carrier.offset = v - (1.0 / carrier.count) * mean;
+    return carrier;
+  }
+
+  void addCarriedFace(const MaterialFace& face, std::span<const Vec3> positions, CrackMesh& out) {
+    const auto first = static_cast<std::int32_t>(out.points.size());
+    for (std::int32_t k = 0; k < face.count; ++k) {
+      out.points.push_back(m_carriers[static_cast<std::size_t>(face.first + k)].at(positions));
+    }
+    PrimitiveList& target = m_dimension == 2 ? m_faceLines : out.polygons;
+    for (std::int32_t k = 0; k < face.count; ++k) {
+      target.connectivity.push_back(first + k);
+    }
+    target.offsets.push_back(static_cast<std::int32_t>(target.connectivity.size()));
   }
 
   // The broken bonds, and the particles at their ends with their rank.
@@ -327,17 +533,6 @@ class LocalVoronoiExtractor final : public CrackExtractor {
       }
     }
   }
-
-  // Per-thread buffers, reused from particle to particle.
-  struct Scratch {
-    ConvexCell cell;
-    std::vector<char> valid;
-    std::vector<Candidate> candidates;
-    std::vector<Vec3> polygon;
-    std::vector<Vec3> clipBuffer;
-    std::vector<Vec3> faceVertices;
-    std::vector<std::pair<dem::BondIndex, std::size_t>> faces;  // bond, first vertex
-  };
 
   // Appends a face's vertices to the block (in 2D the prism's side face
   // stands for an edge: its two lower vertices).
@@ -484,6 +679,13 @@ class LocalVoronoiExtractor final : public CrackExtractor {
         }
       }
     }
+    finish(step, faceBonds, inconsistent, out);
+  }
+
+  // Inconsistency lines, the 2D face segments and the attributes, after the
+  // faces of the step are known.
+  void finish(const StepInput& step, const std::vector<dem::BondIndex>& faceBonds,
+              const std::vector<dem::BondIndex>& inconsistent, CrackMesh& out) {
     m_inconsistent = inconsistent.size();
     // Inconsistent bonds: a line between the particle centres (VTK order:
     // lines come before polygons, and in 2D before the face segments).
@@ -512,6 +714,12 @@ class LocalVoronoiExtractor final : public CrackExtractor {
   ExtractOptions m_options;
   ParticleGrid m_grid;
   double m_largestRadius = 0.0;
+  // Material faces, by (particle, bond); made in the reference geometry.
+  bool m_referenceReady = false;
+  Box m_referenceBox;
+  std::unordered_map<std::uint64_t, std::int32_t> m_faceOf;
+  std::vector<MaterialFace> m_faces;
+  std::vector<Carrier> m_carriers;
   std::vector<std::int32_t> m_rankOf;  // [N] rank among end particles, -1 if none
   std::vector<dem::BondIndex> m_broken;
   PrimitiveList m_faceLines;
