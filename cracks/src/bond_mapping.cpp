@@ -70,6 +70,10 @@ std::string diagnoseMapping(const BondMapping& mapping, const CrackExtractor& ex
         "geometry, or a packing whose neighbours are not all bonded; try --no-validation)",
         extractor.inconsistentBondCount());
   }
+  if (extractor.method() == Method::kCellCut) {
+    return "broken bonds that separate no particles of their cells (isolated breaks, scattered "
+           "damage): cell cut draws them as lines, not faces";
+  }
   return "broken bonds between particles that are no neighbours in the decomposition, or whose "
          "faces lie outside the domain";
 }

@@ -19,7 +19,7 @@ struct GenerateOptions {
   std::string lattice = "fcc";
   int dimension = 3;  // random packings
   std::string radiusRange;
-  double solidFraction = 0.6;
+  double solidFraction = 0.55;
   double interactionRange = 1.1;
   std::vector<int> sites;
   std::vector<double> box;

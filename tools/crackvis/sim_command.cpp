@@ -1,5 +1,7 @@
 // crackvis sim: runs the lattice DEM solver on a benchmark preset of the
-// dissertation's chapter 3.1 and writes the crackvis-dem file as it goes.
+// dissertation's chapter 3.1, or pulls any specimen file (a random packing
+// from crackvis generate) with a notch, and writes the crackvis-dem file as
+// it goes.
 #include <algorithm>
 #include <memory>
 #include <optional>
@@ -11,6 +13,7 @@
 
 #include "commands.hpp"
 #include <crackvis/common/progress.hpp>
+#include <crackvis/dem/dem_file.hpp>
 #include <crackvis/sim/presets.hpp>
 #include <crackvis/sim/run.hpp>
 
@@ -19,6 +22,8 @@ namespace {
 
 struct SimOptions {
   std::string preset;
+  std::string specimen;  // tension: the file whose first step is pulled
+  double notchDepth = 0.1;
   std::string output;
   std::string defectSet = "A";
   std::uint64_t seed = 1;
@@ -43,6 +48,9 @@ Result<sim::PresetOptions> presetOptions(const SimOptions& options, bool setGive
   if (preset.name == "plate2d" && setGiven) {
     return invalidArgument("--set applies to cuboid3d only (plate2d has one defect)");
   }
+  if (preset.name == "tension" && setGiven) {
+    return invalidArgument("--set applies to cuboid3d only (tension cuts a notch: --notch-depth)");
+  }
   preset.defectSet = options.defectSet.front();
   preset.scale = options.scale;
   preset.seed = options.seed;
@@ -61,6 +69,36 @@ Result<sim::PresetOptions> presetOptions(const SimOptions& options, bool setGive
   return preset;
 }
 
+// The specimen's first step, pulled with a notch; bonds already broken there
+// stay broken.
+Result<sim::Preset> tensionPreset(const SimOptions& options, const sim::PresetOptions& preset) {
+  if (options.specimen.empty()) {
+    return invalidArgument("tension needs the specimen file: crackvis sim tension FILE -o OUT");
+  }
+  auto reader = dem::DemFileReader::open(options.specimen);
+  if (!reader) {
+    return reader.status();
+  }
+  auto lattice = reader->readLattice();
+  if (!lattice) {
+    return lattice.status();
+  }
+  auto first = reader->readStep(0);
+  if (!first) {
+    return first.status();
+  }
+  CRACKVIS_RETURN_IF_ERROR(dem::validateStep(*lattice, *first));
+  auto made = sim::makeTensionPreset(*lattice, first->positions, preset, options.notchDepth);
+  if (!made) {
+    return made.status();
+  }
+  for (std::size_t b = 0; b < first->bondState.size(); ++b) {
+    made->setup.bondState[b] =
+        static_cast<std::uint8_t>(made->setup.bondState[b] | first->bondState[b]);
+  }
+  return made;
+}
+
 int runSim(const SimOptions& options, bool setGiven) {
   // libhdf5 closes what is still open at exit, and crashes on a file whose
   // metadata it cannot write (a full disk: SIGSEGV in H5F__close_cb). The
@@ -73,7 +111,8 @@ int runSim(const SimOptions& options, bool setGiven) {
     printError("sim", presetOpts.status().message());
     return kExitFailure;
   }
-  auto preset = sim::makePreset(*presetOpts);
+  auto preset = options.preset == "tension" ? tensionPreset(options, *presetOpts)
+                                            : sim::makePreset(*presetOpts);
   if (!preset) {
     printError("sim", preset.status().message());
     return kExitFailure;
@@ -140,13 +179,23 @@ Command addSimCommand(CLI::App& parent) {
   auto* command = parent.add_subcommand(
       "sim",
       "Run the lattice DEM solver on a benchmark of the dissertation's chapter 3.1 (uniaxial "
-      "tension of a notched specimen) and write a crackvis-dem file, step by step.");
+      "tension of a notched specimen), or pull any specimen file with a notch, and write a "
+      "crackvis-dem file, step by step.");
   command
       ->add_option("preset", options->preset,
                    "plate2d: 2D plate, 4,680 particles, 1,284 saved steps; cuboid3d: 3D cuboid, "
-                   "46,875 particles, 200 saved steps")
+                   "46,875 particles, 200 saved steps; tension FILE: the first step of FILE (a "
+                   "random packing from crackvis generate, say) pulled along x with a notch, 200 "
+                   "saved steps")
       ->required()
-      ->check(CLI::IsMember({"plate2d", "cuboid3d"}));
+      ->check(CLI::IsMember({"plate2d", "cuboid3d", "tension"}));
+  command->add_option("specimen", options->specimen, "tension: the specimen file (crackvis-dem)");
+  command
+      ->add_option("--notch-depth", options->notchDepth,
+                   "tension: the notch's depth from the bottom face (z; y in 2D), as a fraction "
+                   "of the height, across the whole width at mid-length")
+      ->check(CLI::Range(0.0, 0.9))
+      ->capture_default_str();
   command->add_option("-o,--output", options->output, "Output HDF5 file")->required();
   auto* set = command
                   ->add_option("--set", options->defectSet,
@@ -201,6 +250,9 @@ Command addSimCommand(CLI::App& parent) {
       "Examples:\n"
       "  crackvis sim cuboid3d --set A -o cuboidA.h5\n"
       "  crackvis sim plate2d --scale 0.25 --seed 7 -o plate-small.h5\n"
+      "  crackvis generate --packing random --radius-range 5e-4:1e-3 --box 0.06 0.02 0.02 -o "
+      "random.h5\n"
+      "  crackvis sim tension random.h5 -o random-run.h5\n"
       "The model, its parameters and their calibration: docs/simulator.md.");
   return {command, [options, set] { return runSim(*options, set->count() > 0); }};
 }

@@ -189,6 +189,61 @@ double bondStiffnessFor(int dimension, double youngsModulus, double radius) {
                         : std::sqrt(3.0) / 2.0 * youngsModulus * d;
 }
 
+// Grips prescribe the velocity along x only and let the ends contract
+// sideways: fully rigid grips concentrate stress at their edges (the Poisson
+// contraction is blocked there) and the first bonds then break at the grips
+// instead of at the defect (docs/simulator.md).
+void clampEnds(SimulationSetup& setup, double reach, double velocity) {
+  const auto [lo, hi] = dem::boundingBox(setup.positions);
+  setup.clamped.assign(setup.positions.size(), 0);
+  setup.prescribedVelocity.assign(setup.positions.size(), Vec3{});
+  for (std::size_t p = 0; p < setup.positions.size(); ++p) {
+    if (setup.positions[p].x < lo.x + reach) {
+      setup.clamped[p] = kClampX;
+      setup.prescribedVelocity[p] = {-velocity, 0.0, 0.0};
+    } else if (setup.positions[p].x > hi.x - reach) {
+      setup.clamped[p] = kClampX;
+      setup.prescribedVelocity[p] = {velocity, 0.0, 0.0};
+    }
+  }
+}
+
+// Whole steps between saves, the time step no larger than the stable one,
+// and the last of `fullSaved` saved steps exactly at `duration`.
+void scheduleSteps(Preset& preset, const MaterialModel& model, double duration, int fullSaved,
+                   int savedSteps) {
+  SimulationSetup& setup = preset.setup;
+  const double maxStep = model.timeStepFraction * bondTimeScale(setup.lattice, setup.material);
+  const double interval = duration / (fullSaved - 1);
+  preset.stepsPerSave =
+      std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(interval / maxStep)));
+  setup.timeStep = interval / static_cast<double>(preset.stepsPerSave);
+  preset.savedSteps = savedSteps > 0 ? savedSteps : fullSaved;
+}
+
+// The material of a preset for bonds of typical radius r.
+void applyMaterial(Material& material, const MaterialModel& model, int dimension, double radius) {
+  material.density = model.density;
+  material.bondStiffness = bondStiffnessFor(dimension, model.youngsModulus, radius);
+  material.bondDamping = model.bondDamping;
+  material.contact.effectiveModulus =
+      model.youngsModulus / (2.0 * (1.0 - model.poissonRatio * model.poissonRatio));
+  material.contact.restitution = model.restitution;
+  material.contact.friction = model.friction;
+}
+
+Status validateMaterial(const MaterialModel& model) {
+  CRACKVIS_RETURN_IF_ERROR(validate(model.strength));
+  if (!(model.youngsModulus > 0.0) || !(model.density > 0.0) ||
+      !(model.poissonRatio >= 0.0 && model.poissonRatio < 0.5) ||
+      !(model.timeStepFraction > 0.0 && model.timeStepFraction <= 0.5)) {
+    return invalidArgument(
+        "material: E and density must be > 0, Poisson's ratio in [0, 0.5), time step fraction "
+        "in (0, 0.5]");
+  }
+  return Status::ok();
+}
+
 }  // namespace
 
 MaterialModel defaultMaterial(int dimension) {
@@ -243,14 +298,7 @@ Result<Preset> makePreset(const PresetOptions& options) {
   }
   const MaterialModel model =
       options.customMaterial ? options.material : defaultMaterial(plate ? 2 : 3);
-  CRACKVIS_RETURN_IF_ERROR(validate(model.strength));
-  if (!(model.youngsModulus > 0.0) || !(model.density > 0.0) ||
-      !(model.poissonRatio >= 0.0 && model.poissonRatio < 0.5) ||
-      !(model.timeStepFraction > 0.0 && model.timeStepFraction <= 0.5)) {
-    return invalidArgument(
-        "material: E and density must be > 0, Poisson's ratio in [0, 0.5), time step fraction "
-        "in (0, 0.5]");
-  }
+  CRACKVIS_RETURN_IF_ERROR(validateMaterial(model));
 
   const Geometry g = plate ? plateGeometry(options.scale) : cuboidGeometry(options.scale);
   Preset preset;
@@ -264,13 +312,7 @@ Result<Preset> makePreset(const PresetOptions& options) {
   lattice.bonds = dem::nearestNeighbourBonds(g.positions, g.radius);
 
   Material& material = setup.material;
-  material.density = model.density;
-  material.bondStiffness = bondStiffnessFor(g.dimension, model.youngsModulus, g.radius);
-  material.bondDamping = model.bondDamping;
-  material.contact.effectiveModulus =
-      model.youngsModulus / (2.0 * (1.0 - model.poissonRatio * model.poissonRatio));
-  material.contact.restitution = model.restitution;
-  material.contact.friction = model.friction;
+  applyMaterial(material, model, g.dimension, g.radius);
 
   const std::vector<double> strains =
       drawBreakStrains(model.strength, lattice.bondCount(), options.seed);
@@ -296,36 +338,92 @@ Result<Preset> makePreset(const PresetOptions& options) {
   preset.extent = {hi.x - lo.x + 2.0 * g.radius, hi.y - lo.y + 2.0 * g.radius,
                    plate ? 0.0 : hi.z - lo.z + 2.0 * g.radius};
   preset.pullVelocity = plate ? kPlatePull : kCuboidPull;
-  // Grips prescribe the velocity along x only and let the ends contract
-  // sideways: fully rigid grips concentrate stress at their edges (the Poisson
-  // contraction is blocked there) and the first bonds then break at the grips
-  // instead of at the defect (docs/simulator.md).
-  const double clampReach = (kClampLayers - 0.25) * g.layerSpacing;
-  setup.clamped.assign(g.positions.size(), 0);
-  setup.prescribedVelocity.assign(g.positions.size(), Vec3{});
-  for (std::size_t p = 0; p < g.positions.size(); ++p) {
-    if (g.positions[p].x < lo.x + clampReach) {
-      setup.clamped[p] = kClampX;
-      setup.prescribedVelocity[p] = {-preset.pullVelocity, 0.0, 0.0};
-    } else if (g.positions[p].x > hi.x - clampReach) {
-      setup.clamped[p] = kClampX;
-      setup.prescribedVelocity[p] = {preset.pullVelocity, 0.0, 0.0};
-    }
-  }
   setup.positions = g.positions;
+  clampEnds(setup, (kClampLayers - 0.25) * g.layerSpacing, preset.pullVelocity);
   setup.clampRampTime = plate ? kPlateRampTime : kCuboidRampTime;
-
-  const int fullSaved = plate ? kPlateSavedSteps : kCuboidSavedSteps;
   const double duration =
       options.duration > 0.0 ? options.duration : (plate ? kPlateDuration : kCuboidDuration);
-  // Whole steps between saves, the time step no larger than the stable one,
-  // and the last saved step exactly at `duration`.
-  const double maxStep = model.timeStepFraction * bondTimeScale(lattice, material);
-  const double interval = duration / (fullSaved - 1);
-  preset.stepsPerSave =
-      std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(interval / maxStep)));
-  setup.timeStep = interval / static_cast<double>(preset.stepsPerSave);
-  preset.savedSteps = options.savedSteps > 0 ? options.savedSteps : fullSaved;
+  scheduleSteps(preset, model, duration, plate ? kPlateSavedSteps : kCuboidSavedSteps,
+                options.savedSteps);
+  return preset;
+}
+
+Result<Preset> makeTensionPreset(const dem::Lattice& specimen,
+                                 const std::vector<dem::Vec3>& positions,
+                                 const PresetOptions& options, double notchDepth) {
+  CRACKVIS_RETURN_IF_ERROR(dem::validateTopology(specimen));
+  if (positions.size() != specimen.particleCount() || positions.size() < 2) {
+    return invalidArgument(fmt::format("{} positions for N = {} particles", positions.size(),
+                                       specimen.particleCount()));
+  }
+  if (!(notchDepth >= 0.0 && notchDepth < 1.0)) {
+    return invalidArgument(fmt::format("notch depth {} is outside [0, 1)", notchDepth));
+  }
+  const int dimension = specimen.dimension;
+  const MaterialModel model =
+      options.customMaterial ? options.material : defaultMaterial(dimension);
+  CRACKVIS_RETURN_IF_ERROR(validateMaterial(model));
+  const bool plate = dimension == 2;
+  double meanRadius = 0.0;
+  for (double r : specimen.radius) {
+    meanRadius += r / static_cast<double>(specimen.radius.size());
+  }
+  const auto [lo, hi] = dem::boundingBox(positions);
+  const double length = hi.x - lo.x + 2.0 * meanRadius;
+
+  Preset preset;
+  preset.description = fmt::format("tension of a {}D specimen ({} particles, mean radius {:.4g} m)",
+                                   dimension, positions.size(), meanRadius);
+  SimulationSetup& setup = preset.setup;
+  setup.lattice = specimen;
+  setup.positions = positions;
+  applyMaterial(setup.material, model, dimension, meanRadius);
+  // Strength from each bond's rest length, so any packing breaks at the
+  // strains the distribution gives.
+  const std::vector<double> strains =
+      drawBreakStrains(model.strength, specimen.bondCount(), options.seed);
+  setup.lattice.strength.resize(specimen.bondCount());
+  for (std::size_t b = 0; b < specimen.bondCount(); ++b) {
+    const dem::Bond& bond = specimen.bonds[b];
+    const double rest = dem::norm(positions[static_cast<std::size_t>(bond.second)] -
+                                  positions[static_cast<std::size_t>(bond.first)]);
+    setup.lattice.strength[b] = setup.material.bondStiffness * rest * strains[b];
+  }
+  // The notch: bonds across the mid-plane x from the bottom face (z in 3D,
+  // y in 2D) up to notchDepth of the height, over the whole width.
+  const double cut = 0.5 * (lo.x + hi.x);
+  const int up = plate ? 1 : 2;
+  const double bottom = dem::component(lo, up);
+  const double height = dem::component(hi, up) - bottom;
+  setup.bondState.assign(specimen.bondCount(), 0);
+  Vec3 centre{};
+  for (std::size_t b = 0; b < specimen.bondCount(); ++b) {
+    const Vec3 a = positions[static_cast<std::size_t>(specimen.bonds[b].first)];
+    const Vec3 c = positions[static_cast<std::size_t>(specimen.bonds[b].second)];
+    const Vec3 middle = 0.5 * (a + c);
+    if ((a.x - cut) * (c.x - cut) < 0.0 &&
+        dem::component(middle, up) - bottom <= notchDepth * height) {
+      setup.bondState[b] = static_cast<std::uint8_t>(dem::BondState::kBroken);
+      centre = centre + middle;
+      ++preset.defectBonds;
+    }
+  }
+  preset.defectCentre =
+      preset.defectBonds == 0 ? centre : (1.0 / static_cast<double>(preset.defectBonds)) * centre;
+  preset.extent = {length, hi.y - lo.y + 2.0 * meanRadius,
+                   plate ? 0.0 : hi.z - lo.z + 2.0 * meanRadius};
+  // The benchmark's strain rate and loading time, scaled by the length: the
+  // same strain history as the cuboid (the plate in 2D).
+  const double referenceLength =
+      plate ? kPlateSitesPerRow * 2.0 * kPlateRadius
+            : (kCuboidLayers - 1) * 2.0 * kCuboidRadius / std::sqrt(2.0) + 2.0 * kCuboidRadius;
+  const double referencePull = plate ? kPlatePull : kCuboidPull;
+  preset.pullVelocity = referencePull * length / referenceLength;
+  clampEnds(setup, 3.0 * meanRadius, preset.pullVelocity);
+  setup.clampRampTime = (plate ? kPlateRampTime : kCuboidRampTime) * length / referenceLength;
+  const double duration =
+      options.duration > 0.0 ? options.duration : (plate ? kPlateDuration : kCuboidDuration);
+  scheduleSteps(preset, model, duration, kCuboidSavedSteps, options.savedSteps);
   return preset;
 }
 

@@ -172,3 +172,56 @@ TEST_CASE("crackvis info says nothing of an early stop when a run finished", "[s
   auto info = runProcess({kCli, "info", "--json", path});
   CHECK_THAT(info.out, Catch::Contains("\"stopped_early\": false"));
 }
+
+TEST_CASE("crackvis sim tension pulls a generated random packing apart from its notch",
+          "[sim][cli]") {
+  TempDir dir;
+  const std::string specimen = dir.file("random.h5");
+  const std::string run = dir.file("run.h5");
+  REQUIRE(runProcess({kCli, "generate", "--packing", "random", "--radius-range", "1e-3:2e-3",
+                      "--box", "0.08", "0.03", "0.03", "-q", "-o", specimen})
+              .exitCode == 0);
+  auto sim = runProcess({kCli, "sim", "tension", specimen, "--notch-depth", "0.2", "--steps", "60",
+                         "--duration", "2e-3", "-o", run});
+  REQUIRE(sim.exitCode == 0);
+  CHECK_THAT(sim.err, Catch::Contains("tension of a 3D specimen"));
+  auto reader = dem::DemFileReader::open(run);
+  REQUIRE(reader.isOk());
+  auto before = dem::DemFileReader::open(specimen);
+  REQUIRE(before.isOk());
+  CHECK(reader->info().particleCount == before->info().particleCount);
+  CHECK(reader->info().bondCount == before->info().bondCount);
+  auto first = reader->readStep(0);
+  auto last = reader->readStep(reader->stepCount() - 1);
+  REQUIRE(first.isOk());
+  REQUIRE(last.isOk());
+  // The notch: bonds across the mid-plane near the bottom, broken from the start.
+  auto lattice = reader->readLattice();
+  REQUIRE(lattice.isOk());
+  double lowest = 1.0;
+  double highest = 0.0;
+  for (std::size_t b = 0; b < first->bondState.size(); ++b) {
+    if (first->bondState[b] != 0) {
+      const auto& bond = lattice->bonds[b];
+      const dem::Vec3 a = first->positions[static_cast<std::size_t>(bond.first)];
+      const dem::Vec3 c = first->positions[static_cast<std::size_t>(bond.second)];
+      CHECK((a.x - 0.04) * (c.x - 0.04) < 0.0);
+      lowest = std::min(lowest, 0.5 * (a.z + c.z));
+      highest = std::max(highest, 0.5 * (a.z + c.z));
+    }
+  }
+  CHECK(first->brokenBondCount() > 0);
+  CHECK(highest <= 0.2 * 0.03 + 0.002);
+  // Pulled: the ends moved apart and more bonds broke.
+  CHECK(last->brokenBondCount() > 2 * first->brokenBondCount());
+  const auto spanOf = [](const std::vector<dem::Vec3>& positions) {
+    const auto [lo, hi] = dem::boundingBox(positions);
+    return hi.x - lo.x;
+  };
+  CHECK(spanOf(last->positions) > spanOf(first->positions));
+
+  auto missing = runProcess({kCli, "sim", "tension", "-o", dir.file("x.h5")});
+  CHECK(missing.exitCode == 1);
+  CHECK(missing.err ==
+        "crackvis sim: tension needs the specimen file: crackvis sim tension FILE -o OUT\n");
+}

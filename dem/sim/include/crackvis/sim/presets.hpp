@@ -69,6 +69,18 @@ struct Preset {
 
 Result<Preset> makePreset(const PresetOptions& options);
 
+// Uniaxial tension of any specimen (a generated random packing, an imported
+// run's first step): a notch of bonds across the mid-plane x, from the bottom
+// face (z in 3D, y in 2D) up to `notchDepth` of the height, over the whole
+// width; grips of three mean radii at both x ends pulled apart at the
+// benchmarks' strain rate (the cuboid's in 3D, the plate's in 2D) for their
+// loading time; bond stiffness from the mean radius and each bond's strength
+// from its rest length and a strain drawn from the material's distribution.
+// `options` supplies seed, duration, saved steps (default 200) and material.
+Result<Preset> makeTensionPreset(const dem::Lattice& specimen,
+                                 const std::vector<dem::Vec3>& positions,
+                                 const PresetOptions& options, double notchDepth = 0.1);
+
 // "plate2d", "cuboid3d".
 bool isPresetName(std::string_view name);
 
