@@ -1,50 +1,146 @@
 #include <algorithm>
+#include <numeric>
 
 #include <fmt/format.h>
 
 #include "surface_primitives.hpp"
 #include <crackvis/cracks/bond_mapping.hpp>
+#include <crackvis/cracks/crack_components.hpp>
 
 namespace crackvis::cracks {
 
-BondMapping mapBrokenBonds(const CrackMesh& mesh, std::span<const std::uint8_t> bondState,
-                           const CrackExtractor& extractor) {
-  BondMapping mapping;
-  const std::size_t m = bondState.size();
-  std::vector<char> mapped(m, 0);
-  auto mark = [&](double id) {
-    if (id >= 0.0 && id < static_cast<double>(m)) {
-      mapped[static_cast<std::size_t>(id)] = 1;
-    }
-  };
-  const std::vector<Primitive> primitives = surfacePrimitives(mesh);
+namespace {
+
+// Calls visit(primitive index among surfaceCount, bond) for each bond a
+// surface primitive carries (cell data bond_id, or the point data bond_id of
+// its points). False when the mesh carries no bond ids.
+template <typename Visit>
+bool forEachPrimitiveBond(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
+                          std::size_t bondCount, Visit&& visit) {
   const std::size_t base = mesh.vertices.size() + (mesh.dimension == 2 ? 0 : mesh.lines.size());
+  auto valid = [&](double id) { return id >= 0.0 && id < static_cast<double>(bondCount); };
   if (const AttributeArray* ids = mesh.findCellData("bond_id")) {
     for (const Primitive& primitive : primitives) {
-      mark(ids->values[base + primitive.index]);
-    }
-  } else if (const AttributeArray* pointIds = mesh.findPointData("bond_id")) {
-    for (const Primitive& primitive : primitives) {
-      for (std::size_t k = 0; k < primitive.count; ++k) {
-        mark(pointIds->values[static_cast<std::size_t>(primitive.ids[k])]);
+      const double id = ids->values[base + primitive.index];
+      if (valid(id)) {
+        visit(primitive, static_cast<std::size_t>(id));
       }
     }
-  } else if (const LatticeDecomposition* cells = extractor.decomposition()) {
-    std::vector<CellIndex> found;
-    for (std::size_t b = 0; b < m; ++b) {
-      if (bondState[b] != 0) {
-        cells->cellsOfBond(static_cast<dem::BondIndex>(b), found);
-        mapped[b] = found.empty() ? 0 : 1;
+    return true;
+  }
+  if (const AttributeArray* pointIds = mesh.findPointData("bond_id")) {
+    for (const Primitive& primitive : primitives) {
+      for (std::size_t k = 0; k < primitive.count; ++k) {
+        const double id = pointIds->values[static_cast<std::size_t>(primitive.ids[k])];
+        if (valid(id)) {
+          visit(primitive, static_cast<std::size_t>(id));
+        }
+      }
+    }
+    return true;
+  }
+  return false;
+}
+
+// Which bonds a mesh maps to surface elements (see the header).
+std::vector<char> mappedMask(const CrackMesh& mesh, std::span<const std::uint8_t> bondState,
+                             const CrackExtractor& extractor) {
+  const std::size_t m = bondState.size();
+  std::vector<char> mapped(m, 0);
+  const std::vector<Primitive> primitives = surfacePrimitives(mesh);
+  const bool carried = forEachPrimitiveBond(
+      mesh, primitives, m, [&](const Primitive&, std::size_t b) { mapped[b] = 1; });
+  if (!carried) {
+    if (const LatticeDecomposition* cells = extractor.decomposition()) {
+      std::vector<CellIndex> found;
+      for (std::size_t b = 0; b < m; ++b) {
+        if (bondState[b] != 0) {
+          cells->cellsOfBond(static_cast<dem::BondIndex>(b), found);
+          mapped[b] = found.empty() ? 0 : 1;
+        }
       }
     }
   }
-  for (std::size_t b = 0; b < m; ++b) {
+  return mapped;
+}
+
+}  // namespace
+
+BondMapping mapBrokenBonds(const CrackMesh& mesh, std::span<const std::uint8_t> bondState,
+                           const CrackExtractor& extractor) {
+  const std::vector<char> mapped = mappedMask(mesh, bondState, extractor);
+  BondMapping mapping;
+  for (std::size_t b = 0; b < bondState.size(); ++b) {
     if (bondState[b] != 0) {
       ++mapping.broken;
       mapping.mapped += mapped[b] != 0 ? 1 : 0;
     }
   }
   return mapping;
+}
+
+std::vector<std::uint8_t> separatingBonds(const BondGraph& graph,
+                                          std::span<const std::uint8_t> bondState) {
+  const std::size_t n = graph.particleCount();
+  std::vector<std::int32_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  for (std::size_t b = 0; b < bondState.size(); ++b) {
+    if (bondState[b] == 0) {
+      const dem::Bond& bond = graph.bond(static_cast<dem::BondIndex>(b));
+      parent[static_cast<std::size_t>(findRoot(parent, bond.first))] =
+          findRoot(parent, bond.second);
+    }
+  }
+  std::vector<std::size_t> size(n, 0);
+  for (std::size_t p = 0; p < n; ++p) {
+    ++size[static_cast<std::size_t>(findRoot(parent, static_cast<std::int32_t>(p)))];
+  }
+  std::int32_t first = -1;
+  std::int32_t second = -1;
+  for (std::size_t p = 0; p < n; ++p) {
+    const auto root = static_cast<std::int32_t>(p);
+    if (findRoot(parent, root) != root) {
+      continue;
+    }
+    if (first < 0 || size[p] > size[static_cast<std::size_t>(first)]) {
+      second = first;
+      first = root;
+    } else if (second < 0 || size[p] > size[static_cast<std::size_t>(second)]) {
+      second = root;
+    }
+  }
+  std::vector<std::uint8_t> separating(bondState.size(), 0);
+  for (std::size_t b = 0; b < bondState.size() && second >= 0; ++b) {
+    if (bondState[b] != 0) {
+      const dem::Bond& bond = graph.bond(static_cast<dem::BondIndex>(b));
+      const std::int32_t a = findRoot(parent, bond.first);
+      const std::int32_t c = findRoot(parent, bond.second);
+      separating[b] = (a == first && c == second) || (a == second && c == first) ? 1 : 0;
+    }
+  }
+  return separating;
+}
+
+MainCrack measureMainCrack(const CrackMesh& mesh, std::span<const std::uint8_t> separating,
+                           const CrackExtractor& extractor) {
+  MainCrack main;
+  main.mapped = mapBrokenBonds(mesh, separating, extractor);
+  const CrackComponents components = findComponents(mesh);
+  const std::vector<Primitive> primitives = surfacePrimitives(mesh);
+  std::vector<char> counted(mesh.dimension == 2 ? mesh.lines.size() : mesh.polygons.size(), 0);
+  double inLargest = 0.0;
+  forEachPrimitiveBond(mesh, primitives, separating.size(),
+                       [&](const Primitive& primitive, std::size_t b) {
+                         if (separating[b] == 0 || counted[primitive.index] != 0) {
+                           return;
+                         }
+                         counted[primitive.index] = 1;
+                         const double area = measure(mesh, primitive);
+                         main.area += area;
+                         inLargest += components.ofPrimitive[primitive.index] == 0 ? area : 0.0;
+                       });
+  main.largestShare = main.area > 0.0 ? inLargest / main.area : 0.0;
+  return main;
 }
 
 std::string diagnoseMapping(const BondMapping& mapping, const CrackExtractor& extractor,

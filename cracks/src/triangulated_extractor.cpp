@@ -9,11 +9,12 @@
 // triangulation neighbour, which makes it the (power) Voronoi cell.
 //
 // The rule for a never-bonded neighbour pair (i, j): it counts as bonded
-// through every common bonded neighbour k (paths i-k-j of two bonds), and
-// breaks when the last such path has a broken bond. Material that holds
-// together around the pair keeps it closed; a crack that cuts every path
-// between i and j opens it with the real bonds around it. A pair with no such
-// path (at the specimen's surface, or in a void) never breaks. A bonded pair
+// through every common bonded neighbour k (paths i-k-j of two bonds) or, if
+// it has none, through every path i-k-l-j of three bonds, and breaks when the
+// last such path has a broken bond. Material that holds together around the
+// pair keeps it closed; a crack that cuts every path between i and j opens it
+// with the real bonds around it. A pair with no such path (at the specimen's
+// surface, or across a void) never breaks. A bonded pair
 // that is no triangulation neighbour keeps its bond, but no cell holds it,
 // so it makes no face of its own (cell methods) or none that exists (local
 // Voronoi reports it inconsistent).
@@ -43,9 +44,7 @@ class TriangulatedExtractor final : public CrackExtractor {
   const LatticeDecomposition* decomposition() const override {
     return m_inner ? m_inner->decomposition() : nullptr;
   }
-  std::size_t inconsistentBondCount() const override {
-    return m_inner ? m_inner->inconsistentBondCount() : 0;
-  }
+  std::size_t inconsistentBondCount() const override { return m_inconsistent; }
   std::size_t memoryBytes() const override {
     std::size_t bytes = m_bonds.capacity() * sizeof(dem::Bond) + m_cells.memoryBytes() +
                         m_supportStart.capacity() * sizeof(std::int32_t) +
@@ -69,6 +68,7 @@ class TriangulatedExtractor final : public CrackExtractor {
     extended.bondForce = step.bondForce.empty() ? std::span<const float>{} : m_force;
     extended.breakStep = step.breakStep.empty() ? std::span<const std::int32_t>{} : m_breakStep;
     CRACKVIS_RETURN_IF_ERROR(m_inner->extract(extended, out));
+    dropVirtualInconsistencies(out);
     hideVirtualBondIds(out);
     return Status::ok();
   }
@@ -99,9 +99,11 @@ class TriangulatedExtractor final : public CrackExtractor {
     return Status::ok();
   }
 
-  // The two-bond paths i-k-j between the ends of a never-bonded edge: both
-  // bond lists are sorted by their other end, so one merge finds the k.
+  // The two-bond paths i-k-j between the ends of a never-bonded edge (both
+  // bond lists are sorted by their other end, so one merge finds the k), or
+  // the three-bond paths i-k-l-j when there is none.
   void addSupport(const dem::Bond& edge) {
+    const std::size_t before = m_support.size();
     const auto first = m_graph.bondsOf(edge.first);
     const auto second = m_graph.bondsOf(edge.second);
     auto a = first.begin();
@@ -114,9 +116,21 @@ class TriangulatedExtractor final : public CrackExtractor {
       } else if (kb < ka) {
         ++b;
       } else {
-        m_support.push_back({*a, *b});
+        m_support.push_back({*a, *b, -1});
         ++a;
         ++b;
+      }
+    }
+    if (m_support.size() == before) {
+      for (dem::BondIndex ik : first) {
+        const dem::ParticleIndex k = m_graph.otherEnd(ik, edge.first);
+        for (dem::BondIndex lj : second) {
+          const dem::ParticleIndex l = m_graph.otherEnd(lj, edge.second);
+          const dem::BondIndex kl = k == l ? -1 : m_graph.bondBetween(k, l);
+          if (k != edge.second && l != edge.first && kl >= 0) {
+            m_support.push_back({ik, kl, lj});
+          }
+        }
       }
     }
     m_supportStart.push_back(static_cast<std::int32_t>(m_support.size()));
@@ -137,8 +151,8 @@ class TriangulatedExtractor final : public CrackExtractor {
   }
 
   // The step's arrays over the extended bonds: a virtual bond is broken when
-  // every path that held it has a broken bond, since the step the last one
-  // broke; it carries no force.
+  // every path that held it has a broken bond, since the step the last of
+  // them broke (a path breaks with its first bond); it carries no force.
   void extendStep(const StepInput& step) {
     const std::size_t m = m_graph.bondCount();
     const std::size_t virtualCount = m_bonds.size() - m;
@@ -158,13 +172,19 @@ class TriangulatedExtractor final : public CrackExtractor {
       bool broken = first < last;
       std::int32_t brokeAt = -1;
       for (std::size_t s = first; s < last && broken; ++s) {
-        const auto [a, b] = m_support[s];
-        const bool aBroken = step.bondState[static_cast<std::size_t>(a)] != 0;
-        const bool bBroken = step.bondState[static_cast<std::size_t>(b)] != 0;
-        broken = aBroken || bBroken;
-        if (broken && !step.breakStep.empty()) {
-          brokeAt = std::max(brokeAt, pathBreakStep(step, aBroken ? a : -1, bBroken ? b : -1));
+        std::int32_t pathBrokeAt = -1;
+        broken = false;
+        for (dem::BondIndex bond : m_support[s]) {
+          if (bond >= 0 && step.bondState[static_cast<std::size_t>(bond)] != 0) {
+            broken = true;
+            if (!step.breakStep.empty()) {
+              const std::int32_t at = step.breakStep[static_cast<std::size_t>(bond)];
+              pathBrokeAt =
+                  pathBrokeAt < 0 ? at : (at < 0 ? pathBrokeAt : std::min(pathBrokeAt, at));
+            }
+          }
         }
+        brokeAt = std::max(brokeAt, pathBrokeAt);
       }
       m_state[m + v] = broken ? 1 : 0;
       if (!step.breakStep.empty()) {
@@ -173,16 +193,44 @@ class TriangulatedExtractor final : public CrackExtractor {
     }
   }
 
-  // The step a path of two bonds broke: its first broken bond's.
-  static std::int32_t pathBreakStep(const StepInput& step, dem::BondIndex a, dem::BondIndex b) {
-    std::int32_t at = -1;
-    for (dem::BondIndex bond : {a, b}) {
-      if (bond >= 0) {
-        const std::int32_t s = step.breakStep[static_cast<std::size_t>(bond)];
-        at = at < 0 ? s : (s < 0 ? at : std::min(at, s));
+  // A virtual bond whose face local Voronoi cannot make (a pair at the
+  // specimen's surface whose face lies outside the domain) is no bond of the
+  // file gone missing: its inconsistency mark is dropped, and only the file's
+  // bonds count as inconsistent.
+  void dropVirtualInconsistencies(CrackMesh& out) {
+    m_inconsistent = 0;
+    const AttributeArray* flag = out.findCellData("inconsistent");
+    const AttributeArray* ids = out.findCellData("bond_id");
+    if (flag == nullptr || ids == nullptr) {
+      return;
+    }
+    const auto m = static_cast<double>(m_graph.bondCount());
+    const std::size_t base = out.vertices.size();
+    std::vector<char> keep(out.primitiveCount(), 1);
+    PrimitiveList lines;
+    for (std::size_t k = 0; k < out.lines.size(); ++k) {
+      const bool flagged = flag->values[base + k] != 0.0;
+      const bool virtualBond = ids->values[base + k] >= m;
+      keep[base + k] = flagged && virtualBond ? 0 : 1;
+      if (keep[base + k] != 0) {
+        m_inconsistent += flagged ? 1 : 0;
+        lines.addRange(out.lines.connectivity.begin() + out.lines.offsets[k],
+                       out.lines.connectivity.begin() + out.lines.offsets[k + 1]);
       }
     }
-    return at;
+    out.lines = std::move(lines);
+    for (AttributeArray& array : out.cellData) {
+      std::size_t kept = 0;
+      const auto width = static_cast<std::size_t>(array.components);
+      for (std::size_t p = 0; p < keep.size(); ++p) {
+        if (keep[p] != 0) {
+          std::copy_n(array.values.begin() + static_cast<std::ptrdiff_t>(p * width), width,
+                      array.values.begin() + static_cast<std::ptrdiff_t>(kept * width));
+          ++kept;
+        }
+      }
+      array.values.resize(kept * width);
+    }
   }
 
   // A virtual bond is no bond of the file: its faces get bond_id -1.
@@ -206,12 +254,13 @@ class TriangulatedExtractor final : public CrackExtractor {
   std::vector<dem::Bond> m_bonds;  // the graph's M bonds, then the virtual ones
   std::optional<BondGraph> m_extended;
   ExplicitCells m_cells;
-  std::vector<std::int32_t> m_supportStart;  // [virtual + 1]
-  std::vector<std::array<dem::BondIndex, 2>> m_support;
+  std::vector<std::int32_t> m_supportStart;              // [virtual + 1]
+  std::vector<std::array<dem::BondIndex, 3>> m_support;  // paths of 2 (third -1) or 3 bonds
   std::unique_ptr<CrackExtractor> m_inner;
   std::vector<std::uint8_t> m_state;
   std::vector<float> m_force;
   std::vector<std::int32_t> m_breakStep;
+  std::size_t m_inconsistent = 0;
 };
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/extractor.hpp>
 #include <crackvis/cracks/metrics.hpp>
+#include <crackvis/dem/planted_crack.hpp>
 #include <crackvis/dem/random_packing.hpp>
 
 using namespace crackvis;
@@ -114,6 +115,13 @@ TEST_CASE("every method covers a through crack in a random packing", "[cracks][p
               static_cast<std::size_t>(std::count(state.begin(), state.end(), 1)));
         CHECK(mapping.fraction() >= (method == Method::kLocalVoronoi ? 0.95 : 0.99));
         CHECK(findComponents(mesh).components.front().normal.x == Approx(1.0).margin(0.05));
+        // The bonds between the halves are exactly the planted ones, and the
+        // main crack they make lies in the largest component.
+        const auto separating = separatingBonds(graph, state);
+        CHECK(separating == state);
+        const MainCrack main = measureMainCrack(mesh, separating, *extractor);
+        CHECK(main.mapped.fraction() == Approx(mapping.fraction()));
+        CHECK(main.largestShare >= 0.99);
         INFO("coverage " << covered << ", components " << metrics.components << ", inconsistent "
                          << metrics.inconsistentBonds);
         // Cell cut's surface ends at the midpoints of the outermost cut
@@ -161,4 +169,41 @@ TEST_CASE("lattices keep their own cells", "[cracks][packing]") {
   const auto bonds = dem::interactionRangeBonds(positions, radius, 1.01);
   const BondGraph fcc(positions.size(), bonds);
   CHECK(isLatticeGraph(fcc, 3));
+}
+
+TEST_CASE("a planted crack runs across the mid-plane, opens, and scatters isolated breaks",
+          "[cracks][packing]") {
+  const dem::RandomPacking packing = makePacking(3e-4, 3e-4);
+  dem::PlantedCrackSpec spec;
+  spec.steps = 20;
+  auto crack = dem::PlantedCrack::create(packing.lattice, packing.positions, spec);
+  REQUIRE(crack.isOk());
+  CHECK(crack->stepCount() == 21);
+  CHECK(crack->step(0).brokenBondCount() == 0);
+  CHECK(crack->step(0).positions == packing.positions);
+  const auto crossing = throughCrack(packing, crack->cut());
+  const auto last = crack->step(20);
+  std::size_t scattered = 0;
+  std::size_t previous = 0;
+  for (int k = 1; k <= 20; ++k) {
+    const std::size_t broken = crack->step(k).brokenBondCount();
+    CHECK(broken >= previous);  // never heals
+    previous = broken;
+  }
+  for (std::size_t b = 0; b < crossing.size(); ++b) {
+    if (crossing[b] != 0) {
+      REQUIRE(last.bondState[b] == 1);
+      REQUIRE(crack->step(15).bondState[b] == 1);  // the front is through at 3/4
+    } else {
+      scattered += last.bondState[b];
+    }
+  }
+  const double fraction =
+      static_cast<double>(scattered) / static_cast<double>(packing.lattice.bondCount());
+  CHECK(fraction == Approx(0.002).margin(0.0015));
+  // The right half moved away by about one bond length.
+  for (std::size_t i = 0; i < packing.positions.size(); ++i) {
+    const double moved = last.positions[i].x - packing.positions[i].x;
+    REQUIRE(moved == Approx(packing.positions[i].x > crack->cut() ? 6.3e-4 : 0.0).margin(1.5e-4));
+  }
 }

@@ -9,6 +9,7 @@
 #include <crackvis/common/progress.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/lattice_generator.hpp>
+#include <crackvis/dem/planted_crack.hpp>
 #include <crackvis/dem/random_packing.hpp>
 
 namespace crackvis::cli {
@@ -21,6 +22,7 @@ struct GenerateOptions {
   std::string radiusRange;
   double solidFraction = 0.55;
   double interactionRange = 1.1;
+  int plantedCrack = 0;  // steps of a planted through crack; 0: one intact step
   std::vector<int> sites;
   std::vector<double> box;
   double radius = 1e-3;
@@ -165,15 +167,34 @@ Result<Generated> generateRandom(const GenerateOptions& options) {
   return Generated{std::move(packing->lattice), std::move(packing->positions), std::move(summary)};
 }
 
-Status writeOneStep(const std::string& path, const Generated& generated) {
-  auto writer = dem::DemFileWriter::create(path, generated.lattice, {invocation(), "SI"});
+// One intact step, or with --planted-crack the series of a planted through
+// crack, written step by step.
+Status writeSteps(const GenerateOptions& options, const Generated& generated) {
+  auto writer = dem::DemFileWriter::create(options.output, generated.lattice, {invocation(), "SI"});
   if (!writer) {
     return writer.status();
   }
-  dem::StepState initial;
-  initial.positions = generated.positions;
-  initial.bondState.assign(generated.lattice.bondCount(), 0);
-  CRACKVIS_RETURN_IF_ERROR(writer->appendStep(initial));
+  if (options.plantedCrack <= 0) {
+    dem::StepState initial;
+    initial.positions = generated.positions;
+    initial.bondState.assign(generated.lattice.bondCount(), 0);
+    CRACKVIS_RETURN_IF_ERROR(writer->appendStep(initial));
+    return writer->close();
+  }
+  dem::PlantedCrackSpec spec;
+  spec.steps = options.plantedCrack;
+  spec.seed = options.seed;
+  auto crack = dem::PlantedCrack::create(generated.lattice, generated.positions, spec);
+  if (!crack) {
+    return crack.status();
+  }
+  ProgressBar progress("generate: planted crack", crack->stepCount());
+  progress.setEnabled(!options.quiet);
+  for (int k = 0; k < crack->stepCount(); ++k) {
+    CRACKVIS_RETURN_IF_ERROR(writer->appendStep(crack->step(k)));
+    progress.update(k + 1);
+  }
+  progress.finish();
   return writer->close();
 }
 
@@ -183,7 +204,7 @@ int runGenerate(const GenerateOptions& options) {
     printError("generate", generated.status().message());
     return kExitFailure;
   }
-  if (Status status = writeOneStep(options.output, *generated); !status) {
+  if (Status status = writeSteps(options, *generated); !status) {
     printError("generate", status.message());
     return kExitFailure;
   }
@@ -251,6 +272,13 @@ Command addGenerateCommand(CLI::App& parent) {
       ->capture_default_str();
   command->add_option("--seed", options->seed, "Seed of the jitter or the random packing")
       ->capture_default_str();
+  command
+      ->add_option("--planted-crack", options->plantedCrack,
+                   "Write STEPS more steps with a planted through crack (for benchmarks and "
+                   "tests): the bonds across the mid-plane x break from the bottom up, reaching "
+                   "the top at 3/4 of the steps, the right half moves away by up to one mean bond "
+                   "length, and 0.2 % of the bonds break at random elsewhere")
+      ->check(CLI::Range(1, 100000));
   command->add_option("-o,--output", options->output, "Output HDF5 file")->required();
   command->add_flag("-q,--quiet", options->quiet, "Print nothing on success, no progress bar");
   command->footer(

@@ -14,6 +14,7 @@
 
 #include <span>
 #include <string>
+#include <vector>
 
 #include <crackvis/cracks/extractor.hpp>
 
@@ -30,6 +31,23 @@ struct BondMapping {
 };
 
 BondMapping mapBrokenBonds(const CrackMesh& mesh, std::span<const std::uint8_t> bondState,
+                           const CrackExtractor& extractor);
+
+// The broken bonds that separate the two largest pieces the intact bonds
+// hold together (the halves of a through crack): a mask over the bonds.
+std::vector<std::uint8_t> separatingBonds(const BondGraph& graph,
+                                          std::span<const std::uint8_t> bondState);
+
+// The main crack, measured through the bonds that separate the halves:
+//  - mapped: of those bonds, how many became surface elements (as above);
+//  - largestShare: the part of the main crack's area (the surface primitives
+//    of separating bonds) that lies in the largest component.
+struct MainCrack {
+  BondMapping mapped;
+  double area = 0.0;
+  double largestShare = 0.0;
+};
+MainCrack measureMainCrack(const CrackMesh& mesh, std::span<const std::uint8_t> separating,
                            const CrackExtractor& extractor);
 
 // The likely cause of a low fraction, as a phrase for a warning ("the bonds

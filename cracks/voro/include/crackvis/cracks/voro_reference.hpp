@@ -31,8 +31,10 @@ struct GlobalVoronoiSummary {
 
 // Computes the Voronoi cell of every particle inside `box` (particles must lie
 // inside it) with neighbours, face areas and face vertices, as a
-// visualization filter needs them; calls `visit` for each when given.
+// visualization filter needs them; calls `visit` for each when given. With
+// unequal radii, the power (radical) diagram (Voro++'s container_poly).
 GlobalVoronoiSummary globalVoronoi(std::span<const Vec3> positions, const Box& box,
-                                   const std::function<void(const ReferenceCell&)>& visit = {});
+                                   const std::function<void(const ReferenceCell&)>& visit = {},
+                                   std::span<const double> radius = {});
 
 }  // namespace crackvis::cracks
