@@ -11,6 +11,19 @@
 
 namespace crackvis::testing {
 
+// The bond states of a crack through the plane x = cut: every bond whose
+// ends lie on both sides is broken.
+inline std::vector<std::uint8_t> bondsAcross(const std::vector<dem::Bond>& bonds,
+                                             const std::vector<dem::Vec3>& positions, double cut) {
+  std::vector<std::uint8_t> state(bonds.size(), 0);
+  for (std::size_t b = 0; b < bonds.size(); ++b) {
+    const double xa = positions[static_cast<std::size_t>(bonds[b].first)].x;
+    const double xb = positions[static_cast<std::size_t>(bonds[b].second)].x;
+    state[b] = (xa - cut) * (xb - cut) < 0.0 ? 1 : 0;
+  }
+  return state;
+}
+
 struct PlantedCrack {
   dem::LatticeBlock block;
   std::vector<std::uint8_t> state;

@@ -12,6 +12,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "crack_fixtures.hpp"
 #include <crackvis/common/random.hpp>
 #include <crackvis/cracks/bond_graph.hpp>
 #include <crackvis/cracks/crack_components.hpp>
@@ -22,6 +23,7 @@
 
 using namespace crackvis;
 using namespace crackvis::cracks;
+using crackvis::testing::bondsAcross;
 
 namespace {
 
@@ -108,13 +110,7 @@ TEST_CASE("a through crack pulled 3 bond lengths open keeps its faces and covera
   for (const bool random : {false, true}) {
     const Specimen specimen = random ? randomSpecimen() : latticeSpecimen();
     const BondGraph graph(specimen.lattice.particleCount(), specimen.lattice.bonds);
-    std::vector<std::uint8_t> state(specimen.lattice.bondCount(), 0);
-    for (std::size_t b = 0; b < state.size(); ++b) {
-      const dem::Bond& bond = specimen.lattice.bonds[b];
-      const double xa = specimen.positions[static_cast<std::size_t>(bond.first)].x;
-      const double xb = specimen.positions[static_cast<std::size_t>(bond.second)].x;
-      state[b] = (xa - specimen.cut) * (xb - specimen.cut) < 0.0 ? 1 : 0;
-    }
+    const auto state = bondsAcross(specimen.lattice.bonds, specimen.positions, specimen.cut);
     for (Method method : {Method::kCellCut, Method::kLocalVoronoi, Method::kCellCentre}) {
       DYNAMIC_SECTION(toString(method) << (random ? " on a random packing" : " on a lattice")) {
         auto extractor = makeExtractor(method, graph, 3);
@@ -177,13 +173,7 @@ TEST_CASE("without a reference, an opened crack fails local Voronoi's validation
   // What happened before faces were material: each step's own geometry.
   const Specimen specimen = latticeSpecimen();
   const BondGraph graph(specimen.lattice.particleCount(), specimen.lattice.bonds);
-  std::vector<std::uint8_t> state(specimen.lattice.bondCount(), 0);
-  for (std::size_t b = 0; b < state.size(); ++b) {
-    const dem::Bond& bond = specimen.lattice.bonds[b];
-    const double xa = specimen.positions[static_cast<std::size_t>(bond.first)].x;
-    const double xb = specimen.positions[static_cast<std::size_t>(bond.second)].x;
-    state[b] = (xa - specimen.cut) * (xb - specimen.cut) < 0.0 ? 1 : 0;
-  }
+  const auto state = bondsAcross(specimen.lattice.bonds, specimen.positions, specimen.cut);
   const std::vector<Vec3> positions = opened(specimen, 3.0 * specimen.bondLength, 6);
   auto extractor = makeExtractor(Method::kLocalVoronoi, graph, 3);
   CrackMesh mesh;

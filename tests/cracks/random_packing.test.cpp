@@ -9,6 +9,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "crack_fixtures.hpp"
 #include <crackvis/cracks/bond_graph.hpp>
 #include <crackvis/cracks/bond_mapping.hpp>
 #include <crackvis/cracks/crack_components.hpp>
@@ -36,14 +37,7 @@ dem::RandomPacking makePacking(double rmin, double rmax, std::uint64_t seed = 7)
 
 // Every bond whose segment crosses x = cut.
 std::vector<std::uint8_t> throughCrack(const dem::RandomPacking& packing, double cut) {
-  std::vector<std::uint8_t> state(packing.lattice.bondCount(), 0);
-  for (std::size_t b = 0; b < state.size(); ++b) {
-    const dem::Bond& bond = packing.lattice.bonds[b];
-    const double xa = packing.positions[static_cast<std::size_t>(bond.first)].x;
-    const double xb = packing.positions[static_cast<std::size_t>(bond.second)].x;
-    state[b] = (xa - cut) * (xb - cut) < 0.0 ? 1 : 0;
-  }
-  return state;
+  return testing::bondsAcross(packing.lattice.bonds, packing.positions, cut);
 }
 
 // The largest component's coverage of the section by its best-fit plane.
