@@ -72,7 +72,9 @@ std::string attributeArrays(const std::vector<AttributeArray>& arrays, AppendedD
 
 std::vector<double> flatPoints(const std::vector<Vec3>& points) {
   std::vector<double> flat(points.size() * 3);
-  std::memcpy(flat.data(), points.data(), flat.size() * sizeof(double));
+  if (!flat.empty()) {  // memcpy from an empty vector's null data is undefined
+    std::memcpy(flat.data(), points.data(), flat.size() * sizeof(double));
+  }
   return flat;
 }
 

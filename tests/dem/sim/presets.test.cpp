@@ -191,7 +191,11 @@ TEST_CASE("Scaled runs of every preset fracture from the defect within seconds",
     REQUIRE(summary.isOk());
     INFO(c.name << " set " << c.set << ": " << seconds << " s, broken at the end "
                 << summary->brokenPerSavedStep.back() << " of " << summary->bonds);
+#ifndef __SANITIZE_ADDRESS__
+    // A budget for the test suite's sake (the scaled runs are what the other
+    // tests use), not a speed claim; sanitizers make the run 4-5x slower.
     CHECK(seconds < 20.0);
+#endif
     const auto& broken = summary->brokenPerSavedStep;
     CHECK(broken.front() == preset->defectBonds);
     CHECK(std::is_sorted(broken.begin(), broken.end()));
