@@ -76,6 +76,10 @@ TEST_CASE("a description built in code survives toXml and parse", "[pipeline]") 
   d.cracks.method = cracks::Method::kCellCentre;
   d.cracks.mergeOctahedra = true;
   d.cracks.validationTolerance = 0.25;
+  d.cracks.decomposition = cracks::Decomposition::kTriangulation;
+  d.cracks.largest = 3;
+  d.cracks.minComponent = 2.5e-7;
+  d.cracks.colourBy = CrackColourBy::kComponent;
   d.bonds.show = BondSelection::kAll;
   d.bonds.representation = BondRepresentation::kTubes;
   d.bonds.colour = Colour{1, 2, 3};
@@ -211,6 +215,12 @@ std::vector<BadAttribute> badAttributes() {
       {"clip normal zero",
        withLine("  <particles>\n    <clip origin=\"0 0 0\" normal=\"0 0 0\"/>\n  </particles>"),
        "line 5, element <clip>", "normal", "zero vector"},
+      {"largest components negative", withLine("  <cracks largest=\"-1\"/>"),
+       "line 4, element <cracks>", "largest", "-1"},
+      {"component area negative", withLine("  <cracks min-component=\"-1e-6\"/>"),
+       "line 4, element <cracks>", "min-component", "-1e-6"},
+      {"decomposition unknown", withLine("  <cracks decomposition=\"voronoi\"/>"),
+       "line 4, element <cracks>", "decomposition", "voronoi"},
       {"validation tolerance below a double",
        withLine("  <cracks validation-tolerance=\"1e-400\"/>"), "line 4, element <cracks>",
        "validation-tolerance", "1e-400"},

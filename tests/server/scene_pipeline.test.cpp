@@ -5,7 +5,10 @@
 
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
+#include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/dem_series.hpp>
+#include <crackvis/dem/planted_crack.hpp>
+#include <crackvis/dem/random_packing.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 
 namespace crackvis {
@@ -173,6 +176,64 @@ TEST_CASE("a scene pipeline extracts anew only when the extraction changes", "[s
   REQUIRE(scene.replace(merged));
   CHECK(decomposition() != first);
   CHECK(scene.step() == 2);
+}
+
+// A random packing with a planted through crack and scattered breaks.
+struct PlantedSeries {
+  testing::TempDir dir;
+  std::string file = dir.file("run.h5");
+  PlantedSeries() {
+    dem::RandomPackingSpec spec;
+    spec.box = {0.008, 0.005, 0.005};
+    spec.radiusMin = 3e-4;
+    spec.radiusMax = 3e-4;
+    auto packing = dem::generateRandomPacking(spec);
+    REQUIRE(packing);
+    dem::PlantedCrackSpec planted;
+    planted.steps = 4;
+    planted.scatter = 0.02;
+    auto crack = dem::PlantedCrack::create(packing->lattice, packing->positions, planted);
+    REQUIRE(crack);
+    auto writer = dem::DemFileWriter::create(file, packing->lattice, {"test", "SI"});
+    REQUIRE(writer);
+    for (int k = 0; k < crack->stepCount(); ++k) {
+      REQUIRE(writer->appendStep(crack->step(k)));
+    }
+    REQUIRE(writer->close());
+  }
+};
+
+TEST_CASE("a scene pipeline shows the largest crack components and colours by component",
+          "[scene][cracks]") {
+  const PlantedSeries series;
+  auto d = cellCut(4);
+  d.cracks.method = cracks::Method::kLocalVoronoi;
+  auto opened = scene::ScenePipeline::open(d, localOpener(series.dir));
+  REQUIRE(opened);
+  scene::ScenePipeline& scene = **opened;
+  const cracks::CrackComponents all = cracks::findComponents(*scene.input().cracks);
+  REQUIRE(all.components.size() >= 2);  // the sample's breaks make several pieces
+
+  // The same extractor, a new selection: the current step is shown anew.
+  d.cracks.largest = 1;
+  d.cracks.colourBy = pipeline::CrackColourBy::kComponent;
+  REQUIRE(scene.replace(d));
+  const cracks::CrackMesh& main = *scene.input().cracks;
+  const cracks::CrackComponents kept = cracks::findComponents(main);
+  REQUIRE(kept.components.size() == 1);
+  CHECK(kept.components[0].area == Approx(all.components[0].area));
+  const cracks::AttributeArray* label = main.findCellData("component");
+  REQUIRE(label != nullptr);
+  REQUIRE(label->values.size() == main.primitiveCount());
+  for (std::size_t k = 0; k < main.polygons.size(); ++k) {
+    CHECK(label->values[main.vertices.size() + main.lines.size() + k] == 0.0);
+  }
+
+  // A minimum area above every piece leaves no surface.
+  d.cracks.largest = 0;
+  d.cracks.minComponent = 2.0 * all.components[0].area;
+  REQUIRE(scene.replace(d));
+  CHECK(scene.input().cracks->polygons.size() == 0);
 }
 
 }  // namespace crackvis

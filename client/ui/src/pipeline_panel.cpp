@@ -73,17 +73,30 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
   m_validation = new QCheckBox(tr("validate (empty-sphere test)"));
   m_tolerance = spin(0.0, 1.0, 0.05, 2);
   m_merge = new QCheckBox(tr("merge octahedra (cell centre)"));
+  m_decompositionKind =
+      combo<cracks::Decomposition>({{"auto", cracks::Decomposition::kAuto},
+                                    {"lattice cells", cracks::Decomposition::kLattice},
+                                    {"triangulation", cracks::Decomposition::kTriangulation}});
+  m_decompositionKind->setObjectName(QStringLiteral("decomposition"));
+  m_largest = new QSpinBox;
+  m_largest->setRange(0, 1000000);
+  m_largest->setSpecialValueText(tr("all"));
+  m_largest->setObjectName(QStringLiteral("largest"));
+  m_largest->setToolTip(tr("Show only the K largest crack components (1: the main crack)"));
   m_crackColour = combo<CrackColourBy>({{"solid", CrackColourBy::kSolid},
                                         {"bond id", CrackColourBy::kBondId},
                                         {"force", CrackColourBy::kForce},
                                         {"break step", CrackColourBy::kBreakStep},
-                                        {"state", CrackColourBy::kState}});
+                                        {"state", CrackColourBy::kState},
+                                        {"component", CrackColourBy::kComponent}});
   m_crackOpacity = spin(0.0, 1.0, 0.1, 2);
   crackForm->addRow(m_cracksVisible);
   crackForm->addRow(tr("method"), m_method);
   crackForm->addRow(m_validation);
   crackForm->addRow(tr("tolerance"), m_tolerance);
   crackForm->addRow(m_merge);
+  crackForm->addRow(tr("cells"), m_decompositionKind);
+  crackForm->addRow(tr("largest components"), m_largest);
   crackForm->addRow(tr("colour by"), m_crackColour);
   crackForm->addRow(tr("opacity"), m_crackOpacity);
   layout->addWidget(cracks);
@@ -205,6 +218,8 @@ void PipelinePanel::show(const pipeline::PipelineDescription& d) {
   m_validation->setChecked(d.cracks.validation);
   m_tolerance->setValue(d.cracks.validationTolerance);
   m_merge->setChecked(d.cracks.mergeOctahedra);
+  select(m_decompositionKind, d.cracks.decomposition);
+  m_largest->setValue(d.cracks.largest);
   select(m_crackColour, d.cracks.colourBy);
   m_crackOpacity->setValue(d.cracks.opacity);
   select(m_bondsShow, d.bonds.show);
@@ -241,6 +256,8 @@ void PipelinePanel::collect() {
   d.cracks.validation = m_validation->isChecked();
   d.cracks.validationTolerance = m_tolerance->value();
   d.cracks.mergeOctahedra = m_merge->isChecked();
+  d.cracks.decomposition = selected<cracks::Decomposition>(m_decompositionKind);
+  d.cracks.largest = m_largest->value();
   d.cracks.colourBy = selected<CrackColourBy>(m_crackColour);
   d.cracks.opacity = m_crackOpacity->value();
   d.bonds.show = selected<BondSelection>(m_bondsShow);

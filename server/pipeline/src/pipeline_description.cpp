@@ -29,11 +29,16 @@ constexpr Names<ParticleColourBy, 5> kParticleColourBy{
      {ParticleColourBy::kDisplacement, "displacement"},
      {ParticleColourBy::kVelocity, "velocity"},
      {ParticleColourBy::kDamage, "damage"}}};
-constexpr Names<CrackColourBy, 5> kCrackColourBy{{{CrackColourBy::kSolid, "solid"},
+constexpr Names<cracks::Decomposition, 3> kDecompositions{
+    {{cracks::Decomposition::kAuto, "auto"},
+     {cracks::Decomposition::kLattice, "lattice"},
+     {cracks::Decomposition::kTriangulation, "triangulation"}}};
+constexpr Names<CrackColourBy, 6> kCrackColourBy{{{CrackColourBy::kSolid, "solid"},
                                                   {CrackColourBy::kBondId, "bond-id"},
                                                   {CrackColourBy::kForce, "force"},
                                                   {CrackColourBy::kBreakStep, "break-step"},
-                                                  {CrackColourBy::kState, "state"}}};
+                                                  {CrackColourBy::kState, "state"},
+                                                  {CrackColourBy::kComponent, "component"}}};
 constexpr Names<BondSelection, 3> kBondSelections{{{BondSelection::kNone, "none"},
                                                    {BondSelection::kBroken, "broken"},
                                                    {BondSelection::kAll, "all"}}};
@@ -189,6 +194,8 @@ constexpr Span kPixels{16, 7680};
 constexpr Span kFps{1, 120};
 constexpr Span kBitrate{100'000, 100'000'000};
 constexpr Span kVersion{1, 1};
+constexpr Span kComponents{0, 1'000'000};
+constexpr Interval kArea{0.0, kLargest};
 
 // The attributes of one element, converted with range checks: every value
 // of a description passes through these few functions. The first error is
@@ -386,6 +393,9 @@ Status convertCracks(const xmlNode* node, CracksDescription& c) {
   c.validation = a.boolean("validation");
   c.validationTolerance = a.real("validation-tolerance", kUnitInterval);
   c.mergeOctahedra = a.boolean("merge-octahedra");
+  c.decomposition = a.choice("decomposition", kDecompositions);
+  c.largest = static_cast<int>(a.integer("largest", kComponents));
+  c.minComponent = a.real("min-component", kArea);
   c.colourBy = a.choice("colour-by", kCrackColourBy);
   c.colour = a.colour("colour");
   c.opacity = a.real("opacity", kUnitInterval);
@@ -562,9 +572,11 @@ std::string toXml(const PipelineDescription& d) {
   const auto& c = d.cracks;
   out += fmt::format(
       "  <cracks visible=\"{}\" method=\"{}\" validation=\"{}\" validation-tolerance=\"{}\" "
-      "merge-octahedra=\"{}\" colour-by=\"{}\" colour=\"{}\" opacity=\"{}\"/>\n",
+      "merge-octahedra=\"{}\" decomposition=\"{}\" largest=\"{}\" min-component=\"{}\" "
+      "colour-by=\"{}\" colour=\"{}\" opacity=\"{}\"/>\n",
       text(c.visible), cracks::toString(c.method), text(c.validation), c.validationTolerance,
-      text(c.mergeOctahedra), nameOf(kCrackColourBy, c.colourBy), hex(c.colour), c.opacity);
+      text(c.mergeOctahedra), nameOf(kDecompositions, c.decomposition), c.largest, c.minComponent,
+      nameOf(kCrackColourBy, c.colourBy), hex(c.colour), c.opacity);
   const auto& b = d.bonds;
   out += fmt::format(
       "  <bonds show=\"{}\" representation=\"{}\" colour-by=\"{}\" colour=\"{}\" "

@@ -257,6 +257,8 @@ const char* crackArrayName(pipeline::CrackColourBy by) {
       return "break_step";
     case pipeline::CrackColourBy::kState:
       return "bond_state";
+    case pipeline::CrackColourBy::kComponent:
+      return "component";
     case pipeline::CrackColourBy::kSolid:
       break;
   }

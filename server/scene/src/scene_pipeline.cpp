@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <crackvis/cracks/bond_graph.hpp>
+#include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/scene/guarded_call.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 
@@ -67,11 +68,44 @@ void ScenePipeline::restore(State&& state) {
   m_state = std::move(state);
 }
 
+namespace {
+
+// The description's component filter, and the "component" cell array when
+// cracks are coloured by component (largest first: 0 is the main crack).
+void selectComponents(const pipeline::CracksDescription& c, cracks::CrackMesh& mesh) {
+  const cracks::ComponentFilter filter{c.minComponent, c.largest};
+  const bool colour = c.colourBy == pipeline::CrackColourBy::kComponent;
+  if (!filter.active() && !colour) {
+    return;
+  }
+  const cracks::CrackComponents components = cracks::findComponents(mesh);
+  if (colour) {
+    cracks::AttributeArray label{"component", cracks::AttributeType::kInt32, 1, {}};
+    label.values.assign(mesh.primitiveCount(), -1.0);
+    const std::size_t base = mesh.vertices.size() + (mesh.dimension == 2 ? 0 : mesh.lines.size());
+    for (std::size_t k = 0; k < components.ofPrimitive.size(); ++k) {
+      label.values[base + k] = components.ofPrimitive[k];
+    }
+    mesh.cellData.push_back(std::move(label));
+  }
+  cracks::keepComponents(mesh, components, filter);
+}
+
+// Whether two descriptions select or colour crack components differently.
+bool sameSelection(const pipeline::CracksDescription& a, const pipeline::CracksDescription& b) {
+  using pipeline::CrackColourBy;
+  return a.largest == b.largest && a.minComponent == b.minComponent &&
+         (a.colourBy == CrackColourBy::kComponent) == (b.colourBy == CrackColourBy::kComponent);
+}
+
+}  // namespace
+
 cracks::ExtractOptions extractOptions(const pipeline::PipelineDescription& d) {
   cracks::ExtractOptions options;
   options.validate = d.cracks.validation;
   options.validationTolerance = d.cracks.validationTolerance;
   options.mergeOctahedra = d.cracks.mergeOctahedra;
+  options.decomposition = d.cracks.decomposition;
   options.includeIntactFaces = d.showDecomposition;
   return options;
 }
@@ -137,6 +171,7 @@ Status ScenePipeline::apply(pipeline::PipelineDescription next) {
   // choice), so that the step cache never mixes steps with and without it.
   const bool reopen = newFile || extraArraysFor(next) != extraArraysFor(m_state.description);
   const bool newExtractor = reopen || !sameExtraction(next, m_state.description);
+  const bool newSelection = !sameSelection(next.cracks, m_state.description.cracks);
   const bool stepChanged = next.step != m_state.description.step;
   const int shown = m_state.current ? m_state.current->index : -1;
   if (reopen) {
@@ -152,7 +187,7 @@ Status ScenePipeline::apply(pipeline::PipelineDescription next) {
   if (reopen || target != shown) {
     return showStep(target);
   }
-  if (newExtractor) {
+  if (newExtractor || newSelection) {
     m_timings = {};
     return extract(m_state.current);
   }
@@ -197,6 +232,7 @@ Status ScenePipeline::showStep(int step) {
 Status ScenePipeline::extract(std::shared_ptr<const source::SourceStep> step) {
   const auto start = std::chrono::steady_clock::now();
   CRACKVIS_RETURN_IF_ERROR(m_state.extractor->extract(stepInput(*step), m_scratch));
+  selectComponents(m_state.description.cracks, m_scratch);
   m_timings.extractMs = millisecondsSince(start);
   std::swap(m_scratch, m_state.mesh);
   m_state.current = std::move(step);

@@ -49,6 +49,8 @@ class PipelinePanel : public QWidget {
   QCheckBox* m_validation;
   QDoubleSpinBox* m_tolerance;
   QCheckBox* m_merge;
+  QComboBox* m_decompositionKind;
+  QSpinBox* m_largest;
   QComboBox* m_crackColour;
   QDoubleSpinBox* m_crackOpacity;
   QComboBox* m_bondsShow;

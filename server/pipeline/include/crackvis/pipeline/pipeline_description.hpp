@@ -29,7 +29,7 @@ struct Colour {
 
 enum class ParticleRepresentation { kImpostors, kPoints };
 enum class ParticleColourBy { kSolid, kRadius, kDisplacement, kVelocity, kDamage };
-enum class CrackColourBy { kSolid, kBondId, kForce, kBreakStep, kState };
+enum class CrackColourBy { kSolid, kBondId, kForce, kBreakStep, kState, kComponent };
 enum class BondSelection { kNone, kBroken, kAll };
 enum class BondRepresentation { kLines, kTubes };
 enum class BondColourBy { kSolid, kState, kForce, kBreakStep };
@@ -57,6 +57,9 @@ struct CracksDescription {
   bool validation = true;
   double validationTolerance = 0.1;
   bool mergeOctahedra = false;
+  cracks::Decomposition decomposition = cracks::Decomposition::kAuto;
+  int largest = 0;            // keep the K largest components (0: all)
+  double minComponent = 0.0;  // and only those of at least this area, m^2
   CrackColourBy colourBy = CrackColourBy::kSolid;
   Colour colour{0xe0, 0x3c, 0x31};
   double opacity = 1.0;
