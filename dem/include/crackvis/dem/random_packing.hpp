@@ -29,9 +29,9 @@ namespace crackvis::dem {
 
 struct RandomPackingSpec {
   int dimension = 3;
-  Vec3 box{0.02, 0.02, 0.02};  // m; z ignored in 2D
-  double radiusMin = 5e-4;     // m
-  double radiusMax = 5e-4;     // m (>= radiusMin; 2 x radiusMin for "1:2" polydisperse)
+  Vec3 box{0.02, 0.02, 0.02};   // m; z ignored in 2D
+  double radiusMin = 5e-4;      // m
+  double radiusMax = 5e-4;      // m (>= radiusMin; 2 x radiusMin for "1:2" polydisperse)
   double solidFraction = 0.55;  // volume (3D) or area (2D) of the spheres over the box's
   double interactionRange = 1.1;
   double strength = 1.0;  // R_n of every bond, N
