@@ -326,7 +326,10 @@ double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::s
   }
   const CrackComponent& component = set.components[c];
   const Vec3 n = component.normal;
-  const auto [u, w] = planeBasis(n);
+  // Not a structured binding: lambdas below capture w (clang 14 cannot).
+  const std::pair<Vec3, Vec3> basis = planeBasis(n);
+  const Vec3 u = basis.first;
+  const Vec3 w = basis.second;
   const bool line = mesh.dimension == 2;
   // In 2D the section is an interval along the line's direction, which is
   // n x z.
