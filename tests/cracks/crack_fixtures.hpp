@@ -3,13 +3,26 @@
 
 #include <cmath>
 #include <functional>
+#include <span>
 #include <vector>
 
+#include <catch2/catch.hpp>
+
 #include <crackvis/cracks/bond_graph.hpp>
+#include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/extractor.hpp>
 #include <crackvis/dem/lattice_generator.hpp>
 
 namespace crackvis::testing {
+
+// The largest component's coverage of the specimen's section by its
+// best-fit plane (sectionCoverage).
+inline double largestCoverage(const cracks::CrackMesh& mesh, std::span<const dem::Vec3> positions,
+                              std::span<const double> radius) {
+  const cracks::CrackComponents set = cracks::findComponents(mesh);
+  REQUIRE(!set.components.empty());
+  return cracks::sectionCoverage(mesh, set, 0, positions, radius);
+}
 
 // The bond states of a crack through the plane x = cut: every bond whose
 // ends lie on both sides is broken.

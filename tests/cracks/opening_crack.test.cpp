@@ -97,10 +97,8 @@ std::vector<double> polygonCentresX(const CrackMesh& mesh) {
 }
 
 double projectedCoverage(const CrackMesh& mesh, const Specimen& specimen) {
-  const CrackMesh flat = flattened(mesh, specimen.cut);
-  const CrackComponents set = findComponents(flat);
-  REQUIRE(!set.components.empty());
-  return sectionCoverage(flat, set, 0, specimen.positions, specimen.lattice.radius);
+  return testing::largestCoverage(flattened(mesh, specimen.cut), specimen.positions,
+                                  specimen.lattice.radius);
 }
 
 }  // namespace

@@ -42,9 +42,7 @@ std::vector<std::uint8_t> throughCrack(const dem::RandomPacking& packing, double
 
 // The largest component's coverage of the section by its best-fit plane.
 double coverage(const CrackMesh& mesh, const dem::RandomPacking& packing) {
-  const CrackComponents components = findComponents(mesh);
-  REQUIRE(!components.components.empty());
-  return sectionCoverage(mesh, components, 0, packing.positions, packing.lattice.radius);
+  return testing::largestCoverage(mesh, packing.positions, packing.lattice.radius);
 }
 
 }  // namespace
