@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include "cracks/crack_fixtures.hpp"
+#include <crackvis/dem/random_packing.hpp>
 #include <crackvis/scene/scene_content.hpp>
 
 using namespace crackvis;
@@ -195,4 +196,30 @@ TEST_CASE("the decomposition's edges and the bonds shown", "[scene]") {
   shown = scene::bondLines(bonds, input);
   REQUIRE(shown.bonds.size() == crack.state.size());
   CHECK(shown.values[7] == 3.5);
+}
+
+TEST_CASE("a triangulated packing's decomposition edges include its never-bonded pairs",
+          "[scene]") {
+  dem::RandomPackingSpec spec;
+  spec.box = {0.006, 0.004, 0.004};
+  spec.radiusMin = 3e-4;
+  spec.radiusMax = 3e-4;
+  auto packing = dem::generateRandomPacking(spec);
+  REQUIRE(packing);
+  const cracks::BondGraph graph(packing->lattice.particleCount(), packing->lattice.bonds);
+  const auto state = testing::bondsAcross(packing->lattice.bonds, packing->positions, 0.003);
+  auto extractor = cracks::makeExtractor(cracks::Method::kCellCut, graph, 3);
+  cracks::CrackMesh mesh;
+  const cracks::StepInput step{packing->positions, state, packing->lattice.radius, {}, {}, {}};
+  REQUIRE(extractor->extract(step, mesh));
+  scene::SceneInput input{&packing->lattice, step, {}, {}, nullptr, extractor->decomposition()};
+  REQUIRE(input.decomposition != nullptr);
+  const auto edges = scene::decompositionBonds(input);
+  REQUIRE(!edges.empty());
+  // Indices into the decomposition's graph, some beyond the file's bonds:
+  // the renderer draws them through that graph, never through the lattice.
+  const auto total = static_cast<dem::BondIndex>(input.decomposition->graph().bondCount());
+  const auto fileBonds = static_cast<dem::BondIndex>(packing->lattice.bondCount());
+  CHECK(edges.back() < total);
+  CHECK(edges.back() >= fileBonds);
 }

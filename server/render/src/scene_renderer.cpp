@@ -327,12 +327,13 @@ void addCracks(const pipeline::PipelineDescription& d, const cracks::CrackMesh& 
   }
 }
 
-// Lines between the particles of `bonds`.
+// Lines between the particles of `bonds`, indices into `pairs`.
 vtkSmartPointer<vtkPolyData> bondPolyData(const SceneInput& input,
-                                          std::span<const dem::BondIndex> bonds) {
+                                          std::span<const dem::BondIndex> bonds,
+                                          std::span<const dem::Bond> pairs) {
   vtkNew<vtkCellArray> lines;
   for (dem::BondIndex b : bonds) {
-    const dem::Bond& bond = input.lattice->bonds[static_cast<std::size_t>(b)];
+    const dem::Bond& bond = pairs[static_cast<std::size_t>(b)];
     const vtkIdType ids[2] = {bond.first, bond.second};
     lines->InsertNextCell(2, ids);
   }
@@ -344,7 +345,10 @@ vtkSmartPointer<vtkPolyData> bondPolyData(const SceneInput& input,
 
 // The cell methods' local decomposition: the edges of its cells, faint.
 void addDecompositionEdges(const SceneInput& input, vtkRenderer* renderer) {
-  const auto data = bondPolyData(input, scene::decompositionBonds(input));
+  // The decomposition's graph: on a triangulated packing its edges include
+  // pairs that are no bond of the file.
+  const auto data =
+      bondPolyData(input, scene::decompositionBonds(input), input.decomposition->graph().bonds());
   vtkNew<vtkPolyDataMapper> mapper;
   mapper->SetInputData(data);
   mapper->ScalarVisibilityOff();
@@ -370,7 +374,7 @@ void addBonds(const pipeline::PipelineDescription& d, const SceneInput& input,
   values->SetName(bondArrayName(d.bonds.colourBy));
   values->SetNumberOfValues(static_cast<vtkIdType>(shown.values.size()));
   std::copy(shown.values.begin(), shown.values.end(), values->GetPointer(0));
-  const auto data = bondPolyData(input, shown.bonds);
+  const auto data = bondPolyData(input, shown.bonds, input.lattice->bonds);
   data->GetCellData()->AddArray(values);
   vtkNew<vtkPolyDataMapper> mapper;
   if (d.bonds.representation == pipeline::BondRepresentation::kTubes) {

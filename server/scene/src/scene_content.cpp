@@ -171,7 +171,7 @@ std::vector<dem::BondIndex> decompositionBonds(const SceneInput& input) {
     return {};
   }
   const cracks::LatticeDecomposition& decomposition = *input.decomposition;
-  std::vector<std::uint8_t> used(input.lattice->bonds.size(), 0);
+  std::vector<std::uint8_t> used(decomposition.graph().bondCount(), 0);
   for (const cracks::LatticeCell& cell : decomposition.cells()) {
     const auto& shape = cracks::shapeOf(cell.type);
     for (std::size_t e = 0; e < shape.edges.size(); ++e) {

@@ -45,8 +45,11 @@ struct CrackLayers {
 CrackLayers crackLayers(const pipeline::PipelineDescription& description,
                         const cracks::CrackMesh& mesh);
 
-// The bonds that are edges of the decomposition's cells, ascending (empty
-// without a decomposition).
+// The edges of the decomposition's cells, ascending (empty without a
+// decomposition), as indices into the decomposition's graph: the file's
+// bonds, then on a triangulated packing the triangulation's never-bonded
+// edges (beyond the lattice's M bonds; draw them through
+// decomposition->graph()).
 std::vector<dem::BondIndex> decompositionBonds(const SceneInput& input);
 
 // The bonds drawn (all or only broken ones) and the value each is coloured by.
