@@ -47,6 +47,11 @@ struct Flags {
   std::optional<int> maxStreamsPerUser;
   std::optional<double> handshakeSeconds;
   std::optional<double> maxCallSeconds;
+  std::optional<int> maxSlabsPerRead;
+  std::optional<int> describeMaxDepth;
+  std::optional<std::uint64_t> describeMaxObjects;
+  std::optional<double> describeMaxSeconds;
+  std::optional<double> hdf5CallSeconds;
 };
 
 // The configuration file first, then every flag given on top of it, then
@@ -108,6 +113,21 @@ crackvis::Result<ServerConfig> configure(const Flags& flags, const CLI::App& app
   }
   if (flags.maxCallSeconds) {
     config.limits.maxCallSeconds = *flags.maxCallSeconds;
+  }
+  if (flags.maxSlabsPerRead) {
+    config.limits.maxSlabsPerRead = *flags.maxSlabsPerRead;
+  }
+  if (flags.describeMaxDepth) {
+    config.limits.describe.maxDepth = *flags.describeMaxDepth;
+  }
+  if (flags.describeMaxObjects) {
+    config.limits.describe.maxObjects = *flags.describeMaxObjects;
+  }
+  if (flags.describeMaxSeconds) {
+    config.limits.describe.maxTime = crackvis::dataservice::describeTime(*flags.describeMaxSeconds);
+  }
+  if (flags.hdf5CallSeconds) {
+    config.limits.hdf5CallSeconds = *flags.hdf5CallSeconds;
   }
   // Checked once merged, so a flag and a file value meet the same rules.
   CRACKVIS_RETURN_IF_ERROR(crackvis::dataservice::validateServerConfig(config));
@@ -216,6 +236,17 @@ int main(int argc, char** argv) {
                  "time a raw TLS connection has for its handshake and request (default 10)");
   app.add_option("--max-call-seconds", flags.maxCallSeconds,
                  "a Read or Fetch running longer is cancelled");
+  app.add_option("--max-slabs-per-read", flags.maxSlabsPerRead,
+                 "limit on the hyperslabs of one Read (default 4096)");
+  app.add_option("--describe-max-depth", flags.describeMaxDepth,
+                 "levels of nested groups one Describe walks (default 64)");
+  app.add_option("--describe-max-objects", flags.describeMaxObjects,
+                 "objects one Describe lists (default 100000)");
+  app.add_option("--describe-max-seconds", flags.describeMaxSeconds,
+                 "time one Describe may walk a file's tree (default 10)");
+  app.add_option("--hdf5-call-seconds", flags.hdf5CallSeconds,
+                 "time an HDF5 worker may take for a Read's plan or one piece before it is "
+                 "killed and replaced (0.1..3600, default 30)");
   auto* hash = app.add_subcommand(
       "hash-secret", "Read a password or token from stdin and print its hash for the config");
   auto* token = app.add_subcommand("new-token", "Print a random bearer token and its hash");

@@ -88,10 +88,23 @@ TEST_CASE("crackvis-data refuses out-of-range limits from flags and file at star
        "--max-streams must be at least 1, got 0 (limits.max_concurrent_streams in the "
        "configuration file)"},
       {"no describe time in the file", base, R"({"limits": {"describe_max_seconds": 0}})",
-       "limits.describe_max_seconds in the configuration file must be between 0.001 and 3600, "
-       "got 0"},
+       "--describe-max-seconds must be between 0.001 and 3600, got 0 "
+       "(limits.describe_max_seconds in the configuration file)"},
       {"no slabs in the file", base, R"({"limits": {"max_slabs_per_read": 0}})",
-       "limits.max_slabs_per_read in the configuration file must be at least 1, got 0"},
+       "--max-slabs-per-read must be at least 1, got 0 (limits.max_slabs_per_read in the "
+       "configuration file)"},
+      {"describe time not a number", with({"--describe-max-seconds", "1e300"}), "",
+       "--describe-max-seconds must be between 0.001 and 3600, got -0.001 "
+       "(limits.describe_max_seconds in the configuration file)"},
+      {"no describe depth", with({"--describe-max-depth", "0"}), "",
+       "--describe-max-depth must be between 1 and 100000, got 0 (limits.describe_max_depth in "
+       "the configuration file)"},
+      {"HDF5 call time beyond an hour", with({"--hdf5-call-seconds", "1e300"}), "",
+       "--hdf5-call-seconds must be between 0.1 and 3600, got 1e+300 "
+       "(limits.hdf5_call_seconds in the configuration file)"},
+      {"no HDF5 workers in the file", base, R"({"limits": {"hdf5_workers": 0}})",
+       "--hdf5-workers must be between 1 and 64, got 0 (limits.hdf5_workers in the "
+       "configuration file)"},
       {"no root",
        {"--insecure", "--listen", "127.0.0.1:0"},
        "",

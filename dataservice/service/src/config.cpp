@@ -17,6 +17,17 @@ using nlohmann::json;
 using config::checkKeys;
 using config::read;
 
+}  // namespace
+
+std::chrono::milliseconds describeTime(double seconds) {
+  // Out of range (or not finite) becomes -1 ms, which validateServerConfig
+  // refuses, naming the flag and the key.
+  const bool usable = std::isfinite(seconds) && seconds >= 0.0 && seconds <= 1e6;
+  return std::chrono::milliseconds(usable ? static_cast<std::int64_t>(seconds * 1000) : -1);
+}
+
+namespace {
+
 Status readLimits(const json& object, const std::string& where, Limits& limits) {
   CRACKVIS_RETURN_IF_ERROR(checkKeys(
       object, where,
@@ -32,11 +43,7 @@ Status readLimits(const json& object, const std::string& where, Limits& limits) 
   limits.describe.maxObjects = objects;
   double seconds = std::chrono::duration<double>(limits.describe.maxTime).count();
   CRACKVIS_RETURN_IF_ERROR(read(object, "describe_max_seconds", where, seconds));
-  // Out of range (or not finite) becomes -1 ms, which validateServerConfig
-  // refuses, naming the key.
-  const bool usable = std::isfinite(seconds) && seconds >= 0.0 && seconds <= 1e6;
-  limits.describe.maxTime =
-      std::chrono::milliseconds(usable ? static_cast<std::int64_t>(seconds * 1000) : -1);
+  limits.describe.maxTime = describeTime(seconds);
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_memory_bytes", where, limits.maxMemoryBytes));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_read_bytes", where, limits.maxReadBytes));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_fetch_bytes", where, limits.maxFetchBytes));
@@ -180,13 +187,13 @@ Status validateServerConfig(const ServerConfig& config) {
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-streams-per-user", "limits.max_streams_per_user"},
                                         limits.maxStreamsPerUser, 1,
                                         std::numeric_limits<int>::max()));
-  CRACKVIS_RETURN_IF_ERROR(
-      checkSetting({"", "limits.describe_max_depth"}, limits.describe.maxDepth, 1, 100'000));
-  CRACKVIS_RETURN_IF_ERROR(checkSetting({"", "limits.describe_max_objects"},
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--describe-max-depth", "limits.describe_max_depth"},
+                                        limits.describe.maxDepth, 1, 100'000));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--describe-max-objects", "limits.describe_max_objects"},
                                         std::uint64_t{limits.describe.maxObjects}, std::uint64_t{1},
                                         std::uint64_t{100'000'000}));
   CRACKVIS_RETURN_IF_ERROR(
-      checkSetting({"", "limits.describe_max_seconds"},
+      checkSetting({"--describe-max-seconds", "limits.describe_max_seconds"},
                    std::chrono::duration<double>(limits.describe.maxTime).count(), 0.001, 3600.0));
   // One stream's buffer must fit, or no Read could ever run.
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-memory", "limits.max_memory_bytes"},
@@ -194,8 +201,13 @@ Status validateServerConfig(const ServerConfig& config) {
                                         kNoMax));
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--handshake-seconds", "limits.handshake_seconds"},
                                         limits.handshakeSeconds, 0.1, 3600.0));
-  CRACKVIS_RETURN_IF_ERROR(checkSetting({"", "limits.max_slabs_per_read"}, limits.maxSlabsPerRead,
-                                        1, std::numeric_limits<int>::max()));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-slabs-per-read", "limits.max_slabs_per_read"},
+                                        limits.maxSlabsPerRead, 1,
+                                        std::numeric_limits<int>::max()));
+  CRACKVIS_RETURN_IF_ERROR(
+      checkSetting({"--hdf5-workers", "limits.hdf5_workers"}, limits.hdf5Workers, 1, 64));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--hdf5-call-seconds", "limits.hdf5_call_seconds"},
+                                        limits.hdf5CallSeconds, 0.1, 3600.0));
   // Deadlines are computed from it: a week keeps them far from overflow.
   return checkSetting({"--max-call-seconds", "limits.max_call_seconds"}, limits.maxCallSeconds,
                       0.001, 7 * 86400.0);

@@ -3,6 +3,7 @@
 // (docs/security.md shows one) and overridden by command-line flags.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -81,6 +82,10 @@ Result<ServerConfig> parseServerConfig(const std::string& json, const std::strin
 // must be at least 1, got 0 (limits.max_concurrent_streams in the
 // configuration file)".
 Status validateServerConfig(const ServerConfig& config);
+
+// Describe's time limit from seconds; a value out of range or not finite
+// becomes one validateServerConfig refuses.
+std::chrono::milliseconds describeTime(double seconds);
 
 // A setting as a user may give it: its command-line flag and its key in the
 // configuration file (either may be empty).
