@@ -20,6 +20,9 @@
 #include "server/render_fixture.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
+#include <crackvis/dem/dem_file.hpp>
+#include <crackvis/dem/planted_crack.hpp>
+#include <crackvis/dem/random_packing.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/egl_context.hpp>
@@ -371,6 +374,58 @@ TEST_CASE("a session steps and plays through the fracture", "[render][service][i
     CHECK(!stream.states().empty());
     CHECK(stream.states().back().playing());
   }
+}
+
+TEST_CASE("a session's state says when few broken bonds became crack surfaces",
+          "[render][service][integration]") {
+  // A random packing with a planted crack, beside the cuboid in the data root.
+  const std::string file = "random-planted.h5";
+  {
+    dem::RandomPackingSpec spec;
+    spec.box = {0.008, 0.005, 0.005};
+    spec.radiusMin = 3e-4;
+    spec.radiusMax = 3e-4;
+    auto packing = dem::generateRandomPacking(spec);
+    REQUIRE(packing);
+    dem::PlantedCrackSpec planted;
+    planted.steps = 2;
+    auto crack = dem::PlantedCrack::create(packing->lattice, packing->positions, planted);
+    REQUIRE(crack);
+    auto writer =
+        dem::DemFileWriter::create(crackRoot().file(file), packing->lattice, {"test", "SI"});
+    REQUIRE(writer);
+    for (int k = 0; k < crack->stepCount(); ++k) {
+      REQUIRE(writer->appendStep(crack->step(k)));
+    }
+    REQUIRE(writer->close());
+  }
+  auto services = startServices();
+  auto stub = connect(*services.render);
+  auto view = crackView();
+  view.file = file;
+  view.cracks.method = cracks::Method::kCellCut;
+  view.cracks.decomposition = cracks::Decomposition::kLattice;
+  StreamClient stream(*stub, openSession(*stub, crackView()));
+  // Each replacement is answered with the session's state, then a frame.
+  auto stateAfter = [&](const pipeline::PipelineDescription& next) {
+    v1::ClientEvent replace;
+    replace.mutable_replace_pipeline()->set_pipeline_xml(pipeline::toXml(next));
+    const auto id = stream.send(replace);
+    REQUIRE(stream.waitFor([&](const auto& frames, const auto& errors) {
+      return !errors.empty() || (!frames.empty() && frames.back().frame.last_event_id() == id);
+    }));
+    REQUIRE(stream.errors().empty());
+    REQUIRE(!stream.states().empty());
+    return stream.states().back();
+  };
+  const v1::SessionState lattice = stateAfter(view);
+  CHECK(lattice.mapped_fraction() < 0.95);
+  CHECK_THAT(lattice.crack_warning(), Catch::Contains("span no lattice"));
+  // The triangulation: no warning.
+  view.cracks.decomposition = cracks::Decomposition::kAuto;
+  const v1::SessionState triangulated = stateAfter(view);
+  CHECK(triangulated.mapped_fraction() >= 0.95);
+  CHECK(triangulated.crack_warning().empty());
 }
 
 TEST_CASE("bad requests get a clear status and the server keeps serving",

@@ -236,4 +236,22 @@ TEST_CASE("a scene pipeline shows the largest crack components and colours by co
   CHECK(scene.input().cracks->polygons.size() == 0);
 }
 
+TEST_CASE("a scene pipeline says when few broken bonds became crack surfaces, and why",
+          "[scene][cracks]") {
+  const PlantedSeries series;
+  auto d = cellCut(4);
+  d.cracks.method = cracks::Method::kLocalVoronoi;
+  auto opened = scene::ScenePipeline::open(d, localOpener(series.dir));
+  REQUIRE(opened);
+  scene::ScenePipeline& scene = **opened;
+  CHECK(scene.crackMapping().fraction >= 0.95);
+  CHECK(scene.crackMapping().warning.empty());
+  // The lattice's cells on a random packing: fragments, and a warning.
+  d.cracks.decomposition = cracks::Decomposition::kLattice;
+  REQUIRE(scene.replace(d));
+  CHECK(scene.crackMapping().fraction < 0.95);
+  CHECK_THAT(scene.crackMapping().warning,
+             Catch::StartsWith("only ") && Catch::Contains("span no lattice"));
+}
+
 }  // namespace crackvis

@@ -247,8 +247,10 @@ struct RenderClient::Impl {
       }
       QMetaObject::invokeMethod(
           owner,
-          [o = owner, s = state.step(), n = state.step_count(), p = state.playing()] {
+          [o = owner, s = state.step(), n = state.step_count(), p = state.playing(),
+           f = state.mapped_fraction(), w = QString::fromStdString(state.crack_warning())] {
             emit o->stateChanged(s, n, p);
+            emit o->crackMappingChanged(f, w);
           },
           Qt::QueuedConnection);
     } else if (message.has_error()) {

@@ -111,6 +111,17 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   });
   connect(&m_client, &RenderClient::eventFailed, this,
           [this](quint64, const QString& message) { report(message); });
+  // A crack method that maps few broken bonds to faces says so in the status
+  // bar and the messages pane, once per cause (the numbers change with every
+  // step; the cause follows the first ": ").
+  connect(&m_client, &RenderClient::crackMappingChanged, this,
+          [this](double, const QString& warning) {
+            const QString cause = warning.section(QStringLiteral(": "), 1);
+            if (!warning.isEmpty() && cause != m_lastCrackWarning) {
+              report(tr("warning: %1").arg(warning));
+            }
+            m_lastCrackWarning = cause;
+          });
   connect(&m_client, &RenderClient::connectionLost, this, [this](const QString& why) {
     report(tr("connection lost (%1); reconnecting").arg(why));
   });
@@ -180,6 +191,10 @@ void MainWindow::buildMenus() {
   auto* view = menuBar()->addMenu(tr("&View"));
   view->addAction(tr("&Reset camera (r)"), this, [this] { m_client.resetCamera(); });
   view->addAction(tr("&Play / pause (space)"), this, &MainWindow::togglePlay);
+}
+
+QString MainWindow::messages() const {
+  return m_log->toPlainText();
 }
 
 void MainWindow::report(const QString& message) {

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <crackvis/cracks/bond_graph.hpp>
+#include <crackvis/cracks/bond_mapping.hpp>
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/scene/guarded_call.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
@@ -194,6 +195,21 @@ Status ScenePipeline::apply(pipeline::PipelineDescription next) {
   return Status::ok();
 }
 
+ScenePipeline::CrackMapping ScenePipeline::mappingOf(const cracks::CrackMesh& mesh,
+                                                     const cracks::StepInput& input) const {
+  const cracks::BondMapping mapping =
+      cracks::mapBrokenBonds(mesh, input.bondState, *m_state.extractor);
+  CrackMapping result{mapping.fraction(), {}};
+  const std::string cause = cracks::diagnoseMapping(mapping, *m_state.extractor, *m_state.graph,
+                                                    source().lattice().dimension, input.radius,
+                                                    extractOptions(m_state.description));
+  if (!cause.empty()) {
+    result.warning = fmt::format("only {:.1f} % of the {} broken bonds became surface elements: {}",
+                                 100.0 * mapping.fraction(), mapping.broken, cause);
+  }
+  return result;
+}
+
 Status ScenePipeline::openFile(const pipeline::PipelineDescription& d) {
   auto opened = m_opener(d.file);
   if (!opened) {
@@ -231,7 +247,9 @@ Status ScenePipeline::showStep(int step) {
 
 Status ScenePipeline::extract(std::shared_ptr<const source::SourceStep> step) {
   const auto start = std::chrono::steady_clock::now();
-  CRACKVIS_RETURN_IF_ERROR(m_state.extractor->extract(stepInput(*step), m_scratch));
+  const cracks::StepInput input = stepInput(*step);
+  CRACKVIS_RETURN_IF_ERROR(m_state.extractor->extract(input, m_scratch));
+  m_state.mapping = mappingOf(m_scratch, input);
   selectComponents(m_state.description.cracks, m_scratch);
   m_timings.extractMs = millisecondsSince(start);
   std::swap(m_scratch, m_state.mesh);

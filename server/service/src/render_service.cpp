@@ -362,6 +362,8 @@ v1::ServerMessage toMessage(const SessionNotice& notice) {
     state->set_width(notice.state->width);
     state->set_height(notice.state->height);
     state->set_pipeline_xml(notice.state->pipelineXml);
+    state->set_mapped_fraction(notice.state->mappedFraction);
+    state->set_crack_warning(notice.state->crackWarning);
   }
   return message;
 }

@@ -165,7 +165,10 @@ struct Session::Worker {
   }
 
   SessionState state() const {
-    return {scene->step(), stepCount(), playing, width, height, pipeline::toXml(description())};
+    const scene::ScenePipeline::CrackMapping& mapping = scene->crackMapping();
+    return {
+        scene->step(),    stepCount(),    playing, width, height, pipeline::toXml(description()),
+        mapping.fraction, mapping.warning};
   }
 
   void interacted(const SessionEvent& event) {

@@ -119,6 +119,9 @@ class RenderClient : public QObject {
  signals:
   void frameReady(const QImage& image, const crackvis::client::FrameInfo& info);
   void stateChanged(int step, int stepCount, bool playing);
+  // The shown step's broken bonds that became crack surface elements, and
+  // the server's warning when fewer than 95 % did (empty otherwise).
+  void crackMappingChanged(double mappedFraction, const QString& warning);
   void eventFailed(quint64 eventId, const QString& message);
   void connectionLost(const QString& why);
   void reconnected();

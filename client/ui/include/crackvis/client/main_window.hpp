@@ -54,6 +54,8 @@ class MainWindow : public QMainWindow {
   QTreeWidget& fileTree() { return *m_files; }
   QSlider& stepSlider() { return *m_slider; }
   QString lastMessage() const { return m_lastMessage; }
+  // Everything reported so far, one message a line (the messages pane).
+  QString messages() const;
 
  public slots:
   // Connects, lists the files; false (and a message) on failure.
@@ -86,6 +88,7 @@ class MainWindow : public QMainWindow {
   QTimer m_statusTimer;
   QString m_file;
   QString m_lastMessage;
+  QString m_lastCrackWarning;  // the cause of the server's last, reported once
 };
 
 }  // namespace crackvis::client

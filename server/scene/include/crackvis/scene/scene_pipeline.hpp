@@ -81,6 +81,14 @@ class ScenePipeline {
   const source::StepCache& cache() const { return *m_state.cache; }
   const cracks::CrackMesh& cracks() const { return m_state.mesh; }
   const StepTimings& timings() const { return m_timings; }
+  // How many of the shown step's broken bonds became surface elements, and
+  // when fewer than 95 % did, the warning naming the likely cause (empty
+  // otherwise): what extract prints, for the client's status bar.
+  struct CrackMapping {
+    double fraction = 1.0;
+    std::string warning;
+  };
+  const CrackMapping& crackMapping() const { return m_state.mapping; }
   // The step shown, for a renderer; views this pipeline's data, valid until
   // its next change.
   SceneInput input() const;
@@ -98,6 +106,7 @@ class ScenePipeline {
     std::shared_ptr<const source::SourceStep> initial;  // step 0: displacements
     std::shared_ptr<const source::SourceStep> current;
     cracks::CrackMesh mesh;
+    CrackMapping mapping;
   };
 
   ScenePipeline(SourceOpener opener, std::size_t cacheSteps);
@@ -105,6 +114,7 @@ class ScenePipeline {
   void restore(State&& state);
   Status openFile(const pipeline::PipelineDescription& description);
   Status extract(std::shared_ptr<const source::SourceStep> step);
+  CrackMapping mappingOf(const cracks::CrackMesh& mesh, const cracks::StepInput& input) const;
   cracks::StepInput stepInput(const source::SourceStep& step) const;
 
   SourceOpener m_opener;

@@ -64,6 +64,8 @@ struct SessionState {
   int width = 0;
   int height = 0;
   std::string pipelineXml;
+  double mappedFraction = 1.0;  // of the step's broken bonds, as surface elements
+  std::string crackWarning;     // when below 95 %, naming the likely cause
 };
 
 // What a stream sends besides frames: an event the session could not apply,
