@@ -19,10 +19,8 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "server/render_fixture.hpp"
 #include "support/process.hpp"
+#include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
-#include <crackvis/dem/dem_file.hpp>
-#include <crackvis/dem/planted_crack.hpp>
-#include <crackvis/dem/random_packing.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/egl_context.hpp>
@@ -380,25 +378,7 @@ TEST_CASE("a session's state says when few broken bonds became crack surfaces",
           "[render][service][integration]") {
   // A random packing with a planted crack, beside the cuboid in the data root.
   const std::string file = "random-planted.h5";
-  {
-    dem::RandomPackingSpec spec;
-    spec.box = {0.008, 0.005, 0.005};
-    spec.radiusMin = 3e-4;
-    spec.radiusMax = 3e-4;
-    auto packing = dem::generateRandomPacking(spec);
-    REQUIRE(packing);
-    dem::PlantedCrackSpec planted;
-    planted.steps = 2;
-    auto crack = dem::PlantedCrack::create(packing->lattice, packing->positions, planted);
-    REQUIRE(crack);
-    auto writer =
-        dem::DemFileWriter::create(crackRoot().file(file), packing->lattice, {"test", "SI"});
-    REQUIRE(writer);
-    for (int k = 0; k < crack->stepCount(); ++k) {
-      REQUIRE(writer->appendStep(crack->step(k)));
-    }
-    REQUIRE(writer->close());
-  }
+  testing::writePlantedRandomPacking(crackRoot().file(file), 2);
   auto services = startServices();
   auto stub = connect(*services.render);
   auto view = crackView();

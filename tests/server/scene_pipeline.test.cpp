@@ -7,8 +7,6 @@
 #include "support/temp_dir.hpp"
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/dem_series.hpp>
-#include <crackvis/dem/planted_crack.hpp>
-#include <crackvis/dem/random_packing.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 
 namespace crackvis {
@@ -182,35 +180,25 @@ TEST_CASE("a scene pipeline extracts anew only when the extraction changes", "[s
 struct PlantedSeries {
   testing::TempDir dir;
   std::string file = dir.file("run.h5");
-  PlantedSeries() {
-    dem::RandomPackingSpec spec;
-    spec.box = {0.008, 0.005, 0.005};
-    spec.radiusMin = 3e-4;
-    spec.radiusMax = 3e-4;
-    auto packing = dem::generateRandomPacking(spec);
-    REQUIRE(packing);
-    dem::PlantedCrackSpec planted;
-    planted.steps = 4;
-    planted.scatter = 0.02;
-    auto crack = dem::PlantedCrack::create(packing->lattice, packing->positions, planted);
-    REQUIRE(crack);
-    auto writer = dem::DemFileWriter::create(file, packing->lattice, {"test", "SI"});
-    REQUIRE(writer);
-    for (int k = 0; k < crack->stepCount(); ++k) {
-      REQUIRE(writer->appendStep(crack->step(k)));
-    }
-    REQUIRE(writer->close());
-  }
+  PlantedSeries() { testing::writePlantedRandomPacking(file, 4, 0.02); }
 };
+
+// Local Voronoi at the planted series' last step.
+std::unique_ptr<scene::ScenePipeline> openPlanted(const PlantedSeries& series,
+                                                  pipeline::PipelineDescription& d) {
+  d = cellCut(4);
+  d.cracks.method = cracks::Method::kLocalVoronoi;
+  auto opened = scene::ScenePipeline::open(d, localOpener(series.dir));
+  REQUIRE(opened);
+  return std::move(opened).value();
+}
 
 TEST_CASE("a scene pipeline shows the largest crack components and colours by component",
           "[scene][cracks]") {
   const PlantedSeries series;
-  auto d = cellCut(4);
-  d.cracks.method = cracks::Method::kLocalVoronoi;
-  auto opened = scene::ScenePipeline::open(d, localOpener(series.dir));
-  REQUIRE(opened);
-  scene::ScenePipeline& scene = **opened;
+  pipeline::PipelineDescription d;
+  auto opened = openPlanted(series, d);
+  scene::ScenePipeline& scene = *opened;
   const cracks::CrackComponents all = cracks::findComponents(*scene.input().cracks);
   REQUIRE(all.components.size() >= 2);  // the sample's breaks make several pieces
 
@@ -239,11 +227,9 @@ TEST_CASE("a scene pipeline shows the largest crack components and colours by co
 TEST_CASE("a scene pipeline says when few broken bonds became crack surfaces, and why",
           "[scene][cracks]") {
   const PlantedSeries series;
-  auto d = cellCut(4);
-  d.cracks.method = cracks::Method::kLocalVoronoi;
-  auto opened = scene::ScenePipeline::open(d, localOpener(series.dir));
-  REQUIRE(opened);
-  scene::ScenePipeline& scene = **opened;
+  pipeline::PipelineDescription d;
+  auto opened = openPlanted(series, d);
+  scene::ScenePipeline& scene = *opened;
   CHECK(scene.crackMapping().fraction >= 0.95);
   CHECK(scene.crackMapping().warning.empty());
   // The lattice's cells on a random packing: fragments, and a warning.

@@ -3,6 +3,9 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <crackvis/dem/planted_crack.hpp>
+#include <crackvis/dem/random_packing.hpp>
+
 namespace crackvis::testing {
 
 SampleData makeSample(int dimension, int steps, bool optionalArrays) {
@@ -61,6 +64,29 @@ void writeSample(const std::string& path, const SampleData& sample) {
   if (Status status = writer->close(); !status) {
     throw std::runtime_error(status.message());
   }
+}
+
+void writePlantedRandomPacking(const std::string& path, int steps, double scatter) {
+  dem::RandomPackingSpec spec;
+  spec.box = {0.008, 0.005, 0.005};
+  spec.radiusMin = 3e-4;
+  spec.radiusMax = 3e-4;
+  auto packing = dem::generateRandomPacking(spec);
+  if (!packing) {
+    throw std::runtime_error(packing.status().message());
+  }
+  dem::PlantedCrackSpec planted;
+  planted.steps = steps;
+  planted.scatter = scatter;
+  auto crack = dem::PlantedCrack::create(packing->lattice, packing->positions, planted);
+  if (!crack) {
+    throw std::runtime_error(crack.status().message());
+  }
+  SampleData sample{packing->lattice, {}};
+  for (int k = 0; k < crack->stepCount(); ++k) {
+    sample.steps.push_back(crack->step(k));
+  }
+  writeSample(path, sample);
 }
 
 SampleData writeSampleFile(const std::string& path, int dimension, int steps) {

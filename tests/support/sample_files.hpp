@@ -23,6 +23,12 @@ SampleData makeSample(int dimension, int steps, bool optionalArrays = true);
 // Writes `sample` to `path`; throws on failure.
 void writeSample(const std::string& path, const SampleData& sample);
 
+// A monodisperse random packing (r = 0.3 mm in 8 x 5 x 5 mm, about 500
+// particles) with a planted through crack over `steps` steps and `scatter` of
+// the other bonds broken at random (dem::PlantedCrack), written to `path`;
+// throws on failure.
+void writePlantedRandomPacking(const std::string& path, int steps, double scatter = 0.002);
+
 // Shorthand: makeSample + writeSample.
 SampleData writeSampleFile(const std::string& path, int dimension = 3, int steps = 3);
 
