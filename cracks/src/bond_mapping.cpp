@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <numeric>
+#include <unordered_set>
 
 #include <fmt/format.h>
 
@@ -121,11 +122,66 @@ std::vector<std::uint8_t> separatingBonds(const BondGraph& graph,
   return separating;
 }
 
+namespace {
+
+// Cells carry no bonds: a bond of the main crack is in a component when it is
+// an edge of one of the component's cells (their corners' particle_id).
+double cellShareInLargest(const CrackMesh& mesh, const CrackComponents& components,
+                          std::span<const std::uint8_t> separating,
+                          const CrackExtractor& extractor) {
+  const AttributeArray* particle = mesh.findPointData("particle_id");
+  const LatticeDecomposition* decomposition = extractor.decomposition();
+  if (particle == nullptr || decomposition == nullptr) {
+    return 0.0;
+  }
+  auto key = [](double a, double b) {
+    const auto lo = static_cast<std::uint64_t>(std::min(a, b));
+    const auto hi = static_cast<std::uint64_t>(std::max(a, b));
+    return lo << 32 | hi;
+  };
+  std::unordered_set<std::uint64_t> anyCell;
+  std::unordered_set<std::uint64_t> largest;
+  const PrimitiveList& cells = mesh.dimension == 2 ? mesh.polygons : mesh.volumeCells;
+  for (std::size_t k = 0; k < cells.size(); ++k) {
+    for (auto i = cells.offsets[k]; i < cells.offsets[k + 1]; ++i) {
+      for (auto j = i + 1; j < cells.offsets[k + 1]; ++j) {
+        const std::uint64_t edge = key(
+            particle
+                ->values[static_cast<std::size_t>(cells.connectivity[static_cast<std::size_t>(i)])],
+            particle->values[static_cast<std::size_t>(
+                cells.connectivity[static_cast<std::size_t>(j)])]);
+        anyCell.insert(edge);
+        if (components.ofPrimitive[k] == 0) {
+          largest.insert(edge);
+        }
+      }
+    }
+  }
+  std::size_t held = 0;
+  std::size_t inLargest = 0;
+  const BondGraph& graph = decomposition->graph();
+  for (std::size_t b = 0; b < separating.size() && b < graph.bondCount(); ++b) {
+    if (separating[b] != 0) {
+      const dem::Bond& bond = graph.bond(static_cast<dem::BondIndex>(b));
+      const std::uint64_t edge = key(bond.first, bond.second);
+      held += anyCell.count(edge);
+      inLargest += largest.count(edge);
+    }
+  }
+  return held > 0 ? static_cast<double>(inLargest) / static_cast<double>(held) : 0.0;
+}
+
+}  // namespace
+
 MainCrack measureMainCrack(const CrackMesh& mesh, std::span<const std::uint8_t> separating,
                            const CrackExtractor& extractor) {
   MainCrack main;
   main.mapped = mapBrokenBonds(mesh, separating, extractor);
   const CrackComponents components = findComponents(mesh);
+  if (mesh.holdsCells()) {
+    main.largestShare = cellShareInLargest(mesh, components, separating, extractor);
+    return main;
+  }
   const std::vector<Primitive> primitives = surfacePrimitives(mesh);
   std::vector<char> counted(mesh.dimension == 2 ? mesh.lines.size() : mesh.polygons.size(), 0);
   double inLargest = 0.0;

@@ -1,8 +1,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <numeric>
+#include <utility>
 
 #include "surface_primitives.hpp"
 #include <crackvis/cracks/crack_components.hpp>
@@ -72,10 +75,12 @@ struct Moments {
     addWeighted(weight, {a, b, c});
   }
   void addSegment(Vec3 a, Vec3 b) { addWeighted(dem::norm(b - a), {a, b}); }
+  void addTetrahedron(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
+    addWeighted(std::abs(dem::dot(b - a, cross(c - a, d - a))) / 6.0, {a, b, c, d});
+  }
 
-  // Exact moments of a uniform triangle or segment of measure w, s the sum
-  // of its vertices: triangle w/12 (sum v v^T + s s^T), segment
-  // w/6 (a a^T + b b^T + s s^T).
+  // Exact moments of a uniform simplex (segment, triangle, tetrahedron) of
+  // measure w with n vertices summing to s: w/(n(n+1)) (sum v v^T + s s^T).
   void addWeighted(double weight, std::initializer_list<Vec3> vertices) {
     if (weight <= 0.0) {
       return;
@@ -95,17 +100,11 @@ struct Moments {
         }
       }
     };
-    if (n == 3) {
-      for (const Vec3& v : vertices) {
-        add(v, weight / 12.0);
-      }
-      add(sum, weight / 12.0);
-    } else {
-      for (const Vec3& v : vertices) {
-        add(v, weight / 6.0);
-      }
-      add(sum, weight / 6.0);
+    const double scale = weight / (n * (n + 1.0));
+    for (const Vec3& v : vertices) {
+      add(v, scale);
     }
+    add(sum, scale);
   }
 
   Vec3 centroid() const { return area > 0.0 ? (1.0 / area) * first : Vec3{}; }
@@ -244,12 +243,124 @@ std::pair<Vec3, Vec3> planeBasis(Vec3 n) {
   return {u, cross(n, u)};
 }
 
-}  // namespace
+// Coordinates on a component's best-fit plane (3D) or along its best-fit
+// line (2D, second coordinate 0), from its centroid.
+class PlaneProjection {
+ public:
+  PlaneProjection(const CrackComponent& component, int dimension)
+      : m_origin(component.centroid), m_line(dimension == 2) {
+    const std::pair<Vec3, Vec3> basis = planeBasis(component.normal);
+    // In 2D the line's direction is n x z.
+    m_u = m_line ? Vec3{-component.normal.y, component.normal.x, 0.0} : basis.first;
+    m_w = basis.second;
+  }
+  bool line() const { return m_line; }
+  Point2 operator()(Vec3 p) const {
+    const Vec3 d = p - m_origin;
+    return {dem::dot(d, m_u), m_line ? 0.0 : dem::dot(d, m_w)};
+  }
 
-CrackComponents findComponents(const CrackMesh& mesh) {
+ private:
+  Vec3 m_origin;
+  bool m_line;
+  Vec3 m_u;
+  Vec3 m_w;
+};
+
+// The faces of a cell of the cell attribute method, as local node indices
+// (VTK order; -1 pads): 2D triangles' edges, tetrahedra's and pyramids'
+// faces. A cell's projection onto a plane is the union of its faces'.
+using Face = std::array<int, 4>;
+std::span<const Face> cellFaces(std::size_t nodes) {
+  static constexpr std::array<Face, 3> kTriangle{{{0, 1, -1, -1}, {1, 2, -1, -1}, {2, 0, -1, -1}}};
+  static constexpr std::array<Face, 4> kTetrahedron{
+      {{0, 1, 2, -1}, {0, 1, 3, -1}, {0, 2, 3, -1}, {1, 2, 3, -1}}};
+  static constexpr std::array<Face, 5> kPyramid{
+      {{0, 1, 2, 3}, {0, 1, 4, -1}, {1, 2, 4, -1}, {2, 3, 4, -1}, {3, 0, 4, -1}}};
+  switch (nodes) {
+    case 3:
+      return kTriangle;
+    case 4:
+      return kTetrahedron;
+    case 5:
+      return kPyramid;
+    default:
+      return {};
+  }
+}
+
+// The primitives components are made of: a surface's polygons (3D) or lines
+// (2D); a cell mesh's volume cells (3D) or triangles (2D).
+const PrimitiveList& componentList(const CrackMesh& mesh) {
+  if (mesh.holdsCells()) {
+    return mesh.dimension == 2 ? mesh.polygons : mesh.volumeCells;
+  }
+  return mesh.dimension == 2 ? mesh.lines : mesh.polygons;
+}
+PrimitiveList& componentList(CrackMesh& mesh) {
+  return const_cast<PrimitiveList&>(componentList(std::as_const(mesh)));
+}
+
+// Marks what primitive k of componentList(mesh) covers in projection.
+void paintPrimitive(Raster& raster, const CrackMesh& mesh, std::size_t k,
+                    const PlaneProjection& project) {
+  const PrimitiveList& list = componentList(mesh);
+  const std::int32_t* ids = list.connectivity.data() + list.offsets[k];
+  const auto count = static_cast<std::size_t>(list.offsets[k + 1] - list.offsets[k]);
+  auto at = [&](std::size_t v) { return project(mesh.points[static_cast<std::size_t>(ids[v])]); };
+  if (mesh.holdsCells() && project.line()) {  // a 2D cell: the interval of its corners
+    double lo = at(0)[0];
+    double hi = lo;
+    for (std::size_t v = 1; v < count; ++v) {
+      lo = std::min(lo, at(v)[0]);
+      hi = std::max(hi, at(v)[0]);
+    }
+    raster.fillInterval(lo, hi);
+  } else if (mesh.holdsCells()) {
+    for (const Face& face : cellFaces(count)) {
+      const std::size_t corners = face[3] < 0 ? 3 : 4;
+      for (std::size_t t = 1; t + 1 < corners; ++t) {
+        raster.fillTriangle(at(static_cast<std::size_t>(face[0])),
+                            at(static_cast<std::size_t>(face[t])),
+                            at(static_cast<std::size_t>(face[t + 1])));
+      }
+    }
+  } else if (project.line()) {
+    for (std::size_t v = 0; v + 1 < count; ++v) {
+      raster.fillInterval(at(v)[0], at(v + 1)[0]);
+    }
+  } else {
+    for (std::size_t v = 1; v + 1 < count; ++v) {
+      raster.fillTriangle(at(0), at(v), at(v + 1));
+    }
+  }
+}
+
+std::size_t countMarked(const std::vector<char>& cells) {
+  return static_cast<std::size_t>(std::count(cells.begin(), cells.end(), char{1}));
+}
+
+// Numbers components largest first (ties by first appearance, so the order
+// is deterministic) and relabels the primitives.
+void sortLargestFirst(std::vector<CrackComponent>& found, CrackComponents& set) {
+  std::vector<std::int32_t> order(found.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+    return found[static_cast<std::size_t>(a)].area > found[static_cast<std::size_t>(b)].area;
+  });
+  std::vector<std::int32_t> rank(found.size());
+  for (std::size_t r = 0; r < order.size(); ++r) {
+    rank[static_cast<std::size_t>(order[r])] = static_cast<std::int32_t>(r);
+    set.components.push_back(found[static_cast<std::size_t>(order[r])]);
+  }
+  for (std::int32_t& c : set.ofPrimitive) {
+    c = c < 0 ? c : rank[static_cast<std::size_t>(c)];
+  }
+}
+
+CrackComponents surfaceComponents(const CrackMesh& mesh) {
   CrackComponents set;
-  const std::size_t surfaceCount = mesh.dimension == 2 ? mesh.lines.size() : mesh.polygons.size();
-  set.ofPrimitive.assign(surfaceCount, -1);
+  set.ofPrimitive.assign(componentList(mesh).size(), -1);
   const std::vector<Primitive> primitives = surfacePrimitives(mesh);
   if (primitives.empty()) {
     return set;
@@ -302,47 +413,185 @@ CrackComponents findComponents(const CrackMesh& mesh) {
     found[c].centroid = moments[c].centroid();
     found[c].normal = bestFitNormal(moments[c], mesh.dimension);
   }
-  // Largest first (ties by first appearance, so the order is deterministic).
-  std::vector<std::int32_t> order(found.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
-    return found[static_cast<std::size_t>(a)].area > found[static_cast<std::size_t>(b)].area;
-  });
-  std::vector<std::int32_t> rank(found.size());
-  for (std::size_t r = 0; r < order.size(); ++r) {
-    rank[static_cast<std::size_t>(order[r])] = static_cast<std::int32_t>(r);
-    set.components.push_back(found[static_cast<std::size_t>(order[r])]);
-  }
-  for (std::int32_t& c : set.ofPrimitive) {
-    c = c < 0 ? c : rank[static_cast<std::size_t>(c)];
-  }
+  sortLargestFirst(found, set);
   return set;
+}
+
+// Cells sharing a face (3D: a triangle or quad; 2D: an edge) are one
+// component: cells that only touch at a corner enclose no common crack.
+std::vector<std::int32_t> joinCellsByFaces(const PrimitiveList& cells) {
+  std::vector<std::pair<std::array<std::int32_t, 4>, std::int32_t>> faces;
+  for (std::size_t k = 0; k < cells.size(); ++k) {
+    const std::int32_t* ids = cells.connectivity.data() + cells.offsets[k];
+    const auto count = static_cast<std::size_t>(cells.offsets[k + 1] - cells.offsets[k]);
+    for (const Face& face : cellFaces(count)) {
+      std::array<std::int32_t, 4> key{-1, -1, -1, -1};
+      for (std::size_t v = 0; v < 4 && face[v] >= 0; ++v) {
+        key[v] = ids[face[v]];
+      }
+      std::sort(key.begin(), key.end());
+      faces.push_back({key, static_cast<std::int32_t>(k)});
+    }
+  }
+  std::sort(faces.begin(), faces.end());
+  std::vector<std::int32_t> parent(cells.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  for (std::size_t f = 1; f < faces.size(); ++f) {
+    if (faces[f].first == faces[f - 1].first) {
+      parent[static_cast<std::size_t>(findRoot(parent, faces[f].second))] =
+          findRoot(parent, faces[f - 1].second);
+    }
+  }
+  return parent;
+}
+
+void addCellMoments(Moments& moments, const CrackMesh& mesh, const std::int32_t* ids,
+                    std::size_t count) {
+  auto point = [&](std::size_t v) { return mesh.points[static_cast<std::size_t>(ids[v])]; };
+  if (count == 3) {
+    moments.addTriangle(point(0), point(1), point(2));
+  } else if (count == 4) {
+    moments.addTetrahedron(point(0), point(1), point(2), point(3));
+  } else if (count == 5) {  // a pyramid: two tetrahedra on its base's diagonal
+    moments.addTetrahedron(point(0), point(1), point(2), point(4));
+    moments.addTetrahedron(point(0), point(2), point(3), point(4));
+  }
+}
+
+// The raster step for a cell mesh's areas: an eighth of its shortest cell
+// edge (a quarter of the smallest radius where the edges join touching
+// particles, the step sectionCoverage uses), and no finer than a 4096th of
+// the mesh's extent, so coincident points cannot make the raster huge.
+double cellRasterStep(const CrackMesh& mesh, const PrimitiveList& cells) {
+  double shortest = std::numeric_limits<double>::max();
+  for (std::size_t k = 0; k < cells.size(); ++k) {
+    for (auto i = cells.offsets[k]; i < cells.offsets[k + 1]; ++i) {
+      for (auto j = i + 1; j < cells.offsets[k + 1]; ++j) {
+        const auto a = static_cast<std::size_t>(cells.connectivity[static_cast<std::size_t>(i)]);
+        const auto b = static_cast<std::size_t>(cells.connectivity[static_cast<std::size_t>(j)]);
+        shortest = std::min(shortest, dem::norm(mesh.points[a] - mesh.points[b]));
+      }
+    }
+  }
+  const auto [lo, hi] = dem::boundingBox(mesh.points);
+  return std::max({shortest / 8.0, dem::norm(hi - lo) / 4096.0, 1e-300});
+}
+
+// A cell component's area: its cells projected onto its best-fit plane (2D:
+// line), the crack they enclose, rasterised.
+double projectedArea(const CrackMesh& mesh, const CrackComponent& component,
+                     const std::vector<std::size_t>& members, double step) {
+  const PlaneProjection project(component, mesh.dimension);
+  const PrimitiveList& cells = componentList(mesh);
+  double u0 = std::numeric_limits<double>::max();
+  double u1 = -u0;
+  double w0 = u0;
+  double w1 = -u0;
+  for (std::size_t k : members) {
+    for (auto v = cells.offsets[k]; v < cells.offsets[k + 1]; ++v) {
+      const auto point = static_cast<std::size_t>(cells.connectivity[static_cast<std::size_t>(v)]);
+      const Point2 p = project(mesh.points[point]);
+      u0 = std::min(u0, p[0]);
+      u1 = std::max(u1, p[0]);
+      w0 = std::min(w0, p[1]);
+      w1 = std::max(w1, p[1]);
+    }
+  }
+  Raster raster(u0, w0, u1, w1, step, project.line());
+  for (std::size_t k : members) {
+    paintPrimitive(raster, mesh, k, project);
+  }
+  const auto marked = static_cast<double>(countMarked(raster.cells()));
+  return project.line() ? marked * step : marked * step * step;
+}
+
+CrackComponents cellComponents(const CrackMesh& mesh) {
+  CrackComponents set;
+  const PrimitiveList& cells = componentList(mesh);
+  set.ofPrimitive.assign(cells.size(), -1);
+  std::vector<std::int32_t> parent = joinCellsByFaces(cells);
+  std::vector<CrackComponent> found;
+  std::vector<Moments> moments;
+  std::vector<std::vector<std::size_t>> members;
+  std::vector<std::int32_t> label(cells.size(), -1);
+  for (std::size_t k = 0; k < cells.size(); ++k) {
+    const auto root = static_cast<std::size_t>(findRoot(parent, static_cast<std::int32_t>(k)));
+    if (label[root] < 0) {
+      label[root] = static_cast<std::int32_t>(found.size());
+      found.emplace_back();
+      moments.emplace_back();
+      members.emplace_back();
+    }
+    const auto c = static_cast<std::size_t>(label[root]);
+    set.ofPrimitive[k] = label[root];
+    members[c].push_back(k);
+    const std::int32_t* ids = cells.connectivity.data() + cells.offsets[k];
+    const auto count = static_cast<std::size_t>(cells.offsets[k + 1] - cells.offsets[k]);
+    ++found[c].primitives;
+    for (std::size_t v = 0; v < count; ++v) {
+      grow(found[c].box, mesh.points[static_cast<std::size_t>(ids[v])],
+           found[c].primitives == 1 && v == 0);
+    }
+    addCellMoments(moments[c], mesh, ids, count);
+  }
+  const double step = cellRasterStep(mesh, cells);
+  for (std::size_t c = 0; c < found.size(); ++c) {
+    found[c].centroid = moments[c].centroid();
+    found[c].normal = bestFitNormal(moments[c], mesh.dimension);
+    found[c].area = projectedArea(mesh, found[c], members[c], step);
+  }
+  sortLargestFirst(found, set);
+  return set;
+}
+
+// The specimen's section by a component's plane (2D: line), in the plane's
+// coordinates: the convex hull of the projected centres of the particles the
+// plane cuts (a convex polygon, counter-clockwise), or in 2D the two ends of
+// their interval along the line.
+std::vector<Point2> specimenSection(std::span<const Vec3> positions, std::span<const double> radius,
+                                    const CrackComponent& component,
+                                    const PlaneProjection& project) {
+  std::vector<Point2> cut;
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    const double r = radius[radius.size() == 1 ? 0 : k];
+    if (std::abs(dem::dot(positions[k] - component.centroid, component.normal)) <= r) {
+      cut.push_back(project(positions[k]));
+    }
+  }
+  if (!project.line()) {
+    return convexHull(std::move(cut));
+  }
+  if (cut.empty()) {
+    return cut;
+  }
+  const auto [lo, hi] = std::minmax_element(cut.begin(), cut.end());
+  return {*lo, *hi};
+}
+
+}  // namespace
+
+std::size_t componentPrimitiveBase(const CrackMesh& mesh) {
+  const std::size_t base = mesh.vertices.size();
+  if (mesh.holdsCells()) {
+    return base + mesh.lines.size() + (mesh.dimension == 2 ? 0 : mesh.polygons.size());
+  }
+  return base + (mesh.dimension == 2 ? 0 : mesh.lines.size());
+}
+
+CrackComponents findComponents(const CrackMesh& mesh) {
+  return mesh.holdsCells() ? cellComponents(mesh) : surfaceComponents(mesh);
 }
 
 double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::size_t c,
                        std::span<const Vec3> positions, std::span<const double> radius) {
-  if (c >= set.components.size() || positions.empty() || radius.empty()) {
+  if (c >= set.components.size() || positions.empty() || radius.empty() ||
+      (radius.size() != 1 && radius.size() != positions.size())) {
     return 0.0;
   }
   const CrackComponent& component = set.components[c];
-  const Vec3 n = component.normal;
-  // Not a structured binding: lambdas below capture w (clang 14 cannot).
-  const std::pair<Vec3, Vec3> basis = planeBasis(n);
-  const Vec3 u = basis.first;
-  const Vec3 w = basis.second;
-  const bool line = mesh.dimension == 2;
-  // In 2D the section is an interval along the line's direction, which is
-  // n x z.
-  const Vec3 along = line ? Vec3{-n.y, n.x, 0.0} : u;
-  const auto [rmin, rmax] = std::minmax_element(radius.begin(), radius.end());
-  std::vector<Point2> section;
-  for (const Vec3& p : positions) {
-    const Vec3 d = p - component.centroid;
-    if (std::abs(dem::dot(d, n)) <= 2.0 * *rmax) {
-      section.push_back({dem::dot(d, along), line ? 0.0 : dem::dot(d, w)});
-    }
-  }
-  if (section.empty()) {
+  const PlaneProjection project(component, mesh.dimension);
+  const std::vector<Point2> section = specimenSection(positions, radius, component, project);
+  if (section.size() < (project.line() ? 2u : 3u)) {
     return 0.0;
   }
   double u0 = section[0][0];
@@ -355,38 +604,25 @@ double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::s
     w0 = std::min(w0, p[1]);
     w1 = std::max(w1, p[1]);
   }
-  const double cell = 0.25 * *rmin;
-  Raster specimen(u0, w0, u1, w1, cell, line);
-  Raster crack(u0, w0, u1, w1, cell, line);
-  auto project = [&](std::int32_t id) -> Point2 {
-    const Vec3 d = mesh.points[static_cast<std::size_t>(id)] - component.centroid;
-    return {dem::dot(d, along), line ? 0.0 : dem::dot(d, w)};
-  };
-  if (line) {
+  const double cell = 0.25 * *std::min_element(radius.begin(), radius.end());
+  Raster specimen(u0, w0, u1, w1, cell, project.line());
+  Raster crack(u0, w0, u1, w1, cell, project.line());
+  if (project.line()) {
     specimen.fillInterval(u0, u1);
   } else {
-    const std::vector<Point2> hull = convexHull(section);
-    for (std::size_t k = 1; k + 1 < hull.size(); ++k) {
-      specimen.fillTriangle(hull[0], hull[k], hull[k + 1]);
+    for (std::size_t k = 1; k + 1 < section.size(); ++k) {
+      specimen.fillTriangle(section[0], section[k], section[k + 1]);
     }
   }
-  const auto& kind = line ? mesh.lines : mesh.polygons;
-  for (std::size_t k = 0; k < kind.size(); ++k) {
-    if (set.ofPrimitive[k] != static_cast<std::int32_t>(c)) {
-      continue;
+  for (std::size_t k = 0; k < set.ofPrimitive.size(); ++k) {
+    if (set.ofPrimitive[k] == static_cast<std::int32_t>(c)) {
+      paintPrimitive(crack, mesh, k, project);
     }
-    const auto first = static_cast<std::size_t>(kind.offsets[k]);
-    const auto last = static_cast<std::size_t>(kind.offsets[k + 1]);
-    if (line) {
-      for (std::size_t s = first; s + 1 < last; ++s) {
-        crack.fillInterval(project(kind.connectivity[s])[0], project(kind.connectivity[s + 1])[0]);
-      }
-      continue;
-    }
-    const Point2 a = project(kind.connectivity[first]);
-    for (std::size_t v = first + 1; v + 1 < last; ++v) {
-      crack.fillTriangle(a, project(kind.connectivity[v]), project(kind.connectivity[v + 1]));
-    }
+  }
+  if (std::getenv("CV_DEBUG")) {
+    std::fprintf(stderr, "G %g %g %g %g %g\n", u0, w0, u1, w1, cell);
+    for (auto& p : section)
+      std::fprintf(stderr, "S %g %g\n", p[0], p[1]);
   }
   std::size_t inside = 0;
   std::size_t covered = 0;
@@ -394,9 +630,18 @@ double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::s
     if (specimen.cells()[k] != 0) {
       ++inside;
       covered += crack.cells()[k] != 0 ? 1 : 0;
+      if (std::getenv("CV_DEBUG") && crack.cells()[k] == 0)
+        std::fprintf(stderr, "U %zu\n", k);
     }
   }
   return inside == 0 ? 0.0 : static_cast<double>(covered) / static_cast<double>(inside);
+}
+
+double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::size_t c,
+                       const StepInput& step) {
+  const bool reference = step.referencePositions.size() == step.positions.size();
+  return sectionCoverage(mesh, set, c, reference ? step.referencePositions : step.positions,
+                         step.radius);
 }
 
 void keepComponents(CrackMesh& mesh, const CrackComponents& set, const ComponentFilter& filter) {
@@ -409,20 +654,28 @@ void keepComponents(CrackMesh& mesh, const CrackComponents& set, const Component
     const bool amongLargest = filter.largest <= 0 || c < static_cast<std::size_t>(filter.largest);
     keepComponent[c] = bigEnough && amongLargest ? 1 : 0;
   }
-  PrimitiveList& surface = mesh.dimension == 2 ? mesh.lines : mesh.polygons;
-  const std::size_t base = mesh.vertices.size() + (mesh.dimension == 2 ? 0 : mesh.lines.size());
+  PrimitiveList& list = componentList(mesh);
+  const bool volumeCells = &list == &mesh.volumeCells;
+  const std::size_t base = componentPrimitiveBase(mesh);
   std::vector<char> keepPrimitive(mesh.primitiveCount(), 1);
   PrimitiveList kept;
-  for (std::size_t k = 0; k < surface.size(); ++k) {
+  std::vector<std::uint8_t> keptTypes;
+  for (std::size_t k = 0; k < list.size(); ++k) {
     const std::int32_t c = set.ofPrimitive[k];
     const bool keep = c < 0 || keepComponent[static_cast<std::size_t>(c)] != 0;
     keepPrimitive[base + k] = keep ? 1 : 0;
     if (keep) {
-      kept.addRange(surface.connectivity.begin() + surface.offsets[k],
-                    surface.connectivity.begin() + surface.offsets[k + 1]);
+      kept.addRange(list.connectivity.begin() + list.offsets[k],
+                    list.connectivity.begin() + list.offsets[k + 1]);
+      if (volumeCells) {
+        keptTypes.push_back(mesh.volumeCellTypes[k]);
+      }
     }
   }
-  surface = std::move(kept);
+  list = std::move(kept);
+  if (volumeCells) {
+    mesh.volumeCellTypes = std::move(keptTypes);
+  }
   for (AttributeArray& array : mesh.cellData) {
     std::vector<double> values;
     const auto width = static_cast<std::size_t>(array.components);

@@ -173,6 +173,12 @@ void LatticeDecomposition::appendCell(LatticeCell cell, std::span<const std::uin
     const auto bonds = m_graph.bondsOf(a);
     const auto slot = std::find_if(bonds.begin(), bonds.end(),
                                    [&](BondIndex bond) { return m_graph.otherEnd(bond, a) == b; });
+    if (slot - bonds.begin() > 255) {
+      // A byte holds the slot: a triangulation's hull can fan hundreds of
+      // edges from one particle; such a cell is left out and counted.
+      ++m_skippedCells;
+      return;
+    }
     cell.edgeSlots[static_cast<std::size_t>(e)] = static_cast<std::uint8_t>(slot - bonds.begin());
     if (bondState[static_cast<std::size_t>(*slot)] != 0) {
       cell.brokenMask = static_cast<std::uint8_t>(cell.brokenMask | (1u << e));

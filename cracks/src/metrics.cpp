@@ -6,6 +6,7 @@
 #include <tbb/parallel_for.h>
 
 #include "surface_primitives.hpp"
+#include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/metrics.hpp>
 #include <crackvis/cracks/particle_grid.hpp>
 
@@ -196,6 +197,13 @@ SurfaceMetrics computeMetrics(const CrackMesh& mesh, std::span<const Vec3> posit
     }
   }
   topology(mesh, primitives, metrics);
+  if (mesh.holdsCells()) {
+    const CrackComponents set = findComponents(mesh);
+    metrics.components = set.components.size();
+    for (const CrackComponent& component : set.components) {
+      metrics.area += component.area;
+    }
+  }
   return metrics;
 }
 

@@ -23,6 +23,9 @@ std::vector<Primitive> surfacePrimitives(const CrackMesh& mesh) {
       }
     }
   }
+  if (mesh.dimension == 2) {
+    return result;  // 2D polygons are cells (cell attribute), not surface
+  }
   for (std::size_t k = 0; k < mesh.polygons.size(); ++k) {
     const auto begin = static_cast<std::size_t>(mesh.polygons.offsets[k]);
     const auto end = static_cast<std::size_t>(mesh.polygons.offsets[k + 1]);

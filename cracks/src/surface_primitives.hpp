@@ -17,7 +17,7 @@ struct Primitive {
   std::size_t index;
 };
 
-// Polygons, and in 2D the segments of lines not flagged "inconsistent".
+// Polygons (3D), or the segments of lines not flagged "inconsistent" (2D).
 std::vector<Primitive> surfacePrimitives(const CrackMesh& mesh);
 
 // Area of a polygon, length of a segment.

@@ -14,16 +14,21 @@
 // last such path has a broken bond. Material that holds together around the
 // pair keeps it closed; a crack that cuts every path between i and j opens it
 // with the real bonds around it. A pair with no such path (at the specimen's
-// surface, or across a void) never breaks. A bonded pair
+// surface, or across a void) breaks when the intact bonds no longer join ends
+// that the intact packing joined (a through crack separates them): at the
+// surface and in a void it stays closed, a particle with no bond (a rattler)
+// never opens, and a through crack leaves no hole. A bonded pair
 // that is no triangulation neighbour keeps its bond, but no cell holds it,
 // so it makes no face of its own (cell methods) or none that exists (local
 // Voronoi reports it inconsistent).
 #include <algorithm>
+#include <numeric>
 #include <optional>
 
 #include <fmt/format.h>
 
 #include "methods.hpp"
+#include "surface_primitives.hpp"
 #include <crackvis/cracks/triangulation.hpp>
 
 namespace crackvis::cracks {
@@ -50,7 +55,9 @@ class TriangulatedExtractor final : public CrackExtractor {
                         m_supportStart.capacity() * sizeof(std::int32_t) +
                         m_support.capacity() * sizeof(m_support[0]) + m_state.capacity() +
                         m_force.capacity() * sizeof(float) +
-                        m_breakStep.capacity() * sizeof(std::int32_t);
+                        m_breakStep.capacity() * sizeof(std::int32_t) +
+                        (m_piece.capacity() + m_pieceSize.capacity()) * sizeof(std::int32_t) +
+                        m_joined.capacity() + m_marked.capacity();
     if (m_extended) {
       bytes += m_extended->memoryBytes();
     }
@@ -92,6 +99,15 @@ class TriangulatedExtractor final : public CrackExtractor {
         m_bonds.push_back(edge);
         addSupport(edge);
       }
+    }
+    markPieces({});
+    m_joined.assign(m_supportStart.size() - 1, 0);
+    for (std::size_t v = 0; v + 1 < m_supportStart.size(); ++v) {
+      const dem::Bond& pair = m_bonds[m_graph.bondCount() + v];
+      const bool unheld = m_supportStart[v] == m_supportStart[v + 1];
+      m_joined[v] = unheld && m_piece[static_cast<std::size_t>(pair.first)] ==
+                                  m_piece[static_cast<std::size_t>(pair.second)];
+      m_unheld += m_joined[v];
     }
     m_extended.emplace(m_graph.particleCount(), m_bonds);
     m_cells = ExplicitCells(m_graph.particleCount(), std::move(triangulation->cells));
@@ -166,10 +182,19 @@ class TriangulatedExtractor final : public CrackExtractor {
       m_force.assign(step.bondForce.begin(), step.bondForce.end());
       m_force.resize(m_bonds.size(), 0.0f);
     }
+    if (m_unheld > 0) {
+      markPieces(step.bondState);
+    }
     for (std::size_t v = 0; v < virtualCount; ++v) {
       const auto first = static_cast<std::size_t>(m_supportStart[v]);
       const auto last = static_cast<std::size_t>(m_supportStart[v + 1]);
-      bool broken = first < last;
+      if (first == last) {
+        if (m_joined[v] != 0) {
+          extendUnheld(step, m + v);
+        }
+        continue;
+      }
+      bool broken = true;
       std::int32_t brokeAt = -1;
       for (std::size_t s = first; s < last && broken; ++s) {
         std::int32_t pathBrokeAt = -1;
@@ -191,6 +216,61 @@ class TriangulatedExtractor final : public CrackExtractor {
         m_breakStep[m + v] = broken ? brokeAt : -1;
       }
     }
+  }
+
+  // The piece (connected by intact bonds) of each particle, as the index of
+  // its root; with no state, of the intact packing. Union by size keeps the
+  // trees shallow; a state equal to the last one marked is not marked again.
+  void markPieces(std::span<const std::uint8_t> bondState) {
+    const std::size_t m = m_graph.bondCount();
+    if (!bondState.empty() && m_marked.size() == m &&
+        std::equal(m_marked.begin(), m_marked.end(), bondState.begin())) {
+      return;
+    }
+    m_marked.assign(bondState.begin(), bondState.end());
+    const std::size_t n = m_graph.particleCount();
+    m_piece.resize(n);
+    std::iota(m_piece.begin(), m_piece.end(), 0);
+    m_pieceSize.assign(n, 1);
+    for (std::size_t b = 0; b < m; ++b) {
+      if (bondState.empty() || bondState[b] == 0) {
+        const dem::Bond& bond = m_graph.bond(static_cast<dem::BondIndex>(b));
+        auto a = static_cast<std::size_t>(findRoot(m_piece, bond.first));
+        auto c = static_cast<std::size_t>(findRoot(m_piece, bond.second));
+        if (a != c) {
+          if (m_pieceSize[a] < m_pieceSize[c]) {
+            std::swap(a, c);
+          }
+          m_piece[c] = static_cast<std::int32_t>(a);
+          m_pieceSize[a] += m_pieceSize[c];
+        }
+      }
+    }
+    for (std::size_t p = 0; p < n; ++p) {
+      m_piece[p] = findRoot(m_piece, static_cast<std::int32_t>(p));
+    }
+  }
+
+  // A virtual bond no short path holds, between particles the intact packing
+  // joins, is broken while its ends lie in different pieces, since the latest break among its ends'
+  // bonds (when the step has break steps).
+  void extendUnheld(const StepInput& step, std::size_t v) {
+    const dem::Bond& pair = m_bonds[v];
+    const bool broken = m_piece[static_cast<std::size_t>(pair.first)] !=
+                        m_piece[static_cast<std::size_t>(pair.second)];
+    m_state[v] = broken ? 1 : 0;
+    if (step.breakStep.empty()) {
+      return;
+    }
+    std::int32_t brokeAt = -1;
+    for (dem::ParticleIndex end : {pair.first, pair.second}) {
+      for (dem::BondIndex b : m_graph.bondsOf(end)) {
+        if (broken && step.bondState[static_cast<std::size_t>(b)] != 0) {
+          brokeAt = std::max(brokeAt, step.breakStep[static_cast<std::size_t>(b)]);
+        }
+      }
+    }
+    m_breakStep[v] = brokeAt;
   }
 
   // A virtual bond whose face local Voronoi cannot make (a pair at the
@@ -260,6 +340,13 @@ class TriangulatedExtractor final : public CrackExtractor {
   std::vector<std::uint8_t> m_state;
   std::vector<float> m_force;
   std::vector<std::int32_t> m_breakStep;
+  // Virtual bonds no path of 2 or 3 bonds holds whose ends the intact
+  // packing joins (1 each, over the virtual bonds), and how many.
+  std::vector<std::uint8_t> m_joined;
+  std::size_t m_unheld = 0;
+  std::vector<std::int32_t> m_piece;  // markPieces: the root of each particle's piece
+  std::vector<std::int32_t> m_pieceSize;
+  std::vector<std::uint8_t> m_marked;  // the bond state m_piece is of
   std::size_t m_inconsistent = 0;
 };
 

@@ -224,6 +224,36 @@ TEST_CASE("a scene pipeline shows the largest crack components and colours by co
   CHECK(scene.input().cracks->polygons.size() == 0);
 }
 
+TEST_CASE("a scene pipeline selects and colours cell attribute's components too",
+          "[scene][cracks]") {
+  const PlantedSeries series;
+  pipeline::PipelineDescription d;
+  auto opened = openPlanted(series, d);
+  d.cracks.method = cracks::Method::kCellAttribute;
+  scene::ScenePipeline& scene = *opened;
+  REQUIRE(scene.replace(d));
+  const cracks::CrackComponents all = cracks::findComponents(*scene.input().cracks);
+  REQUIRE(all.components.size() >= 2);
+  CHECK(all.components[0].area > 0.0);
+
+  d.cracks.largest = 1;
+  d.cracks.colourBy = pipeline::CrackColourBy::kComponent;
+  REQUIRE(scene.replace(d));
+  const cracks::CrackMesh& main = *scene.input().cracks;
+  REQUIRE(main.hasVolumeCells());
+  CHECK(main.volumeCells.size() == all.components[0].primitives);
+  CHECK(main.volumeCellTypes.size() == main.volumeCells.size());
+  const cracks::AttributeArray* label = main.findCellData("component");
+  REQUIRE(label != nullptr);
+  REQUIRE(label->values.size() == main.primitiveCount());
+  for (double value : label->values) {
+    CHECK(value == 0.0);
+  }
+  const cracks::AttributeArray* broken = main.findCellData("broken_bonds");
+  REQUIRE(broken != nullptr);
+  CHECK(broken->values.size() == main.primitiveCount());
+}
+
 TEST_CASE("a scene pipeline says when few broken bonds became crack surfaces, and why",
           "[scene][cracks]") {
   const PlantedSeries series;

@@ -67,7 +67,7 @@ CrackReport reportCrack(const cracks::CrackMesh& mesh, const cracks::StepInput& 
   const cracks::CrackComponents components = cracks::findComponents(mesh);
   report.components = components.components.size();
   if (!components.components.empty()) {
-    report.coverage = cracks::sectionCoverage(mesh, components, 0, input.positions, input.radius);
+    report.coverage = cracks::sectionCoverage(mesh, components, 0, input);
   }
   const std::vector<std::uint8_t> separating = cracks::separatingBonds(graph, input.bondState);
   const cracks::MainCrack main = cracks::measureMainCrack(mesh, separating, extractor);

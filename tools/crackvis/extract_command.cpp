@@ -167,7 +167,7 @@ StepSummary summarise(const cracks::CrackMesh& mesh, const cracks::StepInput& in
   }
   if (withCoverage && !summary.components.components.empty()) {
     summary.coverage =
-        cracks::sectionCoverage(mesh, summary.components, 0, input.positions, input.radius);
+        cracks::sectionCoverage(mesh, summary.components, 0, input);
   }
   summary.mapping = cracks::mapBrokenBonds(mesh, input.bondState, extractor);
   return summary;

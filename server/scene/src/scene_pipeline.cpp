@@ -83,7 +83,7 @@ void selectComponents(const pipeline::CracksDescription& c, cracks::CrackMesh& m
   if (colour) {
     cracks::AttributeArray label{"component", cracks::AttributeType::kInt32, 1, {}};
     label.values.assign(mesh.primitiveCount(), -1.0);
-    const std::size_t base = mesh.vertices.size() + (mesh.dimension == 2 ? 0 : mesh.lines.size());
+    const std::size_t base = cracks::componentPrimitiveBase(mesh);
     for (std::size_t k = 0; k < components.ofPrimitive.size(); ++k) {
       label.values[base + k] = components.ofPrimitive[k];
     }

@@ -40,8 +40,11 @@ std::vector<std::uint8_t> separatingBonds(const BondGraph& graph,
 
 // The main crack, measured through the bonds that separate the halves:
 //  - mapped: of those bonds, how many became surface elements (as above);
-//  - largestShare: the part of the main crack's area (the surface primitives
-//    of separating bonds) that lies in the largest component.
+//  - area, largestShare: the main crack's area (the surface primitives of
+//    separating bonds) and the part of it that lies in the largest component.
+//    Cells (cell attribute) carry no bonds and have no area of their own:
+//    area 0, and largestShare is the part of the separating bonds that are
+//    edges of cells of the largest component, of those that are edges of any.
 struct MainCrack {
   BondMapping mapped;
   double area = 0.0;

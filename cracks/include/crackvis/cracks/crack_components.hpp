@@ -2,20 +2,29 @@
 // damage: in a tension run most broken bonds are isolated, and each makes a
 // small surface piece of its own away from the main crack.
 //
-// A component is a set of surface primitives (polygons in 3D, segments of
-// lines not flagged inconsistent in 2D) connected through shared points,
-// after welding points that coincide within 1e-9 of the mesh size (the same
-// rule as SurfaceMetrics::components). For each: its area (2D: length),
-// bounding box, area-weighted centroid and best-fit plane (the least-squares
-// plane of the surface, through the second moments of its triangles; in 2D
-// the best-fit line in the xy plane).
+// A component of a surface is a set of surface primitives (polygons in 3D,
+// segments of lines not flagged inconsistent in 2D) connected through shared
+// points, after welding points that coincide within 1e-9 of the mesh size
+// (the same rule as SurfaceMetrics::components). For each: its area (2D:
+// length), bounding box, area-weighted centroid and best-fit plane (the
+// least-squares plane of the surface, through the second moments of its
+// triangles; in 2D the best-fit line in the xy plane).
+//
+// The cell attribute method gives cells, not a surface (CrackMesh::holdsCells):
+// a component is a set of cells joined through shared faces (3D) or edges
+// (2D), its centroid and best-fit plane those of its volume (2D: its area),
+// and its area the crack the cells enclose: the cells projected onto that
+// plane (2D: line), rasterised with a step of an eighth of the shortest cell edge.
 //
 // Coverage: the component's area projected onto its best-fit plane over the
 // specimen's cross-section there. Both are rasterised on the plane with cells
 // of a quarter of the smallest radius, so a folded or doubled surface counts
-// once. The section is the convex hull of the centres within two largest
-// radii of the plane, projected onto it: where every method is defined (the
-// cells of a decomposition end at the centres' hull).
+// once. The section is the convex hull of the centres of the particles the
+// plane cuts (|distance| <= radius), projected onto it: the material the
+// plane meets, out to the centres, where every method is defined (the cells
+// of a decomposition end at the centres' hull). It is taken of the reference
+// configuration where the step has one: the plane of an opened crack runs
+// through the gap, where it cuts no particle of the current step.
 #pragma once
 
 #include <cstdint>
@@ -23,6 +32,7 @@
 #include <vector>
 
 #include <crackvis/cracks/crack_mesh.hpp>
+#include <crackvis/cracks/extractor.hpp>
 
 namespace crackvis::cracks {
 
@@ -36,17 +46,26 @@ struct CrackComponent {
 
 struct CrackComponents {
   std::vector<CrackComponent> components;  // largest area first
-  // The component of each polygon (3D) or line (2D) of the mesh, in mesh
-  // order, as an index into `components`; -1 for inconsistency marks.
+  // The component of each polygon (3D) or line (2D) of a surface, or of each
+  // volume cell (3D) or triangle (2D) of a cell mesh, in mesh order, as an
+  // index into `components`; -1 for inconsistency marks.
   std::vector<std::int32_t> ofPrimitive;
 };
 
 CrackComponents findComponents(const CrackMesh& mesh);
 
+// The index, among all the mesh's primitives in VTK order (cell data order),
+// of the first one ofPrimitive numbers.
+std::size_t componentPrimitiveBase(const CrackMesh& mesh);
+
 // Fraction (0..1) of the specimen's section by component c's best-fit plane
-// that the component covers in projection onto that plane.
+// that the component covers in projection onto that plane; `positions` and
+// `radius` ([N], or one for all) are the particles the section is taken of.
 double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::size_t c,
                        std::span<const Vec3> positions, std::span<const double> radius);
+// The same for a step: of its reference configuration, if it has one.
+double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::size_t c,
+                       const StepInput& step);
 
 // Which components to keep: those of at least `minArea`, and of those the
 // `largest` biggest (0: all).
@@ -56,8 +75,9 @@ struct ComponentFilter {
   bool active() const { return minArea > 0.0 || largest > 0; }
 };
 
-// Drops the surface primitives of the components the filter does not keep,
-// with their cell data; inconsistency marks, vertices and volume cells stay.
+// Drops the primitives of the components the filter does not keep (surface
+// primitives, or a cell mesh's cells), with their cell data; inconsistency
+// marks and vertices stay.
 void keepComponents(CrackMesh& mesh, const CrackComponents& set, const ComponentFilter& filter);
 
 }  // namespace crackvis::cracks

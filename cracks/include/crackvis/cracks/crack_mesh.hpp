@@ -65,6 +65,10 @@ struct CrackMesh {
     return vertices.size() + lines.size() + polygons.size() + volumeCells.size();
   }
   bool hasVolumeCells() const { return volumeCells.size() > 0; }
+  // Whether the mesh is the cell attribute method's cells (3D: volume cells;
+  // 2D: triangles, the only 2D method that fills polygons) rather than a
+  // surface.
+  bool holdsCells() const { return dimension == 2 ? polygons.size() > 0 : hasVolumeCells(); }
   const AttributeArray* findCellData(const std::string& name) const;
   const AttributeArray* findPointData(const std::string& name) const;
   void clear();

@@ -80,6 +80,9 @@ class LatticeDecomposition {
   CellIndex firstNewCell() const { return m_firstNewCell; }
   // Particles whose degree exceeded what cell enumeration supports (64).
   std::size_t skippedParticles() const { return m_skipped; }
+  // Explicit cells left out because a node has more than 256 bonds (the
+  // byte of LatticeCell::edgeSlots): fans on a triangulation's hull.
+  std::size_t skippedCells() const { return m_skippedCells; }
 
   // Cells whose lowest particle is p.
   template <typename Visit>
@@ -135,6 +138,7 @@ class LatticeDecomposition {
   std::vector<dem::BondIndex> m_changed;
   CellIndex m_firstNewCell = 0;
   std::size_t m_skipped = 0;
+  std::size_t m_skippedCells = 0;
 };
 
 }  // namespace crackvis::cracks

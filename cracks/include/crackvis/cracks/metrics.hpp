@@ -2,12 +2,14 @@
 // Fig. 3.32 onwards).
 //
 //  - area: total area of the surface polygons (3D) or length of the surface
-//    segments (2D); inconsistency marks are not surface.
+//    segments (2D); inconsistency marks are not surface. For the cell
+//    attribute method's cells, the sum of its components' areas: the crack
+//    the cells enclose, projected (crack_components.hpp).
 //  - cut depth: a surface primitive cuts particle k by depth r_k - dist(x_k,
 //    primitive) when positive. Each particle counts once, with its deepest
 //    cut: totalDepth sums those, maxDepth is the largest (also relative to r).
 //  - components: connected pieces (primitives sharing a point, after welding
-//    points that coincide within 1e-9 of the mesh size).
+//    points that coincide within 1e-9 of the mesh size; cells sharing a face).
 //  - non-manifold edges: in 3D, welded edges shared by more than two
 //    polygons; in 2D, points shared by more than two segments.
 //  - inconsistent bonds: primitives flagged "inconsistent" (local Voronoi).
