@@ -31,6 +31,7 @@ TEST_CASE("crackvis info prints the counts of a generated FCC block", "[cli][inf
   CHECK_THAT(info.out, Catch::Contains("dimension     3D"));
   CHECK_THAT(info.out, Catch::Contains("particles     N = 172"));
   CHECK_THAT(info.out, Catch::Contains("bonds         M = 756 (mean coordination 8.791)"));
+  CHECK_THAT(info.out, Catch::Contains("crack cells   lattice"));
   CHECK_THAT(info.out, Catch::Contains("steps         1 (time 0 .. 0 s)"));
   CHECK_THAT(info.out,
              Catch::Contains("broken bonds  first step: 0 (0.00 %), last step: 0 (0.00 %)"));
@@ -66,6 +67,27 @@ TEST_CASE("crackvis info --json parses and agrees with the file", "[cli][info]")
     CHECK(row["broken"] == broken);
     CHECK(row["new"] == broken - previous);
     previous = broken;
+  }
+}
+
+TEST_CASE("crackvis info says which cells the crack methods use on a random packing",
+          "[cli][info]") {
+  TempDir dir;
+  for (const auto& [radius, cells] :
+       {std::pair<std::vector<std::string>, std::string>{{"--radius", "1e-3"}, "Delaunay"},
+        {{"--radius-range", "1e-3:2e-3"}, "regular"}}) {
+    const std::string path = dir.file(cells + ".h5");
+    std::vector<std::string> args{kCli,   "generate", "--packing", "random", "--box", "0.02",
+                                  "0.02", "0.02",     "-q",        "-o",     path};
+    args.insert(args.end(), radius.begin(), radius.end());
+    REQUIRE(runProcess(args).exitCode == 0);
+    auto info = runProcess({kCli, "info", path});
+    REQUIRE(info.exitCode == 0);
+    CHECK_THAT(info.out, Catch::Contains("crack cells   " + cells +
+                                         " triangulation (the bonds "
+                                         "span no lattice"));
+    const auto json = nlohmann::json::parse(runProcess({kCli, "info", path, "--json"}).out);
+    CHECK_THAT(json["cells"].get<std::string>(), Catch::StartsWith(cells + " triangulation"));
   }
 }
 

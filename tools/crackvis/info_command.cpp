@@ -1,12 +1,15 @@
 // crackvis info: what a crackvis-dem file holds, as text or JSON. Reading the
 // file validates it, so `info` doubles as a checker: a malformed file gets one
 // line on stderr and exit status 1.
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include <crackvis/cracks/bond_graph.hpp>
+#include <crackvis/cracks/extractor.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/lattice_generator.hpp>
 
@@ -29,6 +32,9 @@ struct StepRow {
 struct FileSummary {
   dem::DemFileInfo info;
   double meanCoordination = 0.0;
+  // The cells the crack methods use by default (--decomposition auto) and
+  // why: the lattice's, or a triangulation, Delaunay or regular.
+  std::string cells;
   std::vector<StepRow> rows;  // first and last only, unless per-step was asked
 };
 
@@ -55,6 +61,22 @@ Result<StepRow> summarizeStep(const dem::DemFileReader& reader, int step, bool f
   return row;
 }
 
+// What `extract` and the render server do with --decomposition auto, so a
+// user sees before extracting whether the bonds span a lattice.
+std::string defaultCells(const dem::Lattice& lattice, int dimension) {
+  if (lattice.particleCount() == 0 || lattice.bondCount() == 0) {
+    return "none (no bonds)";
+  }
+  const cracks::BondGraph graph(lattice.particleCount(), lattice.bonds);
+  if (cracks::isLatticeGraph(graph, dimension)) {
+    return "lattice (the bonds span a lattice: its own cells)";
+  }
+  const auto [lo, hi] = std::minmax_element(lattice.radius.begin(), lattice.radius.end());
+  return *hi - *lo > 1e-9 * *hi
+             ? "regular triangulation (the bonds span no lattice, the radii are unequal)"
+             : "Delaunay triangulation (the bonds span no lattice)";
+}
+
 Result<FileSummary> summarize(const InfoOptions& options) {
   auto reader = dem::DemFileReader::open(options.file);
   if (!reader) {
@@ -73,6 +95,7 @@ Result<FileSummary> summarize(const InfoOptions& options) {
                                  ? 2.0 * static_cast<double>(lattice->bondCount()) /
                                        static_cast<double>(lattice->particleCount())
                                  : 0.0;
+  summary.cells = defaultCells(*lattice, summary.info.dimension);
   const int steps = reader->stepCount();
   std::vector<int> wanted;
   if (options.perStep) {
@@ -108,6 +131,7 @@ nlohmann::json toJson(const FileSummary& summary, bool perStep) {
       {"particles", info.particleCount},
       {"bonds", info.bondCount},
       {"mean_coordination", summary.meanCoordination},
+      {"cells", summary.cells},
       {"steps", info.steps.size()},
       {"incomplete_steps", info.incompleteSteps},
       {"planned_steps", info.plannedSteps > 0 ? nlohmann::json(info.plannedSteps) : nullptr},
@@ -141,6 +165,7 @@ void printText(const FileSummary& summary, bool perStep) {
   fmt::print("dimension     {}D\n", info.dimension);
   fmt::print("particles     N = {}\n", info.particleCount);
   fmt::print("bonds         M = {} (mean coordination {:.3f})\n", m, summary.meanCoordination);
+  fmt::print("crack cells   {}\n", summary.cells);
   if (summary.rows.empty()) {
     fmt::print("steps         0\n");
   } else {
@@ -192,8 +217,10 @@ Command addInfoCommand(CLI::App& parent) {
   auto options = std::make_shared<InfoOptions>();
   auto* command = parent.add_subcommand(
       "info",
-      "Describe a crackvis-dem file: format, dimension, particles N, bonds M, steps, time range "
-      "and broken bonds. Validates the file on the way: a malformed file is reported in one "
+      "Describe a crackvis-dem file: format, dimension, particles N, bonds M, steps, time range, "
+      "the cells the crack methods use (the lattice's, or a triangulation when the bonds span no "
+      "lattice) and broken bonds. Validates the file on the way: a malformed file is reported in "
+      "one "
       "line and the exit status is 1.");
   command->add_option("file", options->file, "HDF5 file in the crackvis-dem layout")->required();
   command->add_flag("--steps", options->perStep,
