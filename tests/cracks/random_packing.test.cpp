@@ -224,8 +224,8 @@ TEST_CASE("a particle with more than 256 neighbours: its cells are left out, non
   }
   const std::vector<double> radius(positions.size(), 0.05);
   const BondGraph graph(positions.size(), bonds);
-  for (Method method : {Method::kCellAttribute, Method::kCellCut, Method::kLocalVoronoi,
-                        Method::kCellCentre}) {
+  for (Method method :
+       {Method::kCellAttribute, Method::kCellCut, Method::kLocalVoronoi, Method::kCellCentre}) {
     DYNAMIC_SECTION(toString(method)) {
       auto extractor = makeExtractor(method, graph, 3);
       CrackMesh mesh;

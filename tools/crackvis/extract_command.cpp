@@ -166,8 +166,7 @@ StepSummary summarise(const cracks::CrackMesh& mesh, const cracks::StepInput& in
     summary.components = cracks::findComponents(mesh);
   }
   if (withCoverage && !summary.components.components.empty()) {
-    summary.coverage =
-        cracks::sectionCoverage(mesh, summary.components, 0, input);
+    summary.coverage = cracks::sectionCoverage(mesh, summary.components, 0, input);
   }
   summary.mapping = cracks::mapBrokenBonds(mesh, input.bondState, extractor);
   return summary;
