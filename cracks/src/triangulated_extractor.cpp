@@ -107,7 +107,7 @@ class TriangulatedExtractor final : public CrackExtractor {
       const bool unheld = m_supportStart[v] == m_supportStart[v + 1];
       m_joined[v] = unheld && m_piece[static_cast<std::size_t>(pair.first)] ==
                                   m_piece[static_cast<std::size_t>(pair.second)];
-      m_unheld += m_joined[v];
+      m_joinedCount += m_joined[v];
     }
     m_extended.emplace(m_graph.particleCount(), m_bonds);
     m_cells = ExplicitCells(m_graph.particleCount(), std::move(triangulation->cells));
@@ -182,7 +182,7 @@ class TriangulatedExtractor final : public CrackExtractor {
       m_force.assign(step.bondForce.begin(), step.bondForce.end());
       m_force.resize(m_bonds.size(), 0.0f);
     }
-    if (m_unheld > 0) {
+    if (m_joinedCount > 0) {
       markPieces(step.bondState);
     }
     for (std::size_t v = 0; v < virtualCount; ++v) {
@@ -252,8 +252,8 @@ class TriangulatedExtractor final : public CrackExtractor {
   }
 
   // A virtual bond no short path holds, between particles the intact packing
-  // joins, is broken while its ends lie in different pieces, since the latest break among its ends'
-  // bonds (when the step has break steps).
+  // joins, is broken while its ends lie in different pieces, since the latest
+  // break among its ends' bonds (when the step has break steps).
   void extendUnheld(const StepInput& step, std::size_t v) {
     const dem::Bond& pair = m_bonds[v];
     const bool broken = m_piece[static_cast<std::size_t>(pair.first)] !=
@@ -343,7 +343,7 @@ class TriangulatedExtractor final : public CrackExtractor {
   // Virtual bonds no path of 2 or 3 bonds holds whose ends the intact
   // packing joins (1 each, over the virtual bonds), and how many.
   std::vector<std::uint8_t> m_joined;
-  std::size_t m_unheld = 0;
+  std::size_t m_joinedCount = 0;
   std::vector<std::int32_t> m_piece;  // markPieces: the root of each particle's piece
   std::vector<std::int32_t> m_pieceSize;
   std::vector<std::uint8_t> m_marked;  // the bond state m_piece is of
