@@ -920,8 +920,17 @@ TEST_CASE("streams that never attach are cancelled, and cannot pin a thread each
     }
   }
   CHECK(timedOut > 0);
-  std::ifstream in(logs.file("render-access.log"));
-  const std::string log((std::istreambuf_iterator<char>(in)), {});
+  // The server logs a call after the client has seen it end: wait for the line.
+  const auto logged = [&] {
+    std::ifstream in(logs.file("render-access.log"));
+    const std::string log((std::istreambuf_iterator<char>(in)), {});
+    return log.find("within 2 s (attach_seconds)") != std::string::npos ? log : std::string{};
+  };
+  std::string log = logged();
+  for (int wait = 0; wait < 50 && log.empty(); ++wait) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    log = logged();
+  }
   CHECK_THAT(log, Catch::Contains("method=Stream") && Catch::Contains("status=DEADLINE_EXCEEDED") &&
                       Catch::Contains("within 2 s (attach_seconds)"));
   const double seconds =
