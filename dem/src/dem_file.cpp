@@ -47,6 +47,33 @@ std::string stepGroupPath(int step) {
   return fmt::format("/steps/{:06d}", step);
 }
 
+namespace {
+const char* ownerFolder(ExtraOwner owner) {
+  return owner == ExtraOwner::kParticles ? "particles" : "bonds";
+}
+std::string extraFolder(ExtraOwner owner, bool perStep, int step) {
+  return perStep ? fmt::format("{}/extra/{}", stepGroupPath(step), ownerFolder(owner))
+                 : fmt::format("/extra/{}", ownerFolder(owner));
+}
+std::string joinLines(const std::vector<std::string>& lines) {
+  return fmt::format("{}", fmt::join(lines, "\n"));
+}
+std::vector<std::string> splitLines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    lines.push_back(text.substr(start, end - start));
+    start = end + 1;
+  }
+  return lines;
+}
+}  // namespace
+
+std::string extraPath(const ExtraInfo& extra, int step) {
+  return fmt::format("{}/{}", extraFolder(extra.owner, extra.perStep, step), extra.name);
+}
+
 // ---------------------------------------------------------------- reader --
 
 Result<DemFileReader> DemFileReader::open(const std::string& path) {
@@ -72,6 +99,7 @@ Result<DemFileReader> DemFileReader::open(const std::string& path) {
   }
   CRACKVIS_RETURN_IF_ERROR(reader.readStructure());
   CRACKVIS_RETURN_IF_ERROR(reader.readSteps());
+  CRACKVIS_RETURN_IF_ERROR(reader.listExtras());
   return reader;
 }
 
@@ -79,8 +107,7 @@ Status DemFileReader::fail(const Status& status) const {
   return {status.code(), fmt::format("{}: {}", m_path, status.message())};
 }
 
-Result<Handle> DemFileReader::openChecked(DemDataset id, int step) const {
-  const std::string path = datasetPath(id, step);
+Result<DemFileReader::OpenedDataset> DemFileReader::openInFile(const std::string& path) const {
   auto resolved = h5::resolveInFile(m_file.get(), path);
   if (!resolved) {
     if (resolved.status().code() == StatusCode::kNotFound) {
@@ -101,6 +128,17 @@ Result<Handle> DemFileReader::openChecked(DemDataset id, int step) const {
   if (!shape) {
     return fail(shape.status());
   }
+  return OpenedDataset{std::move(dataset), std::move(*shape)};
+}
+
+Result<Handle> DemFileReader::openChecked(DemDataset id, int step) const {
+  const std::string path = datasetPath(id, step);
+  auto opened = openInFile(path);
+  if (!opened) {
+    return opened.status();
+  }
+  const h5::DatasetShape* shape = &opened->shape;
+  Handle dataset = std::move(opened->dataset);
   const LayoutSizes sizes{m_info.particleCount, m_info.bondCount};
   if (Status valid =
           checkDatasetHeader(id, path, {shape->type, shape->typeName, shape->dims}, sizes);
@@ -133,6 +171,7 @@ Status DemFileReader::readStructure() {
   if (auto source = h5::readStringAttribute(root, "source")) {
     m_info.source = *source;
   }
+  CRACKVIS_RETURN_IF_ERROR(readProvenance());
 
   // N and M come from the first dataset that carries them; every other
   // dataset must agree.
@@ -146,12 +185,155 @@ Status DemFileReader::readStructure() {
     return pairs.status();
   }
   m_info.bondCount = static_cast<std::int64_t>(h5::describeDataset(pairs->get())->dims[0]);
-  for (DemDataset id : {DemDataset::kStrength, DemDataset::kBreakStep}) {
+  if (auto dataset = openChecked(DemDataset::kBreakStep); !dataset) {
+    return dataset.status();
+  }
+  // Before v1.1 every file had strengths; now they and the new arrays are
+  // optional, but checked whenever present.
+  for (DemDataset id : {DemDataset::kStrength, DemDataset::kParticleId, DemDataset::kParticleGroup,
+                        DemDataset::kBondFlags}) {
+    if (!h5::linkExists(m_file.get(), datasetPath(id))) {
+      if (id == DemDataset::kStrength && m_info.minorVersion < 1) {
+        return fail(missingDataset(datasetPath(id)));
+      }
+      continue;
+    }
     if (auto dataset = openChecked(id); !dataset) {
       return dataset.status();
     }
+    m_info.hasStrength = m_info.hasStrength || id == DemDataset::kStrength;
   }
   return Status::ok();
+}
+
+Status DemFileReader::readProvenance() {
+  const hid_t root = m_file.get();
+  if (H5Aexists(root, "version_minor") > 0) {
+    auto minor = h5::readIntAttribute(root, "version_minor");
+    if (!minor || *minor < 0) {
+      return fail(
+          failedPrecondition("root attribute 'version_minor' is not a non-negative integer"));
+    }
+    m_info.minorVersion = static_cast<int>(*minor);
+  }
+  if (auto code = h5::readStringAttribute(root, "source_code")) {
+    m_info.sourceCode = *code;
+  }
+  if (auto version = h5::readStringAttribute(root, "source_version")) {
+    m_info.sourceVersion = *version;
+  }
+  if (auto files = h5::readStringAttribute(root, "source_files")) {
+    m_info.sourceFiles = splitLines(*files);
+  }
+  return Status::ok();
+}
+
+// Extra arrays are found by listing /extra/{particles,bonds} and step 0's
+// extra groups; each must be float64 [N] / [N,3] (or M for bonds).
+Status DemFileReader::listExtras() {
+  // Per-step extras are listed from step 0, once it is complete.
+  const bool anyStep = stepCount() > 0;
+  for (bool perStep : {false, true}) {
+    if (perStep && !anyStep) {
+      continue;
+    }
+    for (ExtraOwner owner : {ExtraOwner::kParticles, ExtraOwner::kBonds}) {
+      const std::string folder = extraFolder(owner, perStep, 0);
+      auto resolved = h5::resolveInFile(m_file.get(), folder);
+      if (!resolved) {
+        if (resolved.status().code() == StatusCode::kNotFound) {
+          continue;
+        }
+        return fail(
+            failedPrecondition(fmt::format("group {}: {}; crackvis reads only data "
+                                           "inside the file",
+                                           folder, resolved.status().message())));
+      }
+      Handle group = h5::groupHandle(H5Gopen2(m_file.get(), resolved->c_str(), H5P_DEFAULT));
+      if (!group.valid()) {
+        return fail(failedPrecondition(
+            fmt::format("{} is not a readable group ({})", folder, h5::lastHdf5Error())));
+      }
+      auto names = h5::memberNames(group.get());
+      if (!names) {
+        return fail(names.status());
+      }
+      for (const std::string& name : *names) {
+        ExtraInfo extra{name, owner, 1, perStep};
+        if (Status valid = validateName("extra array", name); !valid) {
+          return fail(failedPrecondition(fmt::format("{}/{}: {}", folder, name, valid.message())));
+        }
+        auto dataset = openExtra(extra, 0);
+        if (!dataset) {
+          return dataset.status();
+        }
+        auto shape = h5::describeDataset(dataset->get());
+        extra.components = shape->dims.size() == 2 ? static_cast<int>(shape->dims[1]) : 1;
+        m_info.extras.push_back(extra);
+      }
+    }
+  }
+  return Status::ok();
+}
+
+Result<Handle> DemFileReader::openExtra(const ExtraInfo& extra, int step) const {
+  const std::string path = extraPath(extra, step);
+  auto opened = openInFile(path);
+  if (!opened) {
+    return opened.status();
+  }
+  const h5::DatasetShape* shape = &opened->shape;
+  Handle dataset = std::move(opened->dataset);
+  const std::int64_t rows =
+      extra.owner == ExtraOwner::kParticles ? m_info.particleCount : m_info.bondCount;
+  const bool rowsMatch = !shape->dims.empty() && shape->dims[0] == static_cast<std::uint64_t>(rows);
+  const bool widthValid = shape->dims.size() == 1 ||
+                          (shape->dims.size() == 2 && (shape->dims[1] == 1 || shape->dims[1] == 3));
+  if (shape->type != h5::ElementType::kFloat64 || !rowsMatch || !widthValid) {
+    return fail(failedPrecondition(
+        fmt::format("dataset {} is {} {}, expected float64 [{}] or [{},3] ({} = {})", path,
+                    shape->typeName, h5::formatDims(shape->dims), rows, rows,
+                    extra.owner == ExtraOwner::kParticles ? "N" : "M", rows)));
+  }
+  return dataset;
+}
+
+Result<ExtraArray> DemFileReader::readExtra(const ExtraInfo& extra, int step) const {
+  auto dataset = openExtra(extra, step);
+  if (!dataset) {
+    return dataset.status();
+  }
+  auto shape = h5::describeDataset(dataset->get());
+  ExtraArray array{
+      extra.name, extra.owner, shape->dims.size() == 2 ? static_cast<int>(shape->dims[1]) : 1, {}};
+  array.values.resize(shape->dims[0] * static_cast<std::uint64_t>(array.components));
+  if (Status read = h5::readDataset(dataset->get(), h5::ElementType::kFloat64, array.values.data());
+      !read) {
+    return fail(
+        Status(read.code(), fmt::format("dataset {}: {}", extraPath(extra, step), read.message())));
+  }
+  return array;
+}
+
+Result<std::vector<StepScalar>> DemFileReader::readScalars(hid_t stepGroup, int step) const {
+  auto names = h5::attributeNames(stepGroup);
+  if (!names) {
+    return fail(Status(names.status().code(), fmt::format("step group {}: {}", stepGroupPath(step),
+                                                          names.status().message())));
+  }
+  std::vector<StepScalar> scalars;
+  for (const std::string& name : *names) {
+    if (name == "time") {
+      continue;
+    }
+    auto value = h5::readDoubleAttribute(stepGroup, name);
+    if (!value) {
+      return fail(failedPrecondition(fmt::format(
+          "step group {}: scalar '{}': {}", stepGroupPath(step), name, value.status().message())));
+    }
+    scalars.push_back({name, *value});
+  }
+  return scalars;
 }
 
 Status DemFileReader::readSteps() {
@@ -200,7 +382,19 @@ Status DemFileReader::readSteps() {
     return fail(list.problem);
   }
   for (const auto& [index, time] : list.steps) {
-    m_info.steps.push_back({index, time});
+    Handle group =
+        h5::groupHandle(H5Gopen2(m_file.get(), stepGroupPath(index).c_str(), H5P_DEFAULT));
+    auto scalars = readScalars(group.get(), index);
+    if (!scalars) {
+      return scalars.status();
+    }
+    for (const StepScalar& scalar : *scalars) {
+      if (std::find(m_info.scalarNames.begin(), m_info.scalarNames.end(), scalar.name) ==
+          m_info.scalarNames.end()) {
+        m_info.scalarNames.push_back(scalar.name);
+      }
+    }
+    m_info.steps.push_back({index, time, std::move(*scalars)});
   }
   const auto complete = static_cast<int>(*count);
   m_info.incompleteSteps = static_cast<int>(std::count_if(
@@ -215,15 +409,41 @@ Result<Lattice> DemFileReader::readLattice() const {
   const auto m = static_cast<std::uint64_t>(m_info.bondCount);
   lattice.radius.resize(n);
   lattice.bonds.resize(m);
+  CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kRadius, 0, lattice.radius.data()));
+  CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kPairs, 0, lattice.bonds.data()));
+  bool present = false;
   lattice.strength.resize(m);
-  struct Part {
-    DemDataset id;
-    void* out;
-  };
-  for (const Part& part : {Part{DemDataset::kRadius, lattice.radius.data()},
-                           Part{DemDataset::kPairs, lattice.bonds.data()},
-                           Part{DemDataset::kStrength, lattice.strength.data()}}) {
-    CRACKVIS_RETURN_IF_ERROR(readWhole(part.id, 0, part.out));
+  CRACKVIS_RETURN_IF_ERROR(
+      readOptional(DemDataset::kStrength, m, lattice.strength.data(), present));
+  if (!present) {
+    lattice.strength.clear();
+  }
+  lattice.particleId.resize(n);
+  CRACKVIS_RETURN_IF_ERROR(
+      readOptional(DemDataset::kParticleId, n, lattice.particleId.data(), present));
+  if (!present) {
+    lattice.particleId.clear();
+  }
+  lattice.particleGroup.resize(n);
+  CRACKVIS_RETURN_IF_ERROR(
+      readOptional(DemDataset::kParticleGroup, n, lattice.particleGroup.data(), present));
+  if (!present) {
+    lattice.particleGroup.clear();
+  }
+  lattice.bondFlags.resize(m);
+  CRACKVIS_RETURN_IF_ERROR(
+      readOptional(DemDataset::kBondFlags, m, lattice.bondFlags.data(), present));
+  if (!present) {
+    lattice.bondFlags.clear();
+  }
+  for (const ExtraInfo& extra : m_info.extras) {
+    if (!extra.perStep) {
+      auto array = readExtra(extra, 0);
+      if (!array) {
+        return array.status();
+      }
+      lattice.extras.push_back(std::move(*array));
+    }
   }
   if (Status valid = validateLattice(lattice); !valid) {
     return fail(failedPrecondition(valid.message()));
@@ -242,6 +462,11 @@ Status DemFileReader::readWhole(DemDataset id, int step, void* out) const {
         Status(read.code(), fmt::format("dataset {}: {}", datasetPath(id, step), read.message())));
   }
   return Status::ok();
+}
+
+Status DemFileReader::readOptional(DemDataset id, std::uint64_t, void* out, bool& present) const {
+  present = h5::linkExists(m_file.get(), datasetPath(id));
+  return present ? readWhole(id, 0, out) : Status::ok();
 }
 
 Result<std::vector<std::int32_t>> DemFileReader::readBreakSteps() const {
@@ -273,6 +498,16 @@ Result<StepState> DemFileReader::readStep(int step) const {
   if (h5::linkExists(m_file.get(), datasetPath(DemDataset::kBondForce, step))) {
     state.bondForce.resize(m);
     CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondForce, step, state.bondForce.data()));
+  }
+  state.scalars = m_info.steps[static_cast<size_t>(step)].scalars;
+  for (const ExtraInfo& extra : m_info.extras) {
+    if (extra.perStep) {
+      auto array = readExtra(extra, step);
+      if (!array) {
+        return array.status();
+      }
+      state.extras.push_back(std::move(*array));
+    }
   }
   if (Status valid = validateStep(m_info.dimension, n, m, state); !valid) {
     return fail(failedPrecondition(fmt::format("step {}: {}", step, valid.message())));
@@ -316,6 +551,19 @@ Result<DemFileWriter> DemFileWriter::create(const std::string& path, const Latti
   CRACKVIS_RETURN_IF_ERROR(h5::writeIntAttribute(root, "dimension", lattice.dimension));
   CRACKVIS_RETURN_IF_ERROR(h5::writeStringAttribute(root, "units", metadata.units));
   CRACKVIS_RETURN_IF_ERROR(h5::writeStringAttribute(root, "source", metadata.source));
+  CRACKVIS_RETURN_IF_ERROR(h5::writeIntAttribute(root, "version_minor", kFormatMinorVersion));
+  if (!metadata.sourceCode.empty()) {
+    CRACKVIS_RETURN_IF_ERROR(h5::writeStringAttribute(root, "source_code", metadata.sourceCode));
+  }
+  if (!metadata.sourceVersion.empty()) {
+    CRACKVIS_RETURN_IF_ERROR(
+        h5::writeStringAttribute(root, "source_version", metadata.sourceVersion));
+  }
+  if (!metadata.sourceFiles.empty()) {
+    CRACKVIS_RETURN_IF_ERROR(
+        h5::writeStringAttribute(root, "source_files", joinLines(metadata.sourceFiles)));
+  }
+  writer.m_storage = metadata.storage;
 
   const auto n = static_cast<std::uint64_t>(lattice.particleCount());
   const auto m = static_cast<std::uint64_t>(lattice.bondCount());
@@ -331,8 +579,25 @@ Result<DemFileWriter> DemFileWriter::create(const std::string& path, const Latti
                                             lattice.radius.data()));
   CRACKVIS_RETURN_IF_ERROR(
       h5::writeDataset(root, "/bonds/pairs", ElementType::kInt32, {m, 2}, lattice.bonds.data()));
-  CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(root, "/bonds/strength", ElementType::kFloat64, {m},
-                                            lattice.strength.data()));
+  if (!lattice.strength.empty()) {
+    CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(root, "/bonds/strength", ElementType::kFloat64, {m},
+                                              lattice.strength.data()));
+  }
+  if (!lattice.particleId.empty()) {
+    CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(root, "/particles/id", ElementType::kInt64, {n},
+                                              lattice.particleId.data()));
+  }
+  if (!lattice.particleGroup.empty()) {
+    CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(root, "/particles/group", ElementType::kInt32, {n},
+                                              lattice.particleGroup.data()));
+  }
+  if (!lattice.bondFlags.empty()) {
+    CRACKVIS_RETURN_IF_ERROR(
+        h5::writeDataset(root, "/bonds/flags", ElementType::kUInt8, {m}, lattice.bondFlags.data()));
+  }
+  if (!lattice.extras.empty()) {
+    CRACKVIS_RETURN_IF_ERROR(writer.writeExtras(root, lattice.extras));
+  }
   CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(root, "/bonds/break_step", ElementType::kInt32, {m},
                                             writer.m_breakStep.data()));
   Handle steps = h5::groupHandle(H5Gopen2(root, "/steps", H5P_DEFAULT));
@@ -351,6 +616,11 @@ Status DemFileWriter::recordBreaks(const StepState& step, bool& changed) {
   changed = false;
   for (size_t b = 0; b < m_breakStep.size(); ++b) {
     const bool broken = step.bondState[b] == static_cast<std::uint8_t>(BondState::kBroken);
+    if (!broken && m_lattice.cutAtStart(b)) {
+      return invalidArgument(
+          fmt::format("{}: step {}: bond {} is flagged cut at the start (a notch) but is intact",
+                      m_path, m_stepCount, b));
+    }
     if (broken && m_breakStep[b] < 0) {
       m_breakStep[b] = m_stepCount;
       changed = true;
@@ -413,21 +683,62 @@ Status DemFileWriter::writeStepData(const StepState& step, bool breaksChanged) {
     return internalError(fmt::format("cannot create group {} ({})", path, h5::lastHdf5Error()));
   }
   CRACKVIS_RETURN_IF_ERROR(h5::writeDoubleAttribute(group.get(), "time", step.time));
+  for (const StepScalar& scalar : step.scalars) {
+    CRACKVIS_RETURN_IF_ERROR(h5::writeDoubleAttribute(group.get(), scalar.name, scalar.value));
+  }
   CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(group.get(), "positions", ElementType::kFloat64, {n, 3},
-                                            step.positions.data()));
-  CRACKVIS_RETURN_IF_ERROR(
-      h5::writeDataset(group.get(), "bond_state", ElementType::kUInt8, {m}, step.bondState.data()));
+                                            step.positions.data(), m_storage));
+  CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(group.get(), "bond_state", ElementType::kUInt8, {m},
+                                            step.bondState.data(), m_storage));
   if (!step.velocities.empty()) {
     CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(group.get(), "velocities", ElementType::kFloat32,
-                                              {n, 3}, step.velocities.data()));
+                                              {n, 3}, step.velocities.data(), m_storage));
   }
   if (!step.bondForce.empty()) {
     CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(group.get(), "bond_force", ElementType::kFloat32, {m},
-                                              step.bondForce.data()));
+                                              step.bondForce.data(), m_storage));
+  }
+  if (!step.extras.empty()) {
+    CRACKVIS_RETURN_IF_ERROR(writeExtras(group.get(), step.extras));
   }
   if (breaksChanged) {
     CRACKVIS_RETURN_IF_ERROR(
         h5::overwriteDataset(root, "/bonds/break_step", ElementType::kInt32, m_breakStep.data()));
+  }
+  return Status::ok();
+}
+
+// Extras go under `location`/extra/{particles,bonds}/NAME (location: the
+// root for constant arrays, a step group for per-step ones).
+Status DemFileWriter::writeExtras(hid_t location, const std::vector<ExtraArray>& extras) {
+  Handle extra =
+      h5::groupHandle(H5Gcreate2(location, "extra", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+  if (!extra.valid()) {
+    return internalError(fmt::format("cannot create group extra ({})", h5::lastHdf5Error()));
+  }
+  for (ExtraOwner owner : {ExtraOwner::kParticles, ExtraOwner::kBonds}) {
+    const bool any = std::any_of(extras.begin(), extras.end(),
+                                 [&](const ExtraArray& e) { return e.owner == owner; });
+    if (!any) {
+      continue;
+    }
+    Handle folder = h5::groupHandle(
+        H5Gcreate2(extra.get(), ownerFolder(owner), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    if (!folder.valid()) {
+      return internalError(fmt::format("cannot create group extra/{} ({})", ownerFolder(owner),
+                                       h5::lastHdf5Error()));
+    }
+    for (const ExtraArray& array : extras) {
+      if (array.owner != owner) {
+        continue;
+      }
+      std::vector<std::uint64_t> dims{array.rows()};
+      if (array.components > 1) {
+        dims.push_back(static_cast<std::uint64_t>(array.components));
+      }
+      CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(folder.get(), array.name, ElementType::kFloat64,
+                                                dims, array.values.data(), m_storage));
+    }
   }
   return Status::ok();
 }

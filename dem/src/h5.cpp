@@ -92,6 +92,8 @@ const char* elementTypeName(ElementType type) {
   switch (type) {
     case ElementType::kInt32:
       return "int32";
+    case ElementType::kInt64:
+      return "int64";
     case ElementType::kUInt8:
       return "uint8";
     case ElementType::kFloat32:
@@ -108,6 +110,8 @@ hid_t nativeType(ElementType type) {
   switch (type) {
     case ElementType::kInt32:
       return H5T_NATIVE_INT32;
+    case ElementType::kInt64:
+      return H5T_NATIVE_INT64;
     case ElementType::kUInt8:
       return H5T_NATIVE_UINT8;
     case ElementType::kFloat32:
@@ -147,7 +151,9 @@ ElementType classify(hid_t datatype) {
   const TypeClass type = typeClass(datatype);
   switch (type.kind) {
     case TypeClass::kSignedInteger:
-      return type.bytes == 4 ? ElementType::kInt32 : ElementType::kOther;
+      return type.bytes == 4   ? ElementType::kInt32
+             : type.bytes == 8 ? ElementType::kInt64
+                               : ElementType::kOther;
     case TypeClass::kUnsignedInteger:
       return type.bytes == 1 ? ElementType::kUInt8 : ElementType::kOther;
     case TypeClass::kFloat:
@@ -393,6 +399,8 @@ hid_t fileType(ElementType type) {
   switch (type) {
     case ElementType::kInt32:
       return H5T_STD_I32LE;
+    case ElementType::kInt64:
+      return H5T_STD_I64LE;
     case ElementType::kUInt8:
       return H5T_STD_U8LE;
     case ElementType::kFloat32:
@@ -404,15 +412,45 @@ hid_t fileType(ElementType type) {
   }
   return H5I_INVALID_HID;
 }
+
+// The dataset creation properties of `storage`: contiguous by default, or
+// chunked along the first axis with shuffle + deflate.
+Result<Handle> creationProperties(const std::vector<hsize_t>& dims, const Storage& storage) {
+  Handle properties = propertyListHandle(H5Pcreate(H5P_DATASET_CREATE));
+  std::uint64_t count = 1;
+  for (auto d : dims) {
+    count *= d;
+  }
+  if (!storage.compressed() || count == 0) {
+    return properties;
+  }
+  std::vector<hsize_t> chunk(dims);
+  std::uint64_t rowValues = 1;
+  for (size_t i = 1; i < dims.size(); ++i) {
+    rowValues *= dims[i];
+  }
+  chunk[0] = std::max<hsize_t>(1, std::min<hsize_t>(dims[0], storage.chunkValues / rowValues));
+  if (H5Pset_chunk(properties.get(), static_cast<int>(chunk.size()), chunk.data()) < 0 ||
+      H5Pset_shuffle(properties.get()) < 0 ||
+      H5Pset_deflate(properties.get(), static_cast<unsigned>(storage.deflateLevel)) < 0) {
+    return internalError(fmt::format("cannot set up compression ({})", lastHdf5Error()));
+  }
+  return properties;
+}
 }  // namespace
 
 Status writeDataset(hid_t location, const std::string& name, ElementType type,
-                    const std::vector<std::uint64_t>& dims, const void* data) {
+                    const std::vector<std::uint64_t>& dims, const void* data,
+                    const Storage& storage) {
   std::vector<hsize_t> hdims(dims.begin(), dims.end());
   Handle space =
       dataspaceHandle(H5Screate_simple(static_cast<int>(hdims.size()), hdims.data(), nullptr));
+  auto properties = creationProperties(hdims, storage);
+  if (!properties) {
+    return properties.status();
+  }
   Handle dataset = datasetHandle(H5Dcreate2(location, name.c_str(), fileType(type), space.get(),
-                                            H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+                                            H5P_DEFAULT, properties->get(), H5P_DEFAULT));
   if (!dataset.valid()) {
     return internalError(fmt::format("cannot create dataset {} ({})", name, lastHdf5Error()));
   }
@@ -447,6 +485,36 @@ Status readDataset(hid_t dataset, ElementType type, void* out) {
         fmt::format("read failed, the file may be truncated or corrupt ({})", lastHdf5Error()));
   }
   return Status::ok();
+}
+
+namespace {
+herr_t collectAttributeName(hid_t, const char* name, const H5A_info_t*, void* data) {
+  static_cast<std::vector<std::string>*>(data)->emplace_back(name);
+  return 0;
+}
+herr_t collectMemberName(hid_t, const char* name, const H5L_info_t*, void* data) {
+  static_cast<std::vector<std::string>*>(data)->emplace_back(name);
+  return 0;
+}
+}  // namespace
+
+Result<std::vector<std::string>> attributeNames(hid_t object) {
+  std::vector<std::string> names;
+  hsize_t index = 0;
+  if (H5Aiterate2(object, H5_INDEX_NAME, H5_ITER_INC, &index, collectAttributeName, &names) < 0) {
+    return failedPrecondition(
+        fmt::format("cannot list attributes: file is truncated or corrupt ({})", lastHdf5Error()));
+  }
+  return names;
+}
+
+Result<std::vector<std::string>> memberNames(hid_t group) {
+  std::vector<std::string> names;
+  if (H5Literate(group, H5_INDEX_NAME, H5_ITER_INC, nullptr, collectMemberName, &names) < 0) {
+    return failedPrecondition(
+        fmt::format("cannot list a group: file is truncated or corrupt ({})", lastHdf5Error()));
+  }
+  return names;
 }
 
 }  // namespace crackvis::dem::h5

@@ -16,16 +16,19 @@ constexpr Extent kM{Extent::kBonds};
 constexpr Extent kThree{Extent::kFixed, 3};
 constexpr Extent kTwo{Extent::kFixed, 2};
 
-const std::array<DatasetSpec, 8>& table() {
-  static const std::array<DatasetSpec, 8> layout = {{
+const std::array<DatasetSpec, 11>& table() {
+  static const std::array<DatasetSpec, 11> layout = {{
       {DemDataset::kRadius, "/particles/radius", false, true, ElementType::kFloat64, {kN}},
       {DemDataset::kPairs, "/bonds/pairs", false, true, ElementType::kInt32, {kM, kTwo}},
-      {DemDataset::kStrength, "/bonds/strength", false, true, ElementType::kFloat64, {kM}},
+      {DemDataset::kStrength, "/bonds/strength", false, false, ElementType::kFloat64, {kM}},
       {DemDataset::kBreakStep, "/bonds/break_step", false, true, ElementType::kInt32, {kM}},
       {DemDataset::kPositions, "positions", true, true, ElementType::kFloat64, {kN, kThree}},
       {DemDataset::kBondState, "bond_state", true, true, ElementType::kUInt8, {kM}},
       {DemDataset::kVelocities, "velocities", true, false, ElementType::kFloat32, {kN, kThree}},
       {DemDataset::kBondForce, "bond_force", true, false, ElementType::kFloat32, {kM}},
+      {DemDataset::kParticleId, "/particles/id", false, false, ElementType::kInt64, {kN}},
+      {DemDataset::kParticleGroup, "/particles/group", false, false, ElementType::kInt32, {kN}},
+      {DemDataset::kBondFlags, "/bonds/flags", false, false, ElementType::kUInt8, {kM}},
   }};
   return layout;
 }
@@ -126,9 +129,9 @@ Result<int> checkRootAttributes(const RootAttributes& root) {
         fmt::format("crackvis-dem file without a version ({})", root.version.status().message()));
   }
   if (*root.version != kFormatVersion) {
-    return failedPrecondition(
-        fmt::format("unsupported crackvis-dem version {} (this build reads version {})",
-                    *root.version, kFormatVersion));
+    return failedPrecondition(fmt::format(
+        "unsupported crackvis-dem version {} (this build reads version {}.x, up to {}.{})",
+        *root.version, kFormatVersion, kFormatVersion, kFormatMinorVersion));
   }
   if (!root.dimension) {
     return failedPrecondition(root.dimension.status().message());

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <numeric>
 
@@ -92,19 +93,94 @@ Status validateTopology(const Lattice& lattice) {
   return checkDuplicateBonds(lattice);
 }
 
+namespace {
+
+template <typename T>
+Status checkOptionalLength(const std::vector<T>& values, std::size_t expected, const char* what,
+                           const char* per) {
+  if (values.empty() || values.size() == expected) {
+    return Status::ok();
+  }
+  return invalidArgument(fmt::format("{} {} for {} {}", values.size(), what, expected, per));
+}
+
+Status checkUniqueIds(const std::vector<std::int64_t>& ids) {
+  std::vector<std::size_t> order(ids.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return ids[a] != ids[b] ? ids[a] < ids[b] : a < b;
+  });
+  for (std::size_t i = 1; i < order.size(); ++i) {
+    if (ids[order[i]] == ids[order[i - 1]]) {
+      return invalidArgument(fmt::format("particles {} and {} have the same id {}", order[i - 1],
+                                         order[i], ids[order[i]]));
+    }
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+Status validateName(const std::string& what, const std::string& name) {
+  const bool valid =
+      !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '.' || c == '-';
+      });
+  if (!valid) {
+    return invalidArgument(
+        fmt::format("{} name '{}': expected 1 to 64 characters of A-Z a-z 0-9 _ . -", what, name));
+  }
+  return Status::ok();
+}
+
+Status validateExtras(std::span<const ExtraArray> extras, std::size_t particleCount,
+                      std::size_t bondCount) {
+  for (std::size_t i = 0; i < extras.size(); ++i) {
+    const ExtraArray& extra = extras[i];
+    CRACKVIS_RETURN_IF_ERROR(validateName("extra array", extra.name));
+    for (std::size_t j = 0; j < i; ++j) {
+      if (extras[j].name == extra.name && extras[j].owner == extra.owner) {
+        return invalidArgument(fmt::format("extra array '{}' appears twice", extra.name));
+      }
+    }
+    if (extra.components != 1 && extra.components != 3) {
+      return invalidArgument(fmt::format("extra array '{}' has {} components, expected 1 or 3",
+                                         extra.name, extra.components));
+    }
+    const bool perParticle = extra.owner == ExtraOwner::kParticles;
+    const std::size_t rows = perParticle ? particleCount : bondCount;
+    if (extra.values.size() != rows * static_cast<std::size_t>(extra.components)) {
+      return invalidArgument(
+          fmt::format("extra array '{}' has {} values, expected {} x {} ({} = {})", extra.name,
+                      extra.values.size(), rows, extra.components, perParticle ? "N" : "M", rows));
+    }
+    const auto bad = std::find_if(extra.values.begin(), extra.values.end(),
+                                  [](double v) { return !std::isfinite(v); });
+    if (bad != extra.values.end()) {
+      return invalidArgument(fmt::format("extra array '{}': value {} is not finite ({})",
+                                         extra.name, bad - extra.values.begin(), *bad));
+    }
+  }
+  return Status::ok();
+}
+
 Status validateLattice(const Lattice& lattice) {
   CRACKVIS_RETURN_IF_ERROR(validateTopology(lattice));
-  if (lattice.strength.size() != lattice.bondCount()) {
-    return invalidArgument(fmt::format("{} bond strengths for {} bonds", lattice.strength.size(),
-                                       lattice.bondCount()));
-  }
+  const std::size_t n = lattice.particleCount();
+  const std::size_t m = lattice.bondCount();
+  CRACKVIS_RETURN_IF_ERROR(checkOptionalLength(lattice.strength, m, "bond strengths", "bonds"));
   for (std::size_t b = 0; b < lattice.strength.size(); ++b) {
     if (std::isnan(lattice.strength[b]) || lattice.strength[b] < 0.0) {
       return invalidArgument(
           fmt::format("strength of bond {} is {}, expected >= 0", b, lattice.strength[b]));
     }
   }
-  return Status::ok();
+  CRACKVIS_RETURN_IF_ERROR(checkOptionalLength(lattice.particleId, n, "particle ids", "particles"));
+  CRACKVIS_RETURN_IF_ERROR(checkUniqueIds(lattice.particleId));
+  CRACKVIS_RETURN_IF_ERROR(
+      checkOptionalLength(lattice.particleGroup, n, "particle groups", "particles"));
+  CRACKVIS_RETURN_IF_ERROR(checkOptionalLength(lattice.bondFlags, m, "bond flags", "bonds"));
+  return validateExtras(lattice.extras, n, m);
 }
 
 Status validateStep(const Lattice& lattice, const StepState& step) {
@@ -147,7 +223,23 @@ Status validateStep(int dimension, std::size_t n, std::size_t m, const StepState
           fmt::format("2D data set but particle {} has z = {} (expected 0)", i, p.z));
     }
   }
-  return validateBondStates(step.bondState);
+  CRACKVIS_RETURN_IF_ERROR(validateBondStates(step.bondState));
+  for (std::size_t i = 0; i < step.scalars.size(); ++i) {
+    const StepScalar& scalar = step.scalars[i];
+    CRACKVIS_RETURN_IF_ERROR(validateName("step scalar", scalar.name));
+    if (scalar.name == "time") {
+      return invalidArgument("step scalar 'time' is reserved (it is the step's time)");
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (step.scalars[j].name == scalar.name) {
+        return invalidArgument(fmt::format("step scalar '{}' appears twice", scalar.name));
+      }
+    }
+    if (!std::isfinite(scalar.value)) {
+      return invalidArgument(fmt::format("step scalar '{}' is not finite", scalar.name));
+    }
+  }
+  return validateExtras(step.extras, n, m);
 }
 
 Status validateBondStates(std::span<const std::uint8_t> bondState) {

@@ -52,7 +52,8 @@ SampleData makeSample(int dimension, int steps, bool optionalArrays) {
 }
 
 void writeSample(const std::string& path, const SampleData& sample) {
-  auto writer = dem::DemFileWriter::create(path, sample.lattice, {"crackvis tests", "SI"});
+  auto writer =
+      dem::DemFileWriter::create(path, sample.lattice, dem::metadataFrom("crackvis tests"));
   if (!writer) {
     throw std::runtime_error(writer.status().message());
   }

@@ -161,7 +161,8 @@ void writeCrackedRandomPacking(const std::string& path, int scattered) {
   spec.solidFraction = 0.55;
   auto packing = crackvis::dem::generateRandomPacking(spec);
   REQUIRE(packing.isOk());
-  auto writer = crackvis::dem::DemFileWriter::create(path, packing->lattice, {"test", "SI"});
+  auto writer = crackvis::dem::DemFileWriter::create(path, packing->lattice,
+                                                     crackvis::dem::metadataFrom("test"));
   REQUIRE(writer.isOk());
   crackvis::dem::StepState step;
   step.positions = packing->positions;

@@ -15,6 +15,7 @@
 #include <crackvis/cracks/dem_series.hpp>
 #include <crackvis/cracks/local_voronoi.hpp>
 #include <crackvis/cracks/voro_reference.hpp>
+#include <crackvis/dem/step_range.hpp>
 
 namespace crackvis::cli {
 namespace {
@@ -146,8 +147,8 @@ int runBenchMethods(const BenchMethodsOptions& options) {
     printError("bench methods", series.status().message());
     return kExitFailure;
   }
-  auto steps = cracks::parseStepRange(options.steps.empty() ? "0:-1" : options.steps,
-                                      (*series)->stepCount());
+  auto steps =
+      dem::parseStepRange(options.steps.empty() ? "0:-1" : options.steps, (*series)->stepCount());
   if (!steps) {
     printError("bench methods", steps.status().message());
     return kExitFailure;

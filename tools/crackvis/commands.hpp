@@ -34,6 +34,7 @@ Command addSnapshotCommand(CLI::App& parent);
 Command addBenchMethodsCommand(CLI::App& bench);
 Command addSimCommand(CLI::App& parent);
 Command addHealthCommand(CLI::App& parent);
+Command addImportCommand(CLI::App& parent);
 // Under `crackvis bench`: transfer | methods | render
 // (Declared here as each lands; main.cpp wires them.)
 Command addBenchTransferCommand(CLI::App& bench);

@@ -13,6 +13,7 @@
 #include <crackvis/cracks/dem_series.hpp>
 #include <crackvis/cracks/mesh_writers.hpp>
 #include <crackvis/cracks/metrics.hpp>
+#include <crackvis/dem/step_range.hpp>
 
 namespace crackvis::cli {
 namespace {
@@ -211,8 +212,8 @@ int runExtract(ExtractCommandOptions options) {
     printError("extract", series.status().message());
     return kExitFailure;
   }
-  auto steps = cracks::parseStepRange(options.steps.empty() ? "0:-1" : options.steps,
-                                      (*series)->stepCount());
+  auto steps =
+      dem::parseStepRange(options.steps.empty() ? "0:-1" : options.steps, (*series)->stepCount());
   if (!steps) {
     printError("extract", steps.status().message());
     return kExitFailure;

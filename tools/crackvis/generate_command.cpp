@@ -170,7 +170,11 @@ Result<Generated> generateRandom(const GenerateOptions& options) {
 // One intact step, or with --planted-crack the series of a planted through
 // crack, written step by step.
 Status writeSteps(const GenerateOptions& options, const Generated& generated) {
-  auto writer = dem::DemFileWriter::create(options.output, generated.lattice, {invocation(), "SI"});
+  dem::DemMetadata metadata;
+  metadata.source = invocation();
+  metadata.sourceCode = "crackvis generate";
+  metadata.sourceVersion = CRACKVIS_VERSION;
+  auto writer = dem::DemFileWriter::create(options.output, generated.lattice, metadata);
   if (!writer) {
     return writer.status();
   }

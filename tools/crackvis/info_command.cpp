@@ -32,6 +32,8 @@ struct StepRow {
 struct FileSummary {
   dem::DemFileInfo info;
   double meanCoordination = 0.0;
+  std::int64_t cutAtStart = 0;       // bonds flagged as a notch (v1.1)
+  std::vector<std::int32_t> groups;  // distinct particle group labels (v1.1)
   // The cells the crack methods use by default (--decomposition auto) and
   // why: the lattice's, or a triangulation, Delaunay or regular.
   std::string cells;
@@ -96,6 +98,13 @@ Result<FileSummary> summarize(const InfoOptions& options) {
                                        static_cast<double>(lattice->particleCount())
                                  : 0.0;
   summary.cells = defaultCells(*lattice, summary.info.dimension);
+  for (std::size_t b = 0; b < lattice->bondCount(); ++b) {
+    summary.cutAtStart += lattice->cutAtStart(b) ? 1 : 0;
+  }
+  summary.groups = lattice->particleGroup;
+  std::sort(summary.groups.begin(), summary.groups.end());
+  summary.groups.erase(std::unique(summary.groups.begin(), summary.groups.end()),
+                       summary.groups.end());
   const int steps = reader->stepCount();
   std::vector<int> wanted;
   if (options.perStep) {
@@ -119,12 +128,47 @@ Result<FileSummary> summarize(const InfoOptions& options) {
   return summary;
 }
 
+std::string extraLabel(const dem::ExtraInfo& extra) {
+  return fmt::format("{}/{}{}{}",
+                     extra.owner == dem::ExtraOwner::kParticles ? "particles" : "bonds", extra.name,
+                     extra.components == 3 ? " [3]" : "", extra.perStep ? " (per step)" : "");
+}
+
+nlohmann::json extrasJson(const dem::DemFileInfo& info) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const dem::ExtraInfo& extra : info.extras) {
+    out.push_back({{"name", extra.name},
+                   {"owner", extra.owner == dem::ExtraOwner::kParticles ? "particles" : "bonds"},
+                   {"components", extra.components},
+                   {"per_step", extra.perStep}});
+  }
+  return out;
+}
+
+// A step's scalar by name; NaN when that step has none.
+double scalarOf(const dem::StepInfo& step, const std::string& name) {
+  for (const dem::StepScalar& scalar : step.scalars) {
+    if (scalar.name == name) {
+      return scalar.value;
+    }
+  }
+  return std::nan("");
+}
+
 nlohmann::json toJson(const FileSummary& summary, bool perStep) {
   const auto& info = summary.info;
   nlohmann::json out = {
       {"file", info.path},
       {"format", info.format},
       {"version", info.version},
+      {"version_minor", info.minorVersion},
+      {"source_code", info.sourceCode},
+      {"source_version", info.sourceVersion},
+      {"source_files", info.sourceFiles},
+      {"bonds_cut_at_start", summary.cutAtStart},
+      {"particle_groups", summary.groups},
+      {"step_scalars", info.scalarNames},
+      {"extras", extrasJson(info)},
       {"dimension", info.dimension},
       {"units", info.units},
       {"source", info.source},
@@ -148,10 +192,13 @@ nlohmann::json toJson(const FileSummary& summary, bool perStep) {
   if (perStep) {
     out["per_step"] = nlohmann::json::array();
     for (const StepRow& row : summary.rows) {
-      out["per_step"].push_back({{"step", row.step},
-                                 {"time", row.time},
-                                 {"broken", row.broken},
-                                 {"new", row.newlyBroken}});
+      nlohmann::json entry = {
+          {"step", row.step}, {"time", row.time}, {"broken", row.broken}, {"new", row.newlyBroken}};
+      const auto& stepInfo = info.steps[static_cast<std::size_t>(row.step)];
+      for (const dem::StepScalar& scalar : stepInfo.scalars) {
+        entry["scalars"][scalar.name] = scalar.value;
+      }
+      out["per_step"].push_back(entry);
     }
   }
   return out;
@@ -161,10 +208,16 @@ void printText(const FileSummary& summary, bool perStep) {
   const auto& info = summary.info;
   const auto m = info.bondCount;
   fmt::print("file          {}\n", info.path);
-  fmt::print("format        {} v{}\n", info.format, info.version);
+  fmt::print("format        {} v{}.{}\n", info.format, info.version, info.minorVersion);
   fmt::print("dimension     {}D\n", info.dimension);
   fmt::print("particles     N = {}\n", info.particleCount);
-  fmt::print("bonds         M = {} (mean coordination {:.3f})\n", m, summary.meanCoordination);
+  fmt::print("bonds         M = {} (mean coordination {:.3f}{})\n", m, summary.meanCoordination,
+             summary.cutAtStart > 0
+                 ? fmt::format(", {} cut at the start: a notch", summary.cutAtStart)
+                 : std::string());
+  if (!summary.groups.empty()) {
+    fmt::print("groups        {}\n", fmt::join(summary.groups, ", "));
+  }
   fmt::print("crack cells   {}\n", summary.cells);
   if (summary.rows.empty()) {
     fmt::print("steps         0\n");
@@ -173,8 +226,11 @@ void printText(const FileSummary& summary, bool perStep) {
                info.steps.front().time, info.steps.back().time);
     const StepRow& first = summary.rows.front();
     const StepRow& last = summary.rows.back();
-    fmt::print("broken bonds  first step: {} ({:.2f} %), last step: {} ({:.2f} %)\n", first.broken,
-               percent(first.broken, m), last.broken, percent(last.broken, m));
+    fmt::print("broken bonds  first step: {} ({:.2f} %), last step: {} ({:.2f} %){}\n",
+               first.broken, percent(first.broken, m), last.broken, percent(last.broken, m),
+               summary.cutAtStart > 0
+                   ? fmt::format("; {} of them by load", last.broken - summary.cutAtStart)
+                   : std::string());
   }
   if (info.stoppedEarly()) {
     fmt::print("stopped early the run wrote {} of {} planned steps\n", info.steps.size(),
@@ -184,15 +240,42 @@ void printText(const FileSummary& summary, bool perStep) {
     fmt::print("incomplete    {} step group(s) left unfinished by an interrupted writer\n",
                info.incompleteSteps);
   }
+  if (!info.scalarNames.empty()) {
+    fmt::print("step scalars  {}\n", fmt::join(info.scalarNames, ", "));
+  }
+  if (!info.extras.empty()) {
+    std::vector<std::string> labels;
+    for (const dem::ExtraInfo& extra : info.extras) {
+      labels.push_back(extraLabel(extra));
+    }
+    fmt::print("extra arrays  {}\n", fmt::join(labels, ", "));
+  }
+  if (!info.sourceCode.empty()) {
+    fmt::print("made by       {}{}\n", info.sourceCode,
+               info.sourceVersion.empty() ? "" : fmt::format(" ({})", info.sourceVersion));
+  }
+  if (!info.sourceFiles.empty()) {
+    fmt::print("input files   {}{}\n", info.sourceFiles.size(),
+               info.sourceFiles.size() > 0 ? fmt::format(" ({} ...)", info.sourceFiles.front())
+                                           : std::string());
+  }
   if (!info.source.empty()) {
     fmt::print("source        {}\n", info.source);
   }
   if (perStep) {
-    fmt::print("\n{:>8} {:>14} {:>10} {:>9} {:>8}\n", "step", "time [s]", "broken", "broken %",
+    fmt::print("\n{:>8} {:>14} {:>10} {:>9} {:>8}", "step", "time [s]", "broken", "broken %",
                "new");
+    for (const std::string& name : info.scalarNames) {
+      fmt::print(" {:>14}", name.substr(0, 14));
+    }
+    fmt::print("\n");
     for (const StepRow& row : summary.rows) {
-      fmt::print("{:>8} {:>14.6g} {:>10} {:>9.3f} {:>8}\n", row.step, row.time, row.broken,
+      fmt::print("{:>8} {:>14.6g} {:>10} {:>9.3f} {:>8}", row.step, row.time, row.broken,
                  percent(row.broken, m), row.newlyBroken);
+      for (const std::string& name : info.scalarNames) {
+        fmt::print(" {:>14.6g}", scalarOf(info.steps[static_cast<std::size_t>(row.step)], name));
+      }
+      fmt::print("\n");
     }
   }
 }
@@ -224,7 +307,8 @@ Command addInfoCommand(CLI::App& parent) {
       "line and the exit status is 1.");
   command->add_option("file", options->file, "HDF5 file in the crackvis-dem layout")->required();
   command->add_flag("--steps", options->perStep,
-                    "Add a per-step table: time, broken bonds, newly broken bonds");
+                    "Add a per-step table: time, broken bonds, newly broken bonds and the "
+                    "file's step scalars (load, displacement...)");
   command->add_flag("--json", options->json, "Print JSON instead of text");
   return {command, [options] { return runInfo(*options); }};
 }

@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
 
   std::vector<Command> commands;
   commands.push_back(addGenerateCommand(app));
+  commands.push_back(addImportCommand(app));
   commands.push_back(addInfoCommand(app));
   commands.push_back(addExtractCommand(app));
   commands.push_back(addSnapshotCommand(app));

@@ -132,7 +132,9 @@ int runSim(const SimOptions& options, bool setGiven) {
   progress.setEnabled(!options.quiet);
   sim::RunOptions run;
   run.path = options.output;
-  run.metadata = {invocation(), "SI"};
+  run.metadata.source = invocation();
+  run.metadata.sourceCode = "crackvis sim";
+  run.metadata.sourceVersion = CRACKVIS_VERSION;
   run.stepsPerSave = preset->stepsPerSave;
   run.savedSteps = preset->savedSteps;
   run.writeVelocities = !options.noVelocities;

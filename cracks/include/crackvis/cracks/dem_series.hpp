@@ -37,8 +37,4 @@ class DemSeries {
   std::vector<dem::Vec3> m_reference;
 };
 
-// Parses "A", "A:B" or "A:B:K" (inclusive, stride K; negative A or B count
-// from the end, -1 the last step) against a file of `stepCount` steps.
-Result<std::vector<int>> parseStepRange(const std::string& text, int stepCount);
-
 }  // namespace crackvis::cracks

@@ -21,7 +21,10 @@
 namespace crackvis::dem {
 
 inline constexpr std::string_view kFormatName = "crackvis-dem";
+// The major version: a reader refuses any other. The minor version (root
+// attribute `version_minor`, absent in v1.0 files) only adds optional parts.
 inline constexpr int kFormatVersion = 1;
+inline constexpr int kFormatMinorVersion = 1;
 // The attribute of /steps that records how many steps a writer planned.
 inline constexpr const char* kPlannedStepsAttribute = "planned";
 
@@ -33,12 +36,35 @@ struct DemMetadata {
   std::string source;  // what produced the file, e.g. "crackvis sim cuboid3d --set A"
   std::string units = "SI";
   int plannedSteps = 0;  // steps the writer means to write (/steps@planned); 0: not recorded
+  // v1.1 provenance of imported data (empty: not recorded).
+  std::string sourceCode;                // "LAMMPS", "Yade", "ESyS-Particle", "crackvis sim"
+  std::string sourceVersion;             // the code's version as it reported it
+  std::vector<std::string> sourceFiles;  // the input files, as given
+  h5::Storage storage;                   // per-step datasets: contiguous or compressed
 };
+
+// Metadata naming only what produced the file.
+inline DemMetadata metadataFrom(std::string source) {
+  DemMetadata metadata;
+  metadata.source = std::move(source);
+  return metadata;
+}
 
 struct StepInfo {
   int index = 0;
   double time = 0.0;
+  std::vector<StepScalar> scalars;  // the step's named scalars (v1.1)
 };
+
+// An extra array a file holds (v1.1), as its header describes it.
+struct ExtraInfo {
+  std::string name;
+  ExtraOwner owner = ExtraOwner::kParticles;
+  int components = 1;
+  bool perStep = false;  // under each step group (seen in step 0), else constant
+};
+// "/extra/particles/NAME", or "/steps/000042/extra/bonds/NAME" per step.
+std::string extraPath(const ExtraInfo& extra, int step = 0);
 
 // What a file holds, read from its attributes and dataset headers only.
 struct DemFileInfo {
@@ -53,6 +79,13 @@ struct DemFileInfo {
   std::vector<StepInfo> steps;     // complete steps, in order
   int incompleteSteps = 0;         // step groups an interrupted writer left unfinished
   std::int64_t plannedSteps = 0;   // /steps@planned: steps the writer meant to write; 0 unknown
+  int minorVersion = 0;            // root attribute version_minor; 0 when absent (v1.0)
+  std::string sourceCode;          // v1.1 provenance; empty when not recorded
+  std::string sourceVersion;
+  std::vector<std::string> sourceFiles;
+  bool hasStrength = false;              // /bonds/strength present (required before v1.1)
+  std::vector<std::string> scalarNames;  // step scalars of any step, in first-seen order
+  std::vector<ExtraInfo> extras;         // constant ones, then per-step ones (of step 0)
   // Whether the writer stopped before writing the steps it planned.
   bool stoppedEarly() const { return plannedSteps > static_cast<std::int64_t>(steps.size()); }
 };
@@ -67,14 +100,16 @@ class DemFileReader {
   const DemFileInfo& info() const { return m_info; }
   int stepCount() const { return static_cast<int>(m_info.steps.size()); }
 
-  // Radii, bonds and strengths; validated (bond indices, self and duplicate
+  // Radii, bonds, strengths and the optional v1.1 arrays (ids, groups, bond
+  // flags, constant extras); validated (bond indices, self and duplicate
   // bonds, radii). Every content problem is FAILED_PRECONDITION naming the
   // file and the first bad index; a step out of range is OUT_OF_RANGE
   // (checkStepInRange).
   Result<Lattice> readLattice() const;
   // /bonds/break_step: first step at which each bond is broken, -1 never.
   Result<std::vector<std::int32_t>> readBreakSteps() const;
-  // One whole step: a few contiguous reads, validated against N and M.
+  // One whole step with its scalars and extra arrays: a few contiguous reads,
+  // validated against N and M.
   Result<StepState> readStep(int step) const;
   // Only the bond states of a step (for statistics over many steps).
   Result<std::vector<std::uint8_t>> readBondState(int step) const;
@@ -84,8 +119,20 @@ class DemFileReader {
   Status fail(const Status& status) const;
   Status readStructure();
   Status readSteps();
+  struct OpenedDataset {
+    h5::Handle dataset;
+    h5::DatasetShape shape;
+  };
+  // Opens a dataset by links inside the file only, with its shape.
+  Result<OpenedDataset> openInFile(const std::string& path) const;
   Result<h5::Handle> openChecked(DemDataset id, int step = 0) const;
   Status readWhole(DemDataset id, int step, void* out) const;
+  Status readOptional(DemDataset id, std::uint64_t count, void* out, bool& present) const;
+  Status readProvenance();
+  Status listExtras();
+  Result<h5::Handle> openExtra(const ExtraInfo& extra, int step) const;
+  Result<ExtraArray> readExtra(const ExtraInfo& extra, int step) const;
+  Result<std::vector<StepScalar>> readScalars(hid_t stepGroup, int step) const;
 
   std::string m_path;
   h5::Handle m_file;
@@ -94,7 +141,8 @@ class DemFileReader {
 
 class DemFileWriter {
  public:
-  // Creates (or truncates) `path` and writes the time-independent part.
+  // Creates (or truncates) `path` and writes the time-independent part
+  // (crackvis-dem v1.1: the optional arrays only when the lattice has them).
   static Result<DemFileWriter> create(const std::string& path, const Lattice& lattice,
                                       const DemMetadata& metadata);
 
@@ -114,12 +162,14 @@ class DemFileWriter {
   DemFileWriter() = default;
   Status recordBreaks(const StepState& step, bool& changed);
   Status writeStepData(const StepState& step, bool breaksChanged);
+  Status writeExtras(hid_t location, const std::vector<ExtraArray>& extras);
   Status flush();
   void abandon();
 
   std::string m_path;
   h5::Handle m_file;
   Lattice m_lattice;
+  h5::Storage m_storage;
   std::vector<std::int32_t> m_breakStep;
   int m_stepCount = 0;
 };

@@ -89,7 +89,7 @@ inline Handle propertyListHandle(hid_t id) {
 }
 
 // The element types crackvis files use, with their names in messages.
-enum class ElementType { kInt32, kUInt8, kFloat32, kFloat64, kOther };
+enum class ElementType { kInt32, kInt64, kUInt8, kFloat32, kFloat64, kOther };
 const char* elementTypeName(ElementType type);
 // Native in-memory HDF5 type for reads and writes.
 hid_t nativeType(ElementType type);
@@ -139,9 +139,23 @@ Status writeStringAttribute(hid_t object, const std::string& name, const std::st
 Status writeIntAttribute(hid_t object, const std::string& name, std::int64_t value);
 Status writeDoubleAttribute(hid_t object, const std::string& name, double value);
 
-// Creates a contiguous dataset of the given shape and writes `data` into it.
+// How a written dataset is stored: contiguous (the default, what partial
+// reads of uncompressed files rely on), or chunked along its first axis with
+// HDF5's shuffle and deflate filters (both built into every libhdf5).
+struct Storage {
+  int deflateLevel = 0;                  // 0: contiguous; 1..9: chunked + shuffle + deflate
+  std::uint64_t chunkValues = 1u << 16;  // values per chunk (rows x row width)
+  bool compressed() const { return deflateLevel > 0; }
+};
+
+// Creates a dataset of the given shape and writes `data` into it.
 Status writeDataset(hid_t location, const std::string& name, ElementType type,
-                    const std::vector<std::uint64_t>& dims, const void* data);
+                    const std::vector<std::uint64_t>& dims, const void* data,
+                    const Storage& storage = {});
+// The names of an object's attributes, in name order.
+Result<std::vector<std::string>> attributeNames(hid_t object);
+// The names of a group's members (links), in name order.
+Result<std::vector<std::string>> memberNames(hid_t group);
 // Overwrites the whole of an existing dataset.
 Status overwriteDataset(hid_t location, const std::string& name, ElementType type,
                         const void* data);

@@ -30,6 +30,10 @@ enum class DemDataset {
   kBondState,   // per step
   kVelocities,  // per step, optional
   kBondForce,   // per step, optional
+  // v1.1, all optional:
+  kParticleId,
+  kParticleGroup,
+  kBondFlags,
 };
 
 // One extent of a dataset's shape: the particle count N, the bond count M,
@@ -93,7 +97,8 @@ struct RootAttributes {
   Result<std::int64_t> version = notFound("missing attribute 'version'");
   Result<std::int64_t> dimension = notFound("missing attribute 'dimension'");
 };
-// Format, version and dimension; the dimension on success.
+// Format, version and dimension; the dimension on success. Any minor version
+// of major version 1 is read: v1.1 only adds optional datasets.
 Result<int> checkRootAttributes(const RootAttributes& root);
 
 // The complete steps /steps@count promises. `stepTime(k)` reads the time

@@ -71,15 +71,54 @@ static_assert(sizeof(Bond) == 2 * sizeof(std::int32_t), "Bond must map onto int3
 // Values of a bond_state array.
 enum class BondState : std::uint8_t { kIntact = 0, kBroken = 1 };
 
-// The time-independent part of a data set: what every step shares.
+// Bits of a bond's flags (crackvis-dem v1.1 /bonds/flags).
+enum BondFlag : std::uint8_t {
+  // Cut or absent at the start (a notch, a pre-existing joint): broken from
+  // the first step on, but not by load.
+  kBondCutAtStart = 1,
+};
+
+// What an extra array belongs to.
+enum class ExtraOwner { kParticles, kBonds };
+
+// A named quantity a source code wrote beside the layout's own arrays
+// (damage, forces, coordination...): crackvis-dem v1.1 `extra/NAME`, carried
+// along so a view can colour by it. Values are row-major [count, components].
+struct ExtraArray {
+  std::string name;
+  ExtraOwner owner = ExtraOwner::kParticles;
+  int components = 1;  // 1 (scalar) or 3 (vector)
+  std::vector<double> values;
+
+  std::size_t rows() const { return components > 0 ? values.size() / components : 0; }
+};
+
+// A named per-step scalar (load, displacement, energy...): v1.1.
+struct StepScalar {
+  std::string name;
+  double value = 0.0;
+
+  friend bool operator==(const StepScalar&, const StepScalar&) = default;
+};
+
+// The time-independent part of a data set: what every step shares. The
+// arrays marked optional are empty when a file does not hold them.
 struct Lattice {
   int dimension = 3;             // 2 or 3
   std::vector<double> radius;    // [N] particle radii, m
   std::vector<Bond> bonds;       // [M] the fixed lattice topology
-  std::vector<double> strength;  // [M] tensile strength R_n of each bond, N
+  std::vector<double> strength;  // [M] tensile strength R_n of each bond, N; optional (v1.1)
+  std::vector<std::int64_t> particleId;     // [N] the source code's particle ids; optional
+  std::vector<std::int32_t> particleGroup;  // [N] group label (clamp, material...); optional
+  std::vector<std::uint8_t> bondFlags;      // [M] BondFlag bits; optional
+  std::vector<ExtraArray> extras;           // constant extra arrays
 
   std::size_t particleCount() const { return radius.size(); }
   std::size_t bondCount() const { return bonds.size(); }
+  // Whether bond b was cut at the start (a notch) rather than broken by load.
+  bool cutAtStart(std::size_t b) const {
+    return !bondFlags.empty() && (bondFlags[b] & kBondCutAtStart) != 0;
+  }
 };
 
 // The state of the lattice at one saved time step.
@@ -89,9 +128,19 @@ struct StepState {
   std::vector<std::uint8_t> bondState;           // [M] BondState values
   std::vector<std::array<float, 3>> velocities;  // [N] optional, m/s
   std::vector<float> bondForce;                  // [M] optional normal force, N
+  std::vector<StepScalar> scalars;               // named scalars of this step (v1.1)
+  std::vector<ExtraArray> extras;                // per-step extra arrays (v1.1)
 
   std::size_t brokenBondCount() const;
 };
+
+// Names of extra arrays and step scalars: 1..64 characters of [A-Za-z0-9_.-],
+// so they are safe as HDF5 link names and in pipeline descriptions.
+Status validateName(const std::string& what, const std::string& name);
+// Checks extra arrays against N and M: valid unique names, 1 or 3
+// components, the right number of rows, finite values.
+Status validateExtras(std::span<const ExtraArray> extras, std::size_t particleCount,
+                      std::size_t bondCount);
 
 // The largest coordinate or radius a data set may hold, m: far beyond any
 // specimen, and small enough that differences and bounding boxes of
@@ -99,9 +148,11 @@ struct StepState {
 inline constexpr double kMaxCoordinate = 1e15;
 
 // Checks what a lattice must satisfy whatever its source: dimension 2 or 3,
-// positive finite radii (up to kMaxCoordinate), strengths of length M that
-// are not NaN or negative, bond ends in range, no self-bond, no duplicate
-// bond. The message names the first offending bond or particle.
+// positive finite radii (up to kMaxCoordinate), strengths (when present) of
+// length M that are not NaN or negative, bond ends in range, no self-bond, no
+// duplicate bond, optional per-particle and per-bond arrays of the right
+// length, particle ids unique, extras valid. The message names the first
+// offending bond or particle.
 Status validateLattice(const Lattice& lattice);
 // The same without the strengths (a view reads no strengths): the one check
 // of radii and bonds that `crackvis info`, `extract` and the render server's

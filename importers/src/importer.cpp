@@ -1,0 +1,587 @@
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <numeric>
+#include <optional>
+#include <unordered_map>
+
+#include <fmt/format.h>
+
+#include "scalar_table.hpp"
+#include <crackvis/common/progress.hpp>
+#include <crackvis/dem/dem_file.hpp>
+#include <crackvis/dem/step_range.hpp>
+#include <crackvis/importers/importer.hpp>
+
+namespace crackvis::importers {
+namespace {
+
+using dem::BondState;
+
+constexpr auto kIntact = static_cast<std::uint8_t>(BondState::kIntact);
+constexpr auto kBroken = static_cast<std::uint8_t>(BondState::kBroken);
+
+std::uint64_t pairKey(dem::ParticleIndex a, dem::ParticleIndex b) {
+  const auto lo = static_cast<std::uint32_t>(std::min(a, b));
+  const auto hi = static_cast<std::uint32_t>(std::max(a, b));
+  return (std::uint64_t{lo} << 32) | hi;
+}
+
+// Fixes the particle order and the lattice at the first imported step, then
+// converts each later step against them.
+class SeriesConverter {
+ public:
+  SeriesConverter(const SourceDescription& description, double timestep, const ScalarTable* table)
+      : m_description(description), m_timestep(timestep), m_table(table) {}
+
+  Status begin(const SourceStep& first);
+  Result<dem::StepState> convert(const SourceStep& step);
+
+  const dem::Lattice& lattice() const { return m_lattice; }
+  std::size_t reappeared() const { return m_reappeared; }
+  bool timesFromSource() const { return m_timesFromSource; }
+
+ private:
+  Status placeParticles(const SourceStep& step, std::vector<dem::ParticleIndex>& rowIndex) const;
+  Result<dem::ParticleIndex> indexOf(std::int64_t id, const SourceStep& step) const;
+  Status updateBonds(const SourceStep& step, const std::vector<dem::ParticleIndex>& rowIndex,
+                     std::vector<dem::BondIndex>& bondOfRow);
+  void addExtras(const SourceStep& step, const std::vector<dem::ParticleIndex>& rowIndex,
+                 const std::vector<dem::BondIndex>& bondOfRow, dem::StepState& out) const;
+  std::vector<dem::StepScalar> scalarsOf(const SourceStep& step) const;
+  std::optional<double> timeFromTable(std::int64_t sourceStep) const;
+  Status checkSameArrays(const SourceStep& step, const dem::StepState& out);
+
+  SourceDescription m_description;
+  double m_timestep = 0.0;
+  const ScalarTable* m_table = nullptr;
+  dem::Lattice m_lattice;
+  std::unordered_map<std::int64_t, dem::ParticleIndex> m_indexOfId;
+  std::unordered_map<std::uint64_t, dem::BondIndex> m_bondOfPair;
+  std::vector<std::uint8_t> m_state;
+  std::size_t m_reappeared = 0;
+  bool m_timesFromSource = false;
+  bool m_arraysKnown = false;
+  bool m_withVelocities = false;
+  std::vector<std::string> m_extraNames;  // per-step arrays of the first step
+};
+
+std::vector<std::string> extraNames(const dem::StepState& state) {
+  std::vector<std::string> names;
+  for (const dem::ExtraArray& extra : state.extras) {
+    names.push_back(fmt::format("{}", extra.name));
+  }
+  return names;
+}
+
+// Every step of a crackvis-dem file holds the same per-step arrays, so the
+// first imported step's set is the rule for the rest.
+Status SeriesConverter::checkSameArrays(const SourceStep& step, const dem::StepState& out) {
+  const std::vector<std::string> names = extraNames(out);
+  if (!m_arraysKnown) {
+    m_arraysKnown = true;
+    m_withVelocities = !out.velocities.empty();
+    m_extraNames = names;
+    return Status::ok();
+  }
+  for (const std::string& name : m_extraNames) {
+    if (std::find(names.begin(), names.end(), name) == names.end()) {
+      return failedPrecondition(fmt::format(
+          "{}: step {}: no array '{}', which the first imported step had (every step needs the "
+          "same arrays)",
+          step.origin, step.sourceStep, name));
+    }
+  }
+  for (const std::string& name : names) {
+    if (std::find(m_extraNames.begin(), m_extraNames.end(), name) == m_extraNames.end()) {
+      return failedPrecondition(fmt::format(
+          "{}: step {}: array '{}' is new: the first imported step had none (every step needs "
+          "the same arrays)",
+          step.origin, step.sourceStep, name));
+    }
+  }
+  if (m_withVelocities != !out.velocities.empty()) {
+    return failedPrecondition(
+        fmt::format("{}: step {}: velocities {} (every step needs the same arrays)", step.origin,
+                    step.sourceStep, m_withVelocities ? "are missing" : "appear"));
+  }
+  return Status::ok();
+}
+
+Status unlistedEnd(const SourceStep& step, const SourceBond& bond, std::int64_t id) {
+  return failedPrecondition(
+      fmt::format("{}: step {}: bond {}-{} joins particle id {}, which the step does not list",
+                  step.origin, step.sourceStep, bond.first, bond.second, id));
+}
+
+Result<dem::ParticleIndex> SeriesConverter::indexOf(std::int64_t id, const SourceStep& step) const {
+  const auto found = m_indexOfId.find(id);
+  if (found == m_indexOfId.end()) {
+    return failedPrecondition(fmt::format(
+        "{}: step {}: particle id {} appears, but the first imported step has no such particle "
+        "(crackvis needs the same particles at every step)",
+        step.origin, step.sourceStep, id));
+  }
+  return found->second;
+}
+
+Status SeriesConverter::begin(const SourceStep& first) {
+  const std::size_t n = first.ids.size();
+  if (n == 0) {
+    return failedPrecondition(
+        fmt::format("{}: step {}: no particles", first.origin, first.sourceStep));
+  }
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return first.ids[a] < first.ids[b]; });
+  // A 3D code's flat run (all z = 0) is a 2D data set.
+  const bool flat = std::all_of(first.positions.begin(), first.positions.end(),
+                                [](const dem::Vec3& p) { return p.z == 0.0; });
+  m_lattice.dimension = flat ? 2 : m_description.dimension;
+  m_lattice.particleId.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    m_lattice.particleId[i] = first.ids[order[i]];
+    if (!m_indexOfId.emplace(m_lattice.particleId[i], static_cast<dem::ParticleIndex>(i)).second) {
+      return failedPrecondition(fmt::format("{}: step {}: particle id {} is listed twice",
+                                            first.origin, first.sourceStep,
+                                            m_lattice.particleId[i]));
+    }
+  }
+  m_lattice.radius.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    m_lattice.radius[i] = first.radius[order[i]];
+  }
+  if (!first.group.empty()) {
+    m_lattice.particleGroup.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      m_lattice.particleGroup[i] = first.group[order[i]];
+    }
+  }
+  // The lattice: every bond listed at the first step, in pair order.
+  struct Listed {
+    std::uint64_t key;
+    bool cohesive;
+    double strength;
+  };
+  std::vector<Listed> listed;
+  listed.reserve(first.bonds.size());
+  for (const SourceBond& bond : first.bonds) {
+    auto a = indexOf(bond.first, first);
+    auto b = indexOf(bond.second, first);
+    if (!a || !b) {
+      return unlistedEnd(first, bond, !a ? bond.first : bond.second);
+    }
+    if (*a == *b) {
+      return failedPrecondition(fmt::format("{}: step {}: bond {}-{} joins a particle to itself",
+                                            first.origin, first.sourceStep, bond.first,
+                                            bond.second));
+    }
+    const std::size_t row = listed.size();
+    listed.push_back({pairKey(*a, *b), bond.cohesive,
+                      first.bondStrength.empty() ? 0.0 : first.bondStrength[row]});
+  }
+  std::sort(listed.begin(), listed.end(),
+            [](const Listed& x, const Listed& y) { return x.key < y.key; });
+  for (std::size_t k = 0; k < listed.size(); ++k) {
+    if (k > 0 && listed[k].key == listed[k - 1].key) {
+      const auto lo = static_cast<std::size_t>(listed[k].key >> 32);
+      const auto hi = static_cast<std::size_t>(listed[k].key & 0xffffffffu);
+      return failedPrecondition(fmt::format("{}: step {}: bond {}-{} is listed twice", first.origin,
+                                            first.sourceStep, m_lattice.particleId[lo],
+                                            m_lattice.particleId[hi]));
+    }
+    const auto lo = static_cast<dem::ParticleIndex>(listed[k].key >> 32);
+    const auto hi = static_cast<dem::ParticleIndex>(listed[k].key & 0xffffffffu);
+    m_bondOfPair.emplace(listed[k].key, static_cast<dem::BondIndex>(m_lattice.bonds.size()));
+    m_lattice.bonds.push_back({lo, hi});
+    m_lattice.bondFlags.push_back(listed[k].cohesive ? 0 : dem::kBondCutAtStart);
+    if (!first.bondStrength.empty()) {
+      m_lattice.strength.push_back(listed[k].strength);
+    }
+    m_state.push_back(listed[k].cohesive ? kIntact : kBroken);
+  }
+  return dem::validateLattice(m_lattice);
+}
+
+Status SeriesConverter::placeParticles(const SourceStep& step,
+                                       std::vector<dem::ParticleIndex>& rowIndex) const {
+  const std::size_t n = m_lattice.particleCount();
+  rowIndex.assign(step.ids.size(), -1);
+  std::vector<std::uint8_t> seen(n, 0);
+  for (std::size_t row = 0; row < step.ids.size(); ++row) {
+    auto index = indexOf(step.ids[row], step);
+    if (!index) {
+      return index.status();
+    }
+    if (seen[static_cast<std::size_t>(*index)] != 0) {
+      return failedPrecondition(fmt::format("{}: step {}: particle id {} is listed twice",
+                                            step.origin, step.sourceStep, step.ids[row]));
+    }
+    seen[static_cast<std::size_t>(*index)] = 1;
+    rowIndex[row] = *index;
+  }
+  if (step.ids.size() != n) {
+    const auto missing = std::find(seen.begin(), seen.end(), std::uint8_t{0}) - seen.begin();
+    return failedPrecondition(fmt::format(
+        "{}: step {}: particle id {} vanished (the step lists {} particles, the first imported "
+        "step {}; crackvis needs the same particles at every step)",
+        step.origin, step.sourceStep, m_lattice.particleId[static_cast<std::size_t>(missing)],
+        step.ids.size(), n));
+  }
+  return Status::ok();
+}
+
+Status SeriesConverter::updateBonds(const SourceStep& step,
+                                    const std::vector<dem::ParticleIndex>& rowIndex,
+                                    std::vector<dem::BondIndex>& bondOfRow) {
+  (void)rowIndex;
+  std::vector<std::uint8_t> holds(m_state.size(), 0);
+  bondOfRow.assign(step.bonds.size(), -1);
+  for (std::size_t row = 0; row < step.bonds.size(); ++row) {
+    const SourceBond& bond = step.bonds[row];
+    auto a = indexOf(bond.first, step);
+    auto b = indexOf(bond.second, step);
+    if (!a || !b) {
+      return unlistedEnd(step, bond, !a ? bond.first : bond.second);
+    }
+    const auto found = m_bondOfPair.find(pairKey(*a, *b));
+    if (found == m_bondOfPair.end()) {
+      if (!bond.cohesive) {
+        continue;  // a new frictional contact, not a bond
+      }
+      return failedPrecondition(fmt::format(
+          "{}: step {}: bond {}-{} appears, but the first imported step has no such bond "
+          "(crackvis keeps the first step's bonds; start the import where every bond exists, "
+          "with --steps)",
+          step.origin, step.sourceStep, bond.first, bond.second));
+    }
+    bondOfRow[row] = found->second;
+    if (bond.cohesive) {
+      holds[static_cast<std::size_t>(found->second)] = 1;
+    }
+  }
+  for (std::size_t b = 0; b < m_state.size(); ++b) {
+    if (m_state[b] == kBroken) {
+      m_reappeared += holds[b];
+    } else if (holds[b] == 0) {
+      m_state[b] = kBroken;
+    }
+  }
+  return Status::ok();
+}
+
+void SeriesConverter::addExtras(const SourceStep& step,
+                                const std::vector<dem::ParticleIndex>& rowIndex,
+                                const std::vector<dem::BondIndex>& bondOfRow,
+                                dem::StepState& out) const {
+  for (const dem::ExtraArray& extra : step.extras) {
+    const bool perParticle = extra.owner == dem::ExtraOwner::kParticles;
+    const auto width = static_cast<std::size_t>(extra.components);
+    dem::ExtraArray placed{extra.name, extra.owner, extra.components, {}};
+    placed.values.assign((perParticle ? m_lattice.particleCount() : m_lattice.bondCount()) * width,
+                         0.0);
+    for (std::size_t row = 0; row < extra.rows(); ++row) {
+      const std::int64_t target = perParticle ? rowIndex[row] : bondOfRow[row];
+      if (target < 0) {
+        continue;  // a contact that is not a bond
+      }
+      std::copy_n(extra.values.begin() + static_cast<std::ptrdiff_t>(row * width), width,
+                  placed.values.begin() +
+                      static_cast<std::ptrdiff_t>(static_cast<std::size_t>(target) * width));
+    }
+    out.extras.push_back(std::move(placed));
+  }
+}
+
+std::vector<dem::StepScalar> SeriesConverter::scalarsOf(const SourceStep& step) const {
+  std::vector<dem::StepScalar> scalars{{"source_step", static_cast<double>(step.sourceStep)}};
+  auto add = [&](const dem::StepScalar& scalar) {
+    const bool known = std::any_of(scalars.begin(), scalars.end(),
+                                   [&](const dem::StepScalar& s) { return s.name == scalar.name; });
+    if (!known && scalar.name != "time") {
+      scalars.push_back(scalar);
+    }
+  };
+  for (const dem::StepScalar& scalar : step.scalars) {
+    add(scalar);
+  }
+  if (m_table != nullptr) {
+    for (const dem::StepScalar& scalar : m_table->at(step.sourceStep)) {
+      add(scalar);
+    }
+  }
+  return scalars;
+}
+
+std::optional<double> SeriesConverter::timeFromTable(std::int64_t sourceStep) const {
+  if (m_table != nullptr) {
+    for (const dem::StepScalar& scalar : m_table->at(sourceStep)) {
+      if (scalar.name == "time") {
+        return scalar.value;
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+Result<dem::StepState> SeriesConverter::convert(const SourceStep& step) {
+  std::vector<dem::ParticleIndex> rowIndex;
+  CRACKVIS_RETURN_IF_ERROR(placeParticles(step, rowIndex));
+  std::vector<dem::BondIndex> bondOfRow;
+  CRACKVIS_RETURN_IF_ERROR(updateBonds(step, rowIndex, bondOfRow));
+  dem::StepState out;
+  // The time: as the source wrote it, else from the scalar table's `time`
+  // column, else the step number times --timestep.
+  const std::optional<double> tableTime = timeFromTable(step.sourceStep);
+  m_timesFromSource = step.timeKnown || tableTime.has_value();
+  out.time = step.timeKnown ? step.time
+             : tableTime
+                 ? *tableTime
+                 : static_cast<double>(step.sourceStep) * (m_timestep > 0.0 ? m_timestep : 1.0);
+  out.positions.resize(m_lattice.particleCount());
+  for (std::size_t row = 0; row < rowIndex.size(); ++row) {
+    out.positions[static_cast<std::size_t>(rowIndex[row])] = step.positions[row];
+  }
+  if (!step.velocities.empty()) {
+    out.velocities.resize(m_lattice.particleCount());
+    for (std::size_t row = 0; row < rowIndex.size(); ++row) {
+      out.velocities[static_cast<std::size_t>(rowIndex[row])] = step.velocities[row];
+    }
+  }
+  out.bondState = m_state;
+  out.scalars = scalarsOf(step);
+  addExtras(step, rowIndex, bondOfRow, out);
+  CRACKVIS_RETURN_IF_ERROR(checkSameArrays(step, out));
+  if (Status valid = dem::validateStep(m_lattice, out); !valid) {
+    return failedPrecondition(
+        fmt::format("{}: step {}: {}", step.origin, step.sourceStep, valid.message()));
+  }
+  return out;
+}
+
+std::size_t brokenCount(const dem::StepState& state) {
+  return state.brokenBondCount();
+}
+
+void describeArrays(const dem::StepState& state, ImportSummary& summary) {
+  summary.scalarNames.clear();
+  for (const dem::StepScalar& scalar : state.scalars) {
+    summary.scalarNames.push_back(scalar.name);
+  }
+  summary.extraNames.clear();
+  for (const dem::ExtraArray& extra : state.extras) {
+    summary.extraNames.push_back(fmt::format(
+        "{}/{}", extra.owner == dem::ExtraOwner::kParticles ? "particles" : "bonds", extra.name));
+  }
+  summary.withVelocities = !state.velocities.empty();
+}
+
+Result<SourceStep> readChecked(StepSource& source, int index) {
+  auto step = source.readStep(index);
+  if (!step) {
+    return step.status();
+  }
+  const std::size_t n = step->ids.size();
+  if (step->positions.size() != n || step->radius.size() != n ||
+      (!step->group.empty() && step->group.size() != n) ||
+      (!step->velocities.empty() && step->velocities.size() != n)) {
+    return internalError(fmt::format("{}: step {}: the reader returned ragged rows", step->origin,
+                                     step->sourceStep));
+  }
+  return step;
+}
+
+Status writeSeries(StepSource& source, SeriesConverter& converter, SourceStep first,
+                   const std::string& path, const dem::DemMetadata& metadata,
+                   const ImportOptions& options, ImportSummary& summary);
+
+}  // namespace
+
+Result<ImportSummary> importSeries(StepSource& source, const ImportOptions& options) {
+  ImportSummary summary;
+  summary.source = source.description();
+  summary.sourceSteps = source.stepCount();
+  if (summary.sourceSteps == 0) {
+    return failedPrecondition("the source holds no steps");
+  }
+  auto selected =
+      dem::parseStepRange(options.steps.empty() ? "0:-1" : options.steps, summary.sourceSteps);
+  if (!selected) {
+    return selected.status();
+  }
+  summary.selected = *selected;
+  summary.firstSourceStep = source.sourceStepNumber(summary.selected.front());
+  summary.lastSourceStep = source.sourceStepNumber(summary.selected.back());
+  std::optional<ScalarTable> table;
+  if (!options.scalarsTable.empty()) {
+    auto read = ScalarTable::read(options.scalarsTable);
+    if (!read) {
+      return read.status();
+    }
+    table = std::move(*read);
+  }
+  SeriesConverter converter(summary.source, options.timestep, table ? &*table : nullptr);
+
+  auto first = readChecked(source, summary.selected.front());
+  if (!first) {
+    return first.status();
+  }
+  CRACKVIS_RETURN_IF_ERROR(converter.begin(*first));
+  const dem::Lattice& lattice = converter.lattice();
+  summary.dimension = lattice.dimension;
+  summary.particles = lattice.particleCount();
+  summary.bonds = lattice.bondCount();
+  summary.withGroups = !lattice.particleGroup.empty();
+  summary.cutAtStart = static_cast<std::size_t>(
+      std::count_if(lattice.bondFlags.begin(), lattice.bondFlags.end(),
+                    [](std::uint8_t f) { return (f & dem::kBondCutAtStart) != 0; }));
+
+  if (options.dryRun) {
+    // The first and last step tell N, M, the arrays and how far the crack
+    // went, without reading the steps between.
+    auto state = converter.convert(*first);
+    if (!state) {
+      return state.status();
+    }
+    summary.brokenFirst = brokenCount(*state);
+    describeArrays(*state, summary);
+    if (summary.selected.size() > 1) {
+      auto last = readChecked(source, summary.selected.back());
+      if (!last) {
+        return last.status();
+      }
+      auto lastState = converter.convert(*last);
+      if (!lastState) {
+        return lastState.status();
+      }
+      summary.brokenLast = brokenCount(*lastState);
+    } else {
+      summary.brokenLast = summary.brokenFirst;
+    }
+    summary.timesFromSource = converter.timesFromSource();
+    return summary;
+  }
+
+  dem::DemMetadata metadata;
+  metadata.source = options.invocation;
+  metadata.sourceCode = summary.source.code;
+  metadata.sourceVersion = summary.source.version;
+  metadata.sourceFiles = summary.source.files;
+  if (!options.scalarsTable.empty()) {
+    metadata.sourceFiles.push_back(options.scalarsTable);
+  }
+  metadata.plannedSteps = static_cast<int>(summary.selected.size());
+  metadata.storage = options.storage;
+  // Written beside the output and renamed at the end, so a failed import
+  // leaves no half file and an existing output as it was.
+  const std::string partial = options.output + ".importing";
+  auto status =
+      writeSeries(source, converter, std::move(*first), partial, metadata, options, summary);
+  std::error_code error;
+  if (!status) {
+    std::filesystem::remove(partial, error);
+    return status;
+  }
+  std::filesystem::rename(partial, options.output, error);
+  if (error) {
+    std::filesystem::remove(partial, error);
+    return failedPrecondition(
+        fmt::format("{}: cannot move the import into place ({})", options.output, error.message()));
+  }
+  summary.reappeared = converter.reappeared();
+  summary.timesFromSource = converter.timesFromSource();
+  return summary;
+}
+
+namespace {
+
+Status writeSeries(StepSource& source, SeriesConverter& converter, SourceStep first,
+                   const std::string& path, const dem::DemMetadata& metadata,
+                   const ImportOptions& options, ImportSummary& summary) {
+  auto writer = dem::DemFileWriter::create(path, converter.lattice(), metadata);
+  if (!writer) {
+    return writer.status();
+  }
+  ProgressBar progress("import", static_cast<std::int64_t>(summary.selected.size()));
+  progress.setEnabled(options.progress);
+  for (std::size_t k = 0; k < summary.selected.size(); ++k) {
+    Result<SourceStep> step =
+        k == 0 ? Result<SourceStep>(std::move(first)) : readChecked(source, summary.selected[k]);
+    if (!step) {
+      return step.status();
+    }
+    auto state = converter.convert(*step);
+    if (!state) {
+      return state.status();
+    }
+    CRACKVIS_RETURN_IF_ERROR(writer->appendStep(*state));
+    const std::size_t broken = brokenCount(*state);
+    if (k == 0) {
+      summary.brokenFirst = broken;
+      describeArrays(*state, summary);
+    }
+    summary.brokenLast = broken;
+    summary.stepsWritten = static_cast<int>(k + 1);
+    progress.update(static_cast<std::int64_t>(k + 1),
+                    fmt::format("step {}, broken {}", step->sourceStep, broken));
+  }
+  progress.finish();
+  return writer->close();
+}
+
+}  // namespace
+
+std::string formatSummary(const ImportSummary& s, const ImportOptions& options) {
+  std::string out;
+  const std::string code = s.source.version.empty()
+                               ? s.source.code
+                               : fmt::format("{} ({})", s.source.code, s.source.version);
+  out += fmt::format("source        {}, {} files, {} steps (code steps {} .. {})\n", code,
+                     s.source.files.size(), s.sourceSteps, s.firstSourceStep, s.lastSourceStep);
+  out += fmt::format("imported      {} of {} steps{}\n",
+                     options.dryRun ? s.selected.size() : static_cast<std::size_t>(s.stepsWritten),
+                     s.sourceSteps, options.dryRun ? " (dry run: would import)" : "");
+  out += fmt::format("particles     N = {} ({}D{})\n", s.particles, s.dimension,
+                     s.withGroups ? ", with group labels" : "");
+  out +=
+      fmt::format("bonds         M = {} at the first step, {} of them cut at the start (notch)\n",
+                  s.bonds, s.cutAtStart);
+  out += fmt::format(
+      "broken        {} at the first step, {} at the last ({:.1f} %)\n", s.brokenFirst,
+      s.brokenLast,
+      s.bonds > 0 ? 100.0 * static_cast<double>(s.brokenLast) / static_cast<double>(s.bonds) : 0.0);
+  out += fmt::format(
+      "time          {}\n",
+      s.timesFromSource
+          ? "as the source wrote it"
+          : (options.timestep > 0.0
+                 ? fmt::format("the code's step number x {} s (--timestep)", options.timestep)
+                 : std::string("the code's step number (the source writes no time; give "
+                               "--timestep to convert)")));
+  out += fmt::format("step scalars  {}\n", fmt::join(s.scalarNames, ", "));
+  std::vector<std::string> arrays{"positions", "radius", "id"};
+  if (s.withGroups) {
+    arrays.emplace_back("group");
+  }
+  if (s.withVelocities) {
+    arrays.emplace_back("velocities");
+  }
+  arrays.insert(arrays.end(), s.extraNames.begin(), s.extraNames.end());
+  out += fmt::format("arrays        {}\n", fmt::join(arrays, ", "));
+  if (s.reappeared > 0) {
+    out += fmt::format(
+        "note          {} listings of broken bonds reappeared later; they stay broken (bonds "
+        "never heal)\n",
+        s.reappeared);
+  }
+  if (!options.dryRun) {
+    std::error_code error;
+    const auto bytes = std::filesystem::file_size(options.output, error);
+    out += fmt::format("wrote         {} ({:.1f} MB)\n", options.output,
+                       error ? 0.0 : static_cast<double>(bytes) / 1e6);
+  }
+  return out;
+}
+
+}  // namespace crackvis::importers

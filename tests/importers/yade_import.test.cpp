@@ -1,0 +1,127 @@
+// The Yade importer on a real Yade 2023.02a JCFpm run (tests/data/yade/
+// notched_bar, made by tests/data/generators/yade/run.sh): VTKRecorder's
+// compressed binary files read through VTK, bonds matched to particle ids
+// by position, and the history checked two ways: against the pairs a
+// PyRunner dumped from O.interactions (bonds.<iter>.txt, id1 id2 isCohesive)
+// and against JCFpm's own crack record (cracks_notched_bar.txt).
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include <catch2/catch.hpp>
+
+#include "import_helpers.hpp"
+#include "support/temp_dir.hpp"
+#include <crackvis/importers/step_source.hpp>
+
+using namespace crackvis;
+using crackvis::testing::TempDir;
+
+namespace {
+
+const std::string kBar = testing::kTestData + "/yade/notched_bar";
+
+using Pair = std::pair<std::int64_t, std::int64_t>;
+
+// The cohesive pairs Yade itself listed at an iteration.
+std::set<Pair> cohesivePairs(std::int64_t iteration) {
+  std::ifstream in(kBar + "/bonds." + std::to_string(iteration) + ".txt");
+  std::set<Pair> pairs;
+  std::int64_t a = 0;
+  std::int64_t b = 0;
+  int cohesive = 0;
+  while (in >> a >> b >> cohesive) {
+    if (cohesive != 0) {
+      pairs.emplace(std::min(a, b), std::max(a, b));
+    }
+  }
+  return pairs;
+}
+
+}  // namespace
+
+TEST_CASE("a Yade JCFpm notched bar imports with Yade's own record of its bonds and cracks",
+          "[importers][yade]") {
+  TempDir dir;
+  const std::string out = dir.file("bar.h5");
+  auto source = importers::openYade({kBar});
+  REQUIRE(source);
+  auto options = testing::quietImport(out);
+  options.scalarsTable = kBar + "/history.txt";
+  auto summary = importers::importSeries(**source, options);
+  REQUIRE(summary);
+  CHECK(summary->stepsWritten == 11);
+  CHECK(summary->timesFromSource);  // the history's time column
+
+  auto reader = dem::DemFileReader::open(out);
+  REQUIRE(reader);
+  CHECK(reader->info().sourceCode == "Yade");
+  CHECK(reader->info().particleCount == 327);
+  CHECK(reader->info().bondCount == 1589);
+  auto lattice = reader->readLattice();
+  REQUIRE(lattice);
+  for (int step = 0; step < reader->stepCount(); ++step) {
+    const auto& stepInfo = reader->info().steps[static_cast<std::size_t>(step)];
+    const auto iteration = static_cast<std::int64_t>(testing::scalarOf(stepInfo, "source_step"));
+    auto state = reader->readBondState(step);
+    REQUIRE(state);
+    std::set<Pair> intact;
+    for (std::size_t b = 0; b < lattice->bondCount(); ++b) {
+      if ((*state)[b] == 0) {
+        const std::int64_t first =
+            lattice->particleId[static_cast<std::size_t>(lattice->bonds[b].first)];
+        const std::int64_t second =
+            lattice->particleId[static_cast<std::size_t>(lattice->bonds[b].second)];
+        intact.emplace(std::min(first, second), std::max(first, second));
+      }
+    }
+    INFO("iteration " << iteration);
+    CHECK(intact == cohesivePairs(iteration));
+    const auto broken = std::count(state->begin(), state->end(), std::uint8_t{1});
+    CHECK(broken == static_cast<std::ptrdiff_t>(testing::scalarOf(stepInfo, "jcfpm_cracks")));
+    CHECK(broken == static_cast<std::ptrdiff_t>(testing::scalarOf(stepInfo, "tensCracks")));
+  }
+  // The spheres' own arrays ride along as extras.
+  auto last = reader->readStep(reader->stepCount() - 1);
+  REQUIRE(last);
+  std::vector<std::string> names;
+  for (const auto& extra : last->extras) {
+    names.push_back(extra.name);
+  }
+  CHECK(names == std::vector<std::string>{"damage", "nbCracks", "forceN"});  // by name, as stored
+  double cracksAtSpheres = 0.0;
+  for (double v : last->extras[1].values) {
+    cracksAtSpheres += v;
+  }
+  CHECK(cracksAtSpheres == 2 * 27);  // each broken bond counts at both its spheres
+}
+
+TEST_CASE("damaged Yade records are refused naming the file", "[importers][yade]") {
+  TempDir dir;
+  for (const auto& entry : std::filesystem::directory_iterator(kBar)) {
+    std::filesystem::copy_file(entry.path(), dir.path() / entry.path().filename());
+  }
+  SECTION("an interaction file missing") {
+    std::filesystem::remove(dir.file("intrs.1200.vtp"));
+    auto source = importers::openYade({dir.path().string()});
+    REQUIRE_FALSE(source);
+    CHECK_THAT(source.status().message(),
+               Catch::Contains("iteration 1200") && Catch::Contains("no intrs.1200.vtp"));
+  }
+  SECTION("a truncated sphere file") {
+    std::filesystem::resize_file(dir.file("spheres.2000.vtu"), 3000);
+    auto source = importers::openYade({dir.path().string()});
+    REQUIRE(source);
+    auto result = importers::importSeries(**source, testing::quietImport(dir.file("out.h5")));
+    REQUIRE_FALSE(result);
+    CHECK_THAT(result.status().message(), Catch::Contains("spheres.2000.vtu"));
+  }
+  SECTION("a file that is not VTK") {
+    std::ofstream(dir.file("intrs.800.vtp"), std::ios::trunc) << "not xml";
+    auto source = importers::openYade({dir.path().string()});
+    REQUIRE(source);
+    auto result = importers::importSeries(**source, testing::quietImport(dir.file("out.h5")));
+    REQUIRE_FALSE(result);
+    CHECK_THAT(result.status().message(), Catch::Contains("intrs.800.vtp"));
+  }
+}
