@@ -288,9 +288,12 @@ Status writePvd(const std::vector<CollectionEntry>& entries, const std::string& 
   std::string text =
       "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" "
       "byte_order=\"LittleEndian\">\n  <Collection>\n";
-  for (const CollectionEntry& entry : entries) {
-    text += fmt::format("    <DataSet timestep=\"{:.17g}\" group=\"\" part=\"0\" file=\"{}\"/>\n",
-                        entry.time, entry.file);
+  // Entries of one time in a row are parts of that step (particles, bonds).
+  int part = 0;
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    part = i > 0 && entries[i].time == entries[i - 1].time ? part + 1 : 0;
+    text += fmt::format("    <DataSet timestep=\"{:.17g}\" group=\"\" part=\"{}\" file=\"{}\"/>\n",
+                        entries[i].time, part, entries[i].file);
   }
   text += "  </Collection>\n</VTKFile>\n";
   return writeFile(path, text);

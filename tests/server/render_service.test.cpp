@@ -22,6 +22,8 @@
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/encode/frame_codec.hpp>
+#include <crackvis/importers/importer.hpp>
+#include <crackvis/importers/step_source.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/egl_context.hpp>
 #include <crackvis/rpc/credentials.hpp>
@@ -502,6 +504,32 @@ TEST_CASE("bad requests get a clear status and the server keeps serving",
   // Whatever happened, a new session opens and streams.
   StreamClient stream(*stub, openSession(*stub, crackView()));
   CHECK(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+}
+
+TEST_CASE("an imported Yade run goes through the data service into a render session",
+          "[render][service][integration][importers]") {
+  // Imported into the served root as a user would: crackvis import yade.
+  const std::string imported = crackRoot().file("yade-import.h5");
+  if (!std::filesystem::exists(imported)) {
+    auto source = importers::openYade({std::string(CRACKVIS_TEST_DATA) + "/yade/notched_bar"});
+    REQUIRE(source);
+    importers::ImportOptions options;
+    options.output = imported;
+    options.progress = false;
+    REQUIRE(importers::importSeries(**source, options));
+  }
+  auto services = startServices();
+  auto stub = connect(*services.render);
+  auto view = crackView();
+  view.file = "yade-import.h5";
+  view.cracks.method = cracks::Method::kCellCut;
+  v1::OpenSessionResponse opened;
+  const std::string id = openSession(*stub, view, &opened);
+  CHECK(opened.step_count() == 11);
+  StreamClient stream(*stub, id);
+  REQUIRE(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+  CHECK(stream.frames().front().frame.step() == 10);
+  CHECK(redPixels(stream.frames().front().picture) > 50);  // the crack the JCFpm run made
 }
 
 TEST_CASE("a vanished client's session and GL context are freed",

@@ -1,8 +1,16 @@
 // crackvis import as a user runs it: one command per code, a dry run, the
 // summary, and one line on stderr with exit status 1 for bad input.
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include <catch2/catch.hpp>
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkXMLPolyDataReader.h>
 
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
@@ -61,4 +69,46 @@ TEST_CASE("crackvis import fails with one line naming the input", "[cli][import]
   CHECK(badRange.exitCode == 1);
   CHECK_THAT(badRange.err, Catch::Contains("outside the file's steps 0..10"));
   CHECK_FALSE(std::filesystem::exists(dir.file("o.h5")));
+}
+
+TEST_CASE("crackvis export writes an imported run's particles and bonds for ParaView",
+          "[cli][import][export]") {
+  TempDir dir;
+  const std::string h5 = dir.file("bar.h5");
+  REQUIRE(runProcess({kCli, "import", "lammps", kData + "/lammps/notched_bar", "-o", h5, "-q"})
+              .exitCode == 0);
+  const std::string pvd = dir.file("bar.pvd");
+  auto run =
+      runProcess({kCli, "export", h5, "--particles", "--bonds", "-s", "0:-1:5", "-o", pvd, "-q"});
+  INFO(run.err);
+  REQUIRE(run.exitCode == 0);
+  std::ifstream collection(pvd);
+  const std::string text((std::istreambuf_iterator<char>(collection)),
+                         std::istreambuf_iterator<char>());
+  CHECK_THAT(text, Catch::Contains(R"(part="1" file="bar/bar_bonds_000010.vtp")"));
+
+  vtkNew<vtkXMLPolyDataReader> particles;
+  particles->SetFileName(dir.file("bar/bar_particles_000010.vtp").c_str());
+  particles->Update();
+  CHECK(particles->GetOutput()->GetNumberOfPoints() == 468);
+  CHECK(particles->GetOutput()->GetNumberOfVerts() == 468);
+  for (const char* name : {"radius", "id", "group", "velocity"}) {
+    CHECK(particles->GetOutput()->GetPointData()->GetArray(name) != nullptr);
+  }
+  vtkNew<vtkXMLPolyDataReader> bonds;
+  bonds->SetFileName(dir.file("bar/bar_bonds_000010.vtp").c_str());
+  bonds->Update();
+  REQUIRE(bonds->GetOutput()->GetNumberOfLines() == 2150);
+  vtkDataArray* broken = bonds->GetOutput()->GetCellData()->GetArray("broken");
+  vtkDataArray* notch = bonds->GetOutput()->GetCellData()->GetArray("cut_at_start");
+  REQUIRE(broken != nullptr);
+  REQUIRE(notch != nullptr);
+  double brokenCount = 0.0;
+  double notchCount = 0.0;
+  for (vtkIdType b = 0; b < 2150; ++b) {
+    brokenCount += broken->GetComponent(b, 0);
+    notchCount += notch->GetComponent(b, 0);
+  }
+  CHECK(brokenCount == 60);
+  CHECK(notchCount == 27);
 }

@@ -35,6 +35,7 @@ Command addBenchMethodsCommand(CLI::App& bench);
 Command addSimCommand(CLI::App& parent);
 Command addHealthCommand(CLI::App& parent);
 Command addImportCommand(CLI::App& parent);
+Command addExportCommand(CLI::App& parent);
 // Under `crackvis bench`: transfer | methods | render
 // (Declared here as each lands; main.cpp wires them.)
 Command addBenchTransferCommand(CLI::App& bench);

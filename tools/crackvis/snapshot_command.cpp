@@ -2,6 +2,7 @@
 // description says, written as PNG. The render server's scene without the
 // server: for figures, checks and machines without a display.
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -19,7 +20,7 @@ struct SnapshotOptions {
   std::string file;
   std::string pipelinePath;
   std::string output;
-  std::int64_t step = -1;
+  std::optional<std::int64_t> step;  // unset: the description's; negative: the last
   std::string method;
   int width = 0;
   int height = 0;
@@ -43,8 +44,8 @@ Result<pipeline::PipelineDescription> description(const SnapshotOptions& options
     }
     d = std::move(parsed).value();
   }
-  if (options.step >= 0) {
-    d.step = options.step;
+  if (options.step) {
+    d.step = *options.step;
   }
   if (!options.method.empty()) {
     d.cracks.method = *cracks::parseMethod(options.method);

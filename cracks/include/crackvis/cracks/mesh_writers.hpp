@@ -32,6 +32,7 @@ struct CollectionEntry {
   double time;
   std::string file;  // relative to the .pvd's folder
 };
+// Consecutive entries of the same time become parts 0, 1, ... of that step.
 Status writePvd(const std::vector<CollectionEntry>& entries, const std::string& path);
 
 }  // namespace crackvis::cracks
