@@ -110,7 +110,7 @@ TEST_CASE("the writer refuses steps that do not fit the lattice or heal a bond",
   TempDir dir;
   const std::string path = dir.file("refuse.h5");
   SampleData sample = makeSample(3, 3);
-  auto writer = DemFileWriter::create(path, sample.lattice, {"test", "SI"});
+  auto writer = DemFileWriter::create(path, sample.lattice, metadataFrom("test"));
   REQUIRE(writer.isOk());
   REQUIRE(writer->appendStep(sample.steps[0]).isOk());
   REQUIRE(writer->appendStep(sample.steps[2]).isOk());
@@ -151,7 +151,7 @@ TEST_CASE("a writer killed without closing leaves its completed steps readable",
   const pid_t child = fork();
   REQUIRE(child >= 0);
   if (child == 0) {
-    auto writer = DemFileWriter::create(path, sample.lattice, {"killed", "SI"});
+    auto writer = DemFileWriter::create(path, sample.lattice, metadataFrom("killed"));
     for (int k = 0; k < 3 && writer.isOk(); ++k) {
       (void)writer->appendStep(sample.steps[static_cast<size_t>(k)]);
     }

@@ -36,7 +36,13 @@ std::vector<DemDefect> demDefects(const SampleData& sample) {
        [](const std::string& path, const SampleData&) { setIntAttribute(path, "/", "version", 7); },
        {"unsupported crackvis-dem version 7", "reads version 1"}},
       {"missing dataset",
-       [](const std::string& path, const SampleData&) { deleteLink(path, "/bonds/strength"); },
+       [](const std::string& path, const SampleData&) { deleteLink(path, "/bonds/break_step"); },
+       {"missing dataset /bonds/break_step"}},
+      {"v1.0 file without strengths",
+       [](const std::string& path, const SampleData&) {
+         deleteAttribute(path, "/", "version_minor");  // strengths were required before v1.1
+         deleteLink(path, "/bonds/strength");
+       },
        {"missing dataset /bonds/strength"}},
       {"missing step dataset",
        [](const std::string& path, const SampleData&) {

@@ -32,6 +32,7 @@ struct SimOptions {
   int steps = 0;
   double duration = 0.0;
   bool quiet = false;
+  int compress = 0;  // deflate level of the per-step arrays; 0 contiguous
   bool noVelocities = false;
   bool noBondForce = false;
   // Material overrides; unset keeps the calibrated default.
@@ -135,6 +136,7 @@ int runSim(const SimOptions& options, bool setGiven) {
   run.metadata.source = invocation();
   run.metadata.sourceCode = "crackvis sim";
   run.metadata.sourceVersion = CRACKVIS_VERSION;
+  run.metadata.storage.deflateLevel = options.compress;
   run.stepsPerSave = preset->stepsPerSave;
   run.savedSteps = preset->savedSteps;
   run.writeVelocities = !options.noVelocities;
@@ -228,6 +230,11 @@ Command addSimCommand(CLI::App& parent) {
   command->add_flag("--no-bond-force", options->noBondForce,
                     "Do not write the optional per-step bond forces");
   command->add_flag("-q,--quiet", options->quiet, "No progress bar and no summary");
+  command
+      ->add_option("--compress", options->compress,
+                   "Store per-step arrays chunked with shuffle + deflate at this level (1-9); "
+                   "default contiguous, uncompressed (docs/data-format.md)")
+      ->check(CLI::Range(1, 9));
   const char* material = "Material (overrides the calibrated defaults)";
   command->add_option("--youngs-modulus", options->youngsModulus, "Lattice Young's modulus E, Pa")
       ->check(CLI::PositiveNumber)
