@@ -18,6 +18,7 @@
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/client/main_window.hpp>
+#include <crackvis/client/pipeline_panel.hpp>
 #include <crackvis/client/render_client.hpp>
 
 using namespace crackvis;
@@ -216,4 +217,23 @@ TEST_CASE("the window connects, opens a file, switches the method and steps",
   CHECK(spinUntil([&] { return window.lastMessage().startsWith(QStringLiteral("warning: only ")); },
                   5000));
   CHECK(window.messages().count(QStringLiteral("isolated breaks")) == 1);
+}
+
+TEST_CASE("the pipeline panel offers a file's extra arrays under colour by", "[client]") {
+  application();
+  client::PipelinePanel panel;
+  pipeline::PipelineDescription changed;
+  QObject::connect(&panel, &client::PipelinePanel::changed,
+                   [&](const pipeline::PipelineDescription& d) { changed = d; });
+  panel.setParticleExtras({"damage", "nbCracks"});
+  QComboBox* box = panel.particleColourBox();
+  REQUIRE(box->findText("extra: damage") >= 0);
+  box->setCurrentIndex(box->findText("extra: nbCracks"));
+  CHECK(changed.particles.colourBy == pipeline::ParticleColourBy::kExtra);
+  CHECK(changed.particles.colourByExtra == "nbCracks");
+  CHECK_THAT(pipeline::toXml(changed), Catch::Contains("colour-by=\"extra:nbCracks\""));
+  // Another file's arrays replace these ones.
+  panel.setParticleExtras({"force"});
+  CHECK(box->findText("extra: damage") < 0);
+  CHECK(box->findText("extra: force") >= 0);
 }

@@ -95,6 +95,18 @@ TEST_CASE("a description built in code survives toXml and parse", "[pipeline]") 
   CHECK(*parsed == d);
 }
 
+TEST_CASE("particles colour by a file's extra array: extra:NAME", "[pipeline]") {
+  auto parsed = parsePipeline(
+      document("  <data file=\"a.h5\"/>\n  <particles colour-by=\"extra:damage\"/>\n"));
+  REQUIRE(parsed);
+  CHECK(parsed->particles.colourBy == ParticleColourBy::kExtra);
+  CHECK(parsed->particles.colourByExtra == "damage");
+  auto again = parsePipeline(toXml(*parsed));
+  REQUIRE(again);
+  CHECK(*again == *parsed);
+  CHECK_THAT(toXml(*parsed), Catch::Contains("colour-by=\"extra:damage\""));
+}
+
 TEST_CASE("invalid documents are refused naming the line and the element",
           "[pipeline][validation]") {
   struct Case {
@@ -123,6 +135,12 @@ TEST_CASE("invalid documents are refused naming the line and the element",
        document("  <view/>\n  <data file=\"a.h5\"/>\n"),
        {"element <view>"}},
       {"no data", document("  <view/>\n"), {"element <view>"}},
+      {"an extra array name with a path in it",
+       document("  <data file=\"a.h5\"/>\n  <particles colour-by=\"extra:../x\"/>\n"),
+       {"line 4, element <particles>", "extra:../x"}},
+      {"an extra array without a name",
+       document("  <data file=\"a.h5\"/>\n  <particles colour-by=\"extra:\"/>\n"),
+       {"line 4, element <particles>"}},
       {"wrong version",
        "<pipeline version=\"2\"><data file=\"a.h5\"/></pipeline>",
        {"line 1, element <pipeline>", "'2'"}},

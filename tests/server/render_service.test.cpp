@@ -506,32 +506,6 @@ TEST_CASE("bad requests get a clear status and the server keeps serving",
   CHECK(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
 }
 
-TEST_CASE("an imported Yade run goes through the data service into a render session",
-          "[render][service][integration][importers]") {
-  // Imported into the served root as a user would: crackvis import yade.
-  const std::string imported = crackRoot().file("yade-import.h5");
-  if (!std::filesystem::exists(imported)) {
-    auto source = importers::openYade({std::string(CRACKVIS_TEST_DATA) + "/yade/notched_bar"});
-    REQUIRE(source);
-    importers::ImportOptions options;
-    options.output = imported;
-    options.progress = false;
-    REQUIRE(importers::importSeries(**source, options));
-  }
-  auto services = startServices();
-  auto stub = connect(*services.render);
-  auto view = crackView();
-  view.file = "yade-import.h5";
-  view.cracks.method = cracks::Method::kCellCut;
-  v1::OpenSessionResponse opened;
-  const std::string id = openSession(*stub, view, &opened);
-  CHECK(opened.step_count() == 11);
-  StreamClient stream(*stub, id);
-  REQUIRE(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
-  CHECK(stream.frames().front().frame.step() == 10);
-  CHECK(redPixels(stream.frames().front().picture) > 50);  // the crack the JCFpm run made
-}
-
 TEST_CASE("a vanished client's session and GL context are freed",
           "[render][service][integration]") {
   // A grace short enough to see sessions expire, long enough that a loaded
@@ -969,4 +943,47 @@ TEST_CASE("streams that never attach are cancelled, and cannot pin a thread each
   // The server still opens a session and streams it.
   StreamClient stream(*stub, openSession(*stub, crackView()));
   CHECK(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+}
+
+TEST_CASE("an imported Yade run goes through the data service into a render session",
+          "[render][service][integration][importers]") {
+  // Imported into the served root as a user would: crackvis import yade.
+  const std::string imported = crackRoot().file("yade-import.h5");
+  if (!std::filesystem::exists(imported)) {
+    auto source = importers::openYade({std::string(CRACKVIS_TEST_DATA) + "/yade/notched_bar"});
+    REQUIRE(source);
+    importers::ImportOptions options;
+    options.output = imported;
+    options.progress = false;
+    REQUIRE(importers::importSeries(**source, options));
+  }
+  auto services = startServices();
+  auto stub = connect(*services.render);
+  auto view = crackView();
+  view.file = "yade-import.h5";
+  view.cracks.method = cracks::Method::kCellCut;
+  v1::OpenSessionResponse opened;
+  const std::string id = openSession(*stub, view, &opened);
+  CHECK(opened.step_count() == 11);
+  StreamClient stream(*stub, id);
+  REQUIRE(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+  CHECK(stream.frames().front().frame.step() == 10);
+  CHECK(redPixels(stream.frames().front().picture) > 50);  // the crack the JCFpm run made
+
+  // Its particles coloured by Yade's own per-sphere 'damage' array (an extra
+  // array, read through the data service), viridis; an array the file does
+  // not have is refused naming those it has.
+  auto damage = view;
+  damage.cracks.visible = false;
+  damage.particles.visible = true;
+  damage.particles.colourBy = pipeline::ParticleColourBy::kExtra;
+  damage.particles.colourByExtra = "damage";
+  StreamClient coloured(*stub, openSession(*stub, damage));
+  REQUIRE(coloured.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+  CHECK(viridisPixels(coloured.frames().front().picture) > 100);
+  damage.particles.colourByExtra = "nope";
+  const grpc::Status missing = openStatus(*stub, pipeline::toXml(damage));
+  CHECK(missing.error_code() == grpc::StatusCode::FAILED_PRECONDITION);
+  CHECK_THAT(missing.error_message(),
+             Catch::Contains("no per-particle extra array 'nope'") && Catch::Contains("damage"));
 }

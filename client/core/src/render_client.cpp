@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <cstring>
 #include <deque>
 #include <map>
 #include <mutex>
@@ -514,6 +515,15 @@ Result<FileSummary> RenderClient::describe(const QString& file) {
     }
     if (dataset.path() == "/bonds/pairs" && dataset.shape_size() >= 1) {
       summary.bonds = static_cast<qint64>(dataset.shape(0));
+    }
+    for (const char* folder : {"/extra/particles/", "/steps/000000/extra/particles/"}) {
+      const std::string_view path = dataset.path();
+      if (path.rfind(folder, 0) == 0) {
+        const QString name = QString::fromStdString(std::string(path.substr(std::strlen(folder))));
+        if (!summary.particleExtras.contains(name)) {
+          summary.particleExtras << name;
+        }
+      }
     }
     // Per-step arrays repeat in every step: list the first step's only.
     const bool laterStep =

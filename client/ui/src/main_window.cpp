@@ -1,4 +1,5 @@
 #include <QAction>
+#include <QComboBox>
 #include <QDialogButtonBox>
 #include <QDockWidget>
 #include <QDoubleSpinBox>
@@ -242,10 +243,19 @@ void MainWindow::describe(const QString& file) {
           .arg(summary->lastTime);
   text += summary->arrays.join(QLatin1Char('\n'));
   m_description->setPlainText(text);
+  m_panel->setParticleExtras(summary->particleExtras);
 }
 
 bool MainWindow::openFile(const QString& file) {
+  describe(file);  // the file's extra arrays for the colour-by list
   auto d = m_panel->description();
+  // An extra array of the previous file that this one lacks: back to solid.
+  if (d.particles.colourBy == pipeline::ParticleColourBy::kExtra &&
+      m_panel->particleColourBox()->findText(
+          QStringLiteral("extra: ") + QString::fromStdString(d.particles.colourByExtra)) < 0) {
+    d.particles.colourBy = pipeline::ParticleColourBy::kSolid;
+    d.particles.colourByExtra.clear();
+  }
   d.file = file.toStdString();
   d.step = -1;
   d.view.width = std::max(16, m_viewport->width() & ~1);

@@ -194,6 +194,24 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
   connect(m_background, &QLineEdit::editingFinished, this, &PipelinePanel::collect);
 }
 
+// Extra entries carry kExtra as data and the array's name as their text
+// after the prefix.
+const QString kExtraPrefix = QStringLiteral("extra: ");
+
+void PipelinePanel::setParticleExtras(const QStringList& names) {
+  m_updating = true;
+  for (int i = m_particleColour->count() - 1; i >= 0; --i) {
+    if (m_particleColour->itemData(i).toInt() == static_cast<int>(ParticleColourBy::kExtra)) {
+      m_particleColour->removeItem(i);
+    }
+  }
+  for (const QString& name : names) {
+    m_particleColour->addItem(kExtraPrefix + name, static_cast<int>(ParticleColourBy::kExtra));
+  }
+  m_updating = false;
+  show(m_description);
+}
+
 void PipelinePanel::setDescription(const pipeline::PipelineDescription& description) {
   m_description = description;
   show(description);
@@ -203,7 +221,12 @@ void PipelinePanel::show(const pipeline::PipelineDescription& d) {
   m_updating = true;
   m_particlesVisible->setChecked(d.particles.visible);
   select(m_particleRepresentation, d.particles.representation);
-  select(m_particleColour, d.particles.colourBy);
+  if (d.particles.colourBy == ParticleColourBy::kExtra) {
+    m_particleColour->setCurrentIndex(m_particleColour->findText(
+        kExtraPrefix + QString::fromStdString(d.particles.colourByExtra)));
+  } else {
+    select(m_particleColour, d.particles.colourBy);
+  }
   m_particleOpacity->setValue(d.particles.opacity);
   m_clip->setChecked(d.particles.clip.has_value());
   const ClipPlane clip = d.particles.clip.value_or(ClipPlane{{0, 0, 0}, {1, 0, 0}});
@@ -244,6 +267,11 @@ void PipelinePanel::collect() {
   d.particles.visible = m_particlesVisible->isChecked();
   d.particles.representation = selected<ParticleRepresentation>(m_particleRepresentation);
   d.particles.colourBy = selected<ParticleColourBy>(m_particleColour);
+  d.particles.colourByExtra.clear();
+  if (d.particles.colourBy == ParticleColourBy::kExtra) {
+    d.particles.colourByExtra =
+        m_particleColour->currentText().mid(kExtraPrefix.size()).toStdString();
+  }
   d.particles.opacity = m_particleOpacity->value();
   d.particles.clip.reset();
   if (m_clip->isChecked()) {

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <span>
 
 #include <fmt/format.h>
@@ -20,6 +21,48 @@ Result<bool> optionalDataset(const FileDescription& description, dem::DemDataset
   }
   CRACKVIS_RETURN_IF_ERROR(checkDemDataset(description, id, step, sizes));
   return true;
+}
+
+// The dataset of a per-particle extra array at `step`: per step if the step
+// has it, else constant; its width (1 or 3) once dtype and shape are checked.
+struct ExtraSlab {
+  std::string path;
+  int components = 1;
+};
+
+Result<ExtraSlab> particleExtraSlab(const FileDescription& description, const std::string& file,
+                                    const std::string& name, int step, std::uint64_t n) {
+  const std::string perStep = fmt::format("{}/extra/particles/{}", dem::stepGroupPath(step), name);
+  const std::string constant = fmt::format("/extra/particles/{}", name);
+  const DatasetInfo* dataset = description.findDataset(perStep);
+  if (dataset == nullptr) {
+    dataset = description.findDataset(constant);
+  }
+  if (dataset == nullptr) {
+    std::vector<std::string> known;
+    const std::string prefix = fmt::format("{}/extra/particles/", dem::stepGroupPath(step));
+    for (const DatasetInfo& info : description.datasets) {
+      for (const std::string& folder : {prefix, std::string("/extra/particles/")}) {
+        if (info.path.rfind(folder, 0) == 0) {
+          known.push_back(info.path.substr(folder.size()));
+        }
+      }
+    }
+    return failedPrecondition(fmt::format(
+        "{}: no per-particle extra array '{}' at step {} (the file has: {})", file, name, step,
+        known.empty() ? std::string("none") : fmt::format("{}", fmt::join(known, ", "))));
+  }
+  const bool widthValid =
+      dataset->shape.size() == 1 ||
+      (dataset->shape.size() == 2 && (dataset->shape[1] == 1 || dataset->shape[1] == 3));
+  if (dataset->dtype != DataType::kFloat64 || dataset->shape.empty() || dataset->shape[0] != n ||
+      !widthValid) {
+    return failedPrecondition(
+        fmt::format("{}: dataset {} is {} {}, expected float64 [{}] or [{},3]", file, dataset->path,
+                    dataset->dtypeName, dem::h5::formatDims(dataset->shape), n, n));
+  }
+  return ExtraSlab{dataset->path,
+                   dataset->shape.size() == 2 ? static_cast<int>(dataset->shape[1]) : 1};
 }
 
 std::string positionsPath(int step) {
@@ -214,6 +257,15 @@ Result<RemoteStep> RemoteDemFile::readStep(int step, StepExtras extras) {
   if (readForce) {
     slabs.push_back(Hyperslab::whole(dem::datasetPath(dem::DemDataset::kBondForce, step)));
   }
+  std::optional<ExtraSlab> particleExtra;
+  if (!extras.particleExtra.empty()) {
+    auto found = particleExtraSlab(*m_description, m_file, extras.particleExtra, step, n);
+    if (!found) {
+      return found.status();
+    }
+    particleExtra = *found;
+    slabs.push_back(Hyperslab::whole(found->path));
+  }
   // The request goes out first: the arrays below are allocated (3.5 MB for
   // cuboid A, page faults and zeroing included) while the server opens the
   // file and reads the first piece, not before the server hears of the call.
@@ -247,6 +299,17 @@ Result<RemoteStep> RemoteDemFile::readStep(int step, StepExtras extras) {
     result.bondForce.resize(m);
     expected.push_back(
         {DataType::kFloat32, {m}, reinterpret_cast<std::byte*>(result.bondForce.data())});
+  }
+  if (particleExtra) {
+    const auto width = static_cast<std::uint64_t>(particleExtra->components);
+    result.particleExtraComponents = particleExtra->components;
+    result.particleExtra.resize(n * width);
+    std::vector<std::uint64_t> shape{n};
+    if (m_description->findDataset(particleExtra->path)->shape.size() == 2) {
+      shape.push_back(width);
+    }
+    expected.push_back(
+        {DataType::kFloat64, shape, reinterpret_cast<std::byte*>(result.particleExtra.data())});
   }
   std::vector<bool> arrived(slabs.size(), false);
   // The bonds are checked as their chunks arrive, while the bytes are still

@@ -11,6 +11,7 @@
 #include <libxml/xmlschemas.h>
 
 #include "pipeline_schema_text.hpp"
+#include <crackvis/dem/model.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 
 namespace crackvis::pipeline {
@@ -311,6 +312,20 @@ class Attributes {
     return names[0].first;
   }
 
+  // A built-in quantity or "extra:NAME" (NAME as crackvis-dem names extras).
+  ParticleColourBy particleColourBy(const char* name, std::string& extra) {
+    const std::string raw = text(name);
+    constexpr std::string_view kPrefix = "extra:";
+    if (raw.rfind(kPrefix, 0) != 0) {
+      return choice(name, kParticleColourBy);
+    }
+    extra = raw.substr(kPrefix.size());
+    if (Status valid = dem::validateName("extra array", extra); !valid) {
+      fail(name, fmt::format("'{}': {}", echoed(raw), valid.message()));
+    }
+    return ParticleColourBy::kExtra;
+  }
+
   cracks::Method method(const char* name) {
     auto method = cracks::parseMethod(text(name));
     if (!method) {
@@ -374,7 +389,7 @@ Status convertParticles(const xmlNode* node, ParticlesDescription& p) {
   Attributes a(node);
   p.visible = a.boolean("visible");
   p.representation = a.choice("representation", kParticleRepresentations);
-  p.colourBy = a.choice("colour-by", kParticleColourBy);
+  p.colourBy = a.particleColourBy("colour-by", p.colourByExtra);
   p.colour = a.colour("colour");
   p.opacity = a.real("opacity", kUnitInterval);
   CRACKVIS_RETURN_IF_ERROR(a.status());
@@ -562,7 +577,9 @@ std::string toXml(const PipelineDescription& d) {
       "  <particles visible=\"{}\" representation=\"{}\" colour-by=\"{}\" colour=\"{}\" "
       "opacity=\"{}\"",
       text(p.visible), nameOf(kParticleRepresentations, p.representation),
-      nameOf(kParticleColourBy, p.colourBy), hex(p.colour), p.opacity);
+      p.colourBy == ParticleColourBy::kExtra ? "extra:" + escaped(p.colourByExtra)
+                                             : std::string(nameOf(kParticleColourBy, p.colourBy)),
+      hex(p.colour), p.opacity);
   if (p.clip) {
     out += fmt::format(">\n    <clip origin=\"{}\" normal=\"{}\"/>\n  </particles>\n",
                        text(p.clip->origin), text(p.clip->normal));

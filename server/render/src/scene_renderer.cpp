@@ -130,6 +130,8 @@ const char* particleArrayName(pipeline::ParticleColourBy by) {
       return "velocity";
     case pipeline::ParticleColourBy::kDamage:
       return "damage";
+    case pipeline::ParticleColourBy::kExtra:
+      return "extra";
     case pipeline::ParticleColourBy::kSolid:
       break;
   }
@@ -178,7 +180,10 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   }
   data->GetPointData()->AddArray(radius);
   vtkNew<vtkDoubleArray> values;
-  values->SetName(particleArrayName(particles.colourBy));
+  // The legend shows the array's name: an extra array's own.
+  values->SetName(particles.colourBy == pipeline::ParticleColourBy::kExtra
+                      ? particles.colourByExtra.c_str()
+                      : particleArrayName(particles.colourBy));
   const auto perParticle = scene::particleValues(particles, input);
   values->SetNumberOfValues(n);
   for (vtkIdType k = 0; k < n; ++k) {

@@ -97,6 +97,10 @@ std::vector<double> particleValues(const pipeline::ParticlesDescription& particl
       }
       break;
     }
+    case pipeline::ParticleColourBy::kExtra:
+      std::copy_n(input.particleExtra.begin(), std::min(n, input.particleExtra.size()),
+                  values.begin());
+      break;
     case pipeline::ParticleColourBy::kSolid:
       break;
   }

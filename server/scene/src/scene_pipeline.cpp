@@ -116,6 +116,9 @@ source::ExtraArrays extraArraysFor(const pipeline::PipelineDescription& d) {
   using pipeline::CrackColourBy;
   source::ExtraArrays extras;
   extras.velocities = d.particles.colourBy == pipeline::ParticleColourBy::kVelocity;
+  if (d.particles.colourBy == pipeline::ParticleColourBy::kExtra) {
+    extras.particleExtra = d.particles.colourByExtra;
+  }
   extras.bondForce =
       d.cracks.colourBy == CrackColourBy::kForce || d.bonds.colourBy == BondColourBy::kForce;
   extras.breakStep = d.cracks.colourBy == CrackColourBy::kBreakStep ||
@@ -289,7 +292,8 @@ SceneInput ScenePipeline::input() const {
           m_state.initial->positions,
           m_state.current->velocities,
           &m_state.mesh,
-          m_state.extractor->decomposition()};
+          m_state.extractor->decomposition(),
+          m_state.current->particleExtra};
 }
 
 }  // namespace crackvis::scene

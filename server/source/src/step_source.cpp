@@ -1,4 +1,5 @@
 #include <chrono>
+#include <cmath>
 
 #include <fmt/format.h>
 
@@ -23,6 +24,31 @@ Status badData(const std::string& file, const Status& problem, int step = -1) {
   return failedPrecondition(step < 0
                                 ? fmt::format("{}: {}", file, problem.message())
                                 : fmt::format("{}: step {}: {}", file, step, problem.message()));
+}
+
+// One colour value per particle from an extra array of 1 or 3 components
+// (a vector's magnitude); every value finite, or the step is refused.
+Result<std::vector<float>> particleValues(const std::string& file, int step,
+                                          const std::string& name,
+                                          const std::vector<double>& values, int components) {
+  const auto width = static_cast<std::size_t>(components);
+  std::vector<float> out(width > 0 ? values.size() / width : 0);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    double sum = 0.0;
+    for (std::size_t c = 0; c < width; ++c) {
+      const double v = values[i * width + c];
+      sum += width == 1 ? v : v * v;
+    }
+    const double value = width == 1 ? sum : std::sqrt(sum);
+    if (!std::isfinite(value)) {
+      return badData(file,
+                     invalidArgument(fmt::format(
+                         "extra array '{}': value of particle {} is not finite", name, i)),
+                     step);
+    }
+    out[i] = static_cast<float>(value);
+  }
+  return out;
 }
 
 class RemoteSource final : public StepSource {
@@ -53,7 +79,7 @@ class RemoteSource final : public StepSource {
   const std::vector<std::int32_t>& breakSteps() const override { return m_breakSteps; }
 
   Status setExtraArrays(const ExtraArrays& extras) override {
-    m_extras = {extras.velocities, extras.bondForce};
+    m_extras = {extras.velocities, extras.bondForce, extras.particleExtra};
     m_breakSteps.clear();
     if (extras.breakStep) {
       auto breakSteps = m_remote.breakSteps();
@@ -88,6 +114,14 @@ class RemoteSource final : public StepSource {
     out.bondState = std::move(state.bondState);
     out.velocities = std::move(state.velocities);
     out.bondForce = std::move(state.bondForce);
+    if (!m_extras.particleExtra.empty()) {
+      auto values = particleValues(file(), step, m_extras.particleExtra, remote->particleExtra,
+                                   remote->particleExtraComponents);
+      if (!values) {
+        return values.status();
+      }
+      out.particleExtra = std::move(values).value();
+    }
     out.loadMs = millisecondsSince(start);
     return out;
   }
@@ -152,11 +186,39 @@ class LocalSource final : public StepSource {
     if (m_extras.bondForce) {
       out.bondForce = std::move(state->bondForce);
     }
+    if (!m_extras.particleExtra.empty()) {
+      CRACKVIS_RETURN_IF_ERROR(localExtra(step, *state, out));
+    }
     out.loadMs = millisecondsSince(start);
     return out;
   }
 
  private:
+  // The extra array by name: the step's own, else the lattice's constant one.
+  Status localExtra(int step, const dem::StepState& state, SourceStep& out) const {
+    const std::string& name = m_extras.particleExtra;
+    std::vector<std::string> known;
+    for (const auto* extras : {&state.extras, &m_lattice.extras}) {
+      for (const dem::ExtraArray& extra : *extras) {
+        if (extra.owner != dem::ExtraOwner::kParticles) {
+          continue;
+        }
+        if (extra.name == name) {
+          auto values = particleValues(file(), step, name, extra.values, extra.components);
+          if (!values) {
+            return values.status();
+          }
+          out.particleExtra = std::move(values).value();
+          return Status::ok();
+        }
+        known.push_back(extra.name);
+      }
+    }
+    return failedPrecondition(fmt::format(
+        "{}: no per-particle extra array '{}' at step {} (the file has: {})", file(), name, step,
+        known.empty() ? std::string("none") : fmt::format("{}", fmt::join(known, ", "))));
+  }
+
   std::string m_path;
   dem::DemFileReader m_reader;
   dem::Lattice m_lattice;

@@ -47,6 +47,9 @@ struct FileSummary {
   double firstTime = 0.0;
   double lastTime = 0.0;
   QStringList arrays;  // "/particles/radius float64 [46875]", ...
+  // Per-particle extra arrays a view can colour by (crackvis-dem v1.1
+  // extra/particles/NAME, constant or per step).
+  QStringList particleExtras;
 };
 
 struct FrameInfo {

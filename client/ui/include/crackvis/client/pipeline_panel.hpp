@@ -27,6 +27,10 @@ class PipelinePanel : public QWidget {
   // Shows a description without emitting changed().
   void setDescription(const pipeline::PipelineDescription& description);
   QComboBox* methodBox() const { return m_method; }
+  // The file's per-particle extra arrays, offered as "extra: NAME" under
+  // colour by (replacing the previous file's).
+  void setParticleExtras(const QStringList& names);
+  QComboBox* particleColourBox() const { return m_particleColour; }
 
  signals:
   void changed(const crackvis::pipeline::PipelineDescription& description);

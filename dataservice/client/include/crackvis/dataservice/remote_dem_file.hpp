@@ -31,12 +31,20 @@ struct RemoteStep {
   // Only when asked for and the step has them (crackvis-dem: optional).
   std::vector<std::array<float, 3>> velocities;  // [N], m/s
   std::vector<float> bondForce;                  // [M], N
+  // A per-particle extra array (crackvis-dem v1.1), when asked for: row-major
+  // [N, particleExtraComponents] (1 or 3).
+  std::vector<double> particleExtra;
+  int particleExtraComponents = 1;
 };
 
 // The optional per-step arrays readStep should bring along.
 struct StepExtras {
   bool velocities = false;
   bool bondForce = false;
+  // The NAME of a per-particle extra array (/steps/K/extra/particles/NAME,
+  // else the constant /extra/particles/NAME); empty: none. A file without it
+  // is FAILED_PRECONDITION naming the ones it has.
+  std::string particleExtra;
   friend bool operator==(const StepExtras&, const StepExtras&) = default;
 };
 

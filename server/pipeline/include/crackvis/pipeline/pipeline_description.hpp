@@ -28,7 +28,8 @@ struct Colour {
 };
 
 enum class ParticleRepresentation { kImpostors, kPoints };
-enum class ParticleColourBy { kSolid, kRadius, kDisplacement, kVelocity, kDamage };
+// kExtra: a per-particle extra array of the file, named by colourByExtra.
+enum class ParticleColourBy { kSolid, kRadius, kDisplacement, kVelocity, kDamage, kExtra };
 enum class CrackColourBy { kSolid, kBondId, kForce, kBreakStep, kState, kComponent };
 enum class BondSelection { kNone, kBroken, kAll };
 enum class BondRepresentation { kLines, kTubes };
@@ -45,6 +46,7 @@ struct ParticlesDescription {
   bool visible = true;
   ParticleRepresentation representation = ParticleRepresentation::kImpostors;
   ParticleColourBy colourBy = ParticleColourBy::kSolid;
+  std::string colourByExtra;  // NAME of colour-by="extra:NAME" (kExtra)
   Colour colour{0xb0, 0xb0, 0xb0};
   double opacity = 1.0;
   std::optional<ClipPlane> clip;

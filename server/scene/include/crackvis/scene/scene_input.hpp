@@ -20,6 +20,7 @@ struct SceneInput {
   // The cell methods' decomposition, drawn as its edges when the description
   // shows the decomposition (local Voronoi shows its intact faces instead).
   const cracks::LatticeDecomposition* decomposition = nullptr;
+  std::span<const float> particleExtra;  // [N] the extra array coloured by; may be empty
 };
 
 }  // namespace crackvis::scene

@@ -34,15 +34,19 @@ struct SourceStep {
   // Only what the view colours by (ExtraArrays) and the file has; else empty.
   std::vector<std::array<float, 3>> velocities;  // [N]
   std::vector<float> bondForce;                  // [M]
-  double loadMs = 0.0;                           // time the read took
+  // The per-particle extra array the view colours by (crackvis-dem v1.1), one
+  // value per particle (a 3-vector's magnitude).
+  std::vector<float> particleExtra;  // [N]
+  double loadMs = 0.0;               // time the read took
 };
 
 // The arrays beyond positions and bond states that a view colours by: read
 // only when it does, so that the usual view moves the least data.
 struct ExtraArrays {
-  bool velocities = false;  // per step, [N, 3]
-  bool bondForce = false;   // per step, [M]
-  bool breakStep = false;   // per file, [M]
+  bool velocities = false;    // per step, [N, 3]
+  bool bondForce = false;     // per step, [M]
+  bool breakStep = false;     // per file, [M]
+  std::string particleExtra;  // NAME of extra/particles/NAME (per step or constant); "" none
   friend bool operator==(const ExtraArrays&, const ExtraArrays&) = default;
 };
 
