@@ -1,6 +1,8 @@
 // The crackvis-dem layout checked in one place: the local reader, the remote
 // reader (through a real crackvis-data) and the render server's step sources
 // give one status code and one message for the same problem.
+#include <cstring>
+
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
@@ -12,6 +14,8 @@
 
 namespace crackvis::testing {
 namespace {
+
+namespace v1 = crackvis::v1;
 
 TEST_CASE("A step out of range is OUT_OF_RANGE with one message from every reader",
           "[dataservice][integration]") {
@@ -78,6 +82,59 @@ TEST_CASE("The local and the remote reader word a layout problem alike",
   const Status read = local->readStep(1).status();
   CHECK(read.code() == StatusCode::kFailedPrecondition);
   CHECK(read.message() == root.file("bad.h5") + ": " + problem);
+}
+
+TEST_CASE("a compressed crackvis-dem file reads through the service in pieces, as written",
+          "[dataservice][integration][v1.1]") {
+  // 60,000 particles: a step's positions are 1.4 MB, more than one 1 MiB piece.
+  TempDir root;
+  const std::string path = root.file("packed.h5");
+  dem::Lattice lattice;
+  lattice.radius.assign(60000, 0.5);
+  lattice.bonds = {{0, 1}, {1, 2}};
+  dem::StepState step;
+  for (int i = 0; i < 60000; ++i) {
+    step.positions.push_back({i * 1.0, (i % 7) * 0.25, (i % 13) * 0.5});
+  }
+  step.bondState = {0, 1};
+  {
+    std::lock_guard lock(dataservice::hdf5Mutex());
+    dem::DemMetadata metadata;
+    metadata.storage.deflateLevel = 4;
+    auto writer = dem::DemFileWriter::create(path, lattice, metadata);
+    REQUIRE(writer);
+    REQUIRE(writer->appendStep(step));
+    REQUIRE(writer->close());
+  }
+  auto config = baseConfig();
+  config.dataRoot = root.path().string();
+  auto server = startServer(config);
+  auto client = connect(clientOptions(*server));
+  auto description = client.describe("packed.h5");
+  REQUIRE(description);
+  const auto* positions = description->findDataset("/steps/000000/positions");
+  REQUIRE(positions != nullptr);
+  CHECK_FALSE(positions->chunkShape.empty());  // stored chunked (and deflated)
+
+  auto stub = rawStub(*server);
+  v1::ReadRequest request;
+  request.set_file("packed.h5");
+  request.add_slabs()->set_dataset("/steps/000000/positions");
+  grpc::ClientContext context;
+  auto reader = stub->Read(&context, request);
+  v1::ReadChunk chunk;
+  std::string bytes;
+  int pieces = 0;
+  while (reader->Read(&chunk)) {
+    CHECK(chunk.offset() == bytes.size());
+    CHECK(chunk.data().size() <= (std::size_t{1} << 20));
+    bytes += chunk.data();
+    ++pieces;
+  }
+  REQUIRE(reader->Finish().ok());
+  CHECK(pieces >= 2);
+  REQUIRE(bytes.size() == step.positions.size() * sizeof(dem::Vec3));
+  CHECK(std::memcmp(bytes.data(), step.positions.data(), bytes.size()) == 0);
 }
 
 }  // namespace
