@@ -225,15 +225,21 @@ TEST_CASE("the pipeline panel offers a file's extra arrays under colour by", "[c
   pipeline::PipelineDescription changed;
   QObject::connect(&panel, &client::PipelinePanel::changed,
                    [&](const pipeline::PipelineDescription& d) { changed = d; });
-  panel.setParticleExtras({"damage", "nbCracks"});
+  panel.setExtras({"damage", "nbCracks"}, {"forceN"});
   QComboBox* box = panel.particleColourBox();
   REQUIRE(box->findText("extra: damage") >= 0);
   box->setCurrentIndex(box->findText("extra: nbCracks"));
   CHECK(changed.particles.colourBy == pipeline::ParticleColourBy::kExtra);
   CHECK(changed.particles.colourByExtra == "nbCracks");
   CHECK_THAT(pipeline::toXml(changed), Catch::Contains("colour-by=\"extra:nbCracks\""));
+  QComboBox* bonds = panel.bondColourBox();
+  bonds->setCurrentIndex(bonds->findText("extra: forceN"));
+  CHECK(changed.bonds.colourBy == pipeline::BondColourBy::kExtra);
+  CHECK(changed.bonds.colourByExtra == "forceN");
+  CHECK_THAT(pipeline::toXml(changed), Catch::Contains("colour-by=\"extra:forceN\""));
   // Another file's arrays replace these ones.
-  panel.setParticleExtras({"force"});
+  panel.setExtras({"force"}, {});
   CHECK(box->findText("extra: damage") < 0);
   CHECK(box->findText("extra: force") >= 0);
+  CHECK(bonds->findText("extra: forceN") < 0);
 }

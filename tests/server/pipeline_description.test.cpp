@@ -105,6 +105,12 @@ TEST_CASE("particles colour by a file's extra array: extra:NAME", "[pipeline]") 
   REQUIRE(again);
   CHECK(*again == *parsed);
   CHECK_THAT(toXml(*parsed), Catch::Contains("colour-by=\"extra:damage\""));
+  auto bonds = parsePipeline(
+      document("  <data file=\"a.h5\"/>\n  <bonds show=\"all\" colour-by=\"extra:forceN\"/>\n"));
+  REQUIRE(bonds);
+  CHECK(bonds->bonds.colourBy == BondColourBy::kExtra);
+  CHECK(bonds->bonds.colourByExtra == "forceN");
+  CHECK(*parsePipeline(toXml(*bonds)) == *bonds);
 }
 
 TEST_CASE("invalid documents are refused naming the line and the element",

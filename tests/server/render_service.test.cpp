@@ -986,4 +986,19 @@ TEST_CASE("an imported Yade run goes through the data service into a render sess
   CHECK(missing.error_code() == grpc::StatusCode::FAILED_PRECONDITION);
   CHECK_THAT(missing.error_message(),
              Catch::Contains("no per-particle extra array 'nope'") && Catch::Contains("damage"));
+
+  // Its bonds coloured by Yade's normal force (the per-bond extra 'forceN').
+  auto force = view;
+  force.cracks.visible = false;
+  force.bonds.show = pipeline::BondSelection::kAll;
+  force.bonds.colourBy = pipeline::BondColourBy::kExtra;
+  force.bonds.colourByExtra = "forceN";
+  StreamClient bonds(*stub, openSession(*stub, force));
+  REQUIRE(bonds.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+  CHECK(viridisPixels(bonds.frames().front().picture) > 100);
+  force.bonds.colourByExtra = "nope";
+  const grpc::Status noBondArray = openStatus(*stub, pipeline::toXml(force));
+  CHECK(noBondArray.error_code() == grpc::StatusCode::FAILED_PRECONDITION);
+  CHECK_THAT(noBondArray.error_message(),
+             Catch::Contains("no per-bond extra array 'nope'") && Catch::Contains("forceN"));
 }

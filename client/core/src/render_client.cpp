@@ -516,12 +516,16 @@ Result<FileSummary> RenderClient::describe(const QString& file) {
     if (dataset.path() == "/bonds/pairs" && dataset.shape_size() >= 1) {
       summary.bonds = static_cast<qint64>(dataset.shape(0));
     }
-    for (const char* folder : {"/extra/particles/", "/steps/000000/extra/particles/"}) {
+    for (const auto& [folder, names] :
+         {std::pair{"/extra/particles/", &summary.particleExtras},
+          std::pair{"/steps/000000/extra/particles/", &summary.particleExtras},
+          std::pair{"/extra/bonds/", &summary.bondExtras},
+          std::pair{"/steps/000000/extra/bonds/", &summary.bondExtras}}) {
       const std::string_view path = dataset.path();
       if (path.rfind(folder, 0) == 0) {
         const QString name = QString::fromStdString(std::string(path.substr(std::strlen(folder))));
-        if (!summary.particleExtras.contains(name)) {
-          summary.particleExtras << name;
+        if (!names->contains(name)) {
+          *names << name;
         }
       }
     }

@@ -243,18 +243,25 @@ void MainWindow::describe(const QString& file) {
           .arg(summary->lastTime);
   text += summary->arrays.join(QLatin1Char('\n'));
   m_description->setPlainText(text);
-  m_panel->setParticleExtras(summary->particleExtras);
+  m_panel->setExtras(summary->particleExtras, summary->bondExtras);
 }
 
 bool MainWindow::openFile(const QString& file) {
   describe(file);  // the file's extra arrays for the colour-by list
   auto d = m_panel->description();
-  // An extra array of the previous file that this one lacks: back to solid.
+  // An extra array of the previous file that this one lacks: back to the default.
+  const QString prefix = QStringLiteral("extra: ");
   if (d.particles.colourBy == pipeline::ParticleColourBy::kExtra &&
       m_panel->particleColourBox()->findText(
-          QStringLiteral("extra: ") + QString::fromStdString(d.particles.colourByExtra)) < 0) {
+          prefix + QString::fromStdString(d.particles.colourByExtra)) < 0) {
     d.particles.colourBy = pipeline::ParticleColourBy::kSolid;
     d.particles.colourByExtra.clear();
+  }
+  if (d.bonds.colourBy == pipeline::BondColourBy::kExtra &&
+      m_panel->bondColourBox()->findText(prefix + QString::fromStdString(d.bonds.colourByExtra)) <
+          0) {
+    d.bonds.colourBy = pipeline::BondColourBy::kState;
+    d.bonds.colourByExtra.clear();
   }
   d.file = file.toStdString();
   d.step = -1;

@@ -198,16 +198,39 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
 // after the prefix.
 const QString kExtraPrefix = QStringLiteral("extra: ");
 
-void PipelinePanel::setParticleExtras(const QStringList& names) {
-  m_updating = true;
-  for (int i = m_particleColour->count() - 1; i >= 0; --i) {
-    if (m_particleColour->itemData(i).toInt() == static_cast<int>(ParticleColourBy::kExtra)) {
-      m_particleColour->removeItem(i);
+// Replaces a colour-by box's extra entries (data `extraValue`) by `names`.
+void replaceExtras(QComboBox* box, int extraValue, const QStringList& names) {
+  for (int i = box->count() - 1; i >= 0; --i) {
+    if (box->itemData(i).toInt() == extraValue) {
+      box->removeItem(i);
     }
   }
   for (const QString& name : names) {
-    m_particleColour->addItem(kExtraPrefix + name, static_cast<int>(ParticleColourBy::kExtra));
+    box->addItem(kExtraPrefix + name, extraValue);
   }
+}
+
+// Selects `value`, or the extra entry of `extra` when value is the extra kind.
+template <typename Enum>
+void selectColourBy(QComboBox* box, Enum value, Enum extraValue, const std::string& extra) {
+  if (value == extraValue) {
+    box->setCurrentIndex(box->findText(kExtraPrefix + QString::fromStdString(extra)));
+  } else {
+    select(box, value);
+  }
+}
+
+// The selected extra entry's name; empty unless it is the extra kind.
+std::string selectedExtra(const QComboBox* box, int extraValue) {
+  return box->currentData().toInt() == extraValue
+             ? box->currentText().mid(kExtraPrefix.size()).toStdString()
+             : std::string();
+}
+
+void PipelinePanel::setExtras(const QStringList& particleNames, const QStringList& bondNames) {
+  m_updating = true;
+  replaceExtras(m_particleColour, static_cast<int>(ParticleColourBy::kExtra), particleNames);
+  replaceExtras(m_bondColour, static_cast<int>(BondColourBy::kExtra), bondNames);
   m_updating = false;
   show(m_description);
 }
@@ -221,12 +244,8 @@ void PipelinePanel::show(const pipeline::PipelineDescription& d) {
   m_updating = true;
   m_particlesVisible->setChecked(d.particles.visible);
   select(m_particleRepresentation, d.particles.representation);
-  if (d.particles.colourBy == ParticleColourBy::kExtra) {
-    m_particleColour->setCurrentIndex(m_particleColour->findText(
-        kExtraPrefix + QString::fromStdString(d.particles.colourByExtra)));
-  } else {
-    select(m_particleColour, d.particles.colourBy);
-  }
+  selectColourBy(m_particleColour, d.particles.colourBy, ParticleColourBy::kExtra,
+                 d.particles.colourByExtra);
   m_particleOpacity->setValue(d.particles.opacity);
   m_clip->setChecked(d.particles.clip.has_value());
   const ClipPlane clip = d.particles.clip.value_or(ClipPlane{{0, 0, 0}, {1, 0, 0}});
@@ -247,7 +266,7 @@ void PipelinePanel::show(const pipeline::PipelineDescription& d) {
   m_crackOpacity->setValue(d.cracks.opacity);
   select(m_bondsShow, d.bonds.show);
   select(m_bondRepresentation, d.bonds.representation);
-  select(m_bondColour, d.bonds.colourBy);
+  selectColourBy(m_bondColour, d.bonds.colourBy, BondColourBy::kExtra, d.bonds.colourByExtra);
   m_tubeRadius->setValue(d.bonds.tubeRadius);
   m_decomposition->setChecked(d.showDecomposition);
   m_inconsistent->setChecked(d.showInconsistent);
@@ -267,11 +286,8 @@ void PipelinePanel::collect() {
   d.particles.visible = m_particlesVisible->isChecked();
   d.particles.representation = selected<ParticleRepresentation>(m_particleRepresentation);
   d.particles.colourBy = selected<ParticleColourBy>(m_particleColour);
-  d.particles.colourByExtra.clear();
-  if (d.particles.colourBy == ParticleColourBy::kExtra) {
-    d.particles.colourByExtra =
-        m_particleColour->currentText().mid(kExtraPrefix.size()).toStdString();
-  }
+  d.particles.colourByExtra =
+      selectedExtra(m_particleColour, static_cast<int>(ParticleColourBy::kExtra));
   d.particles.opacity = m_particleOpacity->value();
   d.particles.clip.reset();
   if (m_clip->isChecked()) {
@@ -291,6 +307,7 @@ void PipelinePanel::collect() {
   d.bonds.show = selected<BondSelection>(m_bondsShow);
   d.bonds.representation = selected<BondRepresentation>(m_bondRepresentation);
   d.bonds.colourBy = selected<BondColourBy>(m_bondColour);
+  d.bonds.colourByExtra = selectedExtra(m_bondColour, static_cast<int>(BondColourBy::kExtra));
   d.bonds.tubeRadius = m_tubeRadius->value();
   d.showDecomposition = m_decomposition->isChecked();
   d.showInconsistent = m_inconsistent->isChecked();

@@ -2,6 +2,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -28,28 +29,31 @@ Result<bool> optionalDataset(const FileDescription& description, dem::DemDataset
 struct ExtraSlab {
   std::string path;
   int components = 1;
+  bool matrix = false;  // stored [rows, k] rather than [rows]
 };
 
-Result<ExtraSlab> particleExtraSlab(const FileDescription& description, const std::string& file,
-                                    const std::string& name, int step, std::uint64_t n) {
-  const std::string perStep = fmt::format("{}/extra/particles/{}", dem::stepGroupPath(step), name);
-  const std::string constant = fmt::format("/extra/particles/{}", name);
+// `owner` is "particles" or "bonds"; `n` the rows (N or M).
+Result<ExtraSlab> extraSlab(const FileDescription& description, const std::string& file,
+                            const char* owner, const std::string& name, int step, std::uint64_t n) {
+  const std::string perStep = fmt::format("{}/extra/{}/{}", dem::stepGroupPath(step), owner, name);
+  const std::string constant = fmt::format("/extra/{}/{}", owner, name);
   const DatasetInfo* dataset = description.findDataset(perStep);
   if (dataset == nullptr) {
     dataset = description.findDataset(constant);
   }
   if (dataset == nullptr) {
     std::vector<std::string> known;
-    const std::string prefix = fmt::format("{}/extra/particles/", dem::stepGroupPath(step));
+    const std::string prefix = fmt::format("{}/extra/{}/", dem::stepGroupPath(step), owner);
     for (const DatasetInfo& info : description.datasets) {
-      for (const std::string& folder : {prefix, std::string("/extra/particles/")}) {
+      for (const std::string& folder : {prefix, fmt::format("/extra/{}/", owner)}) {
         if (info.path.rfind(folder, 0) == 0) {
           known.push_back(info.path.substr(folder.size()));
         }
       }
     }
     return failedPrecondition(fmt::format(
-        "{}: no per-particle extra array '{}' at step {} (the file has: {})", file, name, step,
+        "{}: no per-{} extra array '{}' at step {} (the file has: {})", file,
+        std::string_view(owner) == "bonds" ? "bond" : "particle", name, step,
         known.empty() ? std::string("none") : fmt::format("{}", fmt::join(known, ", "))));
   }
   const bool widthValid =
@@ -62,7 +66,8 @@ Result<ExtraSlab> particleExtraSlab(const FileDescription& description, const st
                     dataset->dtypeName, dem::h5::formatDims(dataset->shape), n, n));
   }
   return ExtraSlab{dataset->path,
-                   dataset->shape.size() == 2 ? static_cast<int>(dataset->shape[1]) : 1};
+                   dataset->shape.size() == 2 ? static_cast<int>(dataset->shape[1]) : 1,
+                   dataset->shape.size() == 2};
 }
 
 std::string positionsPath(int step) {
@@ -257,20 +262,34 @@ Result<RemoteStep> RemoteDemFile::readStep(int step, StepExtras extras) {
   if (readForce) {
     slabs.push_back(Hyperslab::whole(dem::datasetPath(dem::DemDataset::kBondForce, step)));
   }
-  std::optional<ExtraSlab> particleExtra;
-  if (!extras.particleExtra.empty()) {
-    auto found = particleExtraSlab(*m_description, m_file, extras.particleExtra, step, n);
+  // Extra arrays, per particle then per bond: (slab, rows, output).
+  struct ExtraRead {
+    ExtraSlab slab;
+    std::uint64_t rows;
+    std::vector<double>* values;
+    int* components;
+  };
+  std::vector<ExtraRead> extraReads;
+  RemoteStep result;
+  for (const auto& [owner, name, rows, values, components] :
+       {std::tuple{"particles", &extras.particleExtra, n, &result.particleExtra,
+                   &result.particleExtraComponents},
+        std::tuple{"bonds", &extras.bondExtra, m, &result.bondExtra,
+                   &result.bondExtraComponents}}) {
+    if (name->empty()) {
+      continue;
+    }
+    auto found = extraSlab(*m_description, m_file, owner, *name, step, rows);
     if (!found) {
       return found.status();
     }
-    particleExtra = *found;
+    extraReads.push_back({*found, rows, values, components});
     slabs.push_back(Hyperslab::whole(found->path));
   }
   // The request goes out first: the arrays below are allocated (3.5 MB for
   // cuboid A, page faults and zeroing included) while the server opens the
   // file and reads the first piece, not before the server hears of the call.
   auto pending = m_client->startRead(m_file, slabs);
-  RemoteStep result;
   result.index = step;
   result.time = steps()[static_cast<size_t>(step)].time;
   result.positions.resize(n);
@@ -300,16 +319,16 @@ Result<RemoteStep> RemoteDemFile::readStep(int step, StepExtras extras) {
     expected.push_back(
         {DataType::kFloat32, {m}, reinterpret_cast<std::byte*>(result.bondForce.data())});
   }
-  if (particleExtra) {
-    const auto width = static_cast<std::uint64_t>(particleExtra->components);
-    result.particleExtraComponents = particleExtra->components;
-    result.particleExtra.resize(n * width);
-    std::vector<std::uint64_t> shape{n};
-    if (m_description->findDataset(particleExtra->path)->shape.size() == 2) {
+  for (const ExtraRead& read : extraReads) {
+    const auto width = static_cast<std::uint64_t>(read.slab.components);
+    *read.components = read.slab.components;
+    read.values->resize(read.rows * width);
+    std::vector<std::uint64_t> shape{read.rows};
+    if (read.slab.matrix) {
       shape.push_back(width);
     }
     expected.push_back(
-        {DataType::kFloat64, shape, reinterpret_cast<std::byte*>(result.particleExtra.data())});
+        {DataType::kFloat64, shape, reinterpret_cast<std::byte*>(read.values->data())});
   }
   std::vector<bool> arrived(slabs.size(), false);
   // The bonds are checked as their chunks arrive, while the bytes are still

@@ -312,18 +312,20 @@ class Attributes {
     return names[0].first;
   }
 
-  // A built-in quantity or "extra:NAME" (NAME as crackvis-dem names extras).
-  ParticleColourBy particleColourBy(const char* name, std::string& extra) {
+  // A built-in quantity or "extra:NAME" (NAME as crackvis-dem names extras),
+  // which gives `extraValue` and the name in `extra`.
+  template <typename E, std::size_t N>
+  E choiceOrExtra(const char* name, const Names<E, N>& names, E extraValue, std::string& extra) {
     const std::string raw = text(name);
     constexpr std::string_view kPrefix = "extra:";
     if (raw.rfind(kPrefix, 0) != 0) {
-      return choice(name, kParticleColourBy);
+      return choice(name, names);
     }
     extra = raw.substr(kPrefix.size());
     if (Status valid = dem::validateName("extra array", extra); !valid) {
       fail(name, fmt::format("'{}': {}", echoed(raw), valid.message()));
     }
-    return ParticleColourBy::kExtra;
+    return extraValue;
   }
 
   cracks::Method method(const char* name) {
@@ -389,7 +391,8 @@ Status convertParticles(const xmlNode* node, ParticlesDescription& p) {
   Attributes a(node);
   p.visible = a.boolean("visible");
   p.representation = a.choice("representation", kParticleRepresentations);
-  p.colourBy = a.particleColourBy("colour-by", p.colourByExtra);
+  p.colourBy =
+      a.choiceOrExtra("colour-by", kParticleColourBy, ParticleColourBy::kExtra, p.colourByExtra);
   p.colour = a.colour("colour");
   p.opacity = a.real("opacity", kUnitInterval);
   CRACKVIS_RETURN_IF_ERROR(a.status());
@@ -421,7 +424,7 @@ Status convertBonds(const xmlNode* node, BondsDescription& b) {
   Attributes a(node);
   b.show = a.choice("show", kBondSelections);
   b.representation = a.choice("representation", kBondRepresentations);
-  b.colourBy = a.choice("colour-by", kBondColourBy);
+  b.colourBy = a.choiceOrExtra("colour-by", kBondColourBy, BondColourBy::kExtra, b.colourByExtra);
   b.colour = a.colour("colour");
   b.tubeRadius = a.real("tube-radius", kTubeRadius);
   return a.status();
@@ -569,6 +572,13 @@ Result<PipelineDescription> parsePipeline(std::string_view xml) {
   return convert(xmlDocGetRootElement(doc.get()));
 }
 
+// The colour-by attribute's text: a built-in name or extra:NAME.
+template <typename E, std::size_t N>
+std::string colourByText(const Names<E, N>& names, E value, E extraValue,
+                         const std::string& extra) {
+  return value == extraValue ? "extra:" + escaped(extra) : std::string(nameOf(names, value));
+}
+
 std::string toXml(const PipelineDescription& d) {
   std::string out = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<pipeline version=\"1\">\n";
   out += fmt::format("  <data file=\"{}\" step=\"{}\"/>\n", escaped(d.file), d.step);
@@ -577,8 +587,7 @@ std::string toXml(const PipelineDescription& d) {
       "  <particles visible=\"{}\" representation=\"{}\" colour-by=\"{}\" colour=\"{}\" "
       "opacity=\"{}\"",
       text(p.visible), nameOf(kParticleRepresentations, p.representation),
-      p.colourBy == ParticleColourBy::kExtra ? "extra:" + escaped(p.colourByExtra)
-                                             : std::string(nameOf(kParticleColourBy, p.colourBy)),
+      colourByText(kParticleColourBy, p.colourBy, ParticleColourBy::kExtra, p.colourByExtra),
       hex(p.colour), p.opacity);
   if (p.clip) {
     out += fmt::format(">\n    <clip origin=\"{}\" normal=\"{}\"/>\n  </particles>\n",
@@ -599,7 +608,8 @@ std::string toXml(const PipelineDescription& d) {
       "  <bonds show=\"{}\" representation=\"{}\" colour-by=\"{}\" colour=\"{}\" "
       "tube-radius=\"{}\"/>\n",
       nameOf(kBondSelections, b.show), nameOf(kBondRepresentations, b.representation),
-      nameOf(kBondColourBy, b.colourBy), hex(b.colour), b.tubeRadius);
+      colourByText(kBondColourBy, b.colourBy, BondColourBy::kExtra, b.colourByExtra), hex(b.colour),
+      b.tubeRadius);
   out += fmt::format("  <decomposition show=\"{}\"/>\n", text(d.showDecomposition));
   out += fmt::format("  <inconsistent show=\"{}\"/>\n", text(d.showInconsistent));
   const auto& v = d.view;

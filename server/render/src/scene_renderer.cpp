@@ -144,6 +144,7 @@ const char* bondArrayName(pipeline::BondColourBy by) {
       return "bond_force";
     case pipeline::BondColourBy::kBreakStep:
       return "break_step";
+    case pipeline::BondColourBy::kExtra:  // named by the caller
     case pipeline::BondColourBy::kState:
     case pipeline::BondColourBy::kSolid:
       break;
@@ -376,7 +377,9 @@ void addBonds(const pipeline::PipelineDescription& d, const SceneInput& input,
               vtkRenderer* renderer, Legend* legend) {
   const scene::BondLines shown = scene::bondLines(d.bonds, input);
   vtkNew<vtkDoubleArray> values;
-  values->SetName(bondArrayName(d.bonds.colourBy));
+  values->SetName(d.bonds.colourBy == pipeline::BondColourBy::kExtra
+                      ? d.bonds.colourByExtra.c_str()
+                      : bondArrayName(d.bonds.colourBy));
   values->SetNumberOfValues(static_cast<vtkIdType>(shown.values.size()));
   std::copy(shown.values.begin(), shown.values.end(), values->GetPointer(0));
   const auto data = bondPolyData(input, shown.bonds, input.lattice->bonds);

@@ -206,6 +206,8 @@ BondLines bondLines(const pipeline::BondsDescription& d, const SceneInput& input
       value = input.step.bondForce[b];
     } else if (d.colourBy == pipeline::BondColourBy::kBreakStep && !input.step.breakStep.empty()) {
       value = input.step.breakStep[b];
+    } else if (d.colourBy == pipeline::BondColourBy::kExtra && b < input.bondExtra.size()) {
+      value = input.bondExtra[b];
     }
     lines.bonds.push_back(static_cast<dem::BondIndex>(b));
     lines.values.push_back(value);

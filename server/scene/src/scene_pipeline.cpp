@@ -119,6 +119,9 @@ source::ExtraArrays extraArraysFor(const pipeline::PipelineDescription& d) {
   if (d.particles.colourBy == pipeline::ParticleColourBy::kExtra) {
     extras.particleExtra = d.particles.colourByExtra;
   }
+  if (d.bonds.colourBy == BondColourBy::kExtra) {
+    extras.bondExtra = d.bonds.colourByExtra;
+  }
   extras.bondForce =
       d.cracks.colourBy == CrackColourBy::kForce || d.bonds.colourBy == BondColourBy::kForce;
   extras.breakStep = d.cracks.colourBy == CrackColourBy::kBreakStep ||
@@ -293,7 +296,8 @@ SceneInput ScenePipeline::input() const {
           m_state.current->velocities,
           &m_state.mesh,
           m_state.extractor->decomposition(),
-          m_state.current->particleExtra};
+          m_state.current->particleExtra,
+          m_state.current->bondExtra};
 }
 
 }  // namespace crackvis::scene

@@ -1,5 +1,6 @@
 #include <chrono>
 #include <cmath>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -26,11 +27,11 @@ Status badData(const std::string& file, const Status& problem, int step = -1) {
                                 : fmt::format("{}: step {}: {}", file, step, problem.message()));
 }
 
-// One colour value per particle from an extra array of 1 or 3 components
-// (a vector's magnitude); every value finite, or the step is refused.
-Result<std::vector<float>> particleValues(const std::string& file, int step,
-                                          const std::string& name,
-                                          const std::vector<double>& values, int components) {
+// One colour value per row (particle or bond) from an extra array of 1 or 3
+// components (a vector's magnitude); every value finite, or the step is
+// refused.
+Result<std::vector<float>> extraValues(const std::string& file, int step, const std::string& name,
+                                       const std::vector<double>& values, int components) {
   const auto width = static_cast<std::size_t>(components);
   std::vector<float> out(width > 0 ? values.size() / width : 0);
   for (std::size_t i = 0; i < out.size(); ++i) {
@@ -41,10 +42,9 @@ Result<std::vector<float>> particleValues(const std::string& file, int step,
     }
     const double value = width == 1 ? sum : std::sqrt(sum);
     if (!std::isfinite(value)) {
-      return badData(file,
-                     invalidArgument(fmt::format(
-                         "extra array '{}': value of particle {} is not finite", name, i)),
-                     step);
+      return badData(
+          file, invalidArgument(fmt::format("extra array '{}': value {} is not finite", name, i)),
+          step);
     }
     out[i] = static_cast<float>(value);
   }
@@ -79,7 +79,7 @@ class RemoteSource final : public StepSource {
   const std::vector<std::int32_t>& breakSteps() const override { return m_breakSteps; }
 
   Status setExtraArrays(const ExtraArrays& extras) override {
-    m_extras = {extras.velocities, extras.bondForce, extras.particleExtra};
+    m_extras = {extras.velocities, extras.bondForce, extras.particleExtra, extras.bondExtra};
     m_breakSteps.clear();
     if (extras.breakStep) {
       auto breakSteps = m_remote.breakSteps();
@@ -114,13 +114,18 @@ class RemoteSource final : public StepSource {
     out.bondState = std::move(state.bondState);
     out.velocities = std::move(state.velocities);
     out.bondForce = std::move(state.bondForce);
-    if (!m_extras.particleExtra.empty()) {
-      auto values = particleValues(file(), step, m_extras.particleExtra, remote->particleExtra,
-                                   remote->particleExtraComponents);
-      if (!values) {
-        return values.status();
+    for (const auto& [name, values, components, target] :
+         {std::tuple{&m_extras.particleExtra, &remote->particleExtra,
+                     remote->particleExtraComponents, &out.particleExtra},
+          std::tuple{&m_extras.bondExtra, &remote->bondExtra, remote->bondExtraComponents,
+                     &out.bondExtra}}) {
+      if (!name->empty()) {
+        auto colours = extraValues(file(), step, *name, *values, components);
+        if (!colours) {
+          return colours.status();
+        }
+        *target = std::move(colours).value();
       }
-      out.particleExtra = std::move(values).value();
     }
     out.loadMs = millisecondsSince(start);
     return out;
@@ -187,7 +192,12 @@ class LocalSource final : public StepSource {
       out.bondForce = std::move(state->bondForce);
     }
     if (!m_extras.particleExtra.empty()) {
-      CRACKVIS_RETURN_IF_ERROR(localExtra(step, *state, out));
+      CRACKVIS_RETURN_IF_ERROR(localExtra(step, *state, dem::ExtraOwner::kParticles,
+                                          m_extras.particleExtra, out.particleExtra));
+    }
+    if (!m_extras.bondExtra.empty()) {
+      CRACKVIS_RETURN_IF_ERROR(
+          localExtra(step, *state, dem::ExtraOwner::kBonds, m_extras.bondExtra, out.bondExtra));
     }
     out.loadMs = millisecondsSince(start);
     return out;
@@ -195,27 +205,28 @@ class LocalSource final : public StepSource {
 
  private:
   // The extra array by name: the step's own, else the lattice's constant one.
-  Status localExtra(int step, const dem::StepState& state, SourceStep& out) const {
-    const std::string& name = m_extras.particleExtra;
+  Status localExtra(int step, const dem::StepState& state, dem::ExtraOwner owner,
+                    const std::string& name, std::vector<float>& out) const {
     std::vector<std::string> known;
     for (const auto* extras : {&state.extras, &m_lattice.extras}) {
       for (const dem::ExtraArray& extra : *extras) {
-        if (extra.owner != dem::ExtraOwner::kParticles) {
+        if (extra.owner != owner) {
           continue;
         }
         if (extra.name == name) {
-          auto values = particleValues(file(), step, name, extra.values, extra.components);
+          auto values = extraValues(file(), step, name, extra.values, extra.components);
           if (!values) {
             return values.status();
           }
-          out.particleExtra = std::move(values).value();
+          out = std::move(values).value();
           return Status::ok();
         }
         known.push_back(extra.name);
       }
     }
     return failedPrecondition(fmt::format(
-        "{}: no per-particle extra array '{}' at step {} (the file has: {})", file(), name, step,
+        "{}: no per-{} extra array '{}' at step {} (the file has: {})", file(),
+        owner == dem::ExtraOwner::kBonds ? "bond" : "particle", name, step,
         known.empty() ? std::string("none") : fmt::format("{}", fmt::join(known, ", "))));
   }
 

@@ -50,6 +50,7 @@ struct FileSummary {
   // Per-particle extra arrays a view can colour by (crackvis-dem v1.1
   // extra/particles/NAME, constant or per step).
   QStringList particleExtras;
+  QStringList bondExtras;  // likewise extra/bonds/NAME
 };
 
 struct FrameInfo {

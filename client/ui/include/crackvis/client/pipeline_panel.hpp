@@ -27,10 +27,11 @@ class PipelinePanel : public QWidget {
   // Shows a description without emitting changed().
   void setDescription(const pipeline::PipelineDescription& description);
   QComboBox* methodBox() const { return m_method; }
-  // The file's per-particle extra arrays, offered as "extra: NAME" under
-  // colour by (replacing the previous file's).
-  void setParticleExtras(const QStringList& names);
+  // The file's per-particle and per-bond extra arrays, offered as
+  // "extra: NAME" under colour by (replacing the previous file's).
+  void setExtras(const QStringList& particleNames, const QStringList& bondNames);
   QComboBox* particleColourBox() const { return m_particleColour; }
+  QComboBox* bondColourBox() const { return m_bondColour; }
 
  signals:
   void changed(const crackvis::pipeline::PipelineDescription& description);

@@ -35,6 +35,8 @@ struct RemoteStep {
   // [N, particleExtraComponents] (1 or 3).
   std::vector<double> particleExtra;
   int particleExtraComponents = 1;
+  std::vector<double> bondExtra;  // the same per bond: [M, bondExtraComponents]
+  int bondExtraComponents = 1;
 };
 
 // The optional per-step arrays readStep should bring along.
@@ -45,6 +47,7 @@ struct StepExtras {
   // else the constant /extra/particles/NAME); empty: none. A file without it
   // is FAILED_PRECONDITION naming the ones it has.
   std::string particleExtra;
+  std::string bondExtra;  // likewise, extra/bonds/NAME
   friend bool operator==(const StepExtras&, const StepExtras&) = default;
 };
 

@@ -33,7 +33,8 @@ enum class ParticleColourBy { kSolid, kRadius, kDisplacement, kVelocity, kDamage
 enum class CrackColourBy { kSolid, kBondId, kForce, kBreakStep, kState, kComponent };
 enum class BondSelection { kNone, kBroken, kAll };
 enum class BondRepresentation { kLines, kTubes };
-enum class BondColourBy { kSolid, kState, kForce, kBreakStep };
+// kExtra: a per-bond extra array of the file, named by colourByExtra.
+enum class BondColourBy { kSolid, kState, kForce, kBreakStep, kExtra };
 enum class ColourMap { kViridis, kCoolWarm, kRainbow, kGrayscale };
 
 struct ClipPlane {
@@ -72,6 +73,7 @@ struct BondsDescription {
   BondSelection show = BondSelection::kNone;
   BondRepresentation representation = BondRepresentation::kLines;
   BondColourBy colourBy = BondColourBy::kState;
+  std::string colourByExtra;  // NAME of colour-by="extra:NAME" (kExtra)
   Colour colour{0x40, 0x40, 0x40};
   double tubeRadius = 0.15;  // fraction of the particle radius
   friend bool operator==(const BondsDescription&, const BondsDescription&) = default;

@@ -21,6 +21,7 @@ struct SceneInput {
   // shows the decomposition (local Voronoi shows its intact faces instead).
   const cracks::LatticeDecomposition* decomposition = nullptr;
   std::span<const float> particleExtra;  // [N] the extra array coloured by; may be empty
+  std::span<const float> bondExtra;      // [M] likewise for the bonds
 };
 
 }  // namespace crackvis::scene

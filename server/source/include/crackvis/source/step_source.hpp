@@ -37,6 +37,7 @@ struct SourceStep {
   // The per-particle extra array the view colours by (crackvis-dem v1.1), one
   // value per particle (a 3-vector's magnitude).
   std::vector<float> particleExtra;  // [N]
+  std::vector<float> bondExtra;      // [M] likewise, the bond extra array coloured by
   double loadMs = 0.0;               // time the read took
 };
 
@@ -47,6 +48,7 @@ struct ExtraArrays {
   bool bondForce = false;     // per step, [M]
   bool breakStep = false;     // per file, [M]
   std::string particleExtra;  // NAME of extra/particles/NAME (per step or constant); "" none
+  std::string bondExtra;      // NAME of extra/bonds/NAME; "" none
   friend bool operator==(const ExtraArrays&, const ExtraArrays&) = default;
 };
 
