@@ -5,6 +5,7 @@
 // count of intact bonds (bond_count.dat, an InteractionScalarFieldSaver).
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <catch2/catch.hpp>
 
@@ -62,6 +63,35 @@ TEST_CASE("an ESyS-Particle notched bar imports with ESyS's own bond count", "[i
   CHECK(first->positions[static_cast<std::size_t>(at)] ==
         dem::Vec3{0.974252112, 0.211817382, 0.353436629});
   CHECK(lattice->radius[static_cast<std::size_t>(at)] == 0.211817382);
+
+  // Every array of particle 207 at step 4200 (snapshot index 6), as the
+  // worker file lists it: pos, rad, id, tag, ..., vel (13-15), force (16-18).
+  std::ifstream worker(kBar + "/snap_t=4200_1.txt");
+  std::string line;
+  std::vector<double> row;
+  while (std::getline(worker, line)) {
+    std::istringstream words(line);
+    std::vector<double> values;
+    double v = 0.0;
+    while (words >> v) {
+      values.push_back(v);
+    }
+    if (values.size() == 29 && values[4] == 207) {
+      row = values;
+    }
+  }
+  REQUIRE(row.size() == 29);
+  auto later = reader->readStep(6);
+  REQUIRE(later);
+  const auto i = static_cast<std::size_t>(at);
+  CHECK(later->positions[i] == dem::Vec3{row[0], row[1], row[2]});
+  CHECK(lattice->particleGroup[i] == static_cast<std::int32_t>(row[5]));
+  CHECK(later->velocities[i][0] == static_cast<float>(row[13]));
+  CHECK(later->velocities[i][2] == static_cast<float>(row[15]));
+  REQUIRE(later->extras.size() == 1);
+  CHECK(later->extras[0].name == "force");
+  CHECK(later->extras[0].values[3 * i] == row[16]);
+  CHECK(later->extras[0].values[3 * i + 2] == row[18]);
 }
 
 TEST_CASE("damaged ESyS-Particle snapshots are refused naming the file", "[importers][esys]") {

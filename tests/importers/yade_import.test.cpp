@@ -9,6 +9,11 @@
 #include <set>
 
 #include <catch2/catch.hpp>
+#include <vtkDataArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
 
 #include "import_helpers.hpp"
 #include "support/temp_dir.hpp"
@@ -94,6 +99,34 @@ TEST_CASE("a Yade JCFpm notched bar imports with Yade's own record of its bonds 
     cracksAtSpheres += v;
   }
   CHECK(cracksAtSpheres == 2 * 27);  // each broken bond counts at both its spheres
+
+  // Every sphere array of the last record, read here with VTK: position,
+  // radius and damage of each sphere by its id.
+  vtkNew<vtkXMLUnstructuredGridReader> spheres;
+  spheres->SetFileName((kBar + "/spheres.4000.vtu").c_str());
+  spheres->Update();
+  vtkUnstructuredGrid* grid = spheres->GetOutput();
+  REQUIRE(grid->GetNumberOfPoints() == 327);
+  vtkDataArray* ids = grid->GetPointData()->GetArray("id");
+  vtkDataArray* radii = grid->GetPointData()->GetArray("radii");
+  vtkDataArray* damage = grid->GetPointData()->GetArray("damage");
+  REQUIRE((ids != nullptr && radii != nullptr && damage != nullptr));
+  int matched = 0;
+  for (vtkIdType k = 0; k < grid->GetNumberOfPoints(); ++k) {
+    const auto id = static_cast<std::int64_t>(ids->GetComponent(k, 0));
+    const auto i = static_cast<std::size_t>(
+        std::find(lattice->particleId.begin(), lattice->particleId.end(), id) -
+        lattice->particleId.begin());
+    REQUIRE(i < lattice->particleId.size());
+    double p[3];
+    grid->GetPoint(k, p);
+    matched += last->positions[i] == dem::Vec3{p[0], p[1], p[2]} &&
+                       lattice->radius[i] == radii->GetComponent(k, 0) &&
+                       last->extras[0].values[i] == damage->GetComponent(k, 0)
+                   ? 1
+                   : 0;
+  }
+  CHECK(matched == 327);
 }
 
 TEST_CASE("damaged Yade records are refused naming the file", "[importers][yade]") {
