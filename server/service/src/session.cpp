@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <malloc.h>
 
 #include <crackvis/common/log.hpp>
 #include <crackvis/scene/guarded_call.hpp>
@@ -472,6 +473,15 @@ Session::~Session() {
 }
 
 void Session::run(std::promise<Status> started) {
+  runWorker(started);
+  // The worker's scene, step cache, GL context and encoder are gone: hand the
+  // freed pages back to the system. glibc keeps them in its arenas
+  // otherwise, and crackvis-render grew by ~150 MB per closed cuboid-A
+  // session (117 MB idle, 461 MB after three; 186 MB once trimmed).
+  malloc_trim(0);
+}
+
+void Session::runWorker(std::promise<Status>& started) {
   Worker worker(*this);
   if (Status status = guarded(m_id, "open", [&] { return worker.start(); }); !status) {
     started.set_value(status);

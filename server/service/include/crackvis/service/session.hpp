@@ -145,6 +145,7 @@ class Session {
   struct Worker;  // the thread's state: scene pipeline, renderer, view
 
   void run(std::promise<Status> started);
+  void runWorker(std::promise<Status>& started);
   Status serve(Worker& worker);  // the event loop; an error ends the session
   void fail(const Status& status);
   void publish(RenderedFrame frame);
