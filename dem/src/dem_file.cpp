@@ -185,6 +185,7 @@ Status DemFileReader::readStructure() {
     return pairs.status();
   }
   m_info.bondCount = static_cast<std::int64_t>(h5::describeDataset(pairs->get())->dims[0]);
+  CRACKVIS_RETURN_IF_ERROR(checkIndexable());
   if (auto dataset = openChecked(DemDataset::kBreakStep); !dataset) {
     return dataset.status();
   }
@@ -202,6 +203,22 @@ Status DemFileReader::readStructure() {
       return dataset.status();
     }
     m_info.hasStrength = m_info.hasStrength || id == DemDataset::kStrength;
+  }
+  return Status::ok();
+}
+
+// Particles and bonds are indexed by int32 (ParticleIndex, BondIndex, the
+// int32 pairs): a file declaring more (a corrupt extent, 7.7e18 in one the
+// fuzzer made) is refused before anything of that size is allocated.
+Status DemFileReader::checkIndexable() const {
+  constexpr std::int64_t kMaxIndexable = std::numeric_limits<std::int32_t>::max();
+  if (m_info.particleCount < 0 || m_info.particleCount > kMaxIndexable || m_info.bondCount < 0 ||
+      m_info.bondCount > kMaxIndexable) {
+    return fail(failedPrecondition(fmt::format(
+        "declares N = {} particles and M = {} bonds; crackvis indexes at most {} of each (file "
+        "corrupt?)",
+        static_cast<std::uint64_t>(m_info.particleCount),
+        static_cast<std::uint64_t>(m_info.bondCount), kMaxIndexable)));
   }
   return Status::ok();
 }

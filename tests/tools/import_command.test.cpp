@@ -137,3 +137,13 @@ TEST_CASE("an imported Yade packing gets a triangulation and its crack is covere
     CHECK(json["steps"][0]["mapped_fraction"].get<double>() > 0.95);
   }
 }
+
+TEST_CASE("crackvis info refuses a file whose extents no index can reach", "[cli][info]") {
+  // Found by the dem_reader fuzz target: /particles/radius declares 7.7e18
+  // elements; reading it once threw out of a std::vector resize.
+  auto info = runProcess({kCli, "info", kData + "/../fuzz/crashes/dem_reader-huge-extent.h5"});
+  CHECK(info.exitCode == 1);
+  CHECK_THAT(info.err, Catch::Contains("declares N = 7741240722073845778 particles") &&
+                           Catch::Contains("file corrupt?"));
+  CHECK_THAT(info.err, !Catch::Contains("internal error"));
+}

@@ -129,6 +129,7 @@ class DemFileReader {
   Status readWhole(DemDataset id, int step, void* out) const;
   Status readOptional(DemDataset id, std::uint64_t count, void* out, bool& present) const;
   Status readProvenance();
+  Status checkIndexable() const;
   Status listExtras();
   Result<h5::Handle> openExtra(const ExtraInfo& extra, int step) const;
   Result<ExtraArray> readExtra(const ExtraInfo& extra, int step) const;
