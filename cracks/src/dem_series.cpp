@@ -49,5 +49,4 @@ Result<StepInput> DemSeries::load(int step) {
                    m_state.bondForce, m_breakSteps,      m_reference};
 }
 
-
 }  // namespace crackvis::cracks
