@@ -428,31 +428,10 @@ Result<Lattice> DemFileReader::readLattice() const {
   lattice.bonds.resize(m);
   CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kRadius, 0, lattice.radius.data()));
   CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kPairs, 0, lattice.bonds.data()));
-  bool present = false;
-  lattice.strength.resize(m);
-  CRACKVIS_RETURN_IF_ERROR(
-      readOptional(DemDataset::kStrength, m, lattice.strength.data(), present));
-  if (!present) {
-    lattice.strength.clear();
-  }
-  lattice.particleId.resize(n);
-  CRACKVIS_RETURN_IF_ERROR(
-      readOptional(DemDataset::kParticleId, n, lattice.particleId.data(), present));
-  if (!present) {
-    lattice.particleId.clear();
-  }
-  lattice.particleGroup.resize(n);
-  CRACKVIS_RETURN_IF_ERROR(
-      readOptional(DemDataset::kParticleGroup, n, lattice.particleGroup.data(), present));
-  if (!present) {
-    lattice.particleGroup.clear();
-  }
-  lattice.bondFlags.resize(m);
-  CRACKVIS_RETURN_IF_ERROR(
-      readOptional(DemDataset::kBondFlags, m, lattice.bondFlags.data(), present));
-  if (!present) {
-    lattice.bondFlags.clear();
-  }
+  CRACKVIS_RETURN_IF_ERROR(readOptional(DemDataset::kStrength, m, lattice.strength));
+  CRACKVIS_RETURN_IF_ERROR(readOptional(DemDataset::kParticleId, n, lattice.particleId));
+  CRACKVIS_RETURN_IF_ERROR(readOptional(DemDataset::kParticleGroup, n, lattice.particleGroup));
+  CRACKVIS_RETURN_IF_ERROR(readOptional(DemDataset::kBondFlags, m, lattice.bondFlags));
   for (const ExtraInfo& extra : m_info.extras) {
     if (!extra.perStep) {
       auto array = readExtra(extra, 0);
@@ -481,9 +460,16 @@ Status DemFileReader::readWhole(DemDataset id, int step, void* out) const {
   return Status::ok();
 }
 
-Status DemFileReader::readOptional(DemDataset id, std::uint64_t, void* out, bool& present) const {
-  present = h5::linkExists(m_file.get(), datasetPath(id));
-  return present ? readWhole(id, 0, out) : Status::ok();
+// An optional time-independent array: `count` values when the file has it,
+// empty when not.
+template <typename T>
+Status DemFileReader::readOptional(DemDataset id, std::uint64_t count, std::vector<T>& out) const {
+  out.clear();
+  if (!h5::linkExists(m_file.get(), datasetPath(id))) {
+    return Status::ok();
+  }
+  out.resize(count);
+  return readWhole(id, 0, out.data());
 }
 
 Result<std::vector<std::int32_t>> DemFileReader::readBreakSteps() const {

@@ -127,7 +127,8 @@ class DemFileReader {
   Result<OpenedDataset> openInFile(const std::string& path) const;
   Result<h5::Handle> openChecked(DemDataset id, int step = 0) const;
   Status readWhole(DemDataset id, int step, void* out) const;
-  Status readOptional(DemDataset id, std::uint64_t count, void* out, bool& present) const;
+  template <typename T>
+  Status readOptional(DemDataset id, std::uint64_t count, std::vector<T>& out) const;
   Status readProvenance();
   Status checkIndexable() const;
   Status listExtras();
