@@ -4,7 +4,7 @@
 // its faces fail validation or do not exist, reported as inconsistent.
 #include <algorithm>
 #include <cmath>
-#include <unordered_map>
+#include <cstring>
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -220,7 +220,8 @@ class LocalVoronoiExtractor final : public CrackExtractor {
   std::size_t memoryBytes() const override {
     return m_grid.memoryBytes() + m_rankOf.capacity() * sizeof(std::int32_t) +
            m_broken.capacity() * sizeof(dem::BondIndex) +
-           m_faceOf.size() * (sizeof(std::uint64_t) + sizeof(std::int32_t) + 16) +
+           m_faceOfBond.capacity() * sizeof(std::int32_t) + m_seenState.capacity() +
+           m_materialBroken.capacity() * sizeof(dem::BondIndex) +
            m_faces.capacity() * sizeof(MaterialFace) + m_carriers.capacity() * sizeof(Carrier);
   }
 
@@ -281,52 +282,23 @@ class LocalVoronoiExtractor final : public CrackExtractor {
   // once, in the reference geometry (where it is validated too), when its
   // bond is first seen broken, and then carried by its particles: every
   // vertex is stored as a combination of particle positions, so the face
-  // follows the specimen however far the crack opens and nothing is
-  // recomputed per step but the carried points.
+  // follows the specimen however far the crack opens. A step costs the diff
+  // of its bond states, the faces of the bonds that broke since the last
+  // step, and the carried points: nothing is recomputed for older breaks.
   void extractMaterial(const StepInput& step, CrackMesh& out) {
-    const std::span<const Vec3> reference = step.referencePositions;
     if (!m_referenceReady) {
-      m_referenceBox =
-          m_options.domain ? *m_options.domain : grownDefaultDomain(reference, step.radius);
-      m_largestRadius = 0.0;
-      for (double r : step.radius) {
-        m_largestRadius = std::max(m_largestRadius, r);
-      }
-      if (m_options.validate) {
-        m_grid.build(reference, 2.0 * m_largestRadius);
-      }
-      m_referenceReady = true;
+      prepareReference(step);
     }
-    const std::vector<dem::ParticleIndex> ends = endParticles(step.bondState);
-    // Faces not made yet, on all cores in blocks of end particles, then
-    // remembered in block order (the same for any thread count).
-    const std::size_t blockCount = (ends.size() + kBlockSize - 1) / kBlockSize;
-    std::vector<std::vector<NewFace>> made(blockCount);
-    tbb::parallel_for(std::size_t{0}, blockCount, [&](std::size_t k) {
-      Scratch scratch;
-      for (std::size_t e = k * kBlockSize; e < std::min(ends.size(), (k + 1) * kBlockSize); ++e) {
-        makeMissingFaces(step, ends[e], scratch, made[k]);
-      }
-    });
-    for (auto& block : made) {
-      for (NewFace& face : block) {
-        const auto index = static_cast<std::int32_t>(m_faces.size());
-        m_faces.push_back({face.valid, static_cast<std::int32_t>(m_carriers.size()),
-                           static_cast<std::int32_t>(face.carriers.size())});
-        m_carriers.insert(m_carriers.end(), face.carriers.begin(), face.carriers.end());
-        m_faceOf.emplace(faceKey(face.particle, face.bond), index);
-      }
-    }
+    makeFaces(step, newlyBroken(step.bondState));
     std::vector<dem::BondIndex> faceBonds;
     std::vector<dem::BondIndex> inconsistent;
     m_faceLines.clear();
-    for (dem::BondIndex bond : m_broken) {
-      const dem::Bond& pair = m_graph.bond(bond);
-      const MaterialFace* first = materialFace(pair.first, bond);
-      const MaterialFace* second = materialFace(pair.second, bond);
-      if (first != nullptr && second != nullptr && first->valid && second->valid &&
-          first->count >= 2) {
-        addCarriedFace(*first, step.positions, out);
+    out.points.reserve(m_carriers.size());
+    for (dem::BondIndex bond : m_materialBroken) {
+      const MaterialFace& face =
+          m_faces[static_cast<std::size_t>(m_faceOfBond[static_cast<std::size_t>(bond)])];
+      if (face.valid) {
+        addCarriedFace(face, step.positions, out);
         faceBonds.push_back(bond);
       } else {
         inconsistent.push_back(bond);
@@ -335,10 +307,97 @@ class LocalVoronoiExtractor final : public CrackExtractor {
     finish(step, faceBonds, inconsistent, out);
   }
 
+  void prepareReference(const StepInput& step) {
+    const std::span<const Vec3> reference = step.referencePositions;
+    m_referenceBox =
+        m_options.domain ? *m_options.domain : grownDefaultDomain(reference, step.radius);
+    m_largestRadius = 0.0;
+    for (double r : step.radius) {
+      m_largestRadius = std::max(m_largestRadius, r);
+    }
+    if (m_options.validate) {
+      m_grid.build(reference, 2.0 * m_largestRadius);
+    }
+    m_faceOfBond.assign(m_graph.bondCount(), -1);
+    m_seenState.assign(m_graph.bondCount(), 0);
+    m_materialBroken.clear();
+    m_referenceReady = true;
+  }
+
+  // The bonds broken now that were intact at the last step, in bond order;
+  // keeps m_materialBroken, all broken bonds in bond order, up to date (also
+  // when a bond heals, which DEM codes do not do but a file may).
+  std::vector<dem::BondIndex> newlyBroken(std::span<const std::uint8_t> state) {
+    std::vector<dem::BondIndex> fresh;
+    bool healed = false;
+    constexpr std::size_t kChunk = 64;
+    for (std::size_t from = 0; from < state.size(); from += kChunk) {
+      const std::size_t count = std::min(kChunk, state.size() - from);
+      // Most chunks are unchanged from step to step: compare them whole.
+      if (std::memcmp(state.data() + from, m_seenState.data() + from, count) == 0) {
+        continue;
+      }
+      for (std::size_t b = from; b < from + count; ++b) {
+        const bool broken = state[b] != 0;
+        if (broken != (m_seenState[b] != 0)) {
+          if (broken) {
+            fresh.push_back(static_cast<dem::BondIndex>(b));
+          } else {
+            healed = true;
+          }
+        }
+        m_seenState[b] = state[b];
+      }
+    }
+    if (healed) {
+      m_materialBroken.clear();
+      for (std::size_t b = 0; b < state.size(); ++b) {
+        if (state[b] != 0) {
+          m_materialBroken.push_back(static_cast<dem::BondIndex>(b));
+        }
+      }
+    } else if (!fresh.empty()) {
+      const auto middle = static_cast<std::ptrdiff_t>(m_materialBroken.size());
+      m_materialBroken.insert(m_materialBroken.end(), fresh.begin(), fresh.end());
+      std::inplace_merge(m_materialBroken.begin(), m_materialBroken.begin() + middle,
+                         m_materialBroken.end());
+    }
+    return fresh;
+  }
+
+  // The faces of bonds never seen broken before, on all cores in blocks,
+  // then remembered in bond order (the same for any thread count).
+  void makeFaces(const StepInput& step, const std::vector<dem::BondIndex>& fresh) {
+    std::vector<dem::BondIndex> missing;
+    for (dem::BondIndex bond : fresh) {
+      if (faceIndexOf(bond) < 0) {
+        missing.push_back(bond);
+      }
+    }
+    std::vector<NewFace> made(missing.size());
+    const std::size_t blockCount = (missing.size() + kBlockSize - 1) / kBlockSize;
+    tbb::parallel_for(std::size_t{0}, blockCount, [&](std::size_t k) {
+      Scratch scratch;
+      for (std::size_t e = k * kBlockSize; e < std::min(missing.size(), (k + 1) * kBlockSize);
+           ++e) {
+        made[e] = makeFace(step, missing[e], scratch);
+      }
+    });
+    for (NewFace& face : made) {
+      m_faceOfBond[static_cast<std::size_t>(face.bond)] = static_cast<std::int32_t>(m_faces.size());
+      m_faces.push_back({face.valid, static_cast<std::int32_t>(m_carriers.size()),
+                         static_cast<std::int32_t>(face.carriers.size())});
+      m_carriers.insert(m_carriers.end(), face.carriers.begin(), face.carriers.end());
+    }
+  }
+
+  std::int32_t faceIndexOf(dem::BondIndex bond) const {
+    return m_faceOfBond[static_cast<std::size_t>(bond)];
+  }
+
   struct NewFace {
-    dem::ParticleIndex particle;
-    dem::BondIndex bond;
-    bool valid;
+    dem::BondIndex bond = -1;
+    bool valid = false;
     std::vector<Carrier> carriers;
   };
   struct MaterialFace {
@@ -347,33 +406,32 @@ class LocalVoronoiExtractor final : public CrackExtractor {
     std::int32_t count;
   };
 
-  static std::uint64_t faceKey(dem::ParticleIndex i, dem::BondIndex b) {
-    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(i)) << 32) |
-           static_cast<std::uint32_t>(b);
-  }
-  const MaterialFace* materialFace(dem::ParticleIndex i, dem::BondIndex b) const {
-    const auto found = m_faceOf.find(faceKey(i, b));
-    return found == m_faceOf.end() ? nullptr : &m_faces[static_cast<std::size_t>(found->second)];
-  }
-
-  // The faces of i's broken bonds that were never made, in the reference
-  // geometry: clipped, validated, their vertices turned into carriers.
-  void makeMissingFaces(const StepInput& step, dem::ParticleIndex i, Scratch& s,
-                        std::vector<NewFace>& out) const {
+  // A broken bond's face in the reference geometry, as each end's cell has
+  // it: drawn (from the first end, its vertices turned into carriers) when
+  // it exists at both ends, passes validation at both and has at least two
+  // vertices; else the bond is inconsistent.
+  NewFace makeFace(const StepInput& step, dem::BondIndex b, Scratch& s) const {
     const std::span<const Vec3> reference = step.referencePositions;
-    for (dem::BondIndex b : m_graph.bondsOf(i)) {
-      if (step.bondState[static_cast<std::size_t>(b)] == 0 || m_faceOf.count(faceKey(i, b)) != 0) {
-        continue;
-      }
+    const dem::Bond& pair = m_graph.bond(b);
+    NewFace face{b, true, {}};
+    for (dem::ParticleIndex i : {pair.first, pair.second}) {
       computeLocalVoronoiFace(m_graph, reference, i, b, m_referenceBox, s.polygon, s.clipBuffer,
                               step.radius);
-      NewFace face{i, b, s.polygon.size() >= 3, {}};
-      if (face.valid && m_options.validate) {
+      bool valid = s.polygon.size() >= 3;
+      if (valid && m_options.validate) {
         s.valid.assign(s.polygon.size(), 2);
         validateVertices(reference, step.radius, i, s.polygon, s.valid, s.candidates);
-        face.valid = std::all_of(s.valid.begin(), s.valid.end(), [](char v) { return v != 0; });
+        valid = std::all_of(s.valid.begin(), s.valid.end(), [](char v) { return v != 0; });
       }
-      const dem::ParticleIndex j = m_graph.otherEnd(b, i);
+      if (!valid) {
+        face.valid = false;
+        face.carriers.clear();
+        return face;
+      }
+      if (i != pair.first) {
+        continue;
+      }
+      const dem::ParticleIndex j = pair.second;
       for (std::size_t k = 0; k < s.polygon.size(); ++k) {
         // In 2D the prism's side face stands for an edge: its lower vertices.
         if (m_dimension == 2 && s.polygon[k].z >= 0.0) {
@@ -381,8 +439,9 @@ class LocalVoronoiExtractor final : public CrackExtractor {
         }
         face.carriers.push_back(carrierOf(reference, step.radius, i, j, s.polygon[k]));
       }
-      out.push_back(std::move(face));
     }
+    face.valid = face.carriers.size() >= 2;
+    return face;
   }
 
   // A vertex of face (i, j) carried by the particles that define it: those
@@ -717,7 +776,9 @@ class LocalVoronoiExtractor final : public CrackExtractor {
   // Material faces, by (particle, bond); made in the reference geometry.
   bool m_referenceReady = false;
   Box m_referenceBox;
-  std::unordered_map<std::uint64_t, std::int32_t> m_faceOf;
+  std::vector<std::int32_t> m_faceOfBond;  // [M] into m_faces, -1 while never broken
+  std::vector<std::uint8_t> m_seenState;   // [M] the bond states of the last step
+  std::vector<dem::BondIndex> m_materialBroken;
   std::vector<MaterialFace> m_faces;
   std::vector<Carrier> m_carriers;
   std::vector<std::int32_t> m_rankOf;  // [N] rank among end particles, -1 if none

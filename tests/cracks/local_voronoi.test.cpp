@@ -42,6 +42,15 @@ std::vector<dem::ParticleIndex> endParticles(const PlantedCrack& crack) {
   return {ends.begin(), ends.end()};
 }
 
+// A small deterministic generator of uniform numbers in [0, 1).
+struct UniformRandom {
+  std::uint64_t seed;
+  double operator()() {
+    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(seed >> 11) * 0x1.0p-53;
+  }
+};
+
 double bondFaceArea() {
   return 1.0 / (2.0 * std::sqrt(2.0));
 }
@@ -225,11 +234,7 @@ TEST_CASE("the validation tolerance decides how much lattice noise counts as inc
 TEST_CASE("every method gives identical output for 1 and 2 threads", "[cracks][determinism]") {
   // A jittered block with a tenth of its bonds broken at random: many blocks
   // of work for every method.
-  std::uint64_t seed = 12345;
-  auto random = [&] {
-    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
-    return static_cast<double>(seed >> 11) * 0x1.0p-53;
-  };
+  UniformRandom random{12345};
   const PlantedCrack crack = plantCrack(
       dem::LatticeKind::kFcc, dem::fccUnitCells(7, 7, 7),
       [&](dem::Vec3, dem::Vec3) { return random() < 0.1; }, 0.02);
@@ -295,4 +300,52 @@ TEST_CASE("a face computed alone equals the same face of the whole cell",
     }
   }
   CHECK(compared > 1000);
+}
+
+TEST_CASE("the lean Voro++ baseline over slabs is the single container's diagram",
+          "[cracks][voro++][bench]") {
+  // A jittered FCC block with unequal radii: the power diagram, as local
+  // Voronoi uses for unequal radii.
+  UniformRandom random{777};
+  const PlantedCrack crack = plantCrack(
+      dem::LatticeKind::kFcc, dem::fccUnitCells(8, 5, 4),
+      [](dem::Vec3, dem::Vec3) { return false; }, 0.05);
+  std::vector<double> radius(crack.block.positions.size());
+  for (double& r : radius) {
+    r = 0.3 + 0.1 * random();
+  }
+  const Box box = sharedBox(crack);
+  const GlobalVoronoiSummary full = globalVoronoi(crack.block.positions, box, {}, radius);
+  const LeanVoronoiSummary one = leanVoronoi(crack.block.positions, box, radius, 1);
+  CHECK(one.containers == 1);
+  CHECK(one.cells == full.cells);
+  CHECK(one.faces == full.faces);
+  CHECK(one.haloWallFaces == 0);
+  for (int slabs : {2, 3}) {
+    INFO(slabs << " slabs");
+    const LeanVoronoiSummary split = leanVoronoi(crack.block.positions, box, radius, slabs);
+    CHECK(split.containers == slabs);
+    CHECK(split.haloWallFaces == 0);
+    CHECK(split.cells == one.cells);
+    CHECK(split.faces == one.faces);
+    CHECK(split.faceArea == Approx(one.faceArea).epsilon(1e-9));
+  }
+}
+
+TEST_CASE("the slab baseline reports cells its halo was too thin for", "[cracks][voro++][bench]") {
+  // Two clusters far apart along x: the cells between them reach across the
+  // middle of the box, beyond any halo of a few mean spacings.
+  std::vector<dem::Vec3> positions;
+  for (int k = 0; k < 8; ++k) {
+    const double y = (k % 2) * 1.0;
+    const double z = ((k / 2) % 2) * 1.0;
+    positions.push_back({k < 4 ? 0.0 : 0.5, y, z});
+    positions.push_back({k < 4 ? 100.0 : 99.5, y, z});
+  }
+  const Box box{{-1e-9, -1e-9, -1e-9}, {100.0 + 1e-9, 1.0 + 1e-9, 1.0 + 1e-9}};
+  const LeanVoronoiSummary one = leanVoronoi(positions, box, {}, 1);
+  const LeanVoronoiSummary split = leanVoronoi(positions, box, {}, 2);
+  CHECK(one.haloWallFaces == 0);
+  CHECK(one.cells == positions.size());
+  CHECK(split.haloWallFaces > 0);
 }

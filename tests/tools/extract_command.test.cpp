@@ -114,16 +114,45 @@ TEST_CASE("crackvis bench methods prints per-step times and ratios as JSON", "[c
   TempDir dir;
   const std::string data = dir.file("run.h5");
   crackvis::testing::writeSampleFile(data, 3, 3);
-  auto run = runProcess({kCli, "bench", "methods", data, "--json", "-q"});
+  auto run = runProcess({kCli, "bench", "methods", data, "--json", "-q", "--runs", "3", "--threads",
+                         "2", "--voro-every", "2"});
   REQUIRE(run.exitCode == 0);
   const auto json = nlohmann::json::parse(run.out);
-  CHECK(json["per_step"].size() == 3);
-  for (const char* method : {"cell-attribute", "cell-cut", "local-voronoi", "cell-centre"}) {
-    CHECK(json["methods"][method]["total_s"].get<double>() > 0.0);
-    CHECK(json["methods"][method]["state_bytes_per_particle"].get<double>() > 0.0);
+  CHECK(json["runs"] == 3);
+  CHECK(json["load_before"].size() == 3);
+  CHECK_THAT(json["machine"].get<std::string>(), Catch::Contains("hardware threads"));
+  // Equal terms: 1 thread against one container, 2 threads against 2 slabs.
+  REQUIRE(json["configs"].size() == 2);
+  for (int c = 0; c < 2; ++c) {
+    const auto& config = json["configs"][c];
+    INFO("configuration " << c);
+    CHECK(config["threads"] == c + 1);
+    CHECK(config["voro++"]["containers"] == c + 1);
+    CHECK(config["voro++"]["exact"] == true);
+    CHECK(config["voro++"]["steps_measured"] == 2);  // steps 0 and 2 (the last)
+    CHECK(config["per_step"].size() == 3);
+    CHECK(config["per_step"][1]["voro++_ms"].is_null());
+    for (const char* method : {"cell-attribute", "cell-cut", "local-voronoi", "cell-centre"}) {
+      const auto& m = config["methods"][method];
+      CHECK(m["total_s"].get<double>() > 0.0);
+      CHECK(m["median_ms"].get<double>() > 0.0);
+      CHECK(m["over_voro++_last_step"].get<double>() > 0.0);
+      CHECK(m["over_voro++_median_over_steps"].get<double>() > 0.0);
+    }
   }
-  CHECK(json["voro++"]["steps_measured"] == 3);
-  CHECK(json["ratios"]["local_voronoi_over_voro++_last_step"].get<double>() > 0.0);
+  // Both configurations computed the same diagram.
+  CHECK(json["configs"][0]["voro++"]["faces"] == json["configs"][1]["voro++"]["faces"]);
+  CHECK(json["methods"]["local-voronoi"]["state_bytes_per_particle"].get<double>() > 0.0);
+  const auto& goals = json["goals"];
+  CHECK(goals["local_voronoi_over_voro++_1_thread_last_step"] ==
+        json["configs"][0]["methods"]["local-voronoi"]["over_voro++_last_step"]);
+  CHECK(goals["met"].is_boolean());
+
+  auto table = runProcess({kCli, "bench", "methods", data, "-q", "--runs", "1", "--threads", "1"});
+  REQUIRE(table.exitCode == 0);
+  CHECK_THAT(table.out, Catch::Contains("1 thread: the four methods against Voro++") &&
+                            Catch::Contains("load before") && Catch::Contains("goals, 1 thread"));
+  CHECK_THAT(table.out, !Catch::Contains("2 threads:"));
 }
 
 TEST_CASE("crackvis snapshot renders a step to PNG off screen", "[cli][snapshot]") {

@@ -17,6 +17,7 @@
 #include <grpcpp/grpcpp.h>
 #include <nlohmann/json.hpp>
 
+#include "bench_support.hpp"
 #include "commands.hpp"
 #include "crackvis/v1/render.grpc.pb.h"
 #include <crackvis/encode/frame_codec.hpp>
@@ -55,25 +56,6 @@ struct FrameRecord {
 
 double ms(Clock::duration d) {
   return std::chrono::duration<double, std::milli>(d).count();
-}
-
-double percentile(std::vector<double> values, double p) {
-  if (values.empty()) {
-    return 0.0;
-  }
-  std::sort(values.begin(), values.end());
-  const double at = p / 100.0 * static_cast<double>(values.size() - 1);
-  const auto lo = static_cast<std::size_t>(at);
-  const auto hi = std::min(lo + 1, values.size() - 1);
-  return values[lo] + (values[hi] - values[lo]) * (at - static_cast<double>(lo));
-}
-
-double mean(const std::vector<double>& values) {
-  double sum = 0.0;
-  for (double v : values) {
-    sum += v;
-  }
-  return values.empty() ? 0.0 : sum / static_cast<double>(values.size());
 }
 
 Result<std::string> readFile(const std::string& path) {
@@ -375,13 +357,6 @@ Result<Report> run(const RenderBenchOptions& options) {
 }
 
 nlohmann::json toJson(const Report& r) {
-  auto stats = [](const std::vector<double>& v) {
-    return nlohmann::json{{"count", v.size()},
-                          {"mean", mean(v)},
-                          {"p50", percentile(v, 50)},
-                          {"p90", percentile(v, 90)},
-                          {"p99", percentile(v, 99)}};
-  };
   std::vector<double> reductions(r.reductions.begin(), r.reductions.end());
   const double fps = r.interactionSeconds > 0
                          ? static_cast<double>(r.interactiveFrames) / r.interactionSeconds
@@ -392,15 +367,15 @@ nlohmann::json toJson(const Report& r) {
                         {"step", r.step},
                         {"first_frame_ms", r.firstFrameMs},
                         {"events", r.events},
-                        {"event_to_frame_ms", stats(r.latencies)},
+                        {"event_to_frame_ms", summaryJson(r.latencies)},
                         {"interactive_fps", fps},
                         {"interactive_bitrate_mbps", r.bitsPerSecond / 1e6},
-                        {"render_reduced_ms", stats(r.reducedRenderMs)},
-                        {"render_full_ms", stats(r.fullRenderMs)},
-                        {"encode_ms", stats(r.encodeMs)},
-                        {"encode_alone_ms", stats(r.isolatedEncodeMs)},
-                        {"client_decode_ms", stats(r.decodeMs)},
-                        {"reduction", stats(reductions)},
+                        {"render_reduced_ms", summaryJson(r.reducedRenderMs)},
+                        {"render_full_ms", summaryJson(r.fullRenderMs)},
+                        {"encode_ms", summaryJson(r.encodeMs)},
+                        {"encode_alone_ms", summaryJson(r.isolatedEncodeMs)},
+                        {"client_decode_ms", summaryJson(r.decodeMs)},
+                        {"reduction", summaryJson(reductions)},
                         {"full_frame_after_idle_ms", r.refineAfterIdleMs},
                         {"targets",
                          {{"event_to_frame_p50_le_60ms", percentile(r.latencies, 50) <= 60.0},

@@ -37,4 +37,22 @@ GlobalVoronoiSummary globalVoronoi(std::span<const Vec3> positions, const Box& b
                                    const std::function<void(const ReferenceCell&)>& visit = {},
                                    std::span<const double> radius = {});
 
+// What the lean baseline computed: every cell's neighbours and face areas.
+struct LeanVoronoiSummary {
+  std::size_t cells = 0;
+  std::size_t faces = 0;
+  double faceArea = 0.0;          // sum over all faces of all cells (a checksum)
+  int containers = 0;             // Voro++ containers (slabs) used
+  std::size_t haloWallFaces = 0;  // owned cells that reached a slab's inner wall: not exact
+};
+
+// The leanest honest global baseline for a crack filter: Voro++ computing
+// each cell's neighbours and face areas only (no vertex lists), as a filter
+// needs them to find the faces of broken bonds. With `slabs` > 1 the box is
+// cut along its longest side into that many Voro++ containers, each run on
+// its own thread with a halo of neighbouring particles; `haloWallFaces`
+// counts cells the halo was too thin for (0: the diagram is exact).
+LeanVoronoiSummary leanVoronoi(std::span<const Vec3> positions, const Box& box,
+                               std::span<const double> radius = {}, int slabs = 1);
+
 }  // namespace crackvis::cracks
