@@ -12,8 +12,8 @@
 namespace crackvis::testing {
 namespace {
 
-TEST_CASE("crackvis bench transfer measures Fetch, the view's Read and raw TLS in one run",
-          "[dataservice][integration]") {
+TEST_CASE("crackvis bench transfer measures Fetch, a first and a warm view, and raw TLS",
+          "[dataservice][integration][bench]") {
   auto config = baseConfig();
   config.rawTlsListen = "127.0.0.1:0";
   auto server = startServer(config);
@@ -31,7 +31,9 @@ TEST_CASE("crackvis bench transfer measures Fetch, the view's Read and raw TLS i
                                            "--step",
                                            "1",
                                            "--repeat",
-                                           "2",
+                                           "3",
+                                           "--max-repeat",
+                                           "4",
                                            "--ca",
                                            tls.ca,
                                            "--cert",
@@ -43,8 +45,10 @@ TEST_CASE("crackvis bench transfer measures Fetch, the view's Read and raw TLS i
   INFO(table.err);
   REQUIRE(table.exitCode == 0);
   CHECK_THAT(table.out, Catch::Contains("(a) full file, gRPC Fetch") &&
-                            Catch::Contains("(b) view of step 1, gRPC Read") &&
-                            Catch::Contains("raw TLS") && Catch::Contains("target >= 100x"));
+                            Catch::Contains("(b) first view of step 1: Describe + Read") &&
+                            Catch::Contains("(c) warm view: step 0, one Read") &&
+                            Catch::Contains("raw TLS") && Catch::Contains("goal >= 100x") &&
+                            Catch::Contains("load before"));
 
   std::vector<std::string> jsonArgs = common;
   jsonArgs.push_back("--json");
@@ -58,11 +62,30 @@ TEST_CASE("crackvis bench transfer measures Fetch, the view's Read and raw TLS i
   CHECK(report.at("grpc_fetch_full").at("bytes") ==
         std::filesystem::file_size(sampleRoot().file("run.h5")));
   CHECK(report.at("raw_tls_full").at("bytes") == report.at("grpc_fetch_full").at("bytes"));
-  CHECK(report.at("grpc_read_view").at("bytes") == viewBytes);
+  CHECK(report.at("grpc_first_view").at("bytes") == viewBytes);
   CHECK(report.at("raw_tls_view").at("bytes") == viewBytes);
-  CHECK(report.at("grpc_read_view").at("seconds_all").size() == 2);
+  // A step change moves the step's positions and bond states only.
+  CHECK(report.at("warm_step") == 0);
+  CHECK(report.at("grpc_warm_view").at("bytes") ==
+        sample.lattice.particleCount() * 24 + sample.lattice.bondCount());
+  // At least --repeat rounds, at most --max-repeat, every timing once per round.
+  const std::size_t runs = report.at("runs").get<std::size_t>();
+  CHECK(runs >= 3);
+  CHECK(runs <= 4);
+  CHECK(report.at("settled").is_boolean());
+  CHECK(report.at("grpc_first_view").at("seconds_all").size() == runs);
+  CHECK(report.at("grpc_warm_view").at("seconds_all").size() == runs);
+  CHECK(report.at("describe").at("seconds_all").size() == runs);
   CHECK(report.at("describe").at("round_trips") == 1);
-  CHECK(report.at("ratios").at("time_full_fetch_over_view_read").get<double>() > 0.0);
+  // The first view includes its Describe and so takes longer than a step change.
+  CHECK(report.at("describe").at("seconds_median").get<double>() <
+        report.at("grpc_first_view").at("seconds_median").get<double>());
+  const auto& ratios = report.at("ratios");
+  CHECK(ratios.at("time_full_fetch_over_first_view").get<double>() > 0.0);
+  CHECK(ratios.at("time_full_fetch_over_warm_view").get<double>() > 0.0);
+  CHECK(ratios.at("grpc_over_raw_tls_throughput_full").get<double>() > 0.0);
+  CHECK(report.at("load_before").size() == 3);
+  CHECK(report.at("goals").at("met").is_boolean());
 
   SECTION("without the raw TLS baseline: one clear line") {
     std::vector<std::string> args = common;

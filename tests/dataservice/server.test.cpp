@@ -4,8 +4,10 @@
 // gives; every bad input gets a status that names the input, and the server
 // keeps answering afterwards.
 #include <catch2/catch.hpp>
+#include <fcntl.h>
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
+#include <sys/stat.h>
 
 #include "crackvis/v1/data.grpc.pb.h"
 #include "service_fixture.hpp"
@@ -126,6 +128,76 @@ TEST_CASE("Describe returns the whole tree of a file in one call, as the file ho
   REQUIRE(linked.isOk());
   CHECK(linked->datasets == description->datasets);
   CHECK(linked->steps == description->steps);
+}
+
+namespace {
+
+// Rewrites `path` in place with the same layout and new step times, then
+// gives it back its old modification time: the same size, inode and mtime,
+// other contents.
+void rewriteKeepingStamp(const std::string& path, SampleData sample, double timeShift) {
+  struct stat before {};
+  REQUIRE(::stat(path.c_str(), &before) == 0);
+  for (auto& step : sample.steps) {
+    step.time += timeShift;
+  }
+  writeSample(path, sample);
+  const struct timespec times[2] = {before.st_atim, before.st_mtim};
+  REQUIRE(::utimensat(AT_FDCWD, path.c_str(), times, 0) == 0);
+  struct stat after {};
+  REQUIRE(::stat(path.c_str(), &after) == 0);
+  REQUIRE(after.st_ino == before.st_ino);
+  REQUIRE(after.st_size == before.st_size);
+}
+
+double firstTime(const Result<dataservice::FileDescription>& description) {
+  REQUIRE(description.isOk());
+  REQUIRE(!description->steps.empty());
+  return description->steps.front().time;
+}
+
+}  // namespace
+
+TEST_CASE("Describe answers an unchanged file from its held answer and walks a changed one",
+          "[dataservice][integration]") {
+  TempDir root;
+  const std::string path = (root.path() / "live.h5").string();
+  const SampleData sample = makeSample(3, 2);
+  writeSample(path, sample);
+  auto config = baseConfig();
+  config.dataRoot = root.path().string();
+  auto server = startServer(config);
+  auto client = connect(clientOptions(*server));
+  const double t0 = sample.steps.front().time;
+  CHECK(firstTime(client.describe("live.h5")) == t0);
+
+  SECTION("a held answer is served while size, inode and mtime are unchanged") {
+    rewriteKeepingStamp(path, sample, 1.0);
+    CHECK(firstTime(client.describe("live.h5")) == t0);
+    // uncached walks the file, and its answer replaces the held one.
+    CHECK(firstTime(client.describe("live.h5", true)) == t0 + 1.0);
+    CHECK(firstTime(client.describe("live.h5")) == t0 + 1.0);
+  }
+  SECTION("a file that grew is walked again") {
+    writeSample(path, makeSample(3, 4));
+    auto grown = client.describe("live.h5");
+    REQUIRE(grown.isOk());
+    CHECK(grown->steps.size() == 4);
+  }
+  SECTION("a removed file is NOT_FOUND, not its held answer") {
+    std::filesystem::remove(path);
+    auto gone = client.describe("live.h5");
+    CHECK(gone.status().code() == StatusCode::kNotFound);
+  }
+  SECTION("without a cache every Describe walks the file") {
+    server.reset();
+    config.limits.describeCacheBytes = 0;
+    server = startServer(config);
+    auto uncachedClient = connect(clientOptions(*server));
+    CHECK(firstTime(uncachedClient.describe("live.h5")) == t0);
+    rewriteKeepingStamp(path, sample, 2.0);
+    CHECK(firstTime(uncachedClient.describe("live.h5")) == t0 + 2.0);
+  }
 }
 
 TEST_CASE("Read returns hyperslabs bit-identical to reading the file directly",

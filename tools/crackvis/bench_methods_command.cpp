@@ -389,8 +389,8 @@ void printReport(const nlohmann::json& json) {
       "figures: per step the median of %d alternating runs (methods, then baseline); timed: %s\n",
       json.at("file").get<std::string>().c_str(), json.at("particles").get<std::size_t>(),
       json.at("bonds").get<std::size_t>(), json.at("steps_measured").get<std::size_t>(),
-      json.at("machine").get<std::string>().c_str(), json.at("load_before").dump().c_str(),
-      json.at("load_after").dump().c_str(), json.at("runs").get<int>(),
+      json.at("machine").get<std::string>().c_str(), loadText(json.at("load_before")).c_str(),
+      loadText(json.at("load_after")).c_str(), json.at("runs").get<int>(),
       json.at("timed").get<std::string>().c_str());
   for (const auto& config : json.at("configs")) {
     printConfig(config);

@@ -25,6 +25,11 @@ nlohmann::json toJson(const LoadAverage& load) {
   return nlohmann::json::array({load.one, load.five, load.fifteen});
 }
 
+std::string loadText(const nlohmann::json& load) {
+  return fmt::format("{:.2f} {:.2f} {:.2f}", load.at(0).get<double>(), load.at(1).get<double>(),
+                     load.at(2).get<double>());
+}
+
 std::string machineDescription() {
   std::ifstream cpuinfo("/proc/cpuinfo");
   std::string line;

@@ -20,6 +20,8 @@ struct LoadAverage {
 LoadAverage loadAverage();
 std::string toString(const LoadAverage& load);
 nlohmann::json toJson(const LoadAverage& load);
+// "1.00 0.50 0.25" from toJson's array.
+std::string loadText(const nlohmann::json& load);
 
 // "CPU model, N hardware threads" from /proc/cpuinfo.
 std::string machineDescription();

@@ -397,11 +397,12 @@ Result<std::vector<FileEntry>> DataClient::listFiles(const std::string& folder,
   return files;
 }
 
-Result<FileDescription> DataClient::describe(const std::string& file) const {
+Result<FileDescription> DataClient::describe(const std::string& file, bool uncached) const {
   grpc::ClientContext context;
   m_impl->prepare(context);
   v1::DescribeRequest request;
   request.set_file(file);
+  request.set_uncached(uncached);
   v1::DescribeResponse response;
   const grpc::Status status = m_impl->stub->Describe(&context, request, &response);
   if (!status.ok()) {

@@ -33,8 +33,8 @@ Status readLimits(const json& object, const std::string& where, Limits& limits) 
       object, where,
       {"max_read_bytes", "max_fetch_bytes", "max_concurrent_streams", "max_streams_per_user",
        "max_slabs_per_read", "max_call_seconds", "handshake_seconds", "max_memory_bytes",
-       "describe_max_depth", "describe_max_objects", "describe_max_seconds", "hdf5_workers",
-       "hdf5_call_seconds"}));
+       "describe_max_depth", "describe_max_objects", "describe_max_seconds", "describe_cache_bytes",
+       "hdf5_workers", "hdf5_call_seconds"}));
   CRACKVIS_RETURN_IF_ERROR(read(object, "hdf5_call_seconds", where, limits.hdf5CallSeconds));
   CRACKVIS_RETURN_IF_ERROR(read(object, "hdf5_workers", where, limits.hdf5Workers));
   CRACKVIS_RETURN_IF_ERROR(read(object, "describe_max_depth", where, limits.describe.maxDepth));
@@ -44,6 +44,7 @@ Status readLimits(const json& object, const std::string& where, Limits& limits) 
   double seconds = std::chrono::duration<double>(limits.describe.maxTime).count();
   CRACKVIS_RETURN_IF_ERROR(read(object, "describe_max_seconds", where, seconds));
   limits.describe.maxTime = describeTime(seconds);
+  CRACKVIS_RETURN_IF_ERROR(read(object, "describe_cache_bytes", where, limits.describeCacheBytes));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_memory_bytes", where, limits.maxMemoryBytes));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_read_bytes", where, limits.maxReadBytes));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_fetch_bytes", where, limits.maxFetchBytes));

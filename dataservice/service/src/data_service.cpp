@@ -518,6 +518,19 @@ grpc::ServerUnaryReactor* DataServiceImpl::ListFiles(grpc::CallbackServerContext
   });
 }
 
+namespace {
+
+Status parseDescription(const std::string& answer, const std::string& file,
+                        v1::DescribeResponse& response) {
+  if (!response.ParseFromString(answer)) {
+    return internalError(
+        fmt::format("Describe of {}: an HDF5 worker sent an unreadable answer", echoed(file)));
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
 grpc::ServerUnaryReactor* DataServiceImpl::Describe(grpc::CallbackServerContext* context,
                                                     const v1::DescribeRequest* request,
                                                     v1::DescribeResponse* response) {
@@ -525,6 +538,14 @@ grpc::ServerUnaryReactor* DataServiceImpl::Describe(grpc::CallbackServerContext*
     auto resolved = resolveFor(caller, request->file());
     if (!resolved) {
       return resolved.status();
+    }
+    // The answer is the file's as named by the caller (it echoes the name).
+    const std::string key = resolved->absolute.string() + '\n' + resolved->requested;
+    const std::optional<FileStamp> stamp = stampOf(resolved->absolute.string());
+    if (stamp && !request->uncached()) {
+      if (auto held = m_descriptions.find(key, *stamp)) {
+        return parseDescription(*held, request->file(), *response);
+      }
     }
     // A client that gave up (or whose deadline passed) stops the walk (its
     // worker is replaced): a hostile file must not hold a worker for a
@@ -534,9 +555,9 @@ grpc::ServerUnaryReactor* DataServiceImpl::Describe(grpc::CallbackServerContext*
     if (!described) {
       return described.status();
     }
-    if (!response->ParseFromString(*described)) {
-      return internalError(fmt::format("Describe of {}: an HDF5 worker sent an unreadable answer",
-                                       echoed(request->file())));
+    CRACKVIS_RETURN_IF_ERROR(parseDescription(*described, request->file(), *response));
+    if (stamp) {
+      m_descriptions.store(key, *stamp, std::move(*described));
     }
     return Status::ok();
   });

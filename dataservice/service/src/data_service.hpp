@@ -13,6 +13,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "crackvis/v1/data.grpc.pb.h"
+#include "describe_cache.hpp"
 #include "hdf5_workers.hpp"
 #include <crackvis/dataservice/catalogue.hpp>
 #include <crackvis/dataservice/server_config.hpp>
@@ -86,7 +87,8 @@ class DataServiceImpl final : public DataServiceBase {
         m_authenticator(authenticator),
         m_limits(limits),
         m_log(log),
-        m_streams(limits.maxConcurrentStreams, limits.maxStreamsPerUser, limits.maxMemoryBytes) {}
+        m_streams(limits.maxConcurrentStreams, limits.maxStreamsPerUser, limits.maxMemoryBytes),
+        m_descriptions(limits.describeCacheBytes) {}
 
   grpc::ServerUnaryReactor* ListFiles(grpc::CallbackServerContext* context,
                                       const crackvis::v1::ListFilesRequest* request,
@@ -128,6 +130,7 @@ class DataServiceImpl final : public DataServiceBase {
   Limits m_limits;
   AccessLog& m_log;
   StreamRegistry m_streams;
+  DescribeCache m_descriptions;
 };
 
 }  // namespace crackvis::dataservice

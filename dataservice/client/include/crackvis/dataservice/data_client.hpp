@@ -80,7 +80,9 @@ class DataClient {
   Status checkHealth(const std::string& service = "") const;
   Result<std::vector<FileEntry>> listFiles(const std::string& folder = "",
                                            bool recursive = true) const;
-  Result<FileDescription> describe(const std::string& file) const;
+  // `uncached`: the server walks the file even when it holds an answer for
+  // it unchanged (what a file's first Describe costs; for benchmarks).
+  Result<FileDescription> describe(const std::string& file, bool uncached = false) const;
   // All slabs in one call; the arrays come back in request order.
   Result<std::vector<TypedArray>> read(const std::string& file,
                                        const std::vector<Hyperslab>& slabs) const;

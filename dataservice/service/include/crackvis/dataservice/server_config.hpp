@@ -37,6 +37,10 @@ struct Limits {
   // in depth, objects and time (limits.describe_max_depth, _max_objects,
   // _max_seconds).
   DescribeLimits describe;
+  // Describe's answers kept for files that have not changed since (size,
+  // modification time, inode), so that a file is walked once per change
+  // rather than once per view (limits.describe_cache_bytes; 0: none).
+  std::uint64_t describeCacheBytes = std::uint64_t{64} << 20;
   // Processes that make every HDF5 call (Describe, Read), so that a libhdf5
   // fault on a corrupt file ends only the call on it (limits.hdf5_workers,
   // --hdf5-workers). Also how many HDF5 calls run at once.

@@ -1,0 +1,69 @@
+#include "describe_cache.hpp"
+
+#include <sys/stat.h>
+
+namespace crackvis::dataservice {
+
+std::optional<FileStamp> stampOf(const std::string& path) {
+  struct stat status {};
+  if (::stat(path.c_str(), &status) != 0) {
+    return std::nullopt;
+  }
+  return FileStamp{
+      static_cast<std::uint64_t>(status.st_dev), static_cast<std::uint64_t>(status.st_ino),
+      static_cast<std::uint64_t>(status.st_size),
+      static_cast<std::int64_t>(status.st_mtim.tv_sec) * 1'000'000'000 + status.st_mtim.tv_nsec};
+}
+
+std::optional<std::string> DescribeCache::find(const std::string& key, const FileStamp& stamp) {
+  std::lock_guard lock(m_mutex);
+  const auto found = m_byKey.find(key);
+  if (found == m_byKey.end()) {
+    return std::nullopt;
+  }
+  if (!(found->second->stamp == stamp)) {
+    // The file changed: its old answer is of no use to anyone.
+    m_bytes -= found->second->answer.size();
+    m_recent.erase(found->second);
+    m_byKey.erase(found);
+    return std::nullopt;
+  }
+  m_recent.splice(m_recent.begin(), m_recent, found->second);
+  return found->second->answer;
+}
+
+void DescribeCache::store(const std::string& key, const FileStamp& stamp, std::string answer) {
+  if (answer.size() > m_maxBytes) {
+    return;
+  }
+  std::lock_guard lock(m_mutex);
+  if (const auto found = m_byKey.find(key); found != m_byKey.end()) {
+    m_bytes -= found->second->answer.size();
+    m_recent.erase(found->second);
+    m_byKey.erase(found);
+  }
+  evictTo(m_maxBytes - answer.size());
+  m_bytes += answer.size();
+  m_recent.push_front({key, stamp, std::move(answer)});
+  m_byKey.emplace(key, m_recent.begin());
+}
+
+void DescribeCache::evictTo(std::uint64_t bytes) {
+  while (m_bytes > bytes && !m_recent.empty()) {
+    m_bytes -= m_recent.back().answer.size();
+    m_byKey.erase(m_recent.back().key);
+    m_recent.pop_back();
+  }
+}
+
+std::uint64_t DescribeCache::bytes() const {
+  std::lock_guard lock(m_mutex);
+  return m_bytes;
+}
+
+std::size_t DescribeCache::entries() const {
+  std::lock_guard lock(m_mutex);
+  return m_recent.size();
+}
+
+}  // namespace crackvis::dataservice
