@@ -21,6 +21,7 @@
 #include <crackvis/dataservice/data_root.hpp>
 #include <crackvis/dataservice/server_config.hpp>
 #include <crackvis/encode/frame_codec.hpp>
+#include <crackvis/render/probe_scene.hpp>
 #include <crackvis/render/scene_renderer.hpp>
 #include <crackvis/service/render_server.hpp>
 
@@ -140,6 +141,13 @@ int serve(const RenderServerConfig& config) {
   auto probe = crackvis::render::SceneRenderer::create(64, 64);
   if (!probe) {
     return fail(probe.status().message());
+  }
+  // One frame of a small cracked specimen too: a driver that makes a
+  // context but cannot draw fails here, and its shader compiler is loaded
+  // before the first user waits for it.
+  crackvis::render::Image frame;
+  if (crackvis::Status drawn = crackvis::render::renderProbeScene(**probe, 64, 64, frame); !drawn) {
+    return fail("drawing the start-up probe frame: " + drawn.message());
   }
   crackvis::log::event(
       stdout, "crackvis-render", "start",

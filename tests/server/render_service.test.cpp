@@ -13,6 +13,7 @@
 
 #include <catch2/catch.hpp>
 #include <grpcpp/grpcpp.h>
+#include <nlohmann/json.hpp>
 
 #include "crackvis/v1/render.grpc.pb.h"
 #include "dataservice/service_fixture.hpp"
@@ -1001,4 +1002,58 @@ TEST_CASE("an imported Yade run goes through the data service into a render sess
   CHECK(noBondArray.error_code() == grpc::StatusCode::FAILED_PRECONDITION);
   CHECK_THAT(noBondArray.error_message(),
              Catch::Contains("no per-bond extra array 'nope'") && Catch::Contains("forceN"));
+}
+
+TEST_CASE(
+    "crackvis bench render reports interactive and full-resolution latency, and how each "
+    "frame was drawn",
+    "[render][service][integration][bench]") {
+  auto services = startServices();
+  const auto tls = testing::clientTls("client");
+  const auto run = testing::runProcess({CRACKVIS_CLI,
+                                        "bench",
+                                        "render",
+                                        "--server",
+                                        fmt::format("localhost:{}", services.render->port()),
+                                        "--file",
+                                        "cuboidA.h5",
+                                        "--size",
+                                        "320x240",
+                                        "--seconds",
+                                        "1",
+                                        "--still-frames",
+                                        "3",
+                                        "--ca",
+                                        tls.ca,
+                                        "--cert",
+                                        tls.cert,
+                                        "--key",
+                                        tls.key,
+                                        "--json"});
+  INFO(run.err);
+  REQUIRE(run.exitCode == 0);
+  const auto json = nlohmann::json::parse(run.out.substr(run.out.find('{')));
+  CHECK(json.at("size") == "320x240");
+  CHECK(json.at("event_to_frame_ms").at("count").get<int>() > 10);
+  // Each still request answered by a full-resolution frame, timed from the
+  // camera move to its arrival.
+  const auto& still = json.at("full_resolution_event_to_frame_ms");
+  CHECK(still.at("count") == 3);
+  CHECK(still.at("p50").get<double>() > 0.0);
+  CHECK(json.at("full_resolution_render_ms").at("count") == 3);
+  CHECK(json.at("full_resolution_render_ms").at("p50").get<double>() <=
+        still.at("p50").get<double>());
+  // The default view draws its particles as spheres in every frame, reduced or not.
+  const auto& kinds = json.at("frame_kinds");
+  REQUIRE(!kinds.empty());
+  int frames = 0;
+  for (const auto& [kind, count] : kinds.items()) {
+    INFO(kind);
+    CHECK_THAT(kind, Catch::EndsWith(" spheres"));
+    frames += count.get<int>();
+  }
+  CHECK(kinds.contains("1/1 spheres"));
+  CHECK(frames >= 3 + 1);
+  CHECK(json.at("targets").at("interactive_spheres_at_most_2x_reduction").is_boolean());
+  CHECK(json.at("load_before").size() == 3);
 }

@@ -1,12 +1,16 @@
 // Real off-screen rendering under EGL (Mesa llvmpipe here): pictures checked
 // by colour, with the crack surface in a colour nothing else has.
+#include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <numbers>
 
 #include <catch2/catch.hpp>
 
 #include "cracks/crack_fixtures.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/render/scene_renderer.hpp>
+#include <crackvis/render/sphere_occlusion.hpp>
 #include <crackvis/scene/scene_content.hpp>
 
 using namespace crackvis;
@@ -53,6 +57,102 @@ bool red(const std::uint8_t* p) {
 }
 bool notBlack(const std::uint8_t* p) {
   return p[0] + p[1] + p[2] > 30;
+}
+
+// Particles placed by hand (no bonds: nothing culled by the scene), seen
+// from (0, 0, 20) down -z at 320x240 and 30 degrees: f = 120 / tan(15 deg)
+// pixels per unit at unit distance.
+struct Spheres {
+  static constexpr int kWidth = 320;
+  static constexpr int kHeight = 240;
+  static constexpr double kEye = 20.0;
+  dem::Lattice lattice;
+  std::vector<dem::Vec3> positions;
+  cracks::CrackMesh mesh;
+  pipeline::PipelineDescription description;
+
+  Spheres() {
+    lattice.dimension = 3;
+    description.file = "spheres.h5";
+    description.view.width = kWidth;
+    description.view.height = kHeight;
+    description.view.background = {0, 0, 0};
+    description.view.scalarBar = false;
+    description.view.camera = pipeline::CameraDescription{{0, 0, kEye}, {0, 0, 0}, {0, 1, 0}, 30};
+    description.cracks.colour = {255, 0, 0};
+  }
+  void add(dem::Vec3 centre, double radius) {
+    positions.push_back(centre);
+    lattice.radius.push_back(radius);
+  }
+  // A crack surface: the square |x|, |y| <= half at z = height.
+  void addSquare(double half, double height) {
+    const auto first = static_cast<std::int32_t>(mesh.points.size());
+    mesh.points.push_back({-half, -half, height});
+    mesh.points.push_back({half, -half, height});
+    mesh.points.push_back({half, half, height});
+    mesh.points.push_back({-half, half, height});
+    mesh.polygons.add({first, first + 1, first + 2, first + 3});
+  }
+  render::SceneInput input() const {
+    return {&lattice, {positions, {}, lattice.radius, {}, {}, {}}, {}, {}, &mesh, nullptr, {}, {}};
+  }
+  static double focal() { return kHeight / 2.0 / std::tan(15.0 * std::numbers::pi / 180.0); }
+  // Where a point of the scene lands, in pixels from the left and the top.
+  static std::array<double, 2> pixelOf(dem::Vec3 p) {
+    const double depth = kEye - p.z;
+    return {kWidth / 2.0 + focal() * p.x / depth, kHeight / 2.0 - focal() * p.y / depth};
+  }
+  // The silhouette's width: the view rays in the plane of x and the view
+  // direction that touch the sphere make angles atan(x / depth) +- asin(r / d).
+  static double silhouetteWidth(dem::Vec3 centre, double radius) {
+    const double depth = kEye - centre.z;
+    const double theta = std::atan2(centre.x, depth);
+    const double alpha = std::asin(radius / std::hypot(centre.x, depth));
+    return focal() * (std::tan(theta + alpha) - std::tan(theta - alpha));
+  }
+};
+
+// The widest run of pixels that `match` along the rows of a window.
+template <typename Match>
+int widestRun(const render::Image& image, int x0, int x1, int y0, int y1, Match match) {
+  int widest = 0;
+  for (int y = std::max(0, y0); y <= std::min(image.height - 1, y1); ++y) {
+    int run = 0;
+    for (int x = std::max(0, x0); x <= std::min(image.width - 1, x1); ++x) {
+      run = match(image.pixel(x, y)) ? run + 1 : 0;
+      widest = std::max(widest, run);
+    }
+  }
+  return widest;
+}
+
+int brightness(const std::uint8_t* p) {
+  return p[0] + p[1] + p[2];
+}
+// Viridis' ends, lit or in shade: the smallest radius purple, the largest yellow.
+bool purple(const std::uint8_t* p) {
+  return p[2] > 20 && p[1] < p[2] / 2 && p[1] < p[0];
+}
+bool yellow(const std::uint8_t* p) {
+  return p[0] > 60 && p[1] > 60 && p[2] < p[1] / 3;
+}
+
+// Pixels whose colours differ by more than `tolerance` (the sum over RGB),
+// `margin` pixels or more from the picture's edges.
+int differingPixels(const render::Image& a, const render::Image& b, int tolerance = 0,
+                    int margin = 0) {
+  int n = 0;
+  for (int y = margin; y < a.height - margin; ++y) {
+    for (int x = margin; x < a.width - margin; ++x) {
+      int d = 0;
+      for (int c = 0; c < 3; ++c) {
+        d += std::abs(static_cast<int>(a.pixel(x, y)[c]) - static_cast<int>(b.pixel(x, y)[c]));
+      }
+      n += d > tolerance ? 1 : 0;
+    }
+  }
+  return n;
 }
 
 }  // namespace
@@ -244,4 +344,223 @@ TEST_CASE("VTK's errors become the call's error, not a line on stderr", "[render
   // An error is the call's own: the next call succeeds.
   testing::TempDir dir;
   CHECK(render::writePng(image, dir.file("x.png")));
+}
+
+TEST_CASE("sphere impostors: silhouettes, shading and depth", "[render][egl]") {
+  auto renderer = render::SceneRenderer::create(Spheres::kWidth, Spheres::kHeight);
+  REQUIRE(renderer.isOk());
+  Spheres scene;
+  render::Image image;
+
+  SECTION("a sphere's silhouette has its projected size, on the axis and off it") {
+    const dem::Vec3 onAxis{0, 0, 0};
+    const dem::Vec3 offAxis{5.5, 3.5, 0};  // the silhouette an ellipse, stretched outwards
+    scene.add(onAxis, 1.0);
+    scene.add(offAxis, 1.0);
+    scene.addSquare(0.0, -5.0);  // no crack: a point behind, for the clipping range
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    const auto stats = (*renderer)->impostorStats();
+    CHECK(stats.points);
+    CHECK(stats.drawn == 2);
+    CHECK(stats.spheres == 2);
+    for (const dem::Vec3& centre : {onAxis, offAxis}) {
+      const double expected = Spheres::silhouetteWidth(centre, 1.0);
+      const auto [u, v] = Spheres::pixelOf(centre);
+      const auto x = static_cast<int>(u);
+      const auto y = static_cast<int>(v);
+      INFO("centre pixel " << u << ", " << v << "; width " << expected);
+      const int width = widestRun(image, x - 40, x + 40, y - 10, y + 10, notBlack);
+      CHECK(std::abs(width - expected) < 1.5);
+      // Lit by the headlight: brightest where the normal faces the eye,
+      // darkening towards the rim.
+      const int centreLight = brightness(image.pixel(x, y));
+      CHECK(centreLight > 300);
+      CHECK(brightness(image.pixel(x + static_cast<int>(0.4 * expected), y)) < centreLight - 60);
+    }
+    // Off the axis the silhouette is wider than on it (by 2 pixels here).
+    CHECK(Spheres::silhouetteWidth(offAxis, 1.0) > Spheres::silhouetteWidth(onAxis, 1.0) + 1.5);
+  }
+
+  SECTION("nearer surfaces hide farther ones, pixel by pixel") {
+    // Coloured by radius: the large sphere yellow, the small ones purple.
+    scene.description.particles.colourBy = pipeline::ParticleColourBy::kRadius;
+    const dem::Vec3 big{0, 0, 0};
+    scene.add(big, 1.0);
+    // Behind the big one and drawn after it: hidden where they overlap.
+    const dem::Vec3 behind{-1.2, 0, -1.5};
+    scene.add(behind, 0.6);
+    // Its centre in front of the big one's, but the big surface is nearer
+    // up to x = 0.55, where the two surfaces cross: only a depth per pixel
+    // puts the boundary there (a depth per sphere would show the small
+    // sphere from its rim at x = 0.2).
+    const dem::Vec3 crossing{0.8, 0, 0.3};
+    scene.add(crossing, 0.6);
+    scene.addSquare(0.0, -5.0);
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    auto at = [&](double x, double z) {
+      const auto [u, v] = Spheres::pixelOf({x, 0, z});
+      return image.pixel(static_cast<int>(u), static_cast<int>(v));
+    };
+    CHECK(yellow(at(0.0, 1.0)));
+    CHECK(yellow(at(-0.9, 0.4)));   // over the sphere behind
+    CHECK(purple(at(-1.5, -1.0)));  // the one behind, beside the big one
+    CHECK(yellow(at(0.35, 0.94)));  // the big surface nearer
+    CHECK(purple(at(0.75, 0.9)));   // the small surface nearer
+    CHECK(purple(at(1.3, 0.3)));    // the small sphere outside the big one
+  }
+
+  SECTION("a crack surface through a sphere cuts it") {
+    // The plane z = 0.5 cuts the unit sphere's cap at radius sqrt(0.75):
+    // the cap shows inside, the plane (red) outside.
+    scene.add({0, 0, 0}, 1.0);
+    scene.addSquare(3.0, 0.5);
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    const auto [u, v] = Spheres::pixelOf({0, 0, 0});
+    const auto y = static_cast<int>(v);
+    CHECK(!red(image.pixel(static_cast<int>(u), y)));
+    CHECK(brightness(image.pixel(static_cast<int>(u), y)) > 300);
+    // The cap's silhouette on the plane: the circle of radius sqrt(0.75) at z = 0.5.
+    const double cap = 2.0 * Spheres::focal() * std::sqrt(0.75) / (Spheres::kEye - 0.5);
+    auto sphereLit = [](const std::uint8_t* p) { return !red(p) && brightness(p) > 30; };
+    const int width = widestRun(image, static_cast<int>(u) - 40, static_cast<int>(u) + 40, y - 3,
+                                y + 3, sphereLit);
+    INFO("cap width " << cap);
+    CHECK(std::abs(width - cap) < 2.0);
+    CHECK(red(image.pixel(static_cast<int>(u + 0.5 * cap + 3), y)));
+  }
+
+  SECTION("a sphere centred just off the picture shows the part in it") {
+    // The picture's left edge at depth 20 is at x = -20 tan(15 deg) * 4 / 3.
+    const double edge = -Spheres::kEye * std::tan(15.0 * std::numbers::pi / 180.0) * 4.0 / 3.0;
+    scene.add({edge - 0.3, 0, 0}, 1.0);
+    SECTION("alone (all centres outside the view)") {}
+    SECTION("with another in the middle") {
+      scene.add({0, 0, 0}, 1.0);
+    }
+    scene.addSquare(0.0, -5.0);
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    const int y = Spheres::kHeight / 2;
+    // About 0.7 of 22 pixels per unit in view.
+    const int shown = widestRun(image, 0, 40, y - 2, y + 2, notBlack);
+    CHECK(std::abs(shown - 0.7 * Spheres::focal() / Spheres::kEye) < 2.0);
+    CHECK((*renderer)->impostorStats().drawn == static_cast<std::int64_t>(scene.positions.size()));
+  }
+
+  SECTION("a clipping plane removes the spheres on the side it hides") {
+    scene.add({-3, 0, 0}, 1.0);
+    scene.add({3, 0, 0}, 1.0);
+    scene.addSquare(0.0, -5.0);
+    scene.description.particles.clip = pipeline::ClipPlane{{0, 0, 0}, {1, 0, 0}};
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    auto centre = [&](double x) {
+      const auto [u, v] = Spheres::pixelOf({x, 0, 1});
+      return image.pixel(static_cast<int>(u), static_cast<int>(v));
+    };
+    CHECK(notBlack(centre(-3)));
+    CHECK(!notBlack(centre(3)));
+    CHECK((*renderer)->impostorStats().drawn == 1);
+  }
+
+  SECTION("translucent spheres show what is behind them, and none is left out") {
+    scene.description.particles.colourBy = pipeline::ParticleColourBy::kRadius;
+    scene.description.particles.opacity = 0.5;
+    scene.add({0, 0, 0}, 1.0);       // yellow, in front
+    scene.add({0.2, 0, -3.0}, 0.5);  // purple, right behind it
+    scene.addSquare(0.0, -5.0);
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    CHECK((*renderer)->impostorStats().drawn == 2);
+    const auto [u, v] = Spheres::pixelOf({0.2, 0, 0.98});
+    const std::uint8_t* both = image.pixel(static_cast<int>(u), static_cast<int>(v));
+    const auto [u1, v1] = Spheres::pixelOf({-0.6, 0, 0.8});
+    const std::uint8_t* front = image.pixel(static_cast<int>(u1), static_cast<int>(v1));
+    // The purple behind takes green away and adds blue.
+    CHECK(both[2] > front[2] + 10);
+    CHECK(both[1] + 10 < front[1]);
+  }
+
+  SECTION("a sphere wider than the largest point falls back to the geometry shader") {
+    scene.add({0, 0, 0}, 1.0);
+    scene.add({0, 0, -3}, 1.0);
+    scene.description.view.camera->position = {0, 0, 2.5};  // about 390 pixels wide
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    CHECK(!(*renderer)->impostorStats().points);
+    CHECK(brightness(image.pixel(Spheres::kWidth / 2, Spheres::kHeight / 2)) > 300);
+    CHECK(count(image, notBlack) > Spheres::kWidth * Spheres::kHeight * 9 / 10);
+    // Back out: points again.
+    scene.description.view.camera->position = {0, 0, Spheres::kEye};
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    CHECK((*renderer)->impostorStats().points);
+  }
+}
+
+TEST_CASE("hidden spheres are left out without changing the picture", "[render][egl]") {
+  // A block of particles with a crack through it, coloured by damage, seen
+  // from a corner close enough for spheres 10 to 20 pixels wide: most
+  // spheres are behind others.
+  constexpr int kSize[2] = {320, 240};
+  auto renderer = render::SceneRenderer::create(kSize[0], kSize[1]);
+  REQUIRE(renderer.isOk());
+  Scene scene;
+  scene.description.view.width = kSize[0];
+  scene.description.view.height = kSize[1];
+  scene.description.particles.visible = true;
+  scene.description.particles.colourBy = pipeline::ParticleColourBy::kDamage;
+  scene.description.view.scalarBar = false;
+  const dem::Vec3 centre = 0.5 * scene.crack.block.extent;
+  scene.description.view.camera =
+      pipeline::CameraDescription{centre + dem::Vec3{10, 7, 5}, centre, {0, 0, 1}, 30};
+  SECTION("from outside") {}
+  SECTION("with a clipping plane through the block") {
+    scene.description.particles.clip = pipeline::ClipPlane{centre, {1, 1, 0}};
+  }
+  render::Image culled;
+  REQUIRE((*renderer)->render(scene.description, scene.input(), culled).isOk());
+  const auto stats = (*renderer)->impostorStats();
+  INFO(stats.drawn << " of " << stats.spheres << " spheres drawn");
+  CHECK(stats.points);
+  CHECK(stats.drawn < stats.spheres * 2 / 3);
+  CHECK(count(culled, notBlack) > kSize[0] * kSize[1] / 5);
+  render::Image all;
+  (*renderer)->setImpostorOptions({.geometryShader = false, .occlusionCulling = false});
+  REQUIRE((*renderer)->renderFrame(kSize[0], kSize[1], all).isOk());
+  // Only the spheres a clipping plane removes are left out.
+  const auto unculled = (*renderer)->impostorStats();
+  CHECK((unculled.drawn < unculled.spheres) == scene.description.particles.clip.has_value());
+  CHECK(differingPixels(all, culled) == 0);
+  // VTK's own impostors (geometry shader): the same picture but for
+  // silhouette pixels and small differences of shading, away from the edges
+  // (where VTK's misses the spheres whose centres are outside the picture).
+  (*renderer)->setImpostorOptions({.geometryShader = true, .occlusionCulling = false});
+  render::Image vtk;
+  REQUIRE((*renderer)->renderFrame(kSize[0], kSize[1], vtk).isOk());
+  CHECK(!(*renderer)->impostorStats().points);
+  CHECK(differingPixels(vtk, all, 30, 24) < count(all, notBlack) / 100);
+}
+
+TEST_CASE("occlusion culling keeps a sphere that peeks out", "[render]") {
+  // Perspective at 100x100 pixels, 100 pixels per view unit at unit depth:
+  // a sphere of radius 1 at depth 10 is about 20 pixels wide.
+  render::OcclusionView view;
+  view.width = 100;
+  view.height = 100;
+  view.rayScale = {0.01, 0.01};
+  view.rayOffset = {-0.5, -0.5};
+  view.nearDepth = 1.0;
+  view.farDepth = 100.0;
+  // A large sphere in front; behind it one fully hidden, one whose rim
+  // shows beside it, and one behind the first but off the screen.
+  const std::vector<double> x{0.0, 0.0, 1.3, 100.0};
+  const std::vector<double> y{0.0, 0.0, 0.0, 0.0};
+  const std::vector<double> z{-10.0, -13.0, -13.0, -13.0};
+  const std::vector<float> r{1.0f, 0.5f, 0.5f, 0.5f};
+  render::SphereSet spheres{x, y, z, r, {}};
+  CHECK(render::unoccludedSpheres(view, spheres) == std::vector<std::int32_t>{0, 2});
+  // A sphere that may not be drawn (clipped) hides nothing.
+  const std::vector<std::uint8_t> mayHide{0, 1, 1, 1};
+  spheres.mayHide = mayHide;
+  CHECK(render::unoccludedSpheres(view, spheres) == std::vector<std::int32_t>{0, 1, 2});
+  // Nor does one that crosses the near plane.
+  view.nearDepth = 9.5;
+  spheres.mayHide = {};
+  CHECK(render::unoccludedSpheres(view, spheres) == std::vector<std::int32_t>{0, 1, 2});
 }

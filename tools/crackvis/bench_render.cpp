@@ -10,6 +10,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <thread>
 
@@ -39,6 +40,7 @@ struct RenderBenchOptions {
   std::string pipelinePath;
   double seconds = 5.0;
   double eventRate = 60.0;  // events per second, a mouse drag's rate
+  int stillFrames = 10;     // isolated camera moves answered at full resolution
   std::string ca = "certs/generated/ca.pem";
   std::string cert = "certs/generated/client.pem";
   std::string key = "certs/generated/client.key";
@@ -171,7 +173,39 @@ struct Report {
   std::vector<int> reductions;
   double refineAfterIdleMs = -1.0;
   double bitsPerSecond = 0.0;
+  // Isolated camera moves, each with a request for a full-resolution frame:
+  // the event-to-frame latency of a still render (ParaView's Render()).
+  std::vector<double> stillLatencies;
+  std::vector<double> stillRenderMs;
+  // How each frame after the first was drawn: reduction factor and the
+  // particles' drawing ("1/2 spheres"), counted.
+  std::map<std::string, int> frameKinds;
+  // Every frame of the drag drew true spheres at no more than 2x reduction.
+  bool dragSpheresAtMost2x = true;
+  LoadAverage loadBefore;
+  LoadAverage loadAfter;
 };
+
+std::string particleDrawingName(const v1::Frame& frame) {
+  return frame.particles().empty() ? "(particles not reported)" : frame.particles();
+}
+
+std::string frameKind(const v1::Frame& frame) {
+  return fmt::format("1/{} {}", std::max(1, frame.reduction()), particleDrawingName(frame));
+}
+
+// The errors the session sent, for a failure message: "; the server said: ...".
+std::string serverErrors(FrameCollector& collector) {
+  const auto errors = collector.errors();
+  if (errors.empty()) {
+    return {};
+  }
+  std::string text = "; the server said:";
+  for (const std::string& error : errors) {
+    text += " " + error;
+  }
+  return text;
+}
 
 std::unique_ptr<v1::RenderService::Stub> makeStub(const RenderBenchOptions& options) {
   grpc::SslCredentialsOptions ssl;
@@ -232,6 +266,7 @@ Result<Report> run(const RenderBenchOptions& options) {
     d.cracks.method = *method;
   }
   auto stub = makeStub(options);
+  const LoadAverage loadBefore = loadAverage();
 
   grpc::ClientContext openContext;
   authorize(openContext, options);
@@ -242,6 +277,7 @@ Result<Report> run(const RenderBenchOptions& options) {
       rpc::fromGrpcStatus(stub->OpenSession(&openContext, open, &opened), "OpenSession"));
   Report report;
   report.backend = opened.backend();
+  report.loadBefore = loadBefore;
   report.width = d.view.width;
   report.height = d.view.height;
   report.particles = opened.particle_count();
@@ -303,8 +339,9 @@ Result<Report> run(const RenderBenchOptions& options) {
                    frames.back().frame.full_resolution();
           },
           30.0)) {
-    return finish(
-        Status(StatusCode::kUnavailable, "no full-resolution frame within 30 s of the last event"));
+    return finish(Status(StatusCode::kUnavailable,
+                         fmt::format("no full-resolution frame within 30 s of the last event{}",
+                                     serverErrors(collector))));
   }
   const auto frames = collector.frames();
   report.events = sent.size();
@@ -323,6 +360,8 @@ Result<Report> run(const RenderBenchOptions& options) {
     const auto& frame = frames[k].frame;
     if (frames[k].received <= lastEvent) {
       ++report.interactiveFrames;
+      report.dragSpheresAtMost2x =
+          report.dragSpheresAtMost2x && frame.reduction() <= 2 && frame.particles() == "spheres";
       bytes += frames[k].bytes;
     }
     (frame.full_resolution() ? report.fullRenderMs : report.reducedRenderMs)
@@ -334,6 +373,46 @@ Result<Report> run(const RenderBenchOptions& options) {
         report.refineAfterIdleMs < 0.0) {
       report.refineAfterIdleMs = ms(frames[k].received - lastEvent);
     }
+  }
+  // Still renders: a small camera move and a request for a full-resolution
+  // frame, one at a time, each waited for (and a pause after it, so the next
+  // one starts from an idle session).
+  for (int k = 0; k < options.stillFrames; ++k) {
+    const std::uint64_t moveId = sent.size() + 2 * static_cast<std::uint64_t>(k) + 1;
+    v1::ClientEvent move;
+    move.set_event_id(moveId);
+    move.mutable_camera()->set_kind(v1::CameraEvent::ROTATE);
+    move.mutable_camera()->set_dx(1.8 / options.eventRate);
+    v1::ClientEvent still;
+    still.set_event_id(moveId + 1);
+    still.mutable_still();
+    const std::size_t seen = collector.frames().size();
+    const auto sentAt = Clock::now();
+    if (!stream->Write(move) || !stream->Write(still)) {
+      return finish(Status(StatusCode::kUnavailable, "the stream ended during the still renders"));
+    }
+    if (!collector.waitFor(
+            [&](const auto& arrived) {
+              return arrived.size() > seen && arrived.back().frame.last_event_id() >= moveId + 1 &&
+                     arrived.back().frame.full_resolution();
+            },
+            30.0)) {
+      return finish(Status(StatusCode::kUnavailable,
+                           fmt::format("no full-resolution frame within 30 s of a still request{}",
+                                       serverErrors(collector))));
+    }
+    const auto answered = collector.frames();
+    for (std::size_t a = seen; a < answered.size(); ++a) {
+      if (answered[a].frame.last_event_id() >= moveId + 1 && answered[a].frame.full_resolution()) {
+        report.stillLatencies.push_back(ms(answered[a].received - sentAt));
+        report.stillRenderMs.push_back(answered[a].frame.timings().render_ms());
+        break;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  for (const FrameRecord& record : collector.frames()) {
+    ++report.frameKinds[frameKind(record.frame)];
   }
   // The session's encoder shares the cores with its renderer; the same
   // frames encoded here with the same settings, alone, time the encoder.
@@ -350,6 +429,7 @@ Result<Report> run(const RenderBenchOptions& options) {
       }
     }
   }
+  report.loadAfter = loadAverage();
   report.bitsPerSecond = report.interactionSeconds > 0
                              ? 8.0 * static_cast<double>(bytes) / report.interactionSeconds
                              : 0.0;
@@ -377,21 +457,34 @@ nlohmann::json toJson(const Report& r) {
                         {"client_decode_ms", summaryJson(r.decodeMs)},
                         {"reduction", summaryJson(reductions)},
                         {"full_frame_after_idle_ms", r.refineAfterIdleMs},
+                        {"full_resolution_event_to_frame_ms", summaryJson(r.stillLatencies)},
+                        {"full_resolution_render_ms", summaryJson(r.stillRenderMs)},
+                        {"frame_kinds", r.frameKinds},
+                        {"machine", machineDescription()},
+                        {"load_before", toJson(r.loadBefore)},
+                        {"load_after", toJson(r.loadAfter)},
                         {"targets",
                          {{"event_to_frame_p50_le_60ms", percentile(r.latencies, 50) <= 60.0},
                           {"interactive_fps_ge_15", fps >= 15.0},
                           {"encode_p50_le_5ms", percentile(r.encodeMs, 50) <= 5.0},
                           {"full_frame_within_300ms_of_idle",
-                           r.refineAfterIdleMs >= 0.0 && r.refineAfterIdleMs <= 300.0}}}};
+                           r.refineAfterIdleMs >= 0.0 && r.refineAfterIdleMs <= 300.0},
+                          {"interactive_p50_le_40ms", percentile(r.latencies, 50) <= 40.0},
+                          {"interactive_spheres_at_most_2x_reduction",
+                           r.interactiveFrames > 0 && r.dragSpheresAtMost2x}}}};
 }
 
 void printTable(const nlohmann::json& j) {
-  std::printf("crackvis bench render: %s, %lld particles, step %d\n%s\n\n",
-              j["size"].get<std::string>().c_str(), j["particles"].get<long long>(),
-              j["step"].get<int>(), j["backend"].get<std::string>().c_str());
+  std::printf(
+      "crackvis bench render: %s, %lld particles, step %d\n%s\nmachine: %s; load before %s, after "
+      "%s\n\n",
+      j["size"].get<std::string>().c_str(), j["particles"].get<long long>(), j["step"].get<int>(),
+      j["backend"].get<std::string>().c_str(), j["machine"].get<std::string>().c_str(),
+      loadText(j["load_before"]).c_str(), loadText(j["load_after"]).c_str());
   std::printf("%-34s %10s %10s %10s %10s\n", "", "mean", "p50", "p90", "p99");
-  for (const char* key : {"event_to_frame_ms", "render_reduced_ms", "render_full_ms", "encode_ms",
-                          "encode_alone_ms", "client_decode_ms", "reduction"}) {
+  for (const char* key : {"event_to_frame_ms", "full_resolution_event_to_frame_ms",
+                          "render_reduced_ms", "render_full_ms", "full_resolution_render_ms",
+                          "encode_ms", "encode_alone_ms", "client_decode_ms", "reduction"}) {
     const auto& s = j[key];
     std::printf("%-34s %10.2f %10.2f %10.2f %10.2f\n", key, s["mean"].get<double>(),
                 s["p50"].get<double>(), s["p90"].get<double>(), s["p99"].get<double>());
@@ -402,6 +495,11 @@ void printTable(const nlohmann::json& j) {
               j["interactive_bitrate_mbps"].get<double>());
   std::printf("full-resolution frame after idle  %10.1f ms\n",
               j["full_frame_after_idle_ms"].get<double>());
+  std::printf("frames drawn as (reduction, particles):");
+  for (const auto& [kind, count] : j["frame_kinds"].items()) {
+    std::printf(" %s x%d", kind.c_str(), count.get<int>());
+  }
+  std::printf("\n");
   std::printf("targets:");
   for (const auto& [name, met] : j["targets"].items()) {
     std::printf(" %s=%s", name.c_str(), met.get<bool>() ? "met" : "MISSED");
@@ -429,10 +527,13 @@ Command addBenchRenderCommand(CLI::App& bench) {
   auto options = std::make_shared<RenderBenchOptions>();
   auto* command = bench.add_subcommand(
       "render",
-      "Interactive rendering against a running crackvis-render: opens a session (particles as "
-      "sphere impostors + crack surfaces), drags the camera with rotate events, and prints "
-      "event-to-frame latency percentiles, frames per second, render and encode times, and the "
-      "time to the full-resolution frame after the last event, as a table and as JSON.");
+      "Interactive and still rendering against a running crackvis-render: opens a session "
+      "(particles as sphere impostors + crack surfaces), drags the camera with rotate events "
+      "(the interactive event-to-frame latency), then makes --still-frames isolated camera moves "
+      "each with a request for a full-resolution frame (the full-resolution event-to-frame "
+      "latency, ParaView's still render). Prints latency percentiles, frames per second, render "
+      "and encode times, how each frame was drawn (reduction factor, particles as spheres or "
+      "flat points) and the load, as a table and as JSON.");
   command->add_option("--server", options->server, "crackvis-render address, HOST:PORT")
       ->required();
   command->add_option("--file", options->file, "crackvis-dem file under the data service's root")
@@ -451,6 +552,11 @@ Command addBenchRenderCommand(CLI::App& bench) {
   command->add_option("--event-rate", options->eventRate, "rotate events per second")
       ->capture_default_str()
       ->check(CLI::Range(1.0, 1000.0));
+  command
+      ->add_option("--still-frames", options->stillFrames,
+                   "isolated camera moves answered at full resolution (0: none)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
   command->add_option("--ca", options->ca, "CA certificate that signed the server's (PEM)")
       ->capture_default_str();
   command->add_option("--cert", options->cert, "client certificate (PEM)")->capture_default_str();

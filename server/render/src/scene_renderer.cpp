@@ -17,7 +17,6 @@
 #include <vtkImageData.h>
 #include <vtkLookupTable.h>
 #include <vtkNew.h>
-#include <vtkOpenGLSphereMapper.h>
 #include <vtkPNGWriter.h>
 #include <vtkPlane.h>
 #include <vtkPointData.h>
@@ -33,6 +32,7 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 
+#include "point_sprite_sphere_mapper.hpp"
 #include "vtk_errors.hpp"
 #include <crackvis/render/egl_context.hpp>
 #include <crackvis/render/scene_renderer.hpp>
@@ -202,7 +202,8 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
 
   vtkSmartPointer<vtkPolyDataMapper> mapper;
   if (particles.representation == pipeline::ParticleRepresentation::kImpostors) {
-    auto spheres = vtkSmartPointer<vtkOpenGLSphereMapper>::New();
+    // Point sprites, hidden spheres left out (point_sprite_sphere_mapper.hpp).
+    auto spheres = vtkSmartPointer<vtkPointSpriteSphereMapper>::New();
     spheres->SetScaleArray("sphere_radius");
     mapper = spheres;
   } else {
@@ -228,28 +229,6 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   if (particles.representation == pipeline::ParticleRepresentation::kPoints) {
     actor->GetProperty()->SetPointSize(3);
   }
-  return actor;
-}
-
-// The interactive stand-in for impostor particles: the same points drawn
-// as flat GL points (no geometry shader, which llvmpipe runs on one thread),
-// sized at each frame to the spheres' projected diameter. At a reduced
-// resolution the spheres are a few pixels wide and look the same.
-vtkSmartPointer<vtkActor> pointsStandIn(vtkActor* impostors) {
-  auto* source = vtkPolyDataMapper::SafeDownCast(impostors->GetMapper());
-  auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
-  mapper->SetInputData(vtkPolyData::SafeDownCast(source->GetInputDataObject(0, 0)));
-  mapper->SetScalarVisibility(source->GetScalarVisibility());
-  mapper->SetLookupTable(source->GetLookupTable());
-  mapper->SetScalarRange(source->GetScalarRange());
-  mapper->SetScalarMode(source->GetScalarMode());
-  mapper->SelectColorArray(source->GetArrayName());
-  mapper->SetClippingPlanes(source->GetClippingPlanes());
-  auto actor = vtkSmartPointer<vtkActor>::New();
-  actor->SetMapper(mapper);
-  actor->GetProperty()->DeepCopy(impostors->GetProperty());
-  actor->GetProperty()->LightingOff();
-  actor->VisibilityOff();
   return actor;
 }
 
@@ -440,9 +419,15 @@ struct SceneRenderer::Impl {
   int width = 0;                          // capacity
   int height = 0;
   bool cameraSet = false;
-  vtkSmartPointer<vtkActor> impostors;  // null unless particles are impostors
-  vtkSmartPointer<vtkActor> standIn;    // their interactive level of detail
-  double meanRadius = 0.0;
+  vtkSmartPointer<vtkPointSpriteSphereMapper> impostors;  // null unless particles are impostors
+  ImpostorOptions impostorOptions;
+
+  void applyImpostorOptions() {
+    if (impostors) {
+      impostors->SetForceGeometryShader(impostorOptions.geometryShader);
+      impostors->SetOcclusionCulling(impostorOptions.occlusionCulling);
+    }
+  }
 };
 
 SceneRenderer::SceneRenderer() : m_impl(std::make_unique<Impl>()) {}
@@ -517,16 +502,11 @@ Status SceneRenderer::setScene(const pipeline::PipelineDescription& d, const Sce
                           d.view.background.b / 255.0);
   Legend legend;
   impl.impostors = nullptr;
-  impl.standIn = nullptr;
   if (d.particles.visible) {
     auto particles = particleActor(d, input, &legend);
     renderer->AddActor(particles);
-    if (d.particles.representation == pipeline::ParticleRepresentation::kImpostors) {
-      impl.impostors = particles;
-      impl.standIn = pointsStandIn(particles);
-      impl.meanRadius = meanRadius(input.step.radius);
-      renderer->AddActor(impl.standIn);
-    }
+    impl.impostors = vtkPointSpriteSphereMapper::SafeDownCast(particles->GetMapper());
+    impl.applyImpostorOptions();
   }
   if (d.cracks.visible && input.cracks != nullptr) {
     addCracks(d, *input.cracks, renderer, &legend);
@@ -550,7 +530,8 @@ Status SceneRenderer::setScene(const pipeline::PipelineDescription& d, const Sce
   return vtkErrors.status("building the scene");
 }
 
-Status SceneRenderer::renderFrame(int width, int height, Image& out, bool interactive) {
+Status SceneRenderer::renderFrame(int width, int height, Image& out,
+                                  [[maybe_unused]] bool interactive) {
   Impl& impl = *m_impl;
   if (width < 1 || height < 1 || width > impl.width || height > impl.height) {
     return invalidArgument(fmt::format("frame {}x{} does not fit the renderer's {}x{}", width,
@@ -561,19 +542,6 @@ Status SceneRenderer::renderFrame(int width, int height, Image& out, bool intera
   // A frame smaller than the pbuffer renders into its lower-left corner.
   impl.window->SetSize(width, height);
   impl.renderer->ResetCameraClippingRange();
-  if (impl.impostors) {
-    impl.impostors->SetVisibility(!interactive);
-    impl.standIn->SetVisibility(interactive);
-    if (interactive) {
-      vtkCamera* camera = impl.renderer->GetActiveCamera();
-      const double pixelsPerUnit =
-          height / (2.0 * camera->GetDistance() *
-                    std::tan(camera->GetViewAngle() * std::numbers::pi / 360.0));
-      const double diameter = 2.0 * impl.meanRadius * pixelsPerUnit;
-      impl.standIn->GetProperty()->SetPointSize(
-          static_cast<float>(std::clamp(diameter, 1.0, 64.0)));
-    }
-  }
   impl.window->Render();
   CRACKVIS_RETURN_IF_ERROR(vtkErrors.status(fmt::format("rendering a {}x{} frame", width, height)));
   vtkNew<vtkUnsignedCharArray> pixels;
@@ -601,6 +569,19 @@ Status SceneRenderer::render(const pipeline::PipelineDescription& d, const Scene
                              Image& out) {
   CRACKVIS_RETURN_IF_ERROR(setScene(d, input, true));
   return renderFrame(d.view.width, d.view.height, out);
+}
+
+void SceneRenderer::setImpostorOptions(const ImpostorOptions& options) {
+  m_impl->impostorOptions = options;
+  m_impl->applyImpostorOptions();
+}
+
+SceneRenderer::ImpostorStats SceneRenderer::impostorStats() const {
+  const vtkPointSpriteSphereMapper* mapper = m_impl->impostors;
+  if (mapper == nullptr) {
+    return {};
+  }
+  return {mapper->GetLastDrawnCount(), mapper->GetLastSphereCount(), mapper->GetLastDrewPoints()};
 }
 
 void SceneRenderer::moveCamera(CameraMove move, double dx, double dy) {

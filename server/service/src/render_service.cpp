@@ -296,6 +296,7 @@ class StreamEncoder {
     out.set_keyframe(encoded->keyframe);
     out.set_full_resolution(frame.fullResolution);
     out.set_reduction(frame.reduction);
+    out.set_particles(frame.particles);
     out.set_step(frame.step);
     out.set_h264(encoded->data.data(), encoded->data.size());
     auto* timings = out.mutable_timings();

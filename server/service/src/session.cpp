@@ -364,6 +364,7 @@ struct Session::Worker {
       return;
     }
     frame.timings.renderMs = millisecondsSince(start);
+    frame.particles = particleDrawing();
     if (factor > 1) {
       render::resample(image, width, height, frame.image);
       refineAt = lastInteraction +
@@ -382,6 +383,15 @@ struct Session::Worker {
     dirty = false;
     forceFull = false;
     keyframe = false;
+  }
+
+  std::string particleDrawing() const {
+    const auto& particles = description().particles;
+    if (!particles.visible) {
+      return "none";
+    }
+    return particles.representation == pipeline::ParticleRepresentation::kImpostors ? "spheres"
+                                                                                    : "points";
   }
 
   // ParaView's image reduction factor, adapted so that a reduced frame fits

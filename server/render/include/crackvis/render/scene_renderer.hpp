@@ -1,6 +1,7 @@
 // Renders one step of a DEM data set as a pipeline description says, off
 // screen (EglContext), into an RGB image: particles as GLSL sphere impostors
-// (vtkOpenGLSphereMapper), crack surfaces from any of the four methods, broken
+// (point sprites that write their depth, hidden ones left out on the CPU:
+// src/point_sprite_sphere_mapper.hpp), crack surfaces from any of the four methods, broken
 // or all bonds as lines or tubes, inconsistency marks, the local
 // decomposition, background, colour map, scalar bar and camera. The building
 // block of the render server's sessions and of `crackvis snapshot`.
@@ -57,8 +58,8 @@ class SceneRenderer {
   Status setScene(const pipeline::PipelineDescription& description, const SceneInput& input,
                   bool resetCamera = false);
   // Renders the scene at width x height (at most the capacity).
-  // `interactive`: a level of detail for frames while the user interacts
-  // (impostor particles drawn as flat points of their projected size).
+  // `interactive` marks a frame of a drag; it is drawn like any other (the
+  // sphere impostors are fast enough at every size to need no stand-in).
   Status renderFrame(int width, int height, Image& out, bool interactive = false);
   // setScene(description, input, true) then renderFrame at the description's
   // view size: a snapshot.
@@ -70,6 +71,25 @@ class SceneRenderer {
   void moveCamera(CameraMove move, double dx, double dy);
   pipeline::CameraDescription camera() const;
   void setCamera(const pipeline::CameraDescription& camera);
+
+  // How impostor particles are drawn, for tests and benchmarks: with VTK's
+  // geometry shader (vtkOpenGLSphereMapper's way) instead of points, and
+  // whether spheres hidden behind others are left out (the picture is the
+  // same). Kept across scenes.
+  struct ImpostorOptions {
+    bool geometryShader = false;
+    bool occlusionCulling = true;
+  };
+  void setImpostorOptions(const ImpostorOptions& options);
+  // The last frame's impostors: spheres drawn, of how many, and whether as
+  // points (false: the geometry shader, also used for a sphere wider than
+  // the largest point). All 0 without impostors.
+  struct ImpostorStats {
+    std::int64_t drawn = 0;
+    std::int64_t spheres = 0;
+    bool points = false;
+  };
+  ImpostorStats impostorStats() const;
 
   int capacityWidth() const;
   int capacityHeight() const;

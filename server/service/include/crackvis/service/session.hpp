@@ -53,6 +53,10 @@ struct RenderedFrame {
   bool keyframe = false;  // the client asked for one
   int bitrate = 0;        // the description's stream bitrate
   int fps = 30;
+  // How the particles were drawn: "spheres" (impostors as point sprites or,
+  // for spheres wider than the largest point, VTK's geometry shader),
+  // "points", or "none".
+  std::string particles;
   render::Image image;  // the view's size
   FrameTimings timings;
 };
