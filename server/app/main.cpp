@@ -261,6 +261,9 @@ int main(int argc, char** argv) {
   app.add_option("--interactive-frame-ms", config.limits.interactiveFrameMs,
                  "render-time budget of a reduced-resolution frame while interacting")
       ->capture_default_str();
+  app.add_option("--max-reduction", config.limits.maxReduction,
+                 "largest image reduction factor while interacting (1: always full resolution)")
+      ->capture_default_str();
   app.add_option("--max-particles", config.limits.fileSizes.maxParticles,
                  "refuse files declaring more particles (before allocating for them)")
       ->capture_default_str();

@@ -107,11 +107,12 @@ class StreamClient {
     REQUIRE(m_stream->Write(event));
     return m_lastEvent;
   }
-  std::uint64_t rotate(double dx, double dy = 0.0) {
+  std::uint64_t rotate(double dx, double dy = 0.0, bool still = false) {
     v1::ClientEvent event;
     event.mutable_camera()->set_kind(v1::CameraEvent::ROTATE);
     event.mutable_camera()->set_dx(dx);
     event.mutable_camera()->set_dy(dy);
+    event.mutable_camera()->set_still(still);
     return send(event);
   }
   std::uint64_t setStep(int step) {
@@ -275,6 +276,54 @@ int viridisPixels(const encode::RgbFrame& picture) {
     n += picture.rgb[i + 1] > picture.rgb[i] + 40 ? 1 : 0;
   }
   return n;
+}
+
+TEST_CASE("a still camera move is answered at full resolution, and --max-reduction caps a drag's",
+          "[render][service][integration]") {
+  auto services = startServices();
+  auto view = crackView();
+  view.particles.visible = true;  // the spheres: frames that cost something
+
+  SECTION("a still move: its first frame is full resolution") {
+    auto stub = connect(*services.render);
+    StreamClient stream(*stub, openSession(*stub, view));
+    REQUIRE(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+    for (int k = 0; k < 3; ++k) {
+      const std::uint64_t id = stream.rotate(0.05, 0.0, true);
+      REQUIRE(stream.waitFor([&](const auto& frames, const auto&) {
+        return frames.back().frame.last_event_id() >= id;
+      }));
+      for (const auto& frame : stream.frames()) {
+        if (frame.frame.last_event_id() == id) {
+          CHECK(frame.frame.full_resolution());
+          CHECK(frame.frame.reduction() == 1);
+          CHECK(frame.frame.particles() == "spheres");
+        }
+      }
+    }
+  }
+  SECTION("max_reduction 1: a drag is drawn at full resolution throughout") {
+    auto config = renderConfig(*services.data);
+    config.limits.maxReduction = 1;
+    config.limits.interactiveFrameMs = 1.0;  // every frame over budget: it would reduce
+    auto server = startRenderServer(config);
+    auto stub = connect(*server);
+    StreamClient stream(*stub, openSession(*stub, view));
+    REQUIRE(stream.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+    std::uint64_t last = 0;
+    for (int k = 0; k < 20; ++k) {
+      last = stream.rotate(0.01);
+      std::this_thread::sleep_for(std::chrono::milliseconds(15));
+    }
+    REQUIRE(stream.waitFor([&](const auto& frames, const auto&) {
+      return frames.back().frame.last_event_id() == last;
+    }));
+    const auto frames = stream.frames();
+    CHECK(frames.size() >= 5);
+    for (const auto& frame : frames) {
+      CHECK(frame.frame.reduction() == 1);
+    }
+  }
 }
 
 TEST_CASE("a session reads the arrays its view colours by: break step, bond force, velocity",

@@ -374,36 +374,36 @@ Result<Report> run(const RenderBenchOptions& options) {
       report.refineAfterIdleMs = ms(frames[k].received - lastEvent);
     }
   }
-  // Still renders: a small camera move and a request for a full-resolution
-  // frame, one at a time, each waited for (and a pause after it, so the next
-  // one starts from an idle session).
+  // Still renders: a small camera move that is not part of a drag
+  // (CameraEvent.still), answered by a full-resolution frame, one at a time,
+  // each waited for (and a pause after it, so the next one starts from an
+  // idle session): ParaView's still render, a camera change and Render().
   for (int k = 0; k < options.stillFrames; ++k) {
-    const std::uint64_t moveId = sent.size() + 2 * static_cast<std::uint64_t>(k) + 1;
+    const std::uint64_t moveId = sent.size() + static_cast<std::uint64_t>(k) + 1;
     v1::ClientEvent move;
     move.set_event_id(moveId);
     move.mutable_camera()->set_kind(v1::CameraEvent::ROTATE);
     move.mutable_camera()->set_dx(1.8 / options.eventRate);
-    v1::ClientEvent still;
-    still.set_event_id(moveId + 1);
-    still.mutable_still();
+    move.mutable_camera()->set_still(true);
     const std::size_t seen = collector.frames().size();
     const auto sentAt = Clock::now();
-    if (!stream->Write(move) || !stream->Write(still)) {
+    if (!stream->Write(move)) {
       return finish(Status(StatusCode::kUnavailable, "the stream ended during the still renders"));
     }
     if (!collector.waitFor(
             [&](const auto& arrived) {
-              return arrived.size() > seen && arrived.back().frame.last_event_id() >= moveId + 1 &&
+              return arrived.size() > seen && arrived.back().frame.last_event_id() >= moveId &&
                      arrived.back().frame.full_resolution();
             },
             30.0)) {
       return finish(Status(StatusCode::kUnavailable,
-                           fmt::format("no full-resolution frame within 30 s of a still request{}",
+                           fmt::format("no full-resolution frame within 30 s of a still camera "
+                                       "move{}",
                                        serverErrors(collector))));
     }
     const auto answered = collector.frames();
     for (std::size_t a = seen; a < answered.size(); ++a) {
-      if (answered[a].frame.last_event_id() >= moveId + 1 && answered[a].frame.full_resolution()) {
+      if (answered[a].frame.last_event_id() >= moveId && answered[a].frame.full_resolution()) {
         report.stillLatencies.push_back(ms(answered[a].received - sentAt));
         report.stillRenderMs.push_back(answered[a].frame.timings().render_ms());
         break;
@@ -529,8 +529,8 @@ Command addBenchRenderCommand(CLI::App& bench) {
       "render",
       "Interactive and still rendering against a running crackvis-render: opens a session "
       "(particles as sphere impostors + crack surfaces), drags the camera with rotate events "
-      "(the interactive event-to-frame latency), then makes --still-frames isolated camera moves "
-      "each with a request for a full-resolution frame (the full-resolution event-to-frame "
+      "(the interactive event-to-frame latency), then makes --still-frames isolated still camera "
+      "moves, each answered by a full-resolution frame (the full-resolution event-to-frame "
       "latency, ParaView's still render). Prints latency percentiles, frames per second, render "
       "and encode times, how each frame was drawn (reduction factor, particles as spheres or "
       "flat points) and the load, as a table and as JSON.");

@@ -12,7 +12,7 @@ Result<SessionEvent> toSessionEvent(const v1::ClientEvent& in) {
   switch (in.event_case()) {
     case v1::ClientEvent::kCamera: {
       const auto& camera = in.camera();
-      CameraEvent event{render::CameraMove::kRotate, camera.dx(), camera.dy()};
+      CameraEvent event{render::CameraMove::kRotate, camera.dx(), camera.dy(), camera.still()};
       switch (camera.kind()) {
         case v1::CameraEvent::ROTATE:
           break;

@@ -35,8 +35,8 @@ Status readLimits(const json& object, const std::string& where, RenderServerConf
   CRACKVIS_RETURN_IF_ERROR(
       checkKeys(object, where,
                 {"max_sessions", "max_sessions_per_user", "session_grace_seconds", "attach_seconds",
-                 "refine_after_ms", "interactive_frame_ms", "max_width", "max_height",
-                 "max_particles", "max_bonds"}));
+                 "refine_after_ms", "interactive_frame_ms", "max_reduction", "max_width",
+                 "max_height", "max_particles", "max_bonds"}));
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "max_particles", where, config.limits.fileSizes.maxParticles));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_bonds", where, config.limits.fileSizes.maxBonds));
@@ -48,6 +48,7 @@ Status readLimits(const json& object, const std::string& where, RenderServerConf
   CRACKVIS_RETURN_IF_ERROR(read(object, "refine_after_ms", where, config.limits.refineAfterMs));
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "interactive_frame_ms", where, config.limits.interactiveFrameMs));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_reduction", where, config.limits.maxReduction));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_width", where, config.limits.maxWidth));
   return read(object, "max_height", where, config.limits.maxHeight);
 }
@@ -112,6 +113,8 @@ Status validateRenderServerConfig(const RenderServerConfig& config) {
                                         limits.refineAfterMs, 0.0, 5000.0));
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--interactive-frame-ms", "limits.interactive_frame_ms"},
                                         limits.interactiveFrameMs, 1.0, 1000.0));
+  CRACKVIS_RETURN_IF_ERROR(
+      checkSetting({"--max-reduction", "limits.max_reduction"}, limits.maxReduction, 1, 8));
   // The schema's frame sizes: a larger limit could never be used.
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-particles", "limits.max_particles"},
                                         limits.fileSizes.maxParticles, std::int64_t{1},

@@ -197,6 +197,10 @@ struct Session::Worker {
       return;
     }
     renderer->moveCamera(camera.move, camera.dx, camera.dy);
+    if (camera.still) {
+      stillFrame(event);
+      return;
+    }
     interacted(event);
   }
 
@@ -285,7 +289,9 @@ struct Session::Worker {
     return Status::ok();
   }
 
-  void handle(const SessionEvent& event, const StillEvent&) {
+  void handle(const SessionEvent& event, const StillEvent&) { stillFrame(event); }
+
+  void stillFrame(const SessionEvent& event) {
     forceFull = true;
     lastEventReceived = event.received;
     dirty = true;
@@ -339,6 +345,7 @@ struct Session::Worker {
     const bool interacting =
         playing || std::chrono::duration<double, std::milli>(now - lastInteraction).count() <
                        session.m_limits.refineAfterMs;
+    reduction = std::min(reduction, mostReduction());  // the start value may exceed a low limit
     const int factor = interacting && !forceFull ? reduction : 1;
     RenderedFrame frame;
     frame.step = scene->step();
@@ -394,6 +401,8 @@ struct Session::Worker {
                                                                                     : "points";
   }
 
+  int mostReduction() const { return std::min(session.m_limits.maxReduction, kMaxReduction); }
+
   // ParaView's image reduction factor, adapted so that a reduced frame fits
   // the budget. Part of a frame's cost does not shrink with its pixels
   // (vertex and geometry work), so a larger factor is taken only while the
@@ -403,7 +412,7 @@ struct Session::Worker {
     auto& known = timeAt[static_cast<std::size_t>(reduction)];
     known = known > 0.0 ? 0.7 * known + 0.3 * renderMs : renderMs;
     const double budget = session.m_limits.interactiveFrameMs;
-    const int most = std::min(session.m_limits.maxReduction, kMaxReduction);
+    const int most = mostReduction();
     const double larger = reduction < most ? timeAt[static_cast<std::size_t>(reduction + 1)] : 0.0;
     const double smaller = reduction > 1 ? timeAt[static_cast<std::size_t>(reduction - 1)] : 0.0;
     if (known > budget && reduction < most && (larger == 0.0 || larger < 0.95 * known)) {

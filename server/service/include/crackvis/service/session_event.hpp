@@ -38,6 +38,7 @@ struct CameraEvent {
   render::CameraMove move = render::CameraMove::kRotate;
   double dx = 0.0;
   double dy = 0.0;
+  bool still = false;  // answered by a full-resolution frame at once, not part of a drag
 };
 struct ResizeEvent {
   int width = 0;
