@@ -1103,6 +1103,12 @@ TEST_CASE(
   }
   CHECK(kinds.contains("1/1 spheres"));
   CHECK(frames >= 3 + 1);
+  // Every frame listed, as counted.
+  REQUIRE(json.at("frames").size() == static_cast<std::size_t>(frames));
+  for (const auto& frame : json.at("frames")) {
+    CHECK(frame.at("particles") == "spheres");
+    CHECK(frame.at("reduction").get<int>() >= 1);
+  }
   CHECK(json.at("targets").at("interactive_spheres_at_most_2x_reduction").is_boolean());
   CHECK(json.at("load_before").size() == 3);
 }

@@ -180,6 +180,7 @@ struct Report {
   // How each frame after the first was drawn: reduction factor and the
   // particles' drawing ("1/2 spheres"), counted.
   std::map<std::string, int> frameKinds;
+  nlohmann::json frames = nlohmann::json::array();  // every frame: id, event, reduction, particles
   // Every frame of the drag drew true spheres at no more than 2x reduction.
   bool dragSpheresAtMost2x = true;
   LoadAverage loadBefore;
@@ -413,6 +414,11 @@ Result<Report> run(const RenderBenchOptions& options) {
   }
   for (const FrameRecord& record : collector.frames()) {
     ++report.frameKinds[frameKind(record.frame)];
+    report.frames.push_back({{"frame", record.frame.frame_id()},
+                             {"last_event", record.frame.last_event_id()},
+                             {"reduction", record.frame.reduction()},
+                             {"particles", record.frame.particles()},
+                             {"render_ms", record.frame.timings().render_ms()}});
   }
   // The session's encoder shares the cores with its renderer; the same
   // frames encoded here with the same settings, alone, time the encoder.
@@ -460,6 +466,7 @@ nlohmann::json toJson(const Report& r) {
                         {"full_resolution_event_to_frame_ms", summaryJson(r.stillLatencies)},
                         {"full_resolution_render_ms", summaryJson(r.stillRenderMs)},
                         {"frame_kinds", r.frameKinds},
+                        {"frames", r.frames},
                         {"machine", machineDescription()},
                         {"load_before", toJson(r.loadBefore)},
                         {"load_after", toJson(r.loadAfter)},
