@@ -155,6 +155,27 @@ TEST_CASE("crackvis bench methods prints per-step times and ratios as JSON", "[c
   CHECK_THAT(table.out, !Catch::Contains("2 threads:"));
 }
 
+TEST_CASE("addresses without a port are refused before anything connects", "[cli][bench]") {
+  // gRPC would otherwise try port 443 of the host and fail after a timeout.
+  auto health = runProcess({kCli, "health", "localhost"});
+  CHECK(health.exitCode == 2);
+  CHECK_THAT(health.err, Catch::StartsWith("crackvis health: server 'localhost': expected "
+                                           "HOST:PORT with the port"));
+  auto render = runProcess({kCli, "bench", "render", "--server", "[::1]", "--file", "x.h5"});
+  CHECK(render.exitCode == 1);
+  CHECK_THAT(render.err, Catch::Contains("--server '[::1]': expected HOST:PORT"));
+  // The raw TLS baseline has no default: the port after crackvis-data's is
+  // crackvis-render's in the documented layout.
+  auto noRaw =
+      runProcess({kCli, "bench", "transfer", "--server", "localhost:50051", "--file", "x.h5"});
+  CHECK(noRaw.exitCode == 2);
+  CHECK_THAT(noRaw.err, Catch::Contains("--raw is required"));
+  auto badRaw = runProcess({kCli, "bench", "transfer", "--server", "localhost:50051", "--raw",
+                            "localhost:99999", "--file", "x.h5"});
+  CHECK(badRaw.exitCode == 1);
+  CHECK_THAT(badRaw.err, Catch::Contains("--raw 'localhost:99999': expected HOST:PORT"));
+}
+
 TEST_CASE("crackvis snapshot renders a step to PNG off screen", "[cli][snapshot]") {
   TempDir dir;
   const std::string data = dir.file("run.h5");

@@ -232,6 +232,7 @@ void authorize(grpc::ClientContext& context, const RenderBenchOptions& options) 
 }
 
 Result<Report> run(const RenderBenchOptions& options) {
+  CRACKVIS_RETURN_IF_ERROR(checkHostPort("--server", options.server));
   for (const std::string* path : {&options.ca, &options.cert, &options.key}) {
     if (auto text = readFile(*path); !text) {
       return text.status();

@@ -57,19 +57,6 @@ double since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// "host:port" -> "host:port+1", the default raw TLS address.
-Result<std::string> nextPort(const std::string& address) {
-  const size_t colon = address.rfind(':');
-  if (colon == std::string::npos) {
-    return invalidArgument(fmt::format("--server '{}': expected HOST:PORT", address));
-  }
-  try {
-    return fmt::format("{}:{}", address.substr(0, colon), std::stoi(address.substr(colon + 1)) + 1);
-  } catch (const std::exception&) {
-    return invalidArgument(fmt::format("--server '{}': expected HOST:PORT", address));
-  }
-}
-
 // The ratios of one round: each compares runs of the same round, so a slow
 // stretch of the machine slows both sides of it.
 struct RoundRatios {
@@ -106,15 +93,11 @@ struct Connections {
 };
 
 Result<Connections> connect(const TransferOptions& options, Report& report) {
-  if (options.raw.empty()) {
-    auto raw = nextPort(options.server);
-    if (!raw) {
-      return raw.status();
-    }
-    report.raw = *raw;
-  } else {
-    report.raw = options.raw;
-  }
+  CRACKVIS_RETURN_IF_ERROR(checkHostPort("--server", options.server));
+  // No default: in the documented layout the port after crackvis-data's is
+  // crackvis-render's, not the raw TLS baseline's.
+  CRACKVIS_RETURN_IF_ERROR(checkHostPort("--raw", options.raw));
+  report.raw = options.raw;
   ds::ClientOptions clientOptions;
   clientOptions.target = options.server;
   clientOptions.tls = {options.ca, options.cert, options.key};
@@ -437,8 +420,10 @@ Command addBenchTransferCommand(CLI::App& bench) {
       ->add_option("--file", options->file, "crackvis-dem file, relative to the server's data root")
       ->required();
   command->add_option("--step", options->step, "step the view shows (default: the last)");
-  command->add_option("--raw", options->raw,
-                      "raw TLS baseline address, HOST:PORT (default: the server's port + 1)");
+  command
+      ->add_option("--raw", options->raw,
+                   "raw TLS baseline address, HOST:PORT: crackvis-data's --raw-tls-listen")
+      ->required();
   command->add_option("--ca", options->ca, "CA certificate that signed the server's (PEM)")
       ->capture_default_str();
   command->add_option("--cert", options->cert, "client certificate (PEM)")->capture_default_str();

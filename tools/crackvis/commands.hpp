@@ -9,6 +9,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include <crackvis/common/status.hpp>
+
 namespace crackvis::cli {
 
 using Action = std::function<int()>;
@@ -25,6 +27,10 @@ const std::string& invocation();
 
 // Prints "crackvis <command>: <message>" as the one line a failure gets.
 void printError(const char* command, const std::string& message);
+
+// An address the user gave (`what`: the flag or argument) must be HOST:PORT
+// with a port: gRPC would otherwise silently try port 443.
+Status checkHostPort(const std::string& what, const std::string& address);
 
 // Top level: crackvis generate | info | sim | extract
 Command addGenerateCommand(CLI::App& parent);

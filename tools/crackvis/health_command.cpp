@@ -17,6 +17,10 @@ struct HealthOptions {
 };
 
 int runHealth(HealthOptions options) {
+  if (Status status = checkHostPort("server", options.server); !status) {
+    printError("health", status.message());
+    return kExitUsage;
+  }
   options.client.target = options.server;
   options.client.timeoutSeconds = 5.0;
   auto client = dataservice::DataClient::connect(options.client);

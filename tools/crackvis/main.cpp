@@ -4,6 +4,8 @@
 #include <exception>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "commands.hpp"
 
 namespace crackvis::cli {
@@ -20,6 +22,23 @@ const std::string& invocation() {
 
 void printError(const char* command, const std::string& message) {
   std::fprintf(stderr, "crackvis %s: %s\n", command, message.c_str());
+}
+
+Status checkHostPort(const std::string& what, const std::string& address) {
+  const std::size_t colon = address.rfind(':');
+  const std::string port = colon == std::string::npos ? "" : address.substr(colon + 1);
+  const bool digits = !port.empty() && port.size() <= 5 &&
+                      port.find_first_not_of("0123456789") == std::string::npos;
+  const bool bracketed = address.find('[') == std::string::npos ||
+                         (colon > 0 && address[colon - 1] == ']');  // [::1]:50052
+  if (colon == std::string::npos || colon == 0 || !digits || !bracketed || std::stoi(port) < 1 ||
+      std::stoi(port) > 65535) {
+    return invalidArgument(
+        fmt::format("{} '{}': expected HOST:PORT with the port (crackvis-data listens on 50051 and "
+                    "crackvis-render on 50052 unless configured otherwise)",
+                    what, address));
+  }
+  return Status::ok();
 }
 
 }  // namespace crackvis::cli
