@@ -88,12 +88,14 @@ struct MethodFacts {
 struct Pass {
   std::vector<std::array<double, 4>> methodMs;
   std::vector<double> voroMs;
+  std::vector<std::size_t> brokenBonds;  // per step, as the methods saw it
 };
 
 struct Config {
   int threads = 1;
   std::vector<Pass> runs;
   cracks::LeanVoronoiSummary voro;  // of the last baseline step, as a check
+  std::size_t haloWallFaces = 0;    // over every baseline step: 0 when every diagram was exact
 };
 
 struct Measurement {
@@ -126,6 +128,7 @@ Status timeMethod(cracks::DemSeries& series, const std::vector<int>& steps, std:
     const auto start = Clock::now();
     CRACKVIS_RETURN_IF_ERROR(extractor->extract(*input, mesh));
     pass.methodMs[k][m] = milliseconds(Clock::now() - start);
+    pass.brokenBonds[k] = series.state().brokenBondCount();
     progress.step(fmt::format("{}, {} thread{}, step {}", methodName(m), threads,
                               threads == 1 ? "" : "s", steps[k]));
     if (facts != nullptr && k + 1 == steps.size()) {
@@ -166,6 +169,7 @@ Status timeVoro(cracks::DemSeries& series, Measurement& measurement, Config& con
     // Voronoi's radical planes.
     config.voro = cracks::leanVoronoi(input->positions, box, input->radius, config.threads);
     pass.voroMs[k] = milliseconds(Clock::now() - start);
+    config.haloWallFaces += config.voro.haloWallFaces;
     progress.step(fmt::format("Voro++, {} container{}, step {}", config.threads,
                               config.threads == 1 ? "" : "s", measurement.steps[k]));
   }
@@ -186,6 +190,7 @@ Status measure(cracks::DemSeries& series, const BenchMethodsOptions& options,
       Pass pass;
       pass.methodMs.assign(measurement.steps.size(), {});
       pass.voroMs.assign(measurement.steps.size(), -1.0);
+      pass.brokenBonds.assign(measurement.steps.size(), 0);
       for (std::size_t m = 0; m < kMethods.size(); ++m) {
         const bool first = run == 0 && c == 0;
         CRACKVIS_RETURN_IF_ERROR(timeMethod(series, measurement.steps, m, config.threads, pass,
@@ -195,10 +200,7 @@ Status measure(cracks::DemSeries& series, const BenchMethodsOptions& options,
       config.runs.push_back(std::move(pass));
     }
   }
-  for (std::size_t k = 0; k < measurement.steps.size(); ++k) {
-    auto input = series.load(measurement.steps[k]);
-    measurement.broken.push_back(input ? series.state().brokenBondCount() : 0);
-  }
+  measurement.broken = measurement.configs.front().runs.front().brokenBonds;
   measurement.loadAfter = loadAverage();
   return Status::ok();
 }
@@ -297,8 +299,8 @@ nlohmann::json configJson(const Measurement& measurement, const Config& config) 
             {"cells", config.voro.cells},
             {"faces", config.voro.faces},
             {"face_area_sum", config.voro.faceArea},
-            {"exact", config.voro.haloWallFaces == 0},
-            {"cells_cut_by_a_slab_wall", config.voro.haloWallFaces}}},
+            {"exact", config.haloWallFaces == 0},
+            {"cells_cut_by_a_slab_wall", config.haloWallFaces}}},
           {"methods", methods},
           {"per_step", perStep}};
 }
@@ -376,7 +378,7 @@ void printConfig(const nlohmann::json& config) {
               voro.at("median_ms").get<double>(), voro.at("steps_measured").get<std::size_t>(),
               voro.at("last_step_ms").get<double>(),
               voro.at("exact").get<bool>()
-                  ? "the diagram is exact (no owned cell reached a slab's inner wall)"
+                  ? "every diagram is exact (no owned cell reached a slab's inner wall)"
                   : fmt::format("NOT exact: {} cell faces on a slab's inner wall (halo too thin)",
                                 voro.at("cells_cut_by_a_slab_wall").get<std::size_t>())
                         .c_str());
