@@ -1,9 +1,73 @@
 // Cell attribute method (dissertation 2.1.1): the cells of the decomposition
 // with the number of their broken bonds as a cell attribute (eq. 2.2).
+#include <algorithm>
+#include <cmath>
+
 #include "methods.hpp"
 
 namespace crackvis::cracks {
 namespace {
+
+// The bond quantities the other methods carry per face, per cell here, so
+// that a cell attribute view can be coloured by them too:
+// first_broken_bond, the lowest index of the cell's broken bonds (not
+// bond_id: a cell stands for several bonds, and bond_id means one);
+// break_step, when the cell first cracked (the earliest break); bond_force,
+// the largest magnitude on the cell's bonds (the load around the crack). The
+// state is broken_bonds itself.
+class CellBondValues {
+ public:
+  explicit CellBondValues(const StepInput& step)
+      : m_hasBreakStep(!step.breakStep.empty()), m_hasForce(!step.bondForce.empty()) {}
+
+  void add(const LatticeCell& cell, const LatticeDecomposition& cells, const StepInput& step) {
+    double lowestId = -1.0;
+    double earliest = -1.0;
+    double load = 0.0;
+    for (int e = 0; e < cell.edgeCount(); ++e) {
+      const auto b = static_cast<std::size_t>(cells.bondOf(cell, e));
+      if (b >= step.bondState.size()) {
+        continue;  // a triangulation's edge that was never a bond
+      }
+      if (m_hasForce) {
+        load = std::max(load, std::abs(static_cast<double>(step.bondForce[b])));
+      }
+      if ((cell.brokenMask & (1U << e)) == 0) {
+        continue;
+      }
+      if (lowestId < 0.0 || static_cast<double>(b) < lowestId) {
+        lowestId = static_cast<double>(b);
+      }
+      if (m_hasBreakStep && (earliest < 0.0 || step.breakStep[b] < earliest)) {
+        earliest = step.breakStep[b];
+      }
+    }
+    m_id.values.push_back(lowestId);
+    if (m_hasBreakStep) {
+      m_breakStep.values.push_back(earliest);
+    }
+    if (m_hasForce) {
+      m_force.values.push_back(load);
+    }
+  }
+
+  void moveTo(std::vector<AttributeArray>& arrays) {
+    arrays.push_back(std::move(m_id));
+    if (m_hasBreakStep) {
+      arrays.push_back(std::move(m_breakStep));
+    }
+    if (m_hasForce) {
+      arrays.push_back(std::move(m_force));
+    }
+  }
+
+ private:
+  bool m_hasBreakStep;
+  bool m_hasForce;
+  AttributeArray m_id{"first_broken_bond", AttributeType::kInt32, 1, {}};
+  AttributeArray m_breakStep{"break_step", AttributeType::kInt32, 1, {}};
+  AttributeArray m_force{"bond_force", AttributeType::kFloat32, 1, {}};
+};
 
 class CellAttributeExtractor final : public CrackExtractor {
  public:
@@ -29,6 +93,7 @@ class CellAttributeExtractor final : public CrackExtractor {
     out.clear();
     out.dimension = m_decomposition.dimension();
     AttributeArray broken{"broken_bonds", AttributeType::kInt32, 1, {}};
+    CellBondValues bondValues(step);
     std::vector<dem::ParticleIndex> used;
     for (const LatticeCell& cell : m_decomposition.cells()) {
       if (cell.brokenCount() < m_options.minBrokenBonds) {
@@ -51,6 +116,7 @@ class CellAttributeExtractor final : public CrackExtractor {
         out.volumeCellTypes.push_back(static_cast<std::uint8_t>(vtkCellTypeOf(cell.type)));
       }
       broken.values.push_back(cell.brokenCount());
+      bondValues.add(cell, m_decomposition, step);
     }
     out.points.reserve(used.size());
     AttributeArray particleId{"particle_id", AttributeType::kInt32, 1, {}};
@@ -60,6 +126,7 @@ class CellAttributeExtractor final : public CrackExtractor {
       m_pointOf[static_cast<std::size_t>(p)] = -1;
     }
     out.cellData.push_back(std::move(broken));
+    bondValues.moveTo(out.cellData);
     out.pointData.push_back(std::move(particleId));
     return Status::ok();
   }

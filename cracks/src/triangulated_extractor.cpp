@@ -319,7 +319,7 @@ class TriangulatedExtractor final : public CrackExtractor {
     const auto m = static_cast<double>(m_graph.bondCount());
     for (auto* arrays : {&out.cellData, &out.pointData}) {
       for (AttributeArray& array : *arrays) {
-        if (array.name == "bond_id") {
+        if (array.name == "bond_id" || array.name == "first_broken_bond") {
           for (double& id : array.values) {
             id = id >= m ? -1.0 : id;
           }

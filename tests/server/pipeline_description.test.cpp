@@ -1,5 +1,6 @@
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include <catch2/catch.hpp>
 
@@ -20,6 +21,8 @@ std::string slurp(const std::filesystem::path& path) {
 std::string document(const std::string& body) {
   return "<?xml version=\"1.0\"?>\n<pipeline version=\"1\">\n" + body + "</pipeline>\n";
 }
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 }  // namespace
 
@@ -93,6 +96,39 @@ TEST_CASE("a description built in code survives toXml and parse", "[pipeline]") 
   auto parsed = parsePipeline(toXml(d));
   REQUIRE(parsed.isOk());
   CHECK(*parsed == d);
+}
+
+TEST_CASE("colour ranges, clips, thresholds and annotations survive toXml and parse",
+          "[pipeline]") {
+  PipelineDescription d;
+  d.file = "a.h5";
+  d.particles.colourBy = ParticleColourBy::kDisplacement;
+  d.particles.range = {RangeMode::kSeries};
+  d.particles.threshold =
+      Threshold<ParticleColourBy>{ParticleColourBy::kExtra, "damage", 0.25, kInfinity};
+  d.cracks.colourBy = CrackColourBy::kBreakStep;
+  d.cracks.range = {RangeMode::kUser, -1.5, 2e-3};
+  d.cracks.clip = ClipPlane{{0.1, 0.2, 0.3}, {0, 1, 0}};
+  d.cracks.threshold = Threshold<CrackColourBy>{CrackColourBy::kForce, "", -kInfinity, 7.5};
+  d.bonds.show = BondSelection::kBroken;
+  d.bonds.clip = ClipPlane{{0, 0, 0}, {1, 0, 0}};
+  d.bonds.threshold = Threshold<BondColourBy>{BondColourBy::kBreakStep, "", 10, 20};
+  d.annotations = {true, false, true, false, true};
+  const std::string xml = toXml(d);
+  auto parsed = parsePipeline(xml);
+  REQUIRE(parsed.isOk());
+  CHECK(*parsed == d);
+  // Open ends are left out, not written as infinities.
+  CHECK(xml.find("inf") == std::string::npos);
+  // A document without them gets step ranges, no clip or threshold, all annotations.
+  auto plain =
+      parsePipeline(document("  <data file=\"a.h5\"/>\n  <annotations show=\"false\"/>\n"));
+  REQUIRE(plain.isOk());
+  CHECK(plain->cracks.range.mode == RangeMode::kStep);
+  CHECK_FALSE(plain->bonds.clip);
+  CHECK_FALSE(plain->particles.threshold);
+  CHECK_FALSE(plain->annotations.show);
+  CHECK(plain->annotations.scaleBar);
 }
 
 TEST_CASE("particles colour by a file's extra array: extra:NAME", "[pipeline]") {
@@ -300,6 +336,33 @@ std::vector<BadAttribute> badAttributes() {
        "line 4, element <stream>", "bitrate", "2147483648"},
       {"bitrate negative", withLine("  <stream bitrate=\"-4000000\"/>"), "line 4, element <stream>",
        "bitrate", "-4000000"},
+      {"user range without its minimum",
+       withLine("  <particles colour-by=\"radius\" range=\"user\" range-max=\"2\"/>"),
+       "line 4, element <particles>", "range-min", "is required"},
+      {"user range upside down",
+       withLine("  <cracks colour-by=\"force\" range=\"user\" range-min=\"5\" range-max=\"1\"/>"),
+       "line 4, element <cracks>", "range-max", "not above range-min 5"},
+      {"user range infinite",
+       withLine("  <bonds range=\"user\" range-min=\"0\" range-max=\"INF\"/>"),
+       "line 4, element <bonds>", "range-max", "INF"},
+      {"threshold by solid",
+       withLine("  <particles>\n    <threshold by=\"solid\" min=\"0\"/>\n  </particles>"),
+       "line 5, element <threshold>", "by", "'solid'"},
+      {"threshold without ends", withLine("  <bonds>\n    <threshold by=\"force\"/>\n  </bonds>"),
+       "line 5, element <threshold>", "min", "needs min, max or both"},
+      {"threshold upside down",
+       withLine("  <cracks>\n    <threshold by=\"break-step\" min=\"9\" max=\"3\"/>\n  </cracks>"),
+       "line 5, element <threshold>", "max", "below min 9"},
+      {"threshold NaN",
+       withLine("  <cracks>\n    <threshold by=\"force\" min=\"NaN\"/>\n  </cracks>"),
+       "line 5, element <threshold>", "min", "NaN"},
+      {"threshold on another extra array than the colour",
+       withLine("  <particles colour-by=\"extra:a\">\n    <threshold by=\"extra:b\" max=\"1\"/>\n"
+                "  </particles>"),
+       "line 5, element <threshold>", "by", "extra:b differs"},
+      {"crack clip without a direction",
+       withLine("  <cracks>\n    <clip origin=\"0 0 0\" normal=\"0 0 0\"/>\n  </cracks>"),
+       "line 5, element <clip>", "normal", "zero vector"},
   };
 }
 

@@ -223,3 +223,133 @@ TEST_CASE("a triangulated packing's decomposition edges include its never-bonded
   CHECK(edges.back() < total);
   CHECK(edges.back() >= fileBonds);
 }
+
+TEST_CASE("legend labels are round numbers written for their quantity", "[scene][legend]") {
+  // Break steps 0..199: whole numbers, no "199." nor "-0".
+  auto steps = scene::legendTicks({0, 199}, true, 5);
+  CHECK(steps.values == std::vector<double>{0, 50, 100, 150});
+  for (double v : steps.values) {
+    const std::string label = scene::formatTick(steps, v);
+    CHECK(label.find('.') == std::string::npos);
+    CHECK(label.find('e') == std::string::npos);
+    CHECK(label.front() != '-');
+  }
+  // A narrow integral range gets steps of one, not fractions.
+  CHECK(scene::legendTicks({0, 3}, true, 6).values == std::vector<double>{0, 1, 2, 3});
+  // Displacements in metres: every tick distinct, exact, no exponent, no trailing point.
+  auto metres = scene::legendTicks({0, 2.6e-4}, false, 4);
+  CHECK(metres.values == std::vector<double>{0, 1e-4, 2e-4});
+  std::vector<std::string> labels;
+  for (double v : metres.values) {
+    labels.push_back(scene::formatTick(metres, v));
+  }
+  CHECK(labels == std::vector<std::string>{"0", "0.0001", "0.0002"});
+  // Forces of tens of newtons: "-20", not "-2e+01".
+  auto force = scene::legendTicks({-28.3, 0.4}, false, 4);
+  labels.clear();
+  for (double v : force.values) {
+    labels.push_back(scene::formatTick(force, v));
+  }
+  CHECK(labels == std::vector<std::string>{"-20", "-10", "0"});
+  auto fine = scene::legendTicks({0.1, 0.35}, false, 6);
+  labels.clear();
+  for (double v : fine.values) {
+    labels.push_back(scene::formatTick(fine, v));
+  }
+  CHECK(labels == std::vector<std::string>{"0.1", "0.15", "0.2", "0.25", "0.3", "0.35"});
+}
+
+TEST_CASE("the length scale bar is a round length in metres", "[scene][legend]") {
+  auto bar = scene::scaleBar(0.2e-3, 300);  // 0.2 mm per pixel, at most 300 px: 60 mm
+  CHECK(bar.metres == Approx(0.05));
+  CHECK(bar.pixels == Approx(250));
+  CHECK(bar.label == "50 mm");
+  CHECK(scene::scaleBar(1e-6, 150).label == "100 µm");
+  CHECK(scene::scaleBar(0.01, 250).label == "2 m");
+  CHECK(scene::scaleBar(0.0, 250).pixels == 0.0);
+}
+
+TEST_CASE("annotations name the step, its time and the crack method", "[scene][legend]") {
+  const auto crack = testing::fccPlaneCrack(3, {1, 0, 0}, 0.5 + 2.5 / std::sqrt(2.0));
+  auto input = inputOf(crack);
+  CHECK(scene::stepAnnotation(input).empty());  // no step known
+  input.stepIndex = 120;
+  input.stepCount = 200;
+  input.time = 1.25e-3;
+  CHECK(scene::stepAnnotation(input) == "step 120 of 0..199   t = 0.00125 s");
+  pipeline::CracksDescription cracks;
+  CHECK(scene::methodAnnotation(cracks) == "cracks: local Voronoi, validated (tolerance 0.1)");
+  cracks.method = cracks::Method::kCellCentre;
+  cracks.mergeOctahedra = true;
+  CHECK(scene::methodAnnotation(cracks) == "cracks: cell centre, octahedra merged");
+  cracks.visible = false;
+  CHECK(scene::methodAnnotation(cracks).empty());
+}
+
+TEST_CASE("legend titles carry units; cell attribute has its own quantities", "[scene][legend]") {
+  pipeline::ParticlesDescription particles;
+  particles.colourBy = pipeline::ParticleColourBy::kVelocity;
+  CHECK(scene::particleQuantity(particles).title == "velocity [m/s]");
+  CHECK_FALSE(scene::particleQuantity(particles).integral);
+  CHECK(scene::crackQuantity(pipeline::CrackColourBy::kBreakStep).integral);
+  CHECK(scene::crackQuantity(pipeline::CrackColourBy::kForce).title == "bond force [N]");
+  CHECK(std::string(scene::crackArrayName(pipeline::CrackColourBy::kState,
+                                          cracks::Method::kCellAttribute)) == "broken_bonds");
+  CHECK(std::string(scene::crackArrayName(pipeline::CrackColourBy::kBondId,
+                                          cracks::Method::kCellAttribute)) == "first_broken_bond");
+  CHECK(scene::crackArrayName(pipeline::CrackColourBy::kSolid) == nullptr);
+}
+
+TEST_CASE("colour ranges: the step's, the series', or the user's", "[scene][legend]") {
+  pipeline::ColourRange range;
+  const scene::ValueRange values{2, 5};
+  const std::optional<scene::ValueRange> series = scene::ValueRange{0, 9};
+  CHECK(scene::colourRange(range, series, values) == values);
+  range.mode = pipeline::RangeMode::kSeries;
+  CHECK(scene::colourRange(range, series, values) == *series);
+  CHECK(scene::colourRange(range, std::nullopt, values) == values);  // not scanned: the step's
+  range = {pipeline::RangeMode::kUser, -1, 1};
+  CHECK(scene::colourRange(range, series, values) == scene::ValueRange{-1, 1});
+  // One value only: a unit wide, not a zero-width (NaN-making) range.
+  CHECK(scene::colourRange({}, std::nullopt, {3, 3}) == scene::ValueRange{3, 4});
+}
+
+TEST_CASE("thresholds keep the particles, crack faces and bonds within them", "[scene]") {
+  const auto crack = testing::fccPlaneCrack(5, {1, 0, 0}, 0.5 + 4.5 / std::sqrt(2.0));
+  auto input = inputOf(crack);
+  // Particles: damage > 0 keeps exactly the particles beside the crack.
+  pipeline::ParticlesDescription particles;
+  particles.threshold = pipeline::Threshold<pipeline::ParticleColourBy>{
+      pipeline::ParticleColourBy::kDamage, "", 0.01};
+  const auto damage = scene::particleValues(pipeline::ParticleColourBy::kDamage, input);
+  const auto kept = scene::visibleParticles(particles, input);
+  const auto damaged = std::count_if(damage.begin(), damage.end(), [](double v) { return v > 0; });
+  CHECK(static_cast<long>(kept.size()) == damaged);
+  CHECK(damaged > 0);
+  for (auto p : kept) {
+    CHECK(damage[static_cast<std::size_t>(p)] > 0.0);
+  }
+  // Crack faces by bond id.
+  cracks::CrackMesh mesh;
+  mesh.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  for (int k = 0; k < 4; ++k) {
+    mesh.polygons.add({0, 1, 2});
+  }
+  mesh.cellData.push_back({"bond_id", cracks::AttributeType::kInt32, 1, {10, 11, 12, 13}});
+  pipeline::PipelineDescription d;
+  d.cracks.threshold =
+      pipeline::Threshold<pipeline::CrackColourBy>{pipeline::CrackColourBy::kBondId, "", 11, 12};
+  CHECK(scene::crackLayers(d, mesh).cracks.findCellData("bond_id")->values ==
+        std::vector<double>{11, 12});
+  // Bonds by force.
+  pipeline::BondsDescription bonds;
+  bonds.show = pipeline::BondSelection::kAll;
+  std::vector<float> force(crack.state.size());
+  for (std::size_t b = 0; b < force.size(); ++b) {
+    force[b] = static_cast<float>(b);
+  }
+  input.step.bondForce = force;
+  bonds.threshold =
+      pipeline::Threshold<pipeline::BondColourBy>{pipeline::BondColourBy::kForce, "", 5, 9};
+  CHECK(scene::bondLines(bonds, input).bonds == std::vector<dem::BondIndex>{5, 6, 7, 8, 9});
+}

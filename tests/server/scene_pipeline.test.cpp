@@ -7,6 +7,7 @@
 #include "support/temp_dir.hpp"
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/dem_series.hpp>
+#include <crackvis/scene/scene_content.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 
 namespace crackvis {
@@ -268,6 +269,88 @@ TEST_CASE("a scene pipeline says when few broken bonds became crack surfaces, an
   CHECK(scene.crackMapping().fraction < 0.95);
   CHECK_THAT(scene.crackMapping().warning,
              Catch::StartsWith("only ") && Catch::Contains("span no lattice"));
+}
+
+}  // namespace crackvis
+
+namespace crackvis {
+
+TEST_CASE("a series colour range spans every step and survives step changes", "[scene][legend]") {
+  const Series series;
+  auto d = cellCut(0);
+  d.particles.colourBy = pipeline::ParticleColourBy::kDisplacement;
+  d.particles.range.mode = pipeline::RangeMode::kSeries;
+  d.cracks.colourBy = pipeline::CrackColourBy::kBreakStep;
+  d.cracks.range.mode = pipeline::RangeMode::kSeries;
+  auto scene = scene::ScenePipeline::open(d, localOpener(series.dir));
+  REQUIRE(scene);
+  // The largest displacement of any particle at any step, computed here
+  // from the file directly.
+  auto file = cracks::DemSeries::open(series.file);
+  REQUIRE(file);
+  auto first = (*file)->load(0);
+  REQUIRE(first);
+  const std::vector<dem::Vec3> initial(first->positions.begin(), first->positions.end());
+  double largest = 0.0;
+  int latestBreak = -1;
+  for (int k = 0; k < 3; ++k) {
+    auto step = (*file)->load(k);
+    REQUIRE(step);
+    for (std::size_t i = 0; i < initial.size(); ++i) {
+      largest = std::max(largest, dem::norm(step->positions[i] - initial[i]));
+    }
+    for (std::size_t b = 0; b < step->bondState.size(); ++b) {
+      if (step->bondState[b] != 0) {
+        latestBreak = std::max(latestBreak, static_cast<int>(step->breakStep[b]));
+      }
+    }
+  }
+  REQUIRE(largest > 0.0);
+  REQUIRE(latestBreak > 0);
+  const auto& ranges = (*scene)->seriesRanges();
+  REQUIRE(ranges.particles);
+  CHECK(ranges.particles->min == 0.0);
+  CHECK(ranges.particles->max == Approx(largest));
+  REQUIRE(ranges.cracks);
+  CHECK(ranges.cracks->max == latestBreak);
+  CHECK_FALSE(ranges.bonds);
+  // Step 0 shows fewer breaks than the series has: its own range is smaller.
+  CHECK((*scene)->input().series.cracks == ranges.cracks);
+  REQUIRE((*scene)->showStep(2));
+  CHECK((*scene)->seriesRanges().cracks == ranges.cracks);
+  // Back to per-step ranges: nothing scanned.
+  d.particles.range.mode = pipeline::RangeMode::kStep;
+  d.cracks.range.mode = pipeline::RangeMode::kStep;
+  REQUIRE((*scene)->replace(d));
+  CHECK_FALSE((*scene)->seriesRanges().particles);
+  CHECK_FALSE((*scene)->seriesRanges().cracks);
+}
+
+TEST_CASE("cell attribute's cells carry the bond quantities crack colour-by names",
+          "[scene][legend]") {
+  const Series series;
+  auto d = cellCut(2);
+  d.cracks.method = cracks::Method::kCellAttribute;
+  d.cracks.colourBy = pipeline::CrackColourBy::kBreakStep;
+  auto scene = scene::ScenePipeline::open(d, localOpener(series.dir));
+  REQUIRE(scene);
+  const cracks::CrackMesh& mesh = (*scene)->cracks();
+  REQUIRE(mesh.primitiveCount() > 0);
+  for (pipeline::CrackColourBy by :
+       {pipeline::CrackColourBy::kBreakStep, pipeline::CrackColourBy::kBondId,
+        pipeline::CrackColourBy::kState}) {
+    const cracks::AttributeArray* array =
+        mesh.findCellData(scene::crackArrayName(by, cracks::Method::kCellAttribute));
+    REQUIRE(array != nullptr);
+    CHECK(array->values.size() == mesh.primitiveCount());
+  }
+  // Every cell shown has a broken bond, so a first break at a step of the file.
+  for (double step : mesh.findCellData("break_step")->values) {
+    CHECK(step >= 0.0);
+    CHECK(step <= 2.0);
+  }
+  // bond_id stays the one-bond-per-face array of the other methods.
+  CHECK(mesh.findCellData("bond_id") == nullptr);
 }
 
 }  // namespace crackvis

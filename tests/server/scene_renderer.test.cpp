@@ -38,6 +38,7 @@ struct Scene {
         pipeline::CameraDescription{centre + dem::Vec3{30, 0, 0}, centre, {0, 0, 1}, 30};
     description.particles.visible = false;
     description.cracks.colour = {255, 0, 0};
+    description.annotations.show = false;  // pictures counted by colour; tested on their own
   }
   render::SceneInput input() const { return {&crack.block.lattice, crack.input(), {}, {}, &mesh}; }
 };
@@ -78,6 +79,7 @@ struct Spheres {
     description.view.height = kHeight;
     description.view.background = {0, 0, 0};
     description.view.scalarBar = false;
+    description.annotations.show = false;
     description.view.camera = pipeline::CameraDescription{{0, 0, kEye}, {0, 0, 0}, {0, 1, 0}, 30};
     description.cracks.colour = {255, 0, 0};
   }
@@ -270,26 +272,180 @@ TEST_CASE("bonds as tubes, the decomposition and the scalar bar are drawn", "[re
     REQUIRE((*renderer)->render(scene.description, input, image).isOk());
     CHECK(count(image, notBlack) > kWidth * kHeight / 20);
   }
-  SECTION("a scalar bar appears at the right when something is coloured by a value") {
-    scene.description.cracks.visible = true;
-    scene.description.cracks.colourBy = pipeline::CrackColourBy::kBondId;
-    scene.description.view.camera->position.x += 200;  // the crack small in the middle
-    scene.description.view.scalarBar = false;
-    auto rightStrip = [&] {
-      int n = 0;
-      for (int y = 0; y < kHeight; ++y) {
-        for (int x = kWidth * 7 / 8; x < kWidth; ++x) {
-          n += notBlack(image.pixel(x, y)) ? 1 : 0;
-        }
-      }
-      return n;
-    };
-    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
-    CHECK(rightStrip() == 0);
-    scene.description.view.scalarBar = true;
-    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
-    CHECK(rightStrip() > 100);
+}
+
+namespace {
+
+// Saturated pixels: a colour map's, not grey text or black background.
+bool colourful(const std::uint8_t* p) {
+  const int hi = std::max({p[0], p[1], p[2]});
+  const int lo = std::min({p[0], p[1], p[2]});
+  return hi - lo > 60;
+}
+
+// Runs of rows with colourful pixels in columns [x0, x1): the bars stacked there.
+int barsIn(const render::Image& image, int x0, int x1) {
+  int runs = 0;
+  bool inRun = false;
+  for (int y = 0; y < image.height; ++y) {
+    bool any = false;
+    for (int x = x0; x < x1; ++x) {
+      any = any || colourful(image.pixel(x, y));
+    }
+    runs += any && !inRun ? 1 : 0;
+    inRun = any;
   }
+  return runs;
+}
+
+int countIn(const render::Image& image, int x0, int y0, int x1, int y1,
+            bool (*match)(const std::uint8_t*)) {
+  int n = 0;
+  for (int y = y0; y < y1; ++y) {
+    for (int x = x0; x < x1; ++x) {
+      n += match(image.pixel(x, y)) ? 1 : 0;
+    }
+  }
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("each coloured layer gets its own scalar bar, beside the specimen", "[render][egl]") {
+  constexpr int kW = 320;
+  constexpr int kH = 240;
+  auto renderer = render::SceneRenderer::create(kW, kH);
+  REQUIRE(renderer.isOk());
+  Scene scene;
+  auto& d = scene.description;
+  d.view.width = kW;
+  d.view.height = kH;
+  d.cracks.colourBy = pipeline::CrackColourBy::kBondId;
+  render::Image image;
+  // The strip: a fifth of the width at this aspect.
+  const int strip = kW * 4 / 5;
+  d.view.scalarBar = false;
+  REQUIRE((*renderer)->render(d, scene.input(), image).isOk());
+  CHECK(countIn(image, strip, 0, kW, kH, notBlack) == 0);
+  d.view.scalarBar = true;
+  REQUIRE((*renderer)->render(d, scene.input(), image).isOk());
+  CHECK(barsIn(image, strip, kW) == 1);
+  // Bonds coloured too: a second bar, below the first.
+  d.bonds.show = pipeline::BondSelection::kBroken;
+  d.bonds.colourBy = pipeline::BondColourBy::kState;
+  REQUIRE((*renderer)->render(d, scene.input(), image).isOk());
+  CHECK(barsIn(image, strip, kW) == 2);
+  // Particles as well: three.
+  d.particles.visible = true;
+  d.particles.colourBy = pipeline::ParticleColourBy::kDamage;
+  d.particles.opacity = 0.2;
+  REQUIRE((*renderer)->render(d, scene.input(), image).isOk());
+  CHECK(barsIn(image, strip, kW) == 3);
+
+  SECTION("the bars cover none of the specimen: the scene is the same picture beside them") {
+    const render::Image withBars = image;
+    auto narrow = render::SceneRenderer::create(strip, kH);
+    REQUIRE(narrow.isOk());
+    d.view.scalarBar = false;
+    d.view.width = strip;
+    REQUIRE((*narrow)->render(d, scene.input(), image).isOk());
+    int differing = 0;
+    for (int y = 0; y < kH; ++y) {
+      for (int x = 0; x < strip; ++x) {
+        int diff = 0;
+        for (int c = 0; c < 3; ++c) {
+          diff += std::abs(withBars.pixel(x, y)[c] - image.pixel(x, y)[c]);
+        }
+        differing += diff > 24 ? 1 : 0;
+      }
+    }
+    CHECK(differing < strip * kH / 500);
+    CHECK(count(image, notBlack) > strip * kH / 10);
+  }
+}
+
+TEST_CASE("annotations: step and method text, axes triad, scale bar", "[render][egl]") {
+  constexpr int kW = 320;
+  constexpr int kH = 240;
+  auto renderer = render::SceneRenderer::create(kW, kH);
+  REQUIRE(renderer.isOk());
+  Scene scene;
+  auto& d = scene.description;
+  d.view.width = kW;
+  d.view.height = kH;
+  d.cracks.visible = false;  // an empty scene: only the annotations draw
+  auto input = scene.input();
+  input.stepIndex = 3;
+  input.stepCount = 10;
+  input.time = 0.5;
+  render::Image image;
+  REQUIRE((*renderer)->render(d, input, image).isOk());
+  CHECK(count(image, notBlack) == 0);
+  d.annotations.show = true;
+  REQUIRE((*renderer)->render(d, input, image).isOk());
+  const auto white = [](const std::uint8_t* p) { return p[0] > 150 && p[1] > 150 && p[2] > 150; };
+  // Text at the top left.
+  CHECK(countIn(image, 0, 0, kW / 2, kH / 8, white) > 30);
+  // The triad at the bottom left: coloured shafts (y green, z yellow here, x
+  // pointing at the viewer).
+  CHECK(countIn(image, 0, kH * 3 / 4, kW / 4, kH, colourful) > 20);
+  // The scale bar at the bottom right: a white line at most a fifth of the width long.
+  int longest = 0;
+  for (int y = kH * 7 / 8; y < kH; ++y) {
+    longest = std::max(longest, widestRun(image, kW / 2, kW - 1, y, y, white));
+  }
+  CHECK(longest >= kW / 5 * 2 / 5);
+  CHECK(longest <= kW / 5 + 1);
+  SECTION("each can be switched off") {
+    d.annotations.axes = false;
+    REQUIRE((*renderer)->render(d, input, image).isOk());
+    CHECK(countIn(image, 0, kH * 3 / 4, kW / 4, kH, colourful) == 0);
+    CHECK(countIn(image, 0, 0, kW / 2, kH / 8, white) > 30);
+    d.annotations.time = false;
+    d.annotations.method = false;
+    d.annotations.scaleBar = false;
+    REQUIRE((*renderer)->render(d, input, image).isOk());
+    CHECK(count(image, notBlack) == 0);
+  }
+  SECTION("the scale bar follows the zoom, at any frame size") {
+    (*renderer)->moveCamera(render::CameraMove::kZoom, 1.2, 0.0);
+    render::Image half;
+    REQUIRE((*renderer)->renderFrame(kW / 2, kH / 2, half).isOk());
+    int run = 0;
+    for (int y = kH / 2 * 7 / 8; y < kH / 2; ++y) {
+      run = std::max(run, widestRun(half, kW / 4, kW / 2 - 1, y, y, white));
+    }
+    CHECK(run >= kW / 10 * 2 / 5 - 1);
+    CHECK(run <= kW / 10 + 1);
+  }
+}
+
+TEST_CASE("a clip plane cuts cracks and bonds too", "[render][egl]") {
+  auto renderer = render::SceneRenderer::create(kWidth, kHeight);
+  REQUIRE(renderer.isOk());
+  Scene scene;
+  render::Image image;
+  REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+  const int whole = count(image, red);
+  REQUIRE(whole > 0);
+  // Hide the crack above the block's middle (+z is up in the picture).
+  const dem::Vec3 centre = 0.5 * scene.crack.block.extent;
+  scene.description.cracks.clip = pipeline::ClipPlane{centre, {0, 0, 1}};
+  REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+  const int clipped = count(image, red);
+  CHECK(clipped > whole / 3);
+  CHECK(clipped < whole * 2 / 3);
+  CHECK(countIn(image, 0, 0, kWidth, kHeight / 2 - 2, red) == 0);
+  // Bonds: the broken ones seen from the side, then clipped away entirely.
+  scene.description.cracks.visible = false;
+  scene.description.bonds.show = pipeline::BondSelection::kBroken;
+  scene.description.bonds.colourBy = pipeline::BondColourBy::kSolid;
+  scene.description.bonds.colour = {255, 0, 0};
+  REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+  REQUIRE(count(image, red) > 0);
+  scene.description.bonds.clip = pipeline::ClipPlane{{-1e3, 0, 0}, {1, 0, 0}};
+  REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+  CHECK(count(image, red) == 0);
 }
 
 TEST_CASE("hidden particles are culled without changing the picture", "[render][egl]") {

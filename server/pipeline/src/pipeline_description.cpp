@@ -53,6 +53,8 @@ constexpr Names<ColourMap, 4> kColourMaps{{{ColourMap::kViridis, "viridis"},
                                            {ColourMap::kCoolWarm, "cool-warm"},
                                            {ColourMap::kRainbow, "rainbow"},
                                            {ColourMap::kGrayscale, "grayscale"}}};
+constexpr Names<RangeMode, 3> kRangeModes{
+    {{RangeMode::kStep, "step"}, {RangeMode::kSeries, "series"}, {RangeMode::kUser, "user"}}};
 
 template <typename E, std::size_t N>
 const char* nameOf(const Names<E, N>& names, E value) {
@@ -238,6 +240,14 @@ class Attributes {
     return realIn(name, raw, stripped(raw), interval);
   }
 
+  // An attribute without a default: nullopt when absent.
+  std::optional<double> optionalReal(const char* name, Interval interval) {
+    if (xmlHasProp(m_node, reinterpret_cast<const xmlChar*>(name)) == nullptr) {
+      return std::nullopt;
+    }
+    return real(name, interval);
+  }
+
   // Three finite numbers; `nonZero` refuses the zero vector (a direction).
   Vec3 vector(const char* name, bool nonZero = false) {
     const std::string raw = text(name);
@@ -339,6 +349,15 @@ class Attributes {
 
   const Status& status() const { return m_status; }
 
+  // An error about `name` beyond its own value (an attribute it needs).
+  void fail(const char* name, const std::string& what) {
+    if (m_status.isOk()) {
+      m_status = invalidArgument(
+          fmt::format("pipeline line {}, element <{}>, attribute '{}': {}", xmlGetLineNo(m_node),
+                      reinterpret_cast<const char*>(m_node->name), name, what));
+    }
+  }
+
  private:
   double realIn(const char* name, const std::string& raw, std::string_view number,
                 Interval interval) {
@@ -364,17 +383,86 @@ class Attributes {
     return value;
   }
 
-  void fail(const char* name, const std::string& what) {
-    if (m_status.isOk()) {
-      m_status = invalidArgument(
-          fmt::format("pipeline line {}, element <{}>, attribute '{}': {}", xmlGetLineNo(m_node),
-                      reinterpret_cast<const char*>(m_node->name), name, what));
-    }
-  }
-
   const xmlNode* m_node;
   Status m_status;
 };
+
+// range, range-min and range-max of a coloured layer.
+ColourRange colourRange(Attributes& a) {
+  ColourRange range;
+  range.mode = a.choice("range", kRangeModes);
+  const auto min = a.optionalReal("range-min", kCoordinate);
+  const auto max = a.optionalReal("range-max", kCoordinate);
+  if (range.mode != RangeMode::kUser) {
+    return range;
+  }
+  if (!min || !max) {
+    a.fail(min ? "range-max" : "range-min", "is required with range=\"user\"");
+  } else if (*min >= *max) {
+    a.fail("range-max", fmt::format("{} is not above range-min {}", *max, *min));
+  } else {
+    range.min = *min;
+    range.max = *max;
+  }
+  return range;
+}
+
+// The optional <clip> child of a layer.
+Status convertClip(const xmlNode* layer, std::optional<ClipPlane>& clip) {
+  if (const xmlNode* node = child(layer, "clip")) {
+    Attributes c(node);
+    clip = ClipPlane{c.vector("origin"), c.vector("normal", true)};
+    return c.status();
+  }
+  return Status::ok();
+}
+
+// The optional <threshold> child of a layer: a quantity of it, not solid,
+// and at least one finite end.
+template <typename E, std::size_t N>
+Status convertThreshold(const xmlNode* layer, const Names<E, N>& names, E extraValue,
+                        std::optional<Threshold<E>>& threshold) {
+  const xmlNode* node = child(layer, "threshold");
+  if (node == nullptr) {
+    return Status::ok();
+  }
+  Attributes a(node);
+  Threshold<E> t;
+  t.by = a.choiceOrExtra("by", names, extraValue, t.byExtra);
+  const auto min = a.optionalReal("min", kCoordinate);
+  const auto max = a.optionalReal("max", kCoordinate);
+  if (a.status().isOk() && t.by == names[0].first) {  // solid
+    a.fail("by", "'solid' is no quantity to threshold by");
+  } else if (a.status().isOk() && !min && !max) {
+    a.fail("min", "a threshold needs min, max or both");
+  } else if (min && max && *min > *max) {
+    a.fail("max", fmt::format("{} is below min {}", *max, *min));
+  }
+  t.min = min.value_or(t.min);
+  t.max = max.value_or(t.max);
+  CRACKVIS_RETURN_IF_ERROR(a.status());
+  threshold = t;
+  return Status::ok();
+}
+
+// A layer reads one extra array: a threshold on extra:A beside colour-by
+// extra:B is refused.
+template <typename E>
+Status checkOneExtraArray(const xmlNode* layer, const char* layerName,
+                          const std::optional<Threshold<E>>& threshold, E colourBy,
+                          const std::string& colourByExtra, E extraValue) {
+  if (threshold && threshold->by == extraValue && colourBy == extraValue &&
+      threshold->byExtra != colourByExtra) {
+    return invalidArgument(fmt::format(
+        "pipeline line {}, element <threshold>, attribute 'by': extra:{} differs from the {}' "
+        "colour-by extra:{} (one extra array per layer)",
+        xmlGetLineNo(child(layer, "threshold")), threshold->byExtra, layerName, colourByExtra));
+  }
+  return Status::ok();
+}
+
+// Crack quantities have no extra arrays: a value no spelling gives.
+constexpr auto kNoCrackExtra = static_cast<CrackColourBy>(-1);
 
 Status convertData(const xmlNode* node, PipelineDescription& d) {
   Attributes a(node);
@@ -395,13 +483,15 @@ Status convertParticles(const xmlNode* node, ParticlesDescription& p) {
       a.choiceOrExtra("colour-by", kParticleColourBy, ParticleColourBy::kExtra, p.colourByExtra);
   p.colour = a.colour("colour");
   p.opacity = a.real("opacity", kUnitInterval);
+  p.range = colourRange(a);
   CRACKVIS_RETURN_IF_ERROR(a.status());
-  if (const xmlNode* clip = child(node, "clip")) {
-    Attributes c(clip);
-    p.clip = ClipPlane{c.vector("origin"), c.vector("normal", true)};
-    return c.status();
-  }
-  return Status::ok();
+  CRACKVIS_RETURN_IF_ERROR(convertClip(node, p.clip));
+  CRACKVIS_RETURN_IF_ERROR(
+      convertThreshold(node, kParticleColourBy, ParticleColourBy::kExtra, p.threshold));
+  // A source reads one per-particle extra array: the one coloured by, or
+  // else the one thresholded by.
+  return checkOneExtraArray(node, "particles", p.threshold, p.colourBy, p.colourByExtra,
+                            ParticleColourBy::kExtra);
 }
 
 Status convertCracks(const xmlNode* node, CracksDescription& c) {
@@ -417,7 +507,10 @@ Status convertCracks(const xmlNode* node, CracksDescription& c) {
   c.colourBy = a.choice("colour-by", kCrackColourBy);
   c.colour = a.colour("colour");
   c.opacity = a.real("opacity", kUnitInterval);
-  return a.status();
+  c.range = colourRange(a);
+  CRACKVIS_RETURN_IF_ERROR(a.status());
+  CRACKVIS_RETURN_IF_ERROR(convertClip(node, c.clip));
+  return convertThreshold(node, kCrackColourBy, kNoCrackExtra, c.threshold);
 }
 
 Status convertBonds(const xmlNode* node, BondsDescription& b) {
@@ -427,7 +520,13 @@ Status convertBonds(const xmlNode* node, BondsDescription& b) {
   b.colourBy = a.choiceOrExtra("colour-by", kBondColourBy, BondColourBy::kExtra, b.colourByExtra);
   b.colour = a.colour("colour");
   b.tubeRadius = a.real("tube-radius", kTubeRadius);
-  return a.status();
+  b.range = colourRange(a);
+  CRACKVIS_RETURN_IF_ERROR(a.status());
+  CRACKVIS_RETURN_IF_ERROR(convertClip(node, b.clip));
+  CRACKVIS_RETURN_IF_ERROR(
+      convertThreshold(node, kBondColourBy, BondColourBy::kExtra, b.threshold));
+  return checkOneExtraArray(node, "bonds", b.threshold, b.colourBy, b.colourByExtra,
+                            BondColourBy::kExtra);
 }
 
 Status convertView(const xmlNode* node, ViewDescription& v) {
@@ -455,6 +554,16 @@ Status convertView(const xmlNode* node, ViewDescription& v) {
 Status convertToggle(const xmlNode* node, bool& show) {
   Attributes a(node);
   show = a.boolean("show");
+  return a.status();
+}
+
+Status convertAnnotations(const xmlNode* node, AnnotationsDescription& n) {
+  Attributes a(node);
+  n.show = a.boolean("show");
+  n.time = a.boolean("time");
+  n.method = a.boolean("method");
+  n.axes = a.boolean("axes");
+  n.scaleBar = a.boolean("scale-bar");
   return a.status();
 }
 
@@ -489,6 +598,8 @@ Result<PipelineDescription> convert(const xmlNode* root) {
       status = convertToggle(node, d.showInconsistent);
     } else if (named(node, "view")) {
       status = convertView(node, d.view);
+    } else if (named(node, "annotations")) {
+      status = convertAnnotations(node, d.annotations);
     } else if (named(node, "stream")) {
       status = convertStream(node, d.stream);
     }
@@ -579,37 +690,71 @@ std::string colourByText(const Names<E, N>& names, E value, E extraValue,
   return value == extraValue ? "extra:" + escaped(extra) : std::string(nameOf(names, value));
 }
 
+// range="..." and, for a user range, its ends.
+std::string rangeText(const ColourRange& r) {
+  std::string out = fmt::format(" range=\"{}\"", nameOf(kRangeModes, r.mode));
+  if (r.mode == RangeMode::kUser) {
+    out += fmt::format(" range-min=\"{}\" range-max=\"{}\"", r.min, r.max);
+  }
+  return out;
+}
+
+// A layer's <clip> and <threshold> children, closing the element either way.
+template <typename E, std::size_t N>
+std::string layerChildren(const char* element, const std::optional<ClipPlane>& clip,
+                          const std::optional<Threshold<E>>& threshold, const Names<E, N>& names,
+                          E extraValue) {
+  if (!clip && !threshold) {
+    return "/>\n";
+  }
+  std::string out = ">\n";
+  if (clip) {
+    out += fmt::format("    <clip origin=\"{}\" normal=\"{}\"/>\n", text(clip->origin),
+                       text(clip->normal));
+  }
+  if (threshold) {
+    out += fmt::format("    <threshold by=\"{}\"",
+                       colourByText(names, threshold->by, extraValue, threshold->byExtra));
+    if (std::isfinite(threshold->min)) {
+      out += fmt::format(" min=\"{}\"", threshold->min);
+    }
+    if (std::isfinite(threshold->max)) {
+      out += fmt::format(" max=\"{}\"", threshold->max);
+    }
+    out += "/>\n";
+  }
+  return out + fmt::format("  </{}>\n", element);
+}
+
 std::string toXml(const PipelineDescription& d) {
   std::string out = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<pipeline version=\"1\">\n";
   out += fmt::format("  <data file=\"{}\" step=\"{}\"/>\n", escaped(d.file), d.step);
   const auto& p = d.particles;
   out += fmt::format(
       "  <particles visible=\"{}\" representation=\"{}\" colour-by=\"{}\" colour=\"{}\" "
-      "opacity=\"{}\"",
+      "opacity=\"{}\"{}",
       text(p.visible), nameOf(kParticleRepresentations, p.representation),
       colourByText(kParticleColourBy, p.colourBy, ParticleColourBy::kExtra, p.colourByExtra),
-      hex(p.colour), p.opacity);
-  if (p.clip) {
-    out += fmt::format(">\n    <clip origin=\"{}\" normal=\"{}\"/>\n  </particles>\n",
-                       text(p.clip->origin), text(p.clip->normal));
-  } else {
-    out += "/>\n";
-  }
+      hex(p.colour), p.opacity, rangeText(p.range));
+  out +=
+      layerChildren("particles", p.clip, p.threshold, kParticleColourBy, ParticleColourBy::kExtra);
   const auto& c = d.cracks;
   out += fmt::format(
       "  <cracks visible=\"{}\" method=\"{}\" validation=\"{}\" validation-tolerance=\"{}\" "
       "merge-octahedra=\"{}\" decomposition=\"{}\" largest=\"{}\" min-component=\"{}\" "
-      "colour-by=\"{}\" colour=\"{}\" opacity=\"{}\"/>\n",
+      "colour-by=\"{}\" colour=\"{}\" opacity=\"{}\"{}",
       text(c.visible), cracks::toString(c.method), text(c.validation), c.validationTolerance,
       text(c.mergeOctahedra), nameOf(kDecompositions, c.decomposition), c.largest, c.minComponent,
-      nameOf(kCrackColourBy, c.colourBy), hex(c.colour), c.opacity);
+      nameOf(kCrackColourBy, c.colourBy), hex(c.colour), c.opacity, rangeText(c.range));
+  out += layerChildren("cracks", c.clip, c.threshold, kCrackColourBy, kNoCrackExtra);
   const auto& b = d.bonds;
   out += fmt::format(
       "  <bonds show=\"{}\" representation=\"{}\" colour-by=\"{}\" colour=\"{}\" "
-      "tube-radius=\"{}\"/>\n",
+      "tube-radius=\"{}\"{}",
       nameOf(kBondSelections, b.show), nameOf(kBondRepresentations, b.representation),
       colourByText(kBondColourBy, b.colourBy, BondColourBy::kExtra, b.colourByExtra), hex(b.colour),
-      b.tubeRadius);
+      b.tubeRadius, rangeText(b.range));
+  out += layerChildren("bonds", b.clip, b.threshold, kBondColourBy, BondColourBy::kExtra);
   out += fmt::format("  <decomposition show=\"{}\"/>\n", text(d.showDecomposition));
   out += fmt::format("  <inconsistent show=\"{}\"/>\n", text(d.showInconsistent));
   const auto& v = d.view;
@@ -625,6 +770,10 @@ std::string toXml(const PipelineDescription& d) {
   } else {
     out += "/>\n";
   }
+  const auto& n = d.annotations;
+  out += fmt::format(
+      "  <annotations show=\"{}\" time=\"{}\" method=\"{}\" axes=\"{}\" scale-bar=\"{}\"/>\n",
+      text(n.show), text(n.time), text(n.method), text(n.axes), text(n.scaleBar));
   out += fmt::format("  <stream fps=\"{}\" bitrate=\"{}\"/>\n", d.stream.fps, d.stream.bitrate);
   out += "</pipeline>\n";
   return out;

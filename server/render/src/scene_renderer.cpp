@@ -32,6 +32,7 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 
+#include "overlays.hpp"
 #include "point_sprite_sphere_mapper.hpp"
 #include "vtk_errors.hpp"
 #include <crackvis/render/egl_context.hpp>
@@ -81,34 +82,43 @@ vtkSmartPointer<vtkLookupTable> lookupTable(ColourMap map, double lo, double hi)
   return table;
 }
 
-// The lookup table and title of the first coloured layer, for the scalar bar.
-struct Legend {
-  vtkSmartPointer<vtkLookupTable> table;
-  std::string title;
-};
-
-void colourByScalars(vtkMapper* mapper, vtkDataArray* scalars, bool cellData, ColourMap map,
-                     Legend* legend, const double* givenRange = nullptr) {
-  double range[2] = {0, 1};
-  if (givenRange != nullptr) {
-    range[0] = givenRange[0];
-    range[1] = givenRange[1];
-  } else {
+// The range of an array's values (the first component).
+scene::ValueRange rangeOf(vtkDataArray* scalars) {
+  double range[2] = {0.0, 0.0};
+  if (scalars != nullptr && scalars->GetNumberOfTuples() > 0) {
     scalars->GetRange(range);
   }
-  auto table = lookupTable(map, range[0], range[1]);
+  return {range[0], range[1]};
+}
+
+// Colours `mapper` by `scalars` over `range` and adds the layer's legend.
+void colourByScalars(vtkMapper* mapper, vtkDataArray* scalars, bool cellData, ColourMap map,
+                     scene::ValueRange range, scene::Quantity quantity,
+                     std::vector<Legend>* legends) {
+  auto table = lookupTable(map, range.min, range.max);
   mapper->SetLookupTable(table);
-  if (legend != nullptr && legend->table == nullptr) {
-    legend->table = table;
-    legend->title = scalars->GetName() != nullptr ? scalars->GetName() : "";
+  if (legends != nullptr) {
+    legends->push_back(Legend{table, std::move(quantity), range});
   }
-  mapper->SetScalarRange(range[0], range[1] > range[0] ? range[1] : range[0] + 1.0);
+  mapper->SetScalarRange(range.min, range.max);
   mapper->SetScalarModeToUsePointFieldData();
   if (cellData) {
     mapper->SetScalarModeToUseCellFieldData();
   }
   mapper->SelectColorArray(scalars->GetName());
   mapper->ScalarVisibilityOn();
+}
+
+// A layer's clip plane: hides the side its normal points to.
+void addClip(vtkMapper* mapper, const std::optional<pipeline::ClipPlane>& clip) {
+  if (!clip) {
+    return;
+  }
+  vtkNew<vtkPlane> plane;
+  plane->SetOrigin(clip->origin.x, clip->origin.y, clip->origin.z);
+  // VTK keeps the side the normal points to; the description hides it.
+  plane->SetNormal(-clip->normal.x, -clip->normal.y, -clip->normal.z);
+  mapper->AddClippingPlane(plane);
 }
 
 vtkSmartPointer<vtkPoints> positionPoints(std::span<const dem::Vec3> positions) {
@@ -153,7 +163,7 @@ const char* bondArrayName(pipeline::BondColourBy by) {
 }
 
 vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
-                                        const SceneInput& input, Legend* legend) {
+                                        const SceneInput& input, std::vector<Legend>* legends) {
   const auto& particles = d.particles;
   const std::vector<dem::ParticleIndex> visible = scene::visibleParticles(particles, input);
   const auto n = static_cast<vtkIdType>(visible.size());
@@ -181,7 +191,7 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   }
   data->GetPointData()->AddArray(radius);
   vtkNew<vtkDoubleArray> values;
-  // The legend shows the array's name: an extra array's own.
+  // The array's name in the scene: an extra array's own.
   values->SetName(particles.colourBy == pipeline::ParticleColourBy::kExtra
                       ? particles.colourByExtra.c_str()
                       : particleArrayName(particles.colourBy));
@@ -193,11 +203,10 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   data->GetPointData()->AddArray(values);
   // The colour range of all particles, hidden ones included, so that it
   // does not change with what is culled.
-  double range[2] = {0.0, 0.0};
+  scene::ValueRange valueRange;
   if (!perParticle.empty()) {
     const auto [lo, hi] = std::minmax_element(perParticle.begin(), perParticle.end());
-    range[0] = *lo;
-    range[1] = *hi;
+    valueRange = {*lo, *hi};
   }
 
   vtkSmartPointer<vtkPolyDataMapper> mapper;
@@ -212,16 +221,11 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   mapper->SetInputData(data);
   mapper->ScalarVisibilityOff();
   if (particles.colourBy != pipeline::ParticleColourBy::kSolid) {
-    colourByScalars(mapper, values, false, d.view.colourMap, legend, range);
+    colourByScalars(mapper, values, false, d.view.colourMap,
+                    scene::colourRange(particles.range, input.series.particles, valueRange),
+                    scene::particleQuantity(particles), legends);
   }
-  if (particles.clip) {
-    vtkNew<vtkPlane> plane;
-    plane->SetOrigin(particles.clip->origin.x, particles.clip->origin.y, particles.clip->origin.z);
-    // VTK keeps the side the normal points to; the description hides it.
-    plane->SetNormal(-particles.clip->normal.x, -particles.clip->normal.y,
-                     -particles.clip->normal.z);
-    mapper->AddClippingPlane(plane);
-  }
+  addClip(mapper, particles.clip);
   auto actor = vtkSmartPointer<vtkActor>::New();
   actor->SetMapper(mapper);
   setColour(actor->GetProperty(), particles.colour);
@@ -232,28 +236,20 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   return actor;
 }
 
-const char* crackArrayName(pipeline::CrackColourBy by) {
-  switch (by) {
-    case pipeline::CrackColourBy::kBondId:
-      return "bond_id";
-    case pipeline::CrackColourBy::kForce:
-      return "bond_force";
-    case pipeline::CrackColourBy::kBreakStep:
-      return "break_step";
-    case pipeline::CrackColourBy::kState:
-      return "bond_state";
-    case pipeline::CrackColourBy::kComponent:
-      return "component";
-    case pipeline::CrackColourBy::kSolid:
-      break;
-  }
-  return nullptr;
-}
-
 // One actor of crack primitives: surfaces (or lines in 2D) through an
 // ordinary mapper; volume cells (cell attribute, 3D) through a data set mapper.
-vtkSmartPointer<vtkActor> meshActor(const cracks::CrackMesh& mesh, const char* colourArray,
-                                    ColourMap map, Legend* legend) {
+// The layer's colour range (`range`, `series`) and legend apply when
+// `colourArray` is given.
+struct MeshColouring {
+  const char* array = nullptr;
+  ColourMap map = ColourMap::kViridis;
+  pipeline::ColourRange range;
+  std::optional<scene::ValueRange> series;
+  scene::Quantity quantity;
+};
+
+vtkSmartPointer<vtkActor> meshActor(const cracks::CrackMesh& mesh, const MeshColouring& colouring,
+                                    std::vector<Legend>* legends) {
   vtkSmartPointer<vtkDataSet> data;
   vtkSmartPointer<vtkMapper> mapper;
   if (mesh.hasVolumeCells()) {
@@ -272,11 +268,16 @@ vtkSmartPointer<vtkActor> meshActor(const cracks::CrackMesh& mesh, const char* c
     mapper = polyMapper;
   }
   mapper->ScalarVisibilityOff();
-  if (colourArray != nullptr) {
-    if (vtkDataArray* cells = data->GetCellData()->GetArray(colourArray)) {
-      colourByScalars(mapper, cells, true, map, legend);
-    } else if (vtkDataArray* points = data->GetPointData()->GetArray(colourArray)) {
-      colourByScalars(mapper, points, false, map, legend);
+  if (colouring.array != nullptr) {
+    const auto colour = [&](vtkDataArray* scalars, bool cellData) {
+      colourByScalars(mapper, scalars, cellData, colouring.map,
+                      scene::colourRange(colouring.range, colouring.series, rangeOf(scalars)),
+                      colouring.quantity, legends);
+    };
+    if (vtkDataArray* cells = data->GetCellData()->GetArray(colouring.array)) {
+      colour(cells, true);
+    } else if (vtkDataArray* points = data->GetPointData()->GetArray(colouring.array)) {
+      colour(points, false);
     }
   }
   auto actor = vtkSmartPointer<vtkActor>::New();
@@ -290,22 +291,27 @@ vtkSmartPointer<vtkActor> meshActor(const cracks::CrackMesh& mesh, const char* c
 // Crack primitives of broken, consistent bonds; the local Voronoi
 // inconsistency marks (lines between the particle centres) and intact faces
 // (the local decomposition) as separate actors when the description shows them.
-void addCracks(const pipeline::PipelineDescription& d, const cracks::CrackMesh& mesh,
-               vtkRenderer* renderer, Legend* legend) {
-  const scene::CrackLayers layers = scene::crackLayers(d, mesh);
-  auto actor =
-      meshActor(layers.cracks, crackArrayName(d.cracks.colourBy), d.view.colourMap, legend);
+void addCracks(const pipeline::PipelineDescription& d, const SceneInput& input,
+               vtkRenderer* renderer, std::vector<Legend>* legends) {
+  const scene::CrackLayers layers = scene::crackLayers(d, *input.cracks);
+  const MeshColouring colouring{scene::crackArrayName(d.cracks.colourBy, d.cracks.method),
+                                d.view.colourMap, d.cracks.range, input.series.cracks,
+                                scene::crackQuantity(d.cracks.colourBy, d.cracks.method)};
+  auto actor = meshActor(layers.cracks, colouring, legends);
+  addClip(actor->GetMapper(), d.cracks.clip);
   setColour(actor->GetProperty(), d.cracks.colour);
   actor->GetProperty()->SetOpacity(d.cracks.opacity);
   renderer->AddActor(actor);
   if (layers.marks.primitiveCount() > 0) {
-    auto marksActor = meshActor(layers.marks, nullptr, d.view.colourMap, nullptr);
+    auto marksActor = meshActor(layers.marks, {}, nullptr);
+    addClip(marksActor->GetMapper(), d.cracks.clip);
     marksActor->GetProperty()->SetColor(1.0, 0.85, 0.0);  // yellow: stands out on every map
     marksActor->GetProperty()->SetLineWidth(3.0);
     renderer->AddActor(marksActor);
   }
   if (layers.intact.primitiveCount() > 0) {
-    auto intactActor = meshActor(layers.intact, nullptr, d.view.colourMap, nullptr);
+    auto intactActor = meshActor(layers.intact, {}, nullptr);
+    addClip(intactActor->GetMapper(), d.cracks.clip);
     intactActor->GetProperty()->SetColor(0.75, 0.8, 0.9);
     intactActor->GetProperty()->SetOpacity(0.25);
     renderer->AddActor(intactActor);
@@ -353,7 +359,7 @@ double meanRadius(std::span<const double> radius) {
 }
 
 void addBonds(const pipeline::PipelineDescription& d, const SceneInput& input,
-              vtkRenderer* renderer, Legend* legend) {
+              vtkRenderer* renderer, std::vector<Legend>* legends) {
   const scene::BondLines shown = scene::bondLines(d.bonds, input);
   vtkNew<vtkDoubleArray> values;
   values->SetName(d.bonds.colourBy == pipeline::BondColourBy::kExtra
@@ -377,37 +383,16 @@ void addBonds(const pipeline::PipelineDescription& d, const SceneInput& input,
   }
   mapper->ScalarVisibilityOff();
   if (d.bonds.colourBy != pipeline::BondColourBy::kSolid) {
-    colourByScalars(mapper, values, true, d.view.colourMap, legend);
+    colourByScalars(mapper, values, true, d.view.colourMap,
+                    scene::colourRange(d.bonds.range, input.series.bonds, rangeOf(values)),
+                    scene::bondQuantity(d.bonds), legends);
   }
+  addClip(mapper, d.bonds.clip);
   vtkNew<vtkActor> actor;
   actor->SetMapper(mapper);
   setColour(actor->GetProperty(), d.bonds.colour);
   actor->GetProperty()->SetLineWidth(2.0);
   renderer->AddActor(actor);
-}
-
-// A scalar bar for the first coloured layer, in a colour readable on the background.
-void addScalarBar(const pipeline::PipelineDescription& d, const Legend& legend,
-                  vtkRenderer* renderer) {
-  if (!d.view.scalarBar || legend.table == nullptr) {
-    return;
-  }
-  vtkNew<vtkScalarBarActor> bar;
-  bar->SetLookupTable(legend.table);
-  bar->SetTitle(legend.title.c_str());
-  bar->SetNumberOfLabels(5);
-  bar->SetMaximumWidthInPixels(110);
-  bar->SetPosition(0.88, 0.1);
-  bar->SetWidth(0.1);
-  bar->SetHeight(0.8);
-  const auto& bg = d.view.background;
-  const double light = (0.299 * bg.r + 0.587 * bg.g + 0.114 * bg.b) / 255.0 > 0.5 ? 0.0 : 1.0;
-  for (vtkTextProperty* text : {bar->GetTitleTextProperty(), bar->GetLabelTextProperty()}) {
-    text->SetColor(light, light, light);
-    text->ShadowOff();
-    text->ItalicOff();
-  }
-  renderer->AddActor2D(bar);
 }
 
 }  // namespace
@@ -421,6 +406,7 @@ struct SceneRenderer::Impl {
   bool cameraSet = false;
   vtkSmartPointer<vtkPointSpriteSphereMapper> impostors;  // null unless particles are impostors
   ImpostorOptions impostorOptions;
+  std::unique_ptr<Overlays> overlays;  // scalar bars and annotations
 
   void applyImpostorOptions() {
     if (impostors) {
@@ -434,6 +420,7 @@ SceneRenderer::SceneRenderer() : m_impl(std::make_unique<Impl>()) {}
 SceneRenderer::~SceneRenderer() {
   if (m_impl && m_impl->egl) {
     (void)m_impl->egl->makeCurrent();
+    m_impl->overlays.reset();
     m_impl->renderer = nullptr;
     m_impl->window = nullptr;  // GL resources go while the context is current
   }
@@ -471,6 +458,7 @@ Result<std::unique_ptr<SceneRenderer>> SceneRenderer::create(int width, int heig
   // broken driver shows here rather than in the first session.
   impl.renderer = vtkSmartPointer<vtkRenderer>::New();
   impl.window->AddRenderer(impl.renderer);
+  impl.overlays = std::make_unique<Overlays>(impl.window, impl.renderer);
   impl.window->Render();
   CRACKVIS_RETURN_IF_ERROR(
       vtkErrors.status(fmt::format("{}: the first frame", impl.egl->description())));
@@ -500,24 +488,25 @@ Status SceneRenderer::setScene(const pipeline::PipelineDescription& d, const Sce
   renderer->RemoveAllViewProps();
   renderer->SetBackground(d.view.background.r / 255.0, d.view.background.g / 255.0,
                           d.view.background.b / 255.0);
-  Legend legend;
+  std::vector<Legend> legends;
   impl.impostors = nullptr;
   if (d.particles.visible) {
-    auto particles = particleActor(d, input, &legend);
+    auto particles = particleActor(d, input, &legends);
     renderer->AddActor(particles);
     impl.impostors = vtkPointSpriteSphereMapper::SafeDownCast(particles->GetMapper());
     impl.applyImpostorOptions();
   }
   if (d.cracks.visible && input.cracks != nullptr) {
-    addCracks(d, *input.cracks, renderer, &legend);
+    addCracks(d, input, renderer, &legends);
   }
   if (d.showDecomposition && input.decomposition != nullptr) {
     addDecompositionEdges(input, renderer);
   }
   if (d.bonds.show != pipeline::BondSelection::kNone) {
-    addBonds(d, input, renderer, &legend);
+    addBonds(d, input, renderer, &legends);
   }
-  addScalarBar(d, legend, renderer);
+  // Before the camera: the legend strip narrows the scene's viewport.
+  impl.overlays->setScene(d, input, std::move(legends));
   if (resetCamera || !impl.cameraSet) {
     if (d.view.camera) {
       setCamera(*d.view.camera);
@@ -541,8 +530,15 @@ Status SceneRenderer::renderFrame(int width, int height, Image& out,
   const VtkErrorScope vtkErrors;
   // A frame smaller than the pbuffer renders into its lower-left corner.
   impl.window->SetSize(width, height);
+  impl.overlays->layout(width, height);
   impl.renderer->ResetCameraClippingRange();
-  impl.window->Render();
+  {
+    std::unique_lock<std::mutex> text(Overlays::textMutex(), std::defer_lock);
+    if (impl.overlays->drawsText()) {
+      text.lock();
+    }
+    impl.window->Render();
+  }
   CRACKVIS_RETURN_IF_ERROR(vtkErrors.status(fmt::format("rendering a {}x{} frame", width, height)));
   vtkNew<vtkUnsignedCharArray> pixels;
   const std::size_t row = static_cast<std::size_t>(width) * 3;
@@ -609,8 +605,8 @@ void SceneRenderer::moveCamera(CameraMove move, double dx, double dy) {
       // The view's extent at the focal point, so the scene follows the mouse.
       const double height =
           2.0 * camera->GetDistance() * std::tan(camera->GetViewAngle() * std::numbers::pi / 360.0);
-      const double aspect =
-          static_cast<double>(m_impl->window->GetSize()[0]) / m_impl->window->GetSize()[1];
+      // The scene's viewport (the legend strip beside it is not the scene).
+      const double aspect = m_impl->renderer->GetTiledAspectRatio();
       const double sx = -dx * height * aspect;
       const double sy = dy * height;
       for (int k = 0; k < 3; ++k) {

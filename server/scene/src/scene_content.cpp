@@ -1,5 +1,8 @@
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+
+#include <fmt/format.h>
 
 #include <crackvis/cracks/lattice_cells.hpp>
 #include <crackvis/scene/scene_content.hpp>
@@ -26,7 +29,7 @@ std::vector<dem::ParticleIndex> visibleParticles(const pipeline::ParticlesDescri
   const std::size_t n = input.step.positions.size();
   const auto& bonds = input.lattice->bonds;
   std::vector<std::uint8_t> keep(n, 1);
-  if (!(particles.opacity < 1.0 || particles.clip || bonds.empty() ||
+  if (!(particles.opacity < 1.0 || particles.clip || particles.threshold || bonds.empty() ||
         input.step.bondState.size() != bonds.size())) {
     std::vector<int> degree(n, 0);
     std::fill(keep.begin(), keep.end(), 0);
@@ -55,9 +58,13 @@ std::vector<dem::ParticleIndex> visibleParticles(const pipeline::ParticlesDescri
       }
     }
   }
+  std::vector<double> thresholded;
+  if (particles.threshold) {
+    thresholded = particleValues(particles.threshold->by, input);
+  }
   std::vector<dem::ParticleIndex> visible;
   for (std::size_t i = 0; i < n; ++i) {
-    if (keep[i] != 0) {
+    if (keep[i] != 0 && (thresholded.empty() || particles.threshold->contains(thresholded[i]))) {
       visible.push_back(static_cast<dem::ParticleIndex>(i));
     }
   }
@@ -66,9 +73,13 @@ std::vector<dem::ParticleIndex> visibleParticles(const pipeline::ParticlesDescri
 
 std::vector<double> particleValues(const pipeline::ParticlesDescription& particles,
                                    const SceneInput& input) {
+  return particleValues(particles.colourBy, input);
+}
+
+std::vector<double> particleValues(pipeline::ParticleColourBy by, const SceneInput& input) {
   const std::size_t n = input.step.positions.size();
   std::vector<double> values(n, 0.0);
-  switch (particles.colourBy) {
+  switch (by) {
     case pipeline::ParticleColourBy::kRadius:
       std::copy_n(input.step.radius.begin(), std::min(n, input.step.radius.size()), values.begin());
       break;
@@ -154,9 +165,16 @@ cracks::CrackMesh selectPrimitives(const cracks::CrackMesh& mesh,
 CrackLayers crackLayers(const pipeline::PipelineDescription& d, const cracks::CrackMesh& mesh) {
   const cracks::AttributeArray* state = mesh.findCellData("bond_state");
   const cracks::AttributeArray* inconsistent = mesh.findCellData("inconsistent");
+  const auto& threshold = d.cracks.threshold;
+  const cracks::AttributeArray* thresholded =
+      threshold ? mesh.findCellData(crackArrayName(threshold->by, d.cracks.method)) : nullptr;
+  const auto within = [&](std::size_t k) {
+    return thresholded == nullptr || k >= thresholded->values.size() ||
+           threshold->contains(thresholded->values[k]);
+  };
   CrackLayers layers;
   layers.cracks = selectPrimitives(mesh, [&](std::size_t k) {
-    return flagOf(state, k, true) && !flagOf(inconsistent, k, false);
+    return flagOf(state, k, true) && !flagOf(inconsistent, k, false) && within(k);
   });
   if (d.showInconsistent && inconsistent != nullptr) {
     layers.marks =
@@ -191,6 +209,21 @@ std::vector<dem::BondIndex> decompositionBonds(const SceneInput& input) {
   return bonds;
 }
 
+double bondValue(pipeline::BondColourBy by, std::size_t b, const SceneInput& input) {
+  switch (by) {
+    case pipeline::BondColourBy::kForce:
+      return b < input.step.bondForce.size() ? input.step.bondForce[b] : 0.0;
+    case pipeline::BondColourBy::kBreakStep:
+      return b < input.step.breakStep.size() ? input.step.breakStep[b] : 0.0;
+    case pipeline::BondColourBy::kExtra:
+      return b < input.bondExtra.size() ? input.bondExtra[b] : 0.0;
+    case pipeline::BondColourBy::kState:
+    case pipeline::BondColourBy::kSolid:
+      break;
+  }
+  return input.step.bondState[b] != 0 ? 1.0 : 0.0;
+}
+
 BondLines bondLines(const pipeline::BondsDescription& d, const SceneInput& input) {
   BondLines lines;
   if (d.show == pipeline::BondSelection::kNone) {
@@ -201,18 +234,232 @@ BondLines bondLines(const pipeline::BondsDescription& d, const SceneInput& input
     if (d.show == pipeline::BondSelection::kBroken && !broken) {
       continue;
     }
-    double value = broken ? 1.0 : 0.0;
-    if (d.colourBy == pipeline::BondColourBy::kForce && !input.step.bondForce.empty()) {
-      value = input.step.bondForce[b];
-    } else if (d.colourBy == pipeline::BondColourBy::kBreakStep && !input.step.breakStep.empty()) {
-      value = input.step.breakStep[b];
-    } else if (d.colourBy == pipeline::BondColourBy::kExtra && b < input.bondExtra.size()) {
-      value = input.bondExtra[b];
+    if (d.threshold && !d.threshold->contains(bondValue(d.threshold->by, b, input))) {
+      continue;
     }
     lines.bonds.push_back(static_cast<dem::BondIndex>(b));
-    lines.values.push_back(value);
+    lines.values.push_back(bondValue(d.colourBy, b, input));
   }
   return lines;
+}
+
+const char* crackArrayName(pipeline::CrackColourBy by, cracks::Method method) {
+  if (method == cracks::Method::kCellAttribute) {
+    if (by == pipeline::CrackColourBy::kBondId) {
+      return "first_broken_bond";
+    }
+    if (by == pipeline::CrackColourBy::kState) {
+      return "broken_bonds";
+    }
+  }
+  switch (by) {
+    case pipeline::CrackColourBy::kBondId:
+      return "bond_id";
+    case pipeline::CrackColourBy::kForce:
+      return "bond_force";
+    case pipeline::CrackColourBy::kBreakStep:
+      return "break_step";
+    case pipeline::CrackColourBy::kState:
+      return "bond_state";
+    case pipeline::CrackColourBy::kComponent:
+      return "component";
+    case pipeline::CrackColourBy::kSolid:
+      break;
+  }
+  return nullptr;
+}
+
+Quantity particleQuantity(const pipeline::ParticlesDescription& particles) {
+  switch (particles.colourBy) {
+    case pipeline::ParticleColourBy::kRadius:
+      return {"radius [m]"};
+    case pipeline::ParticleColourBy::kDisplacement:
+      return {"displacement [m]"};
+    case pipeline::ParticleColourBy::kVelocity:
+      return {"velocity [m/s]"};
+    case pipeline::ParticleColourBy::kDamage:
+      return {"damage (broken bond share)"};
+    case pipeline::ParticleColourBy::kExtra:
+      return {particles.colourByExtra};  // the file names no unit
+    case pipeline::ParticleColourBy::kSolid:
+      break;
+  }
+  return {};
+}
+
+Quantity crackQuantity(pipeline::CrackColourBy by, cracks::Method method) {
+  if (method == cracks::Method::kCellAttribute) {
+    switch (by) {
+      case pipeline::CrackColourBy::kBondId:
+        return {"cell: first broken bond", true};
+      case pipeline::CrackColourBy::kForce:
+        return {"cell: largest bond force [N]"};
+      case pipeline::CrackColourBy::kBreakStep:
+        return {"cell: first break step", true};
+      case pipeline::CrackColourBy::kState:
+        return {"cell: broken bonds", true};
+      default:
+        break;
+    }
+  }
+  switch (by) {
+    case pipeline::CrackColourBy::kBondId:
+      return {"bond id", true};
+    case pipeline::CrackColourBy::kForce:
+      return {"bond force [N]"};
+    case pipeline::CrackColourBy::kBreakStep:
+      return {"crack: break step", true};
+    case pipeline::CrackColourBy::kState:
+      return {"bond state (1 broken)", true};
+    case pipeline::CrackColourBy::kComponent:
+      return {"crack component (0 largest)", true};
+    case pipeline::CrackColourBy::kSolid:
+      break;
+  }
+  return {};
+}
+
+Quantity bondQuantity(const pipeline::BondsDescription& bonds) {
+  switch (bonds.colourBy) {
+    case pipeline::BondColourBy::kForce:
+      return {"bond force [N]"};
+    case pipeline::BondColourBy::kBreakStep:
+      return {"bonds: break step", true};
+    case pipeline::BondColourBy::kExtra:
+      return {"bonds: " + bonds.colourByExtra};
+    case pipeline::BondColourBy::kState:
+      return {"bond state (1 broken)", true};
+    case pipeline::BondColourBy::kSolid:
+      break;
+  }
+  return {};
+}
+
+namespace {
+
+// 1, 2 or 5 times a power of ten: the round number nearest above `x` > 0.
+double roundUp(double x) {
+  const double power = std::pow(10.0, std::floor(std::log10(x)));
+  for (double m : {1.0, 2.0, 5.0, 10.0}) {
+    if (m * power >= x * (1 - 1e-9)) {
+      return m * power;
+    }
+  }
+  return 10.0 * power;
+}
+
+// ... and nearest below.
+double roundDown(double x) {
+  const double power = std::pow(10.0, std::floor(std::log10(x)));
+  for (double m : {5.0, 2.0, 1.0}) {
+    if (m * power <= x * (1 + 1e-9)) {
+      return m * power;
+    }
+  }
+  return power;
+}
+
+}  // namespace
+
+LegendTicks legendTicks(ValueRange range, bool integral, int count) {
+  LegendTicks ticks;
+  const double span = range.max - range.min;
+  if (!(span > 0.0) || !std::isfinite(span)) {
+    ticks.values = {range.min};
+    ticks.format = integral ? "%.0f" : "%.4g";
+    return ticks;
+  }
+  double step = roundUp(span / std::max(1, count - 1));
+  if (integral) {
+    step = std::max(step, 1.0);
+  }
+  const double first = std::ceil(range.min / step - 1e-9) * step;
+  for (double v = first; v <= range.max + step * 1e-9; v += step) {
+    // Multiples of the step, so 0.30000000000000004 prints as 0.3.
+    // (+ 0.0 turns -0 into 0.)
+    ticks.values.push_back(std::round(v / step) * step + 0.0);
+  }
+  if (integral) {
+    ticks.format = "%.0f";
+  } else {
+    // Enough significant digits to tell neighbouring ticks apart, and to
+    // write the largest without an exponent where that takes at most six.
+    const double largest = std::max(std::abs(range.min), std::abs(range.max));
+    const int magnitude = static_cast<int>(std::floor(std::log10(largest) + 1e-9));
+    const int resolution = static_cast<int>(std::floor(std::log10(step) + 1e-9));
+    const int digits = std::clamp(std::max(magnitude - resolution + 1, magnitude + 1), 1, 6);
+    ticks.format = fmt::format("%.{}g", digits);
+  }
+  return ticks;
+}
+
+std::string formatTick(const LegendTicks& ticks, double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, ticks.format.c_str(), value);
+  return text;
+}
+
+ScaleBar scaleBar(double metresPerPixel, double maxPixels) {
+  ScaleBar bar;
+  if (!(metresPerPixel > 0.0) || !(maxPixels > 0.0) || !std::isfinite(metresPerPixel)) {
+    return bar;
+  }
+  bar.metres = roundDown(metresPerPixel * maxPixels);
+  bar.pixels = bar.metres / metresPerPixel;
+  struct Unit {
+    double size;
+    const char* name;
+  };
+  static constexpr Unit kUnits[] = {
+      {1e3, "km"}, {1.0, "m"}, {1e-3, "mm"}, {1e-6, "µm"}, {1e-9, "nm"}};
+  for (const Unit& unit : kUnits) {
+    if (bar.metres >= unit.size * (1 - 1e-9) || unit.size == 1e-9) {
+      bar.label = fmt::format("{:g} {}", bar.metres / unit.size, unit.name);
+      break;
+    }
+  }
+  return bar;
+}
+
+std::string stepAnnotation(const SceneInput& input) {
+  if (input.stepIndex < 0) {
+    return {};
+  }
+  return fmt::format("step {} of 0..{}   t = {:.4g} s", input.stepIndex,
+                     std::max(0, input.stepCount - 1), input.time);
+}
+
+std::string methodAnnotation(const pipeline::CracksDescription& c) {
+  if (!c.visible) {
+    return {};
+  }
+  switch (c.method) {
+    case cracks::Method::kCellAttribute:
+      return "cracks: cell attribute";
+    case cracks::Method::kCellCut:
+      return "cracks: cell cut";
+    case cracks::Method::kCellCentre:
+      return c.mergeOctahedra ? "cracks: cell centre, octahedra merged" : "cracks: cell centre";
+    case cracks::Method::kLocalVoronoi:
+      return c.validation ? fmt::format("cracks: local Voronoi, validated (tolerance {:g})",
+                                        c.validationTolerance)
+                          : "cracks: local Voronoi, not validated";
+  }
+  return {};
+}
+
+ValueRange colourRange(const pipeline::ColourRange& range, const std::optional<ValueRange>& series,
+                       ValueRange values) {
+  ValueRange chosen = values;
+  if (range.mode == pipeline::RangeMode::kUser) {
+    chosen = {range.min, range.max};
+  } else if (range.mode == pipeline::RangeMode::kSeries && series) {
+    chosen = *series;
+  }
+  if (!(chosen.max > chosen.min)) {
+    chosen.max = chosen.min + 1.0;
+  }
+  return chosen;
 }
 
 }  // namespace crackvis::scene

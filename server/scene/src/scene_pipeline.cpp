@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
 
 #include <fmt/format.h>
@@ -8,6 +9,7 @@
 #include <crackvis/cracks/bond_mapping.hpp>
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/scene/guarded_call.hpp>
+#include <crackvis/scene/scene_content.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 
 namespace crackvis::scene {
@@ -71,11 +73,18 @@ void ScenePipeline::restore(State&& state) {
 
 namespace {
 
+// Whether the crack layer is coloured or thresholded by component rank.
+bool usesComponents(const pipeline::CracksDescription& c) {
+  using pipeline::CrackColourBy;
+  return c.colourBy == CrackColourBy::kComponent ||
+         (c.threshold && c.threshold->by == CrackColourBy::kComponent);
+}
+
 // The description's component filter, and the "component" cell array when
 // cracks are coloured by component (largest first: 0 is the main crack).
 void selectComponents(const pipeline::CracksDescription& c, cracks::CrackMesh& mesh) {
   const cracks::ComponentFilter filter{c.minComponent, c.largest};
-  const bool colour = c.colourBy == pipeline::CrackColourBy::kComponent;
+  const bool colour = usesComponents(c);
   if (!filter.active() && !colour) {
     return;
   }
@@ -96,7 +105,7 @@ void selectComponents(const pipeline::CracksDescription& c, cracks::CrackMesh& m
 bool sameSelection(const pipeline::CracksDescription& a, const pipeline::CracksDescription& b) {
   using pipeline::CrackColourBy;
   return a.largest == b.largest && a.minComponent == b.minComponent &&
-         (a.colourBy == CrackColourBy::kComponent) == (b.colourBy == CrackColourBy::kComponent);
+         usesComponents(a) == usesComponents(b);
 }
 
 }  // namespace
@@ -114,19 +123,51 @@ cracks::ExtractOptions extractOptions(const pipeline::PipelineDescription& d) {
 source::ExtraArrays extraArraysFor(const pipeline::PipelineDescription& d) {
   using pipeline::BondColourBy;
   using pipeline::CrackColourBy;
+  using pipeline::ParticleColourBy;
+  // What a layer colours by, and what its threshold selects by.
+  const auto particlesUse = [&](ParticleColourBy by) {
+    return d.particles.colourBy == by || (d.particles.threshold && d.particles.threshold->by == by);
+  };
+  const auto cracksUse = [&](CrackColourBy by) {
+    return d.cracks.colourBy == by || (d.cracks.threshold && d.cracks.threshold->by == by);
+  };
+  const auto bondsUse = [&](BondColourBy by) {
+    return d.bonds.colourBy == by || (d.bonds.threshold && d.bonds.threshold->by == by);
+  };
   source::ExtraArrays extras;
-  extras.velocities = d.particles.colourBy == pipeline::ParticleColourBy::kVelocity;
-  if (d.particles.colourBy == pipeline::ParticleColourBy::kExtra) {
+  extras.velocities = particlesUse(ParticleColourBy::kVelocity);
+  // One extra array per layer (the description's conversion checks): the
+  // one coloured by, else the one thresholded by.
+  if (d.particles.colourBy == ParticleColourBy::kExtra) {
     extras.particleExtra = d.particles.colourByExtra;
+  } else if (particlesUse(ParticleColourBy::kExtra)) {
+    extras.particleExtra = d.particles.threshold->byExtra;
   }
   if (d.bonds.colourBy == BondColourBy::kExtra) {
     extras.bondExtra = d.bonds.colourByExtra;
+  } else if (bondsUse(BondColourBy::kExtra)) {
+    extras.bondExtra = d.bonds.threshold->byExtra;
   }
-  extras.bondForce =
-      d.cracks.colourBy == CrackColourBy::kForce || d.bonds.colourBy == BondColourBy::kForce;
-  extras.breakStep = d.cracks.colourBy == CrackColourBy::kBreakStep ||
-                     d.bonds.colourBy == BondColourBy::kBreakStep;
+  extras.bondForce = cracksUse(CrackColourBy::kForce) || bondsUse(BondColourBy::kForce);
+  extras.breakStep = cracksUse(CrackColourBy::kBreakStep) || bondsUse(BondColourBy::kBreakStep);
   return extras;
+}
+
+std::string seriesKey(const pipeline::PipelineDescription& d) {
+  using pipeline::RangeMode;
+  std::string key;
+  if (d.particles.visible && d.particles.range.mode == RangeMode::kSeries) {
+    key +=
+        fmt::format("p{}:{};", static_cast<int>(d.particles.colourBy), d.particles.colourByExtra);
+  }
+  if (d.cracks.visible && d.cracks.range.mode == RangeMode::kSeries) {
+    key += fmt::format("c{};", static_cast<int>(d.cracks.colourBy));
+  }
+  if (d.bonds.show != pipeline::BondSelection::kNone && d.bonds.range.mode == RangeMode::kSeries) {
+    key += fmt::format("b{}:{}:{};", static_cast<int>(d.bonds.colourBy), d.bonds.colourByExtra,
+                       static_cast<int>(d.bonds.show));
+  }
+  return key;
 }
 
 ScenePipeline::ScenePipeline(SourceOpener opener, std::size_t cacheSteps)
@@ -191,6 +232,10 @@ Status ScenePipeline::apply(pipeline::PipelineDescription next) {
                                               source().lattice().dimension, extractOptions(next));
   }
   m_state.description = std::move(next);
+  const std::string series = seriesKey(m_state.description);
+  if (reopen || series != m_state.seriesKey) {
+    CRACKVIS_RETURN_IF_ERROR(scanSeries());
+  }
   if (reopen || target != shown) {
     return showStep(target);
   }
@@ -198,6 +243,99 @@ Status ScenePipeline::apply(pipeline::PipelineDescription next) {
     m_timings = {};
     return extract(m_state.current);
   }
+  return Status::ok();
+}
+
+namespace {
+
+void widen(std::optional<ValueRange>& range, double v) {
+  if (!std::isfinite(v)) {
+    return;
+  }
+  if (!range) {
+    range = ValueRange{v, v};
+  }
+  range->min = std::min(range->min, v);
+  range->max = std::max(range->max, v);
+}
+
+// A crack face's value of a bond quantity, from its bond (what the
+// extractor maps onto the faces); nullopt for component ranks and cell
+// attribute's per-cell counts and loads, which need the extraction itself.
+std::optional<double> crackFaceValue(const pipeline::CracksDescription& c, std::size_t b,
+                                     const cracks::StepInput& step) {
+  if (c.method == cracks::Method::kCellAttribute &&
+      (c.colourBy == pipeline::CrackColourBy::kState ||
+       c.colourBy == pipeline::CrackColourBy::kForce)) {
+    return std::nullopt;
+  }
+  switch (c.colourBy) {
+    case pipeline::CrackColourBy::kBondId:
+      return static_cast<double>(b);
+    case pipeline::CrackColourBy::kForce:
+      return b < step.bondForce.size() ? std::optional<double>(step.bondForce[b]) : std::nullopt;
+    case pipeline::CrackColourBy::kBreakStep:
+      return b < step.breakStep.size() ? std::optional<double>(step.breakStep[b]) : std::nullopt;
+    case pipeline::CrackColourBy::kState:
+      return 1.0;
+    case pipeline::CrackColourBy::kComponent:
+    case pipeline::CrackColourBy::kSolid:
+      break;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+// Crack components would need every step extracted; their ranks keep the
+// step's range (docs/pipeline.md).
+Status ScenePipeline::scanSeries() {
+  const pipeline::PipelineDescription& d = m_state.description;
+  m_state.series = {};
+  m_state.seriesKey = seriesKey(d);
+  if (m_state.seriesKey.empty()) {
+    return Status::ok();
+  }
+  using pipeline::RangeMode;
+  const bool particles = d.particles.visible && d.particles.range.mode == RangeMode::kSeries &&
+                         d.particles.colourBy != pipeline::ParticleColourBy::kSolid;
+  const bool cracks = d.cracks.visible && d.cracks.range.mode == RangeMode::kSeries;
+  const bool bonds =
+      d.bonds.show != pipeline::BondSelection::kNone && d.bonds.range.mode == RangeMode::kSeries;
+  SeriesRanges ranges;
+  for (int k = 0; k < stepCount(); ++k) {
+    auto step = m_state.cache->readAside(k);
+    if (!step) {
+      return step.status();
+    }
+    SceneInput input;
+    input.lattice = &source().lattice();
+    input.step = stepInput(*step);
+    input.initialPositions = m_state.initial->positions;
+    input.velocities = step->velocities;
+    input.particleExtra = step->particleExtra;
+    input.bondExtra = step->bondExtra;
+    if (particles) {
+      for (double v : particleValues(d.particles, input)) {
+        widen(ranges.particles, v);
+      }
+    }
+    if (cracks) {
+      for (std::size_t b = 0; b < step->bondState.size(); ++b) {
+        if (step->bondState[b] != 0) {
+          if (auto v = crackFaceValue(d.cracks, b, input.step)) {
+            widen(ranges.cracks, *v);
+          }
+        }
+      }
+    }
+    if (bonds) {
+      for (double v : bondLines(d.bonds, input).values) {
+        widen(ranges.bonds, v);
+      }
+    }
+  }
+  m_state.series = ranges;
   return Status::ok();
 }
 
@@ -297,7 +435,11 @@ SceneInput ScenePipeline::input() const {
           &m_state.mesh,
           m_state.extractor->decomposition(),
           m_state.current->particleExtra,
-          m_state.current->bondExtra};
+          m_state.current->bondExtra,
+          m_state.series,
+          m_state.current->index,
+          stepCount(),
+          m_state.current->time};
 }
 
 }  // namespace crackvis::scene

@@ -60,6 +60,11 @@ Result<CachedStep> StepCache::get(int step) {
   return CachedStep{shared, shared->loadMs};
 }
 
+Result<SourceStep> StepCache::readAside(int step) {
+  std::lock_guard reading(m_readMutex);
+  return m_source->read(step);
+}
+
 void StepCache::prefetch(int step) {
   {
     std::lock_guard lock(m_mutex);

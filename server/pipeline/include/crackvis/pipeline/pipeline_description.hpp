@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -43,6 +44,29 @@ struct ClipPlane {
   friend bool operator==(const ClipPlane&, const ClipPlane&) = default;
 };
 
+// How a coloured layer's colours span its values: over the step shown (each
+// step its own range), over the whole series (every step scanned once, so a
+// colour means the same value at every step), or the range the user set.
+enum class RangeMode { kStep, kSeries, kUser };
+struct ColourRange {
+  RangeMode mode = RangeMode::kStep;
+  double min = 0.0;  // kUser
+  double max = 1.0;  // kUser, > min
+  friend bool operator==(const ColourRange&, const ColourRange&) = default;
+};
+
+// Keeps only a layer's elements whose value of `by` (a colour-by quantity of
+// that layer, not solid) lies in [min, max]; an end not given is infinite.
+template <typename By>
+struct Threshold {
+  By by{};
+  std::string byExtra;  // NAME of by="extra:NAME"
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  bool contains(double v) const { return v >= min && v <= max; }
+  friend bool operator==(const Threshold&, const Threshold&) = default;
+};
+
 struct ParticlesDescription {
   bool visible = true;
   ParticleRepresentation representation = ParticleRepresentation::kImpostors;
@@ -50,7 +74,9 @@ struct ParticlesDescription {
   std::string colourByExtra;  // NAME of colour-by="extra:NAME" (kExtra)
   Colour colour{0xb0, 0xb0, 0xb0};
   double opacity = 1.0;
+  ColourRange range;
   std::optional<ClipPlane> clip;
+  std::optional<Threshold<ParticleColourBy>> threshold;
   friend bool operator==(const ParticlesDescription&, const ParticlesDescription&) = default;
 };
 
@@ -66,6 +92,9 @@ struct CracksDescription {
   CrackColourBy colourBy = CrackColourBy::kSolid;
   Colour colour{0xe0, 0x3c, 0x31};
   double opacity = 1.0;
+  ColourRange range;
+  std::optional<ClipPlane> clip;
+  std::optional<Threshold<CrackColourBy>> threshold;
   friend bool operator==(const CracksDescription&, const CracksDescription&) = default;
 };
 
@@ -76,6 +105,9 @@ struct BondsDescription {
   std::string colourByExtra;  // NAME of colour-by="extra:NAME" (kExtra)
   Colour colour{0x40, 0x40, 0x40};
   double tubeRadius = 0.15;  // fraction of the particle radius
+  ColourRange range;
+  std::optional<ClipPlane> clip;
+  std::optional<Threshold<BondColourBy>> threshold;
   friend bool operator==(const BondsDescription&, const BondsDescription&) = default;
 };
 
@@ -97,6 +129,17 @@ struct ViewDescription {
   friend bool operator==(const ViewDescription&, const ViewDescription&) = default;
 };
 
+// What is written over the picture besides the scalar bars (on by default in
+// snapshots, movies and the stream).
+struct AnnotationsDescription {
+  bool show = true;      // false: none of them
+  bool time = true;      // step (of the file's steps) and simulated time
+  bool method = true;    // the crack method and its options
+  bool axes = true;      // an x, y, z triad turning with the camera
+  bool scaleBar = true;  // a length scale in metres at the focal plane
+  friend bool operator==(const AnnotationsDescription&, const AnnotationsDescription&) = default;
+};
+
 struct StreamDescription {
   int fps = 30;
   int bitrate = 4'000'000;  // bits per second
@@ -112,6 +155,7 @@ struct PipelineDescription {
   bool showDecomposition = false;
   bool showInconsistent = false;
   ViewDescription view;
+  AnnotationsDescription annotations;
   StreamDescription stream;
   friend bool operator==(const PipelineDescription&, const PipelineDescription&) = default;
 };

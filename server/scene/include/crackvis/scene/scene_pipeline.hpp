@@ -37,6 +37,10 @@ cracks::ExtractOptions extractOptions(const pipeline::PipelineDescription& descr
 // a pipeline reads them only then.
 source::ExtraArrays extraArraysFor(const pipeline::PipelineDescription& description);
 
+// The quantities whose ranges over the whole series a description asks for
+// (range="series"), as text: a change of it means a new scan.
+std::string seriesKey(const pipeline::PipelineDescription& description);
+
 // What the last step change cost.
 struct StepTimings {
   double loadMs = 0.0;  // 0 for a cached step
@@ -81,6 +85,8 @@ class ScenePipeline {
   const source::StepCache& cache() const { return *m_state.cache; }
   const cracks::CrackMesh& cracks() const { return m_state.mesh; }
   const StepTimings& timings() const { return m_timings; }
+  // The series ranges of the layers that ask for them (empty otherwise).
+  const SeriesRanges& seriesRanges() const { return m_state.series; }
   // How many of the shown step's broken bonds became surface elements, and
   // when fewer than 95 % did, the warning naming the likely cause (empty
   // otherwise): what extract prints, for the client's status bar.
@@ -107,6 +113,8 @@ class ScenePipeline {
     std::shared_ptr<const source::SourceStep> current;
     cracks::CrackMesh mesh;
     CrackMapping mapping;
+    SeriesRanges series;
+    std::string seriesKey;  // of the description the ranges were scanned for
   };
 
   ScenePipeline(SourceOpener opener, std::size_t cacheSteps);
@@ -114,6 +122,8 @@ class ScenePipeline {
   void restore(State&& state);
   Status openFile(const pipeline::PipelineDescription& description);
   Status extract(std::shared_ptr<const source::SourceStep> step);
+  // Reads every step once (aside from the cache) for the series ranges.
+  Status scanSeries();
   CrackMapping mappingOf(const cracks::CrackMesh& mesh, const cracks::StepInput& input) const;
   cracks::StepInput stepInput(const source::SourceStep& step) const;
 

@@ -102,6 +102,9 @@ class StepCache {
   Result<CachedStep> get(int step);
   // Reads `step` in the background unless cached or out of range.
   void prefetch(int step);
+  // Reads `step` now without keeping it: a scan over the whole series must
+  // not push the steps a session shows out of the cache.
+  Result<SourceStep> readAside(int step);
 
   struct Stats {
     std::uint64_t hits = 0;
