@@ -92,12 +92,21 @@ TEST_CASE("the encoder refuses bad settings and frames of another size", "[encod
            Bad{{64, 48, 0, 4'000'000}, "encoder fps 0 outside 1..240"},
            Bad{{64, 48, -5, 4'000'000}, "encoder fps -5 outside 1..240"},
            Bad{{64, 48, 1000, 4'000'000}, "encoder fps 1000 outside 1..240"},
-           Bad{{64, 48, 30, 0}, "encoder bitrate 0 below 1 kbit per frame (30 fps)"},
+           Bad{{64, 48, 30, 10}, "encoder bitrate 10 below 1 kbit per frame (30 fps)"},
+           Bad{{64, 48, 30, -4'000'000},
+               "encoder bitrate -4000000 below 1 kbit per frame (30 fps)"},
+           Bad{{64, 48, 30, 0, 60}, "encoder crf 60 outside 0..51"},
+           Bad{{64, 48, 30, 0, 20, "warp-speed"}, "libx264 has no preset 'warp-speed'"},
        }) {
     const auto created = encode::FrameEncoder::create(bad.settings);
     CHECK(created.status().code() == StatusCode::kInvalidArgument);
     CHECK(created.status().message() == bad.message);
   }
+  // Bitrate 0: constant quality, the movies' mode.
+  auto quality = encode::FrameEncoder::create({64, 48, 30, 0, 20, "medium"});
+  REQUIRE(quality.isOk());
+  const encode::RgbFrame grey{64, 48, std::vector<std::uint8_t>(64 * 48 * 3, 128)};
+  CHECK(quality.value()->encode(grey, true).isOk());
   auto encoder = encode::FrameEncoder::create({64, 48, 30, 1'000'000});
   REQUIRE(encoder.isOk());
   const encode::RgbFrame wrong{32, 32, std::vector<std::uint8_t>(32 * 32 * 3, 0)};

@@ -37,6 +37,7 @@ Command addGenerateCommand(CLI::App& parent);
 Command addInfoCommand(CLI::App& parent);
 Command addExtractCommand(CLI::App& parent);
 Command addSnapshotCommand(CLI::App& parent);
+Command addMovieCommand(CLI::App& parent);
 Command addBenchMethodsCommand(CLI::App& bench);
 Command addSimCommand(CLI::App& parent);
 Command addHealthCommand(CLI::App& parent);

@@ -65,6 +65,7 @@ int main(int argc, char** argv) {
   commands.push_back(addExtractCommand(app));
   commands.push_back(addExportCommand(app));
   commands.push_back(addSnapshotCommand(app));
+  commands.push_back(addMovieCommand(app));
   commands.push_back(addBenchMethodsCommand(*bench));
   commands.push_back(addBenchTransferCommand(*bench));
   commands.push_back(addBenchRenderCommand(*bench));

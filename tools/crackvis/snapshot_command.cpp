@@ -1,13 +1,12 @@
 // crackvis snapshot: one step rendered off screen (EGL) as a pipeline
 // description says, written as PNG. The render server's scene without the
 // server: for figures, checks and machines without a display.
-#include <fstream>
 #include <optional>
-#include <sstream>
 
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include "pipeline_file.hpp"
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/scene_renderer.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
@@ -28,22 +27,11 @@ struct SnapshotOptions {
 };
 
 Result<pipeline::PipelineDescription> description(const SnapshotOptions& options) {
-  pipeline::PipelineDescription d;
-  if (!options.pipelinePath.empty()) {
-    std::ifstream in(options.pipelinePath);
-    if (!in) {
-      return notFound(
-          fmt::format("{}: cannot read the pipeline description", options.pipelinePath));
-    }
-    std::stringstream text;
-    text << in.rdbuf();
-    auto parsed = pipeline::parsePipeline(text.str());
-    if (!parsed) {
-      return Status(parsed.status().code(),
-                    fmt::format("{}: {}", options.pipelinePath, parsed.status().message()));
-    }
-    d = std::move(parsed).value();
+  auto read = readPipelineFile(options.pipelinePath);
+  if (!read) {
+    return read.status();
   }
+  pipeline::PipelineDescription d = std::move(read).value();
   if (options.step) {
     d.step = *options.step;
   }

@@ -1,5 +1,8 @@
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -59,7 +62,17 @@ Status checkSettings(const EncoderSettings& settings) {
   if (settings.fps < 1 || settings.fps > 240) {
     return invalidArgument(fmt::format("encoder fps {} outside 1..240", settings.fps));
   }
-  if (settings.bitrate < 1000 * settings.fps) {
+  // libx264 takes any preset string and fails only when it opens.
+  static constexpr std::array<std::string_view, 10> kPresets{
+      "ultrafast", "superfast", "veryfast", "faster",   "fast",
+      "medium",    "slow",      "slower",   "veryslow", "placebo"};
+  if (std::find(kPresets.begin(), kPresets.end(), settings.preset) == kPresets.end()) {
+    return invalidArgument(fmt::format("libx264 has no preset '{}'", settings.preset));
+  }
+  if (settings.bitrate == 0 && (settings.crf < 0 || settings.crf > 51)) {
+    return invalidArgument(fmt::format("encoder crf {} outside 0..51", settings.crf));
+  }
+  if (settings.bitrate != 0 && settings.bitrate < 1000 * settings.fps) {
     return invalidArgument(fmt::format("encoder bitrate {} below 1 kbit per frame ({} fps)",
                                        settings.bitrate, settings.fps));
   }
@@ -101,13 +114,17 @@ Result<std::unique_ptr<FrameEncoder>> FrameEncoder::create(const EncoderSettings
   c->time_base = AVRational{1, settings.fps};
   c->framerate = AVRational{settings.fps, 1};
   c->pix_fmt = AV_PIX_FMT_YUV420P;
-  c->bit_rate = settings.bitrate;
-  c->rc_max_rate = settings.bitrate;                        // capped
-  c->rc_buffer_size = settings.bitrate / settings.fps * 2;  // about two frames of VBV
-  c->gop_size = 10 * settings.fps;                          // keyframes come on demand
+  if (settings.bitrate > 0) {
+    c->bit_rate = settings.bitrate;
+    c->rc_max_rate = settings.bitrate;                        // capped
+    c->rc_buffer_size = settings.bitrate / settings.fps * 2;  // about two frames of VBV
+  } else {
+    av_opt_set_int(c->priv_data, "crf", settings.crf, 0);  // a movie: quality, not a cap
+  }
+  c->gop_size = 10 * settings.fps;  // keyframes come on demand
   c->max_b_frames = 0;
   c->thread_count = 2;
-  av_opt_set(c->priv_data, "preset", "ultrafast", 0);
+  av_opt_set(c->priv_data, "preset", settings.preset.c_str(), 0);
   av_opt_set(c->priv_data, "tune", "zerolatency", 0);
   CRACKVIS_RETURN_IF_ERROR(check(avcodec_open2(c, codec, nullptr), "avcodec_open2(libx264)"));
   impl.yuv.reset(av_frame_alloc());

@@ -34,7 +34,12 @@ struct EncoderSettings {
   int width = 1280;  // even
   int height = 720;  // even
   int fps = 30;
-  int bitrate = 4'000'000;  // bits per second, capped (VBV)
+  int bitrate = 4'000'000;  // bits per second, capped (VBV); 0: constant quality (crf)
+  int crf = 20;             // libx264's constant rate factor when bitrate is 0
+  // libx264's speed/quality trade: the stream's frames must be ready in
+  // milliseconds; an offline movie (crackvis movie) affords "medium", which
+  // gives visibly sharper frames at the same bitrate.
+  std::string preset = "ultrafast";
 };
 
 class FrameEncoder {
