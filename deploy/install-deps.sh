@@ -44,7 +44,7 @@ readonly PACKAGES=(
 readonly RUNTIME_PACKAGES=(
   libhdf5-103-1 libgrpc++1.51 libgrpc29 libabsl20220623 libprotobuf32 libssl3 libfmt9
   libtbb12 libvoro++1 libvtk9.1 libxml2 libgmp10
-  libavcodec59 libavutil57 libswscale6
+  libavcodec59 libavformat59 libavutil57 libswscale6
   libegl1 libegl-mesa0 libgl1-mesa-dri
 )
 

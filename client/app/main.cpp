@@ -9,16 +9,65 @@
 
 #include <crackvis/client/demo_script.hpp>
 #include <crackvis/client/main_window.hpp>
+#include <crackvis/common/spelling.hpp>
+#include <crackvis/rpc/connection_advice.hpp>
 
 namespace {
 
-bool wantsDemo(int argc, char** argv) {
+constexpr int kExitFailure = 1;
+constexpr int kExitUsage = 2;
+
+// --name or --name=value among the arguments (Qt's -platform too).
+bool hasArgument(int argc, char** argv, const char* name) {
+  const QByteArray wanted(name);
   for (int i = 1; i < argc; ++i) {
-    if (QByteArray(argv[i]) == "--demo" || QByteArray(argv[i]).startsWith("--demo=")) {
+    const QByteArray arg(argv[i]);
+    if (arg == wanted || arg.startsWith(wanted + "=")) {
       return true;
     }
   }
   return false;
+}
+
+bool wantsDemo(int argc, char** argv) {
+  return hasArgument(argc, argv, "--demo");
+}
+
+// Qt aborts when its platform plugin finds no display: a window needs X11
+// or Wayland unless another platform (offscreen) is chosen.
+bool displayMissing(int argc, char** argv) {
+  const QByteArray platform = qgetenv("QT_QPA_PLATFORM");
+  const bool needsDisplay =
+      platform.isEmpty() || platform.startsWith("xcb") || platform.startsWith("wayland");
+  return needsDisplay && !hasArgument(argc, argv, "-platform") &&
+         qEnvironmentVariableIsEmpty("DISPLAY") && qEnvironmentVariableIsEmpty("WAYLAND_DISPLAY");
+}
+
+int fail(const QString& message, int code) {
+  std::fprintf(stderr, "crackvis-client: %s\n", qPrintable(message));
+  return code;
+}
+
+// Unknown options with the nearest known one ("unknown option '--conect'
+// (did you mean --connect?)"); empty when the command line parses.
+QString misspelling(const QCommandLineParser& parser, const QList<QCommandLineOption>& options) {
+  const QStringList unknown = parser.unknownOptionNames();
+  if (unknown.isEmpty()) {
+    return parser.errorText();
+  }
+  std::vector<std::string> names;
+  for (const QCommandLineOption& option : options) {
+    for (const QString& name : option.names()) {
+      names.push_back((name.size() == 1 ? "-" : "--") + name.toStdString());
+    }
+  }
+  const QString given =
+      (unknown.front().size() == 1 ? QStringLiteral("-") : QStringLiteral("--")) + unknown.front();
+  const std::string nearest = crackvis::closestName(given.toStdString(), names);
+  return QStringLiteral("unknown option '%1'%2")
+      .arg(given, nearest.empty()
+                      ? QString()
+                      : QStringLiteral(" (did you mean %1?)").arg(QString::fromStdString(nearest)));
 }
 
 // The scripted session without a window (no display needed).
@@ -53,11 +102,21 @@ int runHeadlessDemo(const crackvis::client::ConnectionSettings& settings, const 
 }  // namespace
 
 int main(int argc, char** argv) {
-  // Without a display the scripted demo runs on a QCoreApplication.
+  crackvis::rpc::quietGrpcLogs();  // a failure is the one line this program prints
+  // Without a display the scripted demo (and --help) runs on a
+  // QCoreApplication; a window without one would end in Qt's abort.
   const bool demo = wantsDemo(argc, argv);
+  const bool help = hasArgument(argc, argv, "--help") || hasArgument(argc, argv, "-h") ||
+                    hasArgument(argc, argv, "--help-all");
+  if (!demo && !help && displayMissing(argc, argv)) {
+    return fail(QStringLiteral("no display (DISPLAY and WAYLAND_DISPLAY are not set): run the "
+                               "scripted session without a window with --demo FOLDER, or the "
+                               "window off screen with QT_QPA_PLATFORM=offscreen"),
+                kExitUsage);
+  }
   std::unique_ptr<QCoreApplication> application =
-      demo ? std::make_unique<QCoreApplication>(argc, argv)
-           : std::make_unique<QApplication>(argc, argv);
+      demo || help ? std::make_unique<QCoreApplication>(argc, argv)
+                   : std::make_unique<QApplication>(argc, argv);
   QCoreApplication& app = *application;
   QApplication::setOrganizationName(QStringLiteral("crackvis"));
   QApplication::setApplicationName(QStringLiteral("crackvis-client"));
@@ -82,7 +141,8 @@ int main(int argc, char** argv) {
                           QStringLiteral("path"));
   QCommandLineOption pipelineFile(
       QStringLiteral("pipeline"),
-      QStringLiteral("start from this pipeline description (XML, pipeline-schemas/pipeline.xsd)"),
+      QStringLiteral("start from this view: a pipeline description (XML, docs/pipeline.md) as "
+                     "File > Save view writes it, with its file (unless --file), step and camera"),
       QStringLiteral("xml"));
   QCommandLineOption screenshot(
       QStringLiteral("window-screenshot"),
@@ -93,8 +153,13 @@ int main(int argc, char** argv) {
       QStringLiteral("no window: run the scripted demo session (rotate, step through the fracture, "
                      "the four methods) and write demo.mp4 and demo.png into this folder"),
       QStringLiteral("folder"));
-  parser.addOptions({connect, ca, cert, key, token, file, pipelineFile, screenshot, demoOption});
-  parser.process(app);
+  const QList<QCommandLineOption> options{connect, ca,           cert,       key,       token,
+                                          file,    pipelineFile, screenshot, demoOption};
+  parser.addOptions(options);
+  if (!parser.parse(QCoreApplication::arguments())) {
+    return fail(misspelling(parser, options), kExitUsage);
+  }
+  parser.process(app);  // --help
 
   crackvis::pipeline::PipelineDescription startView;
   if (parser.isSet(pipelineFile)) {
@@ -121,6 +186,17 @@ int main(int argc, char** argv) {
     }
     return runHeadlessDemo(settings, parser.value(file), parser.value(demoOption), startView);
   }
+  // A screenshot run has no one to read the messages pane: what goes wrong
+  // is printed at once, and the program ends with status 1.
+  const bool screenshotRun = parser.isSet(screenshot);
+  // --file, else the file a saved view (--pipeline) names.
+  const QString fileToOpen =
+      parser.isSet(file) ? parser.value(file) : QString::fromStdString(startView.file);
+  if (screenshotRun && (!parser.isSet(connect) || fileToOpen.isEmpty())) {
+    return fail(QStringLiteral("--window-screenshot needs --connect and --file (or a --pipeline "
+                               "view that names a file)"),
+                kExitUsage);
+  }
 
   crackvis::client::MainWindow window;
   if (parser.isSet(pipelineFile)) {
@@ -128,20 +204,47 @@ int main(int argc, char** argv) {
   }
   window.show();
   if (parser.isSet(connect)) {
-    if (window.connectTo(settings) && parser.isSet(file)) {
-      window.openFile(parser.value(file));
+    // A saved view (--pipeline) opens as it was saved: its step (a step the
+    // file lacks is the server's error, in the messages pane) and camera;
+    // a file alone at its last step, the camera fitted to it.
+    bool opened = window.connectTo(settings);
+    if (opened && !fileToOpen.isEmpty()) {
+      if (parser.isSet(pipelineFile)) {
+        startView.file = fileToOpen.toStdString();
+        opened = window.openView(startView);
+      } else {
+        opened = window.openFile(fileToOpen, -1);
+      }
+    }
+    if (!opened && screenshotRun) {
+      return fail(window.lastMessage(), kExitFailure);
     }
   }
-  if (parser.isSet(screenshot)) {
+  if (screenshotRun) {
+    const auto quit = [said = std::make_shared<bool>(false)](const QString& why) {
+      if (!*said) {  // the first failure is the one to read
+        *said = true;
+        fail(why, kExitFailure);
+      }
+      QApplication::exit(kExitFailure);
+    };
+    QObject::connect(&window.client(), &crackvis::client::RenderClient::eventFailed, &window,
+                     [quit](quint64, const QString& message) { quit(message); });
+    QObject::connect(
+        &window.client(), &crackvis::client::RenderClient::connectionLost, &window,
+        [quit](const QString& why) { quit(QStringLiteral("connection lost: ") + why); });
     // Once the stream has settled (a full-resolution frame and nothing newer
     // for a second: the window's resize has gone through), grab and quit.
     const QString path = parser.value(screenshot);
     auto* settle = new QTimer(&window);
     settle->setSingleShot(true);
     settle->setInterval(1000);
-    QObject::connect(settle, &QTimer::timeout, &window, [&window, path] {
-      const bool saved = window.grab().save(path);
-      QApplication::exit(saved ? 0 : 1);
+    QObject::connect(settle, &QTimer::timeout, &window, [&window, path, quit] {
+      if (window.grab().save(path)) {
+        QApplication::exit(0);
+      } else {
+        quit(QStringLiteral("cannot write %1").arg(path));
+      }
     });
     QObject::connect(&window.client(), &crackvis::client::RenderClient::frameReady, settle,
                      [settle](const QImage&, const crackvis::client::FrameInfo& info) {
@@ -151,7 +254,8 @@ int main(int argc, char** argv) {
                          settle->stop();
                        }
                      });
-    QTimer::singleShot(60000, &app, [] { QApplication::exit(1); });
+    QTimer::singleShot(60000, &app,
+                       [quit] { quit(QStringLiteral("no full-resolution frame within 60 s")); });
   }
   return QApplication::exec();
 }

@@ -208,7 +208,7 @@ int main(int argc, char** argv) {
   app.add_option("--root", flags.root, "data root: the folder whose files are served");
   app.add_option("--ca", flags.ca,
                  "CA certificate (PEM) that client certificates must be signed by "
-                 "(default certs/generated/ca.pem)");
+                 "(default certs/generated/ca.pem, where missing /etc/crackvis/certs/ca.pem)");
   app.add_option("--cert", flags.cert,
                  "server certificate (PEM; default certs/generated/server.pem)");
   app.add_option("--key", flags.key,

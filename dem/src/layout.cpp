@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <array>
 #include <limits>
 
@@ -177,6 +178,20 @@ Status checkStepInRange(const std::string& file, int step, int stepCount) {
   }
   return outOfRange(fmt::format("{}: step {} out of range (the file has steps 0..{})", file, step,
                                 stepCount - 1));
+}
+
+std::vector<std::int64_t> brokenBondsPerStep(std::span<const std::int32_t> breakSteps,
+                                             int stepCount) {
+  std::vector<std::int64_t> broken(static_cast<std::size_t>(std::max(0, stepCount)), 0);
+  for (const std::int32_t step : breakSteps) {
+    if (step >= 0 && step < stepCount) {
+      ++broken[static_cast<std::size_t>(step)];
+    }
+  }
+  for (std::size_t k = 1; k < broken.size(); ++k) {
+    broken[k] += broken[k - 1];
+  }
+  return broken;
 }
 
 Status checkDeclaredSizes(const std::string& file, const LayoutSizes& sizes,

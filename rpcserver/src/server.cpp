@@ -88,6 +88,9 @@ Result<std::unique_ptr<ServerHost>> ServerHost::start(const Listener& listener,
         listener.listen));
   }
   host->m_server->GetHealthCheckService()->SetServingStatus(true);
+  if (!host->m_settings.service.empty()) {
+    host->m_server->GetHealthCheckService()->SetServingStatus(host->m_settings.service, true);
+  }
   host->m_address = formatHostPort(listener.hostPort.host, host->m_port);
   if (listener.insecure) {
     std::fprintf(stderr,

@@ -2,24 +2,34 @@
 // crackvis-render started in this process on loopback ports with generated
 // certificates (tests/server/render_fixture.hpp), frames decoded by the
 // client's own decoder thread. Widgets run under QT_QPA_PLATFORM=offscreen.
+#include <QAction>
 #include <QApplication>
+#include <QCheckBox>
 #include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QFile>
+#include <QLineEdit>
 #include <QSignalSpy>
 #include <QSlider>
 #include <QTest>
 #include <QTreeWidget>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <optional>
 
 #include <catch2/catch.hpp>
 
 #include "dataservice/service_fixture.hpp"
 #include "server/render_fixture.hpp"
+#include "support/network.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/client/main_window.hpp>
 #include <crackvis/client/pipeline_panel.hpp>
 #include <crackvis/client/render_client.hpp>
+#include <crackvis/client/step_plot.hpp>
+#include <crackvis/dem/dem_file.hpp>
 
 using namespace crackvis;
 using namespace crackvis::testing;
@@ -242,4 +252,419 @@ TEST_CASE("the pipeline panel offers a file's extra arrays under colour by", "[c
   CHECK(box->findText("extra: damage") < 0);
   CHECK(box->findText("extra: force") >= 0);
   CHECK(bonds->findText("extra: forceN") < 0);
+}
+
+TEST_CASE("the client says what is wrong with the server it was pointed at",
+          "[client][integration]") {
+  application();
+  auto services = startServices();
+  client::RenderClient client;
+  auto settings = settingsFor(*services.render);
+  SECTION("nothing listens there") {
+    const int port = closedPort();
+    settings.address = QStringLiteral("localhost:%1").arg(port);
+    const Status status = client.connectTo(settings);
+    CHECK(status.code() == StatusCode::kUnavailable);
+    CHECK(status.message() == fmt::format("no crackvis-render at localhost:{} (connection "
+                                          "refused): is it running? see docs/deploy.md",
+                                          port));
+  }
+  SECTION("the data service's port") {
+    settings.address = QStringLiteral("localhost:%1").arg(services.data->port());
+    const Status status = client.connectTo(settings);
+    CHECK(status.code() == StatusCode::kFailedPrecondition);
+    CHECK(status.message() == fmt::format("localhost:{} is a crackvis-data, not a crackvis-render",
+                                          services.data->port()));
+  }
+  SECTION("a render server on --insecure") {
+    auto config = renderConfig(*services.data);
+    config.insecure = true;
+    auto plain = startRenderServer(config);
+    settings.address = QString::fromStdString(plain->address());
+    const Status status = client.connectTo(settings);
+    CHECK(status.message() ==
+          fmt::format("{} speaks plaintext (a crackvis-render started with --insecure), not TLS, "
+                      "and this client connects only with TLS: start the server with its "
+                      "certificates (docs/security.md)",
+                      plain->address()));
+  }
+  SECTION("an address without a port") {
+    settings.address = QStringLiteral("localhost");
+    const Status status = client.connectTo(settings);
+    CHECK(status.code() == StatusCode::kInvalidArgument);
+    CHECK_THAT(status.message(),
+               Catch::StartsWith("address 'localhost': expected HOST:PORT with the port"));
+  }
+  SECTION("a certificate that is not there") {
+    settings.caPath = QStringLiteral("/nonexistent/ca.pem");
+    const Status status = client.connectTo(settings);
+    CHECK(status.message() ==
+          "cannot read CA certificate '/nonexistent/ca.pem': No such file or "
+          "directory (set by --ca or in File > Connect)");
+  }
+  CHECK_FALSE(client.connected());
+  // The right address, for contrast.
+  CHECK(client.connectTo(settingsFor(*services.render)).isOk());
+}
+
+TEST_CASE("the window shows a step the file lacks as the server's error, not another step",
+          "[client][ui][integration]") {
+  application();
+  auto services = startServices();
+  client::MainWindow window;
+  window.resize(900, 600);
+  window.show();
+  REQUIRE(window.connectTo(settingsFor(*services.render)));
+  auto summary = window.client().describe(QStringLiteral("cuboidA.h5"));
+  REQUIRE(summary.isOk());
+  const int steps = summary->steps;
+  REQUIRE(steps > 3);
+
+  CHECK_FALSE(window.openFile(QStringLiteral("cuboidA.h5"), steps + 100));
+  const QString expected =
+      QStringLiteral("cuboidA.h5: step %1 out of range (the file has steps 0..%2)")
+          .arg(steps + 100)
+          .arg(steps - 1);
+  CHECK(window.lastMessage().contains(expected));
+  CHECK(window.messages().contains(expected));
+  CHECK_FALSE(window.client().hasSession());
+
+  // A step the file has is the one shown.
+  REQUIRE(window.openFile(QStringLiteral("cuboidA.h5"), 2));
+  REQUIRE(spinUntil([&] { return window.viewport().framesShown() > 0; }));
+  CHECK(window.client().step() == 2);
+  CHECK(window.stepSlider().value() == 2);
+}
+
+namespace {
+
+// The window with cuboidA.h5 open and a frame shown.
+void openCuboid(client::MainWindow& window, const service::RenderServer& server) {
+  window.resize(900, 600);
+  window.show();
+  REQUIRE(window.connectTo(settingsFor(server)));
+  REQUIRE(window.openFile(QStringLiteral("cuboidA.h5")));
+  REQUIRE(spinUntil([&] { return window.viewport().framesShown() > 0; }));
+}
+
+std::optional<pipeline::CameraDescription> cameraOf(const QString& xml) {
+  auto d = pipeline::parsePipeline(xml.toStdString());
+  REQUIRE(d.isOk());
+  return d->view.camera;
+}
+
+// The full-resolution frame that follows the last event sent.
+QImage settledFrame(FrameLog& log, quint64 event) {
+  REQUIRE(spinUntil([&] {
+    return !log.infos.empty() && log.infos.back().lastEventId >= event &&
+           log.infos.back().fullResolution;
+  }));
+  return log.images.back();
+}
+
+}  // namespace
+
+TEST_CASE("a saved view opens again as it was: file, step, camera; another file is fitted",
+          "[client][ui][integration]") {
+  application();
+  auto services = startServices();
+  testing::TempDir out;
+  const QString viewPath = QString::fromStdString(out.file("view.xml"));
+  QImage saved;  // rendered by the server (PNG): the picture itself, no codec between
+  pipeline::CameraDescription savedCamera;
+  {
+    client::MainWindow window;
+    openCuboid(window, *services.render);
+    FrameLog log(window.client());
+    window.stepSlider().setValue(3);
+    REQUIRE(spinUntil([&] { return window.client().step() == 3; }, 10000));
+    const auto opened = cameraOf(window.client().pipelineXml());
+    REQUIRE(opened.has_value());
+    window.client().rotate(0.15, 0.05);
+    window.client().zoom(0.4);
+    const quint64 still = window.client().requestStill();
+    (void)settledFrame(log, still);
+    // The server's state carries the camera once it has come to rest.
+    REQUIRE(spinUntil([&] {
+      auto camera = cameraOf(window.client().pipelineXml());
+      return camera && dem::norm(camera->position - opened->position) > 1e-3;
+    }));
+    auto png = window.client().snapshotPng();
+    REQUIRE(png.isOk());
+    saved = QImage::fromData(*png, "PNG");
+    REQUIRE(window.saveView(viewPath));
+    CHECK(window.messages().contains(QStringLiteral("saved the view to")));
+    QFile file(viewPath);
+    REQUIRE(file.open(QIODevice::ReadOnly));
+    auto view = pipeline::parsePipeline(file.readAll().toStdString());
+    REQUIRE(view.isOk());
+    CHECK(view->file == "cuboidA.h5");
+    CHECK(view->step == 3);
+    CHECK_FALSE(view->clientLayout.empty());  // the window's docks and size
+    REQUIRE(view->view.camera.has_value());
+    savedCamera = *view->view.camera;
+  }
+  // A new window (a colleague's) shows the same picture from the file.
+  client::MainWindow again;
+  again.resize(900, 600);
+  again.show();
+  REQUIRE(again.connectTo(settingsFor(*services.render)));
+  FrameLog log(again.client());
+  REQUIRE(again.loadView(viewPath));
+  REQUIRE(spinUntil([&] { return !log.infos.empty() && log.infos.back().fullResolution; }));
+  CHECK(again.client().step() == 3);
+  CHECK(again.stepSlider().value() == 3);
+  auto png = again.client().snapshotPng(saved.width(), saved.height());
+  REQUIRE(png.isOk());
+  const QImage reopened = QImage::fromData(*png, "PNG");
+  REQUIRE(reopened.size() == saved.size());
+  CHECK(difference(saved, reopened) < 0.5);
+  auto shownCamera = cameraOf(again.client().pipelineXml());
+  REQUIRE(shownCamera.has_value());
+  CHECK(dem::norm(shownCamera->position - savedCamera.position) < 1e-6);
+
+  // Opening a file (this one again, as a user picks it in the browser)
+  // fits the camera to it instead of keeping the saved one.
+  REQUIRE(again.openFile(QStringLiteral("cuboidA.h5")));
+  REQUIRE(spinUntil([&] {
+    auto camera = cameraOf(again.client().pipelineXml());
+    return camera && dem::norm(camera->position - savedCamera.position) > 1e-3;
+  }));
+
+  // A file that is no view: one message, nothing changes.
+  const std::string bad = out.file("bad.xml");
+  std::ofstream(bad) << "<pipeline><particles opacity='2'/></pipeline>";
+  CHECK_FALSE(again.loadView(QString::fromStdString(bad)));
+  CHECK(again.lastMessage().contains(QStringLiteral("is no view")));
+  CHECK(again.client().hasSession());
+}
+
+TEST_CASE("screenshots of any size, full-resolution movies, and a recording's menu item",
+          "[client][ui][integration]") {
+  application();
+  auto services = startServices();
+  client::MainWindow window;
+  openCuboid(window, *services.render);
+  testing::TempDir out;
+
+  const QString shot = QString::fromStdString(out.file("shot.png"));
+  window.saveScreenshot(shot, QSize(640, 360));
+  const QImage picture(shot);
+  CHECK(picture.size() == QSize(640, 360));
+  // Beyond the server's largest view: its refusal, in the messages pane.
+  window.saveScreenshot(QString::fromStdString(out.file("huge.png")), QSize(9000, 9000));
+  CHECK(window.lastMessage().contains(QStringLiteral("9000")));
+  CHECK_FALSE(std::filesystem::exists(out.file("huge.png")));
+
+  // Steps 0, 2, 4, 6 rendered again on the server at 320x240.
+  const int steps = window.client().stepCount();
+  REQUIRE(steps > 6);
+  const std::string movie = out.file("movie.mp4");
+  REQUIRE(window.recordMovie(QString::fromStdString(movie), 0, 6, 2, QSize(320, 240), 10));
+  const auto probe =
+      runProcess({"ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0",
+                  "-show_entries", "stream=width,height,nb_read_frames", "-of", "csv=p=0", movie});
+  INFO(probe.err);
+  REQUIRE(probe.exitCode == 0);
+  CHECK(QString::fromStdString(probe.out).trimmed() == QStringLiteral("320,240,4"));
+  CHECK(spinUntil([&] { return window.client().step() == 6; }, 10000));
+  // A step the file lacks: the server's refusal, no file left behind.
+  const std::string badMovie = out.file("bad.mp4");
+  CHECK_FALSE(window.recordMovie(QString::fromStdString(badMovie), steps, steps + 2, 1,
+                                 QSize(320, 240), 10));
+  INFO(window.messages().toStdString());
+  CHECK(window.lastMessage().contains(QStringLiteral("out of range")));
+  CHECK_FALSE(std::filesystem::exists(badMovie));
+
+  // The menu says what the item will do.
+  auto actionNamed = [&](const QString& prefix) -> QAction* {
+    for (QAction* action : window.findChildren<QAction*>()) {
+      if (action->text().remove(QLatin1Char('&')).startsWith(prefix)) {
+        return action;
+      }
+    }
+    return nullptr;
+  };
+  REQUIRE(actionNamed(QStringLiteral("Record the stream")) != nullptr);
+  window.toggleRecording(QString::fromStdString(out.file("stream.mp4")));
+  CHECK(actionNamed(QStringLiteral("Stop recording")) != nullptr);
+  CHECK(actionNamed(QStringLiteral("Record the stream")) == nullptr);
+  window.toggleRecording();
+  CHECK(actionNamed(QStringLiteral("Record the stream")) != nullptr);
+}
+
+TEST_CASE("the messages pane folds a repeated error into a count", "[client][ui][integration]") {
+  application();
+  auto services = startServices();
+  client::MainWindow window;
+  openCuboid(window, *services.render);
+  QSignalSpy failed(&window.client(), &client::RenderClient::eventFailed);
+  for (int k = 0; k < 3; ++k) {
+    window.client().setStep(100000);
+  }
+  REQUIRE(spinUntil([&] { return failed.count() >= 3; }));
+  QTest::qWait(50);  // the window's own slot runs after the spy's
+  const QString log = window.messages();
+  CHECK(log.count(QStringLiteral("out of range")) == 1);
+  CHECK(log.contains(QStringLiteral("(3 times)")));
+  // A different message starts a line of its own.
+  window.client().setStep(100001);
+  REQUIRE(spinUntil([&] { return failed.count() >= 4; }));
+  QTest::qWait(50);
+  CHECK(window.messages().count(QStringLiteral("out of range")) == 2);
+}
+
+TEST_CASE("the panel's clip, threshold and colour range reach every layer", "[client][ui]") {
+  application();
+  client::PipelinePanel panel;
+  QSignalSpy changed(&panel, &client::PipelinePanel::changed);
+  const auto& cracks = panel.crackControls();
+  const auto& bonds = panel.bondControls();
+  panel.clipNormal(0)->setValue(0.0);
+  panel.clipNormal(2)->setValue(1.0);
+  panel.clipOrigin(2)->setValue(0.05);
+  cracks.clip->setChecked(true);
+  bonds.clip->setChecked(true);
+  const auto& d1 = panel.description();
+  REQUIRE(d1.cracks.clip.has_value());
+  CHECK(d1.cracks.clip->normal == dem::Vec3{0, 0, 1});
+  CHECK(d1.cracks.clip->origin.z == Approx(0.05));
+  REQUIRE(d1.bonds.clip.has_value());
+  CHECK_FALSE(d1.particles.clip.has_value());
+
+  cracks.thresholdBy->setCurrentIndex(cracks.thresholdBy->findText(QStringLiteral("break step")));
+  cracks.thresholdMin->setText(QStringLiteral("100"));
+  cracks.threshold->setChecked(true);
+  const auto& d2 = panel.description();
+  REQUIRE(d2.cracks.threshold.has_value());
+  CHECK(d2.cracks.threshold->by == pipeline::CrackColourBy::kBreakStep);
+  CHECK(d2.cracks.threshold->min == 100.0);
+  CHECK(std::isinf(d2.cracks.threshold->max));
+
+  const auto& particles = panel.particleControls();
+  particles.rangeMin->setText(QStringLiteral("-0.5"));
+  particles.rangeMax->setText(QStringLiteral("2e-3"));
+  particles.rangeMode->setCurrentIndex(particles.rangeMode->findText(QStringLiteral("set")));
+  const auto& d3 = panel.description();
+  CHECK(d3.particles.range.mode == pipeline::RangeMode::kUser);
+  CHECK(d3.particles.range.min == -0.5);
+  CHECK(d3.particles.range.max == 0.002);
+  CHECK(changed.count() >= 4);
+  // What the panel makes is a valid document that says the same.
+  pipeline::PipelineDescription made = panel.description();
+  made.file = "cuboidA.h5";  // the window adds the file it opened
+  auto parsed = pipeline::parsePipeline(pipeline::toXml(made));
+  INFO(parsed.status().message());
+  REQUIRE(parsed.isOk());
+  CHECK(*parsed == made);
+  // And a description shown comes back unchanged.
+  client::PipelinePanel other;
+  other.setDescription(*parsed);
+  CHECK(other.crackControls().threshold->isChecked());
+  CHECK(other.crackControls().thresholdMin->text() == QStringLiteral("100"));
+  CHECK(other.particleControls().rangeMax->text() == QStringLiteral("0.002"));
+}
+
+TEST_CASE("a double click shows the values of the particle under it", "[client][ui][integration]") {
+  application();
+  auto services = startServices();
+  client::MainWindow window;
+  openCuboid(window, *services.render);
+  QSignalSpy picked(&window.client(), &client::RenderClient::picked);
+  const QRect picture = window.viewport().pictureRect();
+  QTest::mouseDClick(&window.viewport(), Qt::LeftButton, Qt::NoModifier, picture.center());
+  REQUIRE(spinUntil([&] { return picked.count() > 0; }, 10000));
+  const QList<QVariant> answer = picked.takeFirst();
+  CHECK(answer.at(2).toString() == QStringLiteral("particle"));
+  CHECK(answer.at(3).toLongLong() >= 0);
+  CHECK(answer.at(1).toString().contains(QStringLiteral("radius")));
+  CHECK(spinUntil([&] { return window.messages().contains(QStringLiteral("picked: particle")); },
+                  5000));
+  // Off the specimen (the view's corner, the background): nothing there.
+  CHECK(window.viewport().pickAt(picture.topLeft() + QPoint(2, 2)));
+  REQUIRE(spinUntil([&] { return picked.count() > 0; }, 10000));
+  CHECK(picked.takeFirst().at(1).toString() == QStringLiteral("nothing there"));
+  // Outside the picture no event is sent; the server refuses a point
+  // outside the view all the same.
+  CHECK_FALSE(window.viewport().pickAt(QPoint(-5, -5)));
+  QSignalSpy failed(&window.client(), &client::RenderClient::eventFailed);
+  window.client().pick(2.0, 0.5);
+  REQUIRE(spinUntil([&] { return failed.count() > 0; }, 10000));
+  CHECK(failed.takeFirst().at(1).toString().contains(QStringLiteral("fractions of the view")));
+  CHECK(window.client().hasSession());
+}
+
+TEST_CASE("the step plot shows the broken bonds of every step and goes to a clicked step",
+          "[client][ui][integration]") {
+  application();
+  auto services = startServices();
+  client::MainWindow window;
+  openCuboid(window, *services.render);
+  const client::StepHistory& history = window.stepPlot().history();
+  const int steps = window.client().stepCount();
+  REQUIRE(static_cast<int>(history.brokenBonds.size()) == steps);
+  REQUIRE(static_cast<int>(history.time.size()) == steps);
+  // Against the file's own bond states, step by step (the plot counts
+  // /bonds/break_step).
+  auto file = dem::DemFileReader::open(crackRoot().file("cuboidA.h5"));
+  REQUIRE(file.isOk());
+  for (const int step : {0, steps / 2, steps - 1}) {
+    auto state = file->readBondState(step);
+    REQUIRE(state.isOk());
+    CHECK(history.brokenBonds[static_cast<std::size_t>(step)] ==
+          std::count(state->begin(), state->end(), std::uint8_t{1}));
+  }
+  CHECK(history.brokenBonds.back() > history.brokenBonds.front());
+  CHECK(history.bondCount > history.brokenBonds.back());
+  CHECK(history.time.back() > history.time.front());
+
+  // A click in the plot's middle goes to the middle step.
+  const QRect area = window.stepPlot().plotArea();
+  const int middle = window.stepPlot().stepAt(area.center().x());
+  CHECK(std::abs(middle - (steps - 1) / 2) <= 1);
+  QTest::mouseClick(&window.stepPlot(), Qt::LeftButton, Qt::NoModifier, area.center());
+  CHECK(spinUntil([&] { return window.client().step() == middle; }, 10000));
+  CHECK(window.stepSlider().value() == middle);
+  // A scalar the file lacks is not drawn (the simulator's files have none).
+  CHECK_FALSE(window.stepPlot().setScalar(QStringLiteral("load")));
+  CHECK(window.plotScalarBox().count() == 1 + history.scalarNames.size());
+}
+
+TEST_CASE("the step plot draws a chosen step scalar beside the broken bonds", "[client][ui]") {
+  application();
+  client::StepPlot plot;
+  plot.resize(400, 200);
+  client::StepHistory history;
+  history.time = {0.0, 1.0, 2.0, 3.0};
+  history.brokenBonds = {0, 1, 3, 6};
+  history.bondCount = 10;
+  history.scalarNames = {QStringLiteral("load")};
+  history.scalars = {{0.0, 5.0, std::nan(""), 2.0}};
+  plot.setHistory(history);
+  auto pixelsOf = [&](QColor colour) {
+    const QImage image = plot.grab().toImage().convertToFormat(QImage::Format_RGB888);
+    int n = 0;
+    for (int y = 0; y < image.height(); ++y) {
+      for (int x = 0; x < image.width(); ++x) {
+        const QColor c = image.pixelColor(x, y);
+        n += std::abs(c.red() - colour.red()) + std::abs(c.green() - colour.green()) +
+                         std::abs(c.blue() - colour.blue()) <
+                     30
+                 ? 1
+                 : 0;
+      }
+    }
+    return n;
+  };
+  const QColor scalarColour(0x4c, 0xc9, 0xf0);
+  const QColor brokenColour(0xff, 0x9f, 0x1c);
+  CHECK(pixelsOf(brokenColour) > 50);
+  CHECK(pixelsOf(scalarColour) == 0);
+  REQUIRE(plot.setScalar(QStringLiteral("load")));
+  CHECK(plot.scalar() == QStringLiteral("load"));
+  CHECK(pixelsOf(scalarColour) > 50);
+  CHECK_FALSE(plot.setScalar(QStringLiteral("energy")));
+  CHECK(pixelsOf(scalarColour) == 0);
+  CHECK(plot.stepAt(plot.plotArea().right()) == 3);
+  CHECK(plot.stepAt(-100) == 0);
 }

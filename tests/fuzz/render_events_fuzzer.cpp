@@ -53,6 +53,10 @@ struct AcceptedCheck {
   void operator()(const SetStepEvent&) const {}
   void operator()(const StillEvent&) const {}
   void operator()(const KeyframeEvent&) const {}
+  void operator()(const PickEvent& pick) const {
+    require(pick.x >= 0.0 && pick.x <= 1.0 && pick.y >= 0.0 && pick.y <= 1.0,
+            "a pick outside the view was accepted");
+  }
 };
 
 }  // namespace

@@ -131,6 +131,23 @@ TEST_CASE("colour ranges, clips, thresholds and annotations survive toXml and pa
   CHECK(plain->annotations.scaleBar);
 }
 
+TEST_CASE("a saved view's client layout survives toXml and parse; a bad one is refused",
+          "[pipeline]") {
+  PipelineDescription d;
+  d.file = "a.h5";
+  d.clientLayout = "AAAA/+09bGF5b3V0=";
+  auto parsed = parsePipeline(toXml(d));
+  REQUIRE(parsed.isOk());
+  CHECK(parsed->clientLayout == d.clientLayout);
+  CHECK(toXml(PipelineDescription{}).find("<client") == std::string::npos);
+  auto bad = parsePipeline(document("  <data file=\"a.h5\"/>\n  <client layout=\"a<b\"/>\n"));
+  CHECK_FALSE(bad.isOk());
+  auto quoted =
+      parsePipeline(document("  <data file=\"a.h5\"/>\n  <client layout=\"x&quot;y\"/>\n"));
+  REQUIRE_FALSE(quoted.isOk());
+  CHECK_THAT(quoted.status().message(), Catch::Contains("client"));
+}
+
 TEST_CASE("particles colour by a file's extra array: extra:NAME", "[pipeline]") {
   auto parsed = parsePipeline(
       document("  <data file=\"a.h5\"/>\n  <particles colour-by=\"extra:damage\"/>\n"));

@@ -391,6 +391,39 @@ TEST_CASE("a session reads the arrays its view colours by: break step, bond forc
   CHECK(colouredBy(view).rgb.size() > 0);                     // and it takes the next replacement
 }
 
+TEST_CASE("a session's annotations name the step it shows", "[render][service][integration]") {
+  auto services = startServices();
+  auto stub = connect(*services.render);
+  auto view = crackView();
+  view.annotations.show = true;
+  view.step = 0;
+  StreamClient stream(*stub, openSession(*stub, view));
+  // The annotation text at the top left, in a full-resolution frame after `event`.
+  auto textAfter = [&](std::uint64_t event) {
+    REQUIRE(stream.waitFor([&](const auto& frames, const auto&) {
+      return !frames.empty() && frames.back().frame.last_event_id() == event &&
+             frames.back().frame.full_resolution();
+    }));
+    const auto picture = stream.frames().back().picture;
+    std::vector<std::uint8_t> corner;
+    int bright = 0;
+    for (int y = 0; y < picture.height / 8; ++y) {
+      for (int x = 0; x < picture.width / 2; ++x) {
+        const auto* p = &picture.rgb[3 * (static_cast<std::size_t>(y) * picture.width + x)];
+        corner.push_back(p[0]);
+        bright += p[0] > 150 && p[1] > 150 && p[2] > 150 ? 1 : 0;
+      }
+    }
+    CHECK(bright > 30);
+    return corner;
+  };
+  const auto atZero = textAfter(0);
+  const auto atLast = textAfter(stream.setStep(7));
+  // "step 0 of ..." became "step 7 of ...".
+  CHECK(atZero != atLast);
+  CHECK(stream.errors().empty());
+}
+
 TEST_CASE("a session steps and plays through the fracture", "[render][service][integration]") {
   auto services = startServices();
   auto stub = connect(*services.render);
@@ -633,6 +666,19 @@ TEST_CASE("snapshots, several sessions, close, and the data service passed throu
   describe.set_file("../outside.h5");
   CHECK(stub->Describe(&missingContext, describe, &description).error_code() ==
         grpc::StatusCode::INVALID_ARGUMENT);
+  // A file that is no crackvis-dem and a missing one: a clear refusal.
+  for (const auto& [file, code] :
+       {std::pair{"notes.txt", grpc::StatusCode::FAILED_PRECONDITION},
+        std::pair{"nosuch.h5", grpc::StatusCode::NOT_FOUND},
+        std::pair{"../outside.h5", grpc::StatusCode::INVALID_ARGUMENT}}) {
+    grpc::ClientContext historyContext;
+    v1::StepHistoryRequest history;
+    history.set_file(file);
+    v1::StepHistoryResponse steps;
+    const grpc::Status refused = stub->StepHistory(&historyContext, history, &steps);
+    INFO(file << ": " << refused.error_message());
+    CHECK(refused.error_code() == code);
+  }
 
   for (const std::string& id : {a, b}) {
     grpc::ClientContext context;
@@ -707,6 +753,14 @@ class AsUser {
     v1::DescribeResponse response;
     return m_stub.Describe(&context, request, &response);
   }
+  grpc::Status stepHistory(const std::string& file) {
+    grpc::ClientContext context;
+    prepare(context);
+    v1::StepHistoryRequest request;
+    request.set_file(file);
+    v1::StepHistoryResponse response;
+    return m_stub.StepHistory(&context, request, &response);
+  }
   grpc::Status snapshot(const std::string& session) {
     grpc::ClientContext context;
     prepare(context);
@@ -778,6 +832,10 @@ TEST_CASE("the render server applies crackvis-data's users: tokens and folders",
   }
   SECTION("a symlink in alice's folder to bob's file: Describe, OpenSession, replacement") {
     CHECK(asAlice.describe("alice/a.h5").ok());
+    CHECK(asAlice.stepHistory("alice/a.h5").ok());
+    CHECK(asAlice.stepHistory("alice/link.h5").error_code() == grpc::StatusCode::PERMISSION_DENIED);
+    CHECK(asBob.stepHistory("cuboidA.h5").error_code() == grpc::StatusCode::PERMISSION_DENIED);
+    CHECK(anonymous.stepHistory("alice/a.h5").error_code() == grpc::StatusCode::UNAUTHENTICATED);
     const grpc::Status described = asAlice.describe("alice/link.h5");
     CHECK(described.error_code() == grpc::StatusCode::PERMISSION_DENIED);
     CHECK_THAT(described.error_message(), Catch::Contains("links to 'bob/b.h5'"));

@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 
 #include "cracks/crack_fixtures.hpp"
 #include "support/temp_dir.hpp"
@@ -448,6 +449,31 @@ TEST_CASE("a clip plane cuts cracks and bonds too", "[render][egl]") {
   CHECK(count(image, red) == 0);
 }
 
+TEST_CASE("a camera reset fits the whole specimen, whatever is hidden or clipped",
+          "[render][egl]") {
+  auto renderer = render::SceneRenderer::create(kWidth, kHeight);
+  REQUIRE(renderer.isOk());
+  Scene scene;
+  scene.description.view.camera.reset();
+  scene.description.particles.visible = true;
+  REQUIRE((*renderer)->setScene(scene.description, scene.input(), true).isOk());
+  (*renderer)->moveCamera(render::CameraMove::kReset, 0, 0);
+  const pipeline::CameraDescription whole = (*renderer)->camera();
+  // Only the crack's half-plane shown, particles hidden: VTK's own reset
+  // would zoom onto what is visible; the reset fits the specimen still.
+  scene.description.particles.visible = false;
+  const dem::Vec3 centre = 0.5 * scene.crack.block.extent;
+  scene.description.cracks.clip = pipeline::ClipPlane{centre, {0, 0, 1}};
+  (*renderer)->moveCamera(render::CameraMove::kZoom, 1.5, 0);
+  REQUIRE((*renderer)->setScene(scene.description, scene.input(), false).isOk());
+  (*renderer)->moveCamera(render::CameraMove::kReset, 0, 0);
+  const pipeline::CameraDescription fitted = (*renderer)->camera();
+  CHECK(dem::norm(fitted.focalPoint - whole.focalPoint) < 1e-9);
+  CHECK(dem::norm(fitted.position - whole.position) < 1e-9);
+  // The specimen's centre, with the particles' radii.
+  CHECK(dem::norm(whole.focalPoint - centre) < 0.6);
+}
+
 TEST_CASE("hidden particles are culled without changing the picture", "[render][egl]") {
   auto renderer = render::SceneRenderer::create(kWidth, kHeight);
   REQUIRE(renderer.isOk());
@@ -719,4 +745,67 @@ TEST_CASE("occlusion culling keeps a sphere that peeks out", "[render]") {
   view.nearDepth = 9.5;
   spheres.mayHide = {};
   CHECK(render::unoccludedSpheres(view, spheres) == std::vector<std::int32_t>{0, 1, 2});
+}
+
+TEST_CASE("a pick finds the particle or crack element under the point, as shown", "[render]") {
+  Scene scene;
+  const render::SceneInput input = scene.input();
+  const dem::Vec3 centre = 0.5 * scene.crack.block.extent;
+  const auto& positions = scene.crack.block.positions;
+  // A ray along -x through the centre: the particle it meets first is the
+  // one nearest the eye among those on the line, and the hit lies on its
+  // sphere.
+  const scene::Ray ray{centre + dem::Vec3{100, 0.01, 0.02}, {-1, 0, 0}};
+  scene.description.particles.visible = true;
+  scene::PickResult hit = scene::pick(scene.description, input, ray);
+  REQUIRE(hit.kind == scene::PickedKind::kParticle);
+  const auto i = static_cast<std::size_t>(hit.index);
+  CHECK(dem::norm(hit.point - positions[i]) == Approx(0.5).epsilon(1e-9));
+  double farthest = -1e300;  // the largest x of a sphere the line passes through
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    const dem::Vec3 off = positions[k] - ray.origin;
+    const double dy = off.y;
+    const double dz = off.z;
+    if (dy * dy + dz * dz < 0.25) {
+      farthest = std::max(farthest, positions[k].x + std::sqrt(0.25 - dy * dy - dz * dz));
+    }
+  }
+  CHECK(hit.point.x == Approx(farthest));
+  CHECK(hit.values.front().name == "radius");
+  CHECK(hit.values.front().value == 0.5);
+  CHECK(scene::describePick(hit).starts_with(fmt::format("particle {} at (", hit.index)));
+
+  // Particles hidden: the crack plane (x = const) is met, with its bond.
+  scene.description.particles.visible = false;
+  hit = scene::pick(scene.description, input, ray);
+  REQUIRE(hit.kind == scene::PickedKind::kCrack);
+  const auto& cell = scene.mesh.polygons;
+  REQUIRE(cell.size() > 0);
+  CHECK(std::any_of(hit.values.begin(), hit.values.end(),
+                    [](const scene::PickedValue& v) { return v.name.starts_with("bond_id"); }));
+  CHECK(std::abs(hit.point.y - ray.origin.y) < 1e-9);
+  CHECK(hit.point.x > 0.0);
+  CHECK(hit.point.x < scene.crack.block.extent.x);
+  // Clipped away (the eye's side of x = centre), nothing is left on the line.
+  scene.description.cracks.clip = pipeline::ClipPlane{centre - dem::Vec3{3, 0, 0}, {1, 0, 0}};
+  CHECK(scene::pick(scene.description, input, ray).kind == scene::PickedKind::kNothing);
+  // A ray that misses the block.
+  const scene::Ray miss{centre + dem::Vec3{100, 50, 0}, {-1, 0, 0}};
+  CHECK(scene::pick(scene.description, input, miss).kind == scene::PickedKind::kNothing);
+}
+
+TEST_CASE("the view's ray goes through the focal point at the centre of the view",
+          "[render][egl]") {
+  auto renderer = render::SceneRenderer::create(kWidth, kHeight);
+  REQUIRE(renderer.isOk());
+  Scene scene;
+  REQUIRE((*renderer)->setScene(scene.description, scene.input(), true).isOk());
+  const pipeline::CameraDescription camera = (*renderer)->camera();
+  const scene::Ray ray = (*renderer)->viewRay(0.5, 0.5, kWidth, kHeight);
+  const dem::Vec3 view = camera.focalPoint - camera.position;
+  const dem::Vec3 along = (1.0 / dem::norm(ray.direction)) * ray.direction;
+  CHECK(dem::dot(along, (1.0 / dem::norm(view)) * view) == Approx(1.0).epsilon(1e-6));
+  // The top of the view is up (+z here), its right is -y seen along -x.
+  const scene::Ray top = (*renderer)->viewRay(0.5, 0.0, kWidth, kHeight);
+  CHECK(top.direction.z / dem::norm(top.direction) > along.z + 0.1);
 }

@@ -21,8 +21,10 @@
 #include "bench_support.hpp"
 #include "commands.hpp"
 #include "crackvis/v1/render.grpc.pb.h"
+#include <crackvis/dataservice/tls_material.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
+#include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
 
 namespace crackvis::cli {
@@ -41,9 +43,7 @@ struct RenderBenchOptions {
   double seconds = 5.0;
   double eventRate = 60.0;  // events per second, a mouse drag's rate
   int stillFrames = 10;     // isolated camera moves answered at full resolution
-  std::string ca = "certs/generated/ca.pem";
-  std::string cert = "certs/generated/client.pem";
-  std::string key = "certs/generated/client.key";
+  dataservice::TlsFiles tls = dataservice::defaultTlsFiles("client");
   std::string token;
   bool jsonOnly = false;
   bool methodGiven = false;
@@ -208,21 +208,15 @@ std::string serverErrors(FrameCollector& collector) {
   return text;
 }
 
-std::unique_ptr<v1::RenderService::Stub> makeStub(const RenderBenchOptions& options) {
+std::shared_ptr<grpc::Channel> makeChannel(const RenderBenchOptions& options,
+                                           const dataservice::TlsMaterial& material) {
   grpc::SslCredentialsOptions ssl;
-  if (auto ca = readFile(options.ca)) {
-    ssl.pem_root_certs = *ca;
-  }
-  if (auto key = readFile(options.key)) {
-    ssl.pem_private_key = *key;
-  }
-  if (auto cert = readFile(options.cert)) {
-    ssl.pem_cert_chain = *cert;
-  }
+  ssl.pem_root_certs = material.caPem;
+  ssl.pem_private_key = material.keyPem;
+  ssl.pem_cert_chain = material.certPem;
   grpc::ChannelArguments arguments;
   arguments.SetMaxReceiveMessageSize(64 << 20);
-  return v1::RenderService::NewStub(
-      grpc::CreateCustomChannel(options.server, grpc::SslCredentials(ssl), arguments));
+  return grpc::CreateCustomChannel(options.server, grpc::SslCredentials(ssl), arguments);
 }
 
 void authorize(grpc::ClientContext& context, const RenderBenchOptions& options) {
@@ -233,10 +227,9 @@ void authorize(grpc::ClientContext& context, const RenderBenchOptions& options) 
 
 Result<Report> run(const RenderBenchOptions& options) {
   CRACKVIS_RETURN_IF_ERROR(checkHostPort("--server", options.server));
-  for (const std::string* path : {&options.ca, &options.cert, &options.key}) {
-    if (auto text = readFile(*path); !text) {
-      return text.status();
-    }
+  auto material = dataservice::loadTlsMaterial(options.tls);
+  if (!material) {
+    return material.status();
   }
   auto size = parseSize(options.size);
   if (!size) {
@@ -267,7 +260,8 @@ Result<Report> run(const RenderBenchOptions& options) {
   if (options.pipelinePath.empty() || options.methodGiven) {
     d.cracks.method = *method;
   }
-  auto stub = makeStub(options);
+  const auto channel = makeChannel(options, *material);
+  auto stub = v1::RenderService::NewStub(channel);
   const LoadAverage loadBefore = loadAverage();
 
   grpc::ClientContext openContext;
@@ -276,7 +270,8 @@ Result<Report> run(const RenderBenchOptions& options) {
   open.set_pipeline_xml(pipeline::toXml(d));
   v1::OpenSessionResponse opened;
   CRACKVIS_RETURN_IF_ERROR(
-      rpc::fromGrpcStatus(stub->OpenSession(&openContext, open, &opened), "OpenSession"));
+      rpc::fromGrpcStatus(stub->OpenSession(&openContext, open, &opened), "OpenSession",
+                          {rpc::ServerKind::kRender, options.server}, channel));
   Report report;
   report.backend = opened.backend();
   report.loadBefore = loadBefore;
@@ -565,10 +560,11 @@ Command addBenchRenderCommand(CLI::App& bench) {
                    "isolated camera moves answered at full resolution (0: none)")
       ->capture_default_str()
       ->check(CLI::Range(0, 1000));
-  command->add_option("--ca", options->ca, "CA certificate that signed the server's (PEM)")
+  command->add_option("--ca", options->tls.ca, "CA certificate that signed the server's (PEM)")
       ->capture_default_str();
-  command->add_option("--cert", options->cert, "client certificate (PEM)")->capture_default_str();
-  command->add_option("--key", options->key, "client private key (PEM)")->capture_default_str();
+  command->add_option("--cert", options->tls.cert, "client certificate (PEM)")
+      ->capture_default_str();
+  command->add_option("--key", options->tls.key, "client private key (PEM)")->capture_default_str();
   command->add_option("--token", options->token, "bearer token, when the server has users");
   command->add_flag("--json", options->jsonOnly, "print only the JSON");
   command->footer(

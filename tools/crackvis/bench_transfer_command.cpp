@@ -32,9 +32,7 @@ struct TransferOptions {
   std::string raw;
   std::string file;
   int step = -1;
-  std::string ca = "certs/generated/ca.pem";
-  std::string cert = "certs/generated/client.pem";
-  std::string key = "certs/generated/client.key";
+  ds::TlsFiles tls = ds::defaultTlsFiles("client");
   std::string token;
   int repeat = 5;
   int maxRepeat = 30;
@@ -100,7 +98,7 @@ Result<Connections> connect(const TransferOptions& options, Report& report) {
   report.raw = options.raw;
   ds::ClientOptions clientOptions;
   clientOptions.target = options.server;
-  clientOptions.tls = {options.ca, options.cert, options.key};
+  clientOptions.tls = options.tls;
   clientOptions.token = options.token;
   clientOptions.timeoutSeconds = 3600.0;
   auto client = ds::DataClient::connect(clientOptions);
@@ -414,7 +412,8 @@ Command addBenchTransferCommand(CLI::App& bench) {
       "(crackvis-data --raw-tls-listen). Rounds alternate their order and repeat until the "
       "median ratios settle. Prints bytes, seconds, MB/s, ratios and the load as a table and as "
       "JSON. Certificates come from certs/make-dev-certs.sh; --ca, --cert and --key name them "
-      "(defaults: certs/generated/ca.pem, client.pem, client.key).");
+      "(defaults: certs/generated/ca.pem, client.pem, client.key, or where they are missing "
+      "/etc/crackvis/certs).");
   command->add_option("--server", options->server, "crackvis-data address, HOST:PORT")->required();
   command
       ->add_option("--file", options->file, "crackvis-dem file, relative to the server's data root")
@@ -424,10 +423,11 @@ Command addBenchTransferCommand(CLI::App& bench) {
       ->add_option("--raw", options->raw,
                    "raw TLS baseline address, HOST:PORT: crackvis-data's --raw-tls-listen")
       ->required();
-  command->add_option("--ca", options->ca, "CA certificate that signed the server's (PEM)")
+  command->add_option("--ca", options->tls.ca, "CA certificate that signed the server's (PEM)")
       ->capture_default_str();
-  command->add_option("--cert", options->cert, "client certificate (PEM)")->capture_default_str();
-  command->add_option("--key", options->key, "client private key (PEM)")->capture_default_str();
+  command->add_option("--cert", options->tls.cert, "client certificate (PEM)")
+      ->capture_default_str();
+  command->add_option("--key", options->tls.key, "client private key (PEM)")->capture_default_str();
   command->add_option("--token", options->token, "bearer token, when the server has users");
   command
       ->add_option("--repeat", options->repeat,

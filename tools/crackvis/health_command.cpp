@@ -29,11 +29,16 @@ int runHealth(HealthOptions options) {
     return kExitFailure;
   }
   if (Status status = client->checkHealth(options.service); !status) {
-    printError("health", fmt::format("{}: {}", options.server, status.message()));
+    // Advice names the address already ("no crackvis-data or ... at HOST:PORT").
+    const bool named = status.message().find(options.server) != std::string::npos;
+    printError("health",
+               named ? status.message() : fmt::format("{}: {}", options.server, status.message()));
     return kExitFailure;
   }
   if (!options.quiet) {
-    std::printf("%s: SERVING\n", options.server.c_str());
+    const std::string program = client->serverProgram();
+    std::printf("%s: SERVING%s\n", options.server.c_str(),
+                program.empty() ? "" : fmt::format(" ({})", program).c_str());
   }
   return kExitOk;
 }

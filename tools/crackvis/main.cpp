@@ -7,6 +7,8 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include <crackvis/common/spelling.hpp>
+#include <crackvis/rpc/connection_advice.hpp>
 
 namespace crackvis::cli {
 namespace {
@@ -25,21 +27,58 @@ void printError(const char* command, const std::string& message) {
 }
 
 Status checkHostPort(const std::string& what, const std::string& address) {
-  const std::size_t colon = address.rfind(':');
-  const std::string port = colon == std::string::npos ? "" : address.substr(colon + 1);
-  const bool digits = !port.empty() && port.size() <= 5 &&
-                      port.find_first_not_of("0123456789") == std::string::npos;
-  const bool bracketed = address.find('[') == std::string::npos ||
-                         (colon > 0 && address[colon - 1] == ']');  // [::1]:50052
-  if (colon == std::string::npos || colon == 0 || !digits || !bracketed || std::stoi(port) < 1 ||
-      std::stoi(port) > 65535) {
-    return invalidArgument(
-        fmt::format("{} '{}': expected HOST:PORT with the port (crackvis-data listens on 50051 and "
-                    "crackvis-render on 50052 unless configured otherwise)",
-                    what, address));
-  }
-  return Status::ok();
+  return rpc::checkHostPort(what, address);  // the client's --connect has the same rule
 }
+
+namespace {
+
+// A misspelt subcommand or option, said with the nearest right one
+// ("unknown subcommand 'extrat' (did you mean extract?)"); empty when the
+// parse failed for another reason (CLI11's message says it then).
+std::string misspelling(const CLI::App& app) {
+  const CLI::App* deepest = &app;
+  std::string path = "crackvis";
+  for (auto parsed = deepest->get_subcommands(); !parsed.empty();
+       parsed = deepest->get_subcommands()) {
+    deepest = parsed.front();
+    path += " " + deepest->get_name();
+  }
+  const std::vector<std::string> extras = deepest->remaining();
+  std::vector<std::string> subcommands;
+  for (const CLI::App* sub : deepest->get_subcommands([](const CLI::App*) { return true; })) {
+    subcommands.push_back(sub->get_name());
+  }
+  // Where a subcommand was due, the first word is one gone wrong (what
+  // follows it belongs to the subcommand meant).
+  if (!subcommands.empty() && !extras.empty() && !extras.front().starts_with("-")) {
+    const std::string nearest = closestName(extras.front(), subcommands);
+    return fmt::format("{}: unknown subcommand '{}' ({})", path, extras.front(),
+                       nearest.empty() ? fmt::format("one of: {}", fmt::join(subcommands, ", "))
+                                       : fmt::format("did you mean {}?", nearest));
+  }
+  for (const std::string& arg : extras) {
+    if (arg.size() < 2 || arg[0] != '-') {
+      continue;
+    }
+    const std::string given = arg.substr(0, arg.find('='));
+    std::vector<std::string> names;
+    for (const CLI::Option* option : deepest->get_options()) {
+      for (const std::string& name : option->get_lnames()) {
+        names.push_back("--" + name);
+      }
+      for (const std::string& name : option->get_snames()) {
+        names.push_back("-" + name);
+      }
+    }
+    const std::string nearest = closestName(given, names);
+    return fmt::format(
+        "{}: unknown option '{}'{}", path, given,
+        nearest.empty() ? std::string() : fmt::format(" (did you mean {}?)", nearest));
+  }
+  return {};
+}
+
+}  // namespace
 
 }  // namespace crackvis::cli
 
@@ -53,6 +92,7 @@ int main(int argc, char** argv) {
       "Data sets are HDF5 files in the crackvis-dem layout (docs/data-format.md).",
       "crackvis"};
   app.require_subcommand(1);
+  crackvis::rpc::quietGrpcLogs();  // failures are the one line each command prints
   app.set_version_flag("--version", std::string("crackvis ") + CRACKVIS_VERSION);
   auto* bench = app.add_subcommand(
       "bench", "Benchmarks that print ratios against a baseline measured in the same run.");
@@ -81,7 +121,11 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "crackvis: %s\nRun 'crackvis --help' for usage.\n", e.what());
+    if (const std::string typo = misspelling(app); !typo.empty()) {
+      std::fprintf(stderr, "%s\n", typo.c_str());
+    } else {
+      std::fprintf(stderr, "crackvis: %s\nRun 'crackvis --help' for usage.\n", e.what());
+    }
     return kExitUsage;
   }
   try {

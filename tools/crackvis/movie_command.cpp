@@ -15,8 +15,7 @@
 #include "pipeline_file.hpp"
 #include <crackvis/common/progress.hpp>
 #include <crackvis/dem/step_range.hpp>
-#include <crackvis/encode/frame_codec.hpp>
-#include <crackvis/record/stream_recorder.hpp>
+#include <crackvis/record/movie_writer.hpp>
 #include <crackvis/render/scene_renderer.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 #include <crackvis/source/step_source.hpp>
@@ -109,15 +108,10 @@ int runMovie(const MovieOptions& options) {
   if (!renderer) {
     return fail(renderer.status());
   }
-  encode::limitCodecLogsToWarnings();
-  encode::EncoderSettings settings{width, height, options.fps, options.bitrate, 20, "medium"};
-  auto encoder = encode::FrameEncoder::create(settings);
-  if (!encoder) {
-    return fail(encoder.status());
-  }
-  auto recorder = record::StreamRecorder::start(options.output, width, height, options.fps);
-  if (!recorder) {
-    return fail(recorder.status());
+  auto movie =
+      record::MovieWriter::start(options.output, {width, height, options.fps, options.bitrate});
+  if (!movie) {
+    return fail(movie.status());
   }
   ProgressBar progress("movie", frames);
   progress.setEnabled(!options.quiet);
@@ -148,18 +142,14 @@ int runMovie(const MovieOptions& options) {
     rgb.width = image.width;
     rgb.height = image.height;
     rgb.rgb.swap(image.rgb);
-    // A keyframe every two seconds, so that players can seek.
-    auto encoded = (*encoder)->encode(rgb, i % (2 * options.fps) == 0);
+    const Status added = (*movie)->add(rgb);
     rgb.rgb.swap(image.rgb);
-    if (!encoded) {
-      return fail(encoded.status());
-    }
-    if (Status status = (*recorder)->add(*encoded, static_cast<double>(i) / options.fps); !status) {
-      return fail(status);
+    if (!added) {
+      return fail(added);
     }
     progress.update(i + 1, fmt::format("step {}", step));
   }
-  if (Status status = (*recorder)->finish(); !status) {
+  if (Status status = (*movie)->finish(); !status) {
     return fail(status);
   }
   progress.finish();

@@ -1,4 +1,3 @@
-#include <QFile>
 #include <QMetaObject>
 #include <algorithm>
 #include <atomic>
@@ -6,6 +5,7 @@
 #include <condition_variable>
 #include <cstring>
 #include <deque>
+#include <filesystem>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -15,8 +15,11 @@
 
 #include "crackvis/v1/render.grpc.pb.h"
 #include <crackvis/client/render_client.hpp>
+#include <crackvis/common/certificates.hpp>
 #include <crackvis/encode/frame_codec.hpp>
+#include <crackvis/record/movie_writer.hpp>
 #include <crackvis/record/stream_recorder.hpp>
+#include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
 
 namespace crackvis::client {
@@ -25,13 +28,35 @@ namespace {
 namespace v1 = crackvis::v1;
 using Clock = std::chrono::steady_clock;
 
-Result<std::string> readFile(const QString& path, const char* what) {
-  QFile file(path);
-  if (!file.open(QIODevice::ReadOnly)) {
-    return failedPrecondition(
-        fmt::format("{} {}: {}", what, path.toStdString(), file.errorString().toStdString()));
+// A TLS file of the connection, with the defaults' fallback to the
+// installed certificates and a message naming the option that sets it.
+Result<std::string> readTlsFile(const QString& path, const char* what, const char* flag) {
+  return readCertificateFile(path.toStdString(), what,
+                             fmt::format("{} or in File > Connect", flag));
+}
+
+// crackvis-render as the user named it, for connection_advice's messages;
+// this client has no plaintext mode.
+rpc::Peer renderPeer(const QString& address) {
+  return {rpc::ServerKind::kRender, address.toStdString(), false, "--", false};
+}
+
+// A Snapshot's PNG as the movie's next frame; the server must have rendered
+// the size asked for (the movie's every frame has one size).
+Status rgbFromPng(const QByteArray& png, int width, int height, encode::RgbFrame& frame) {
+  const QImage image = QImage::fromData(png, "PNG").convertToFormat(QImage::Format_RGB888);
+  if (image.width() != width || image.height() != height) {
+    return internalError(fmt::format("the server's snapshot is {}x{}, not the movie's {}x{}",
+                                     image.width(), image.height(), width, height));
   }
-  return file.readAll().toStdString();
+  frame.width = width;
+  frame.height = height;
+  frame.rgb.resize(static_cast<std::size_t>(width) * height * 3);
+  const auto rowBytes = static_cast<std::size_t>(width) * 3;
+  for (int row = 0; row < height; ++row) {
+    std::memcpy(frame.rgb.data() + row * rowBytes, image.constScanLine(row), rowBytes);
+  }
+  return Status::ok();
 }
 
 double ms(Clock::duration d) {
@@ -106,6 +131,10 @@ struct RenderClient::Impl {
   std::thread supervisor;
   std::thread decoder;
 
+  Status failure(const grpc::Status& status, const char* call) const {
+    return rpc::fromGrpcStatus(status, call, renderPeer(settings.address), channel);
+  }
+
   void authorize(grpc::ClientContext& context) const {
     if (!settings.token.isEmpty()) {
       context.AddMetadata("authorization", "Bearer " + settings.token.toStdString());
@@ -135,7 +164,7 @@ struct RenderClient::Impl {
     request.set_pipeline_xml(xml);
     v1::OpenSessionResponse response;
     CRACKVIS_RETURN_IF_ERROR(
-        rpc::fromGrpcStatus(stub->OpenSession(&context, request, &response), "OpenSession"));
+        failure(stub->OpenSession(&context, request, &response), "OpenSession"));
     std::lock_guard lock(mutex);
     sessionId = response.session_id();
     pipelineXml = xml;
@@ -254,6 +283,14 @@ struct RenderClient::Impl {
             emit o->crackMappingChanged(f, w);
           },
           Qt::QueuedConnection);
+    } else if (message.has_pick()) {
+      const auto& pick = message.pick();
+      QMetaObject::invokeMethod(
+          owner,
+          [o = owner, id = pick.event_id(), text = QString::fromStdString(pick.text()),
+           kind = QString::fromStdString(pick.kind()),
+           index = pick.index()] { emit o->picked(id, text, kind, index); },
+          Qt::QueuedConnection);
     } else if (message.has_error()) {
       QMetaObject::invokeMethod(
           owner,
@@ -305,7 +342,7 @@ struct RenderClient::Impl {
       }
       QMetaObject::invokeMethod(
           owner,
-          [o = owner, why = QString::fromStdString(ended.error_message())] {
+          [o = owner, why = QString::fromStdString(failure(ended, "Stream").message())] {
             emit o->connectionLost(why);
           },
           Qt::QueuedConnection);
@@ -427,9 +464,10 @@ RenderClient::~RenderClient() {
 
 Status RenderClient::connectTo(const ConnectionSettings& settings) {
   closeSession();
-  auto ca = readFile(settings.caPath, "CA certificate");
-  auto cert = readFile(settings.certPath, "client certificate");
-  auto key = readFile(settings.keyPath, "client key");
+  CRACKVIS_RETURN_IF_ERROR(rpc::checkHostPort("address", settings.address.toStdString()));
+  auto ca = readTlsFile(settings.caPath, "CA certificate", "--ca");
+  auto cert = readTlsFile(settings.certPath, "client certificate", "--cert");
+  auto key = readTlsFile(settings.keyPath, "client key", "--key");
   for (const auto* file : {&ca, &cert, &key}) {
     if (!*file) {
       return file->status();
@@ -452,7 +490,8 @@ Status RenderClient::connectTo(const ConnectionSettings& settings) {
   v1::ListFilesResponse files;
   CRACKVIS_RETURN_IF_ERROR(
       rpc::fromGrpcStatus(stub->ListFiles(&context, v1::ListFilesRequest(), &files),
-                          fmt::format("connecting to {}", settings.address.toStdString())));
+                          fmt::format("connecting to {}", settings.address.toStdString()),
+                          renderPeer(settings.address), channel));
   m_impl->settings = settings;
   m_impl->channel = std::move(channel);
   m_impl->stub = std::move(stub);
@@ -476,13 +515,35 @@ Result<std::vector<FileEntry>> RenderClient::listFiles() {
   request.set_recursive(true);
   v1::ListFilesResponse response;
   CRACKVIS_RETURN_IF_ERROR(
-      rpc::fromGrpcStatus(m_impl->stub->ListFiles(&context, request, &response), "ListFiles"));
+      m_impl->failure(m_impl->stub->ListFiles(&context, request, &response), "ListFiles"));
   std::vector<FileEntry> out;
   for (const auto& file : response.files()) {
     out.push_back({QString::fromStdString(file.path()), static_cast<qint64>(file.size_bytes()),
                    file.is_hdf5()});
   }
   return out;
+}
+
+Result<StepHistory> RenderClient::stepHistory(const QString& file) {
+  if (!connected()) {
+    return failedPrecondition("not connected");
+  }
+  grpc::ClientContext context;
+  m_impl->authorize(context);
+  v1::StepHistoryRequest request;
+  request.set_file(file.toStdString());
+  v1::StepHistoryResponse response;
+  CRACKVIS_RETURN_IF_ERROR(
+      m_impl->failure(m_impl->stub->StepHistory(&context, request, &response), "StepHistory"));
+  StepHistory history;
+  history.time.assign(response.time().begin(), response.time().end());
+  history.brokenBonds.assign(response.broken_bonds().begin(), response.broken_bonds().end());
+  history.bondCount = response.bond_count();
+  for (const v1::StepSeries& series : response.scalars()) {
+    history.scalarNames << QString::fromStdString(series.name());
+    history.scalars.emplace_back(series.values().begin(), series.values().end());
+  }
+  return history;
 }
 
 Result<FileSummary> RenderClient::describe(const QString& file) {
@@ -495,7 +556,7 @@ Result<FileSummary> RenderClient::describe(const QString& file) {
   request.set_file(file.toStdString());
   v1::DescribeResponse response;
   CRACKVIS_RETURN_IF_ERROR(
-      rpc::fromGrpcStatus(m_impl->stub->Describe(&context, request, &response), "Describe"));
+      m_impl->failure(m_impl->stub->Describe(&context, request, &response), "Describe"));
   FileSummary summary;
   summary.file = file;
   summary.format = QString::fromStdString(response.format());
@@ -646,7 +707,14 @@ quint64 RenderClient::requestStill() {
   return m_impl->queue(event);
 }
 
-Result<QByteArray> RenderClient::snapshotPng(int width, int height) {
+quint64 RenderClient::pick(double x, double y) {
+  v1::ClientEvent event;
+  event.mutable_pick()->set_x(x);
+  event.mutable_pick()->set_y(y);
+  return m_impl->queue(event);
+}
+
+Result<QByteArray> RenderClient::snapshotPng(int width, int height, std::optional<int> step) {
   std::string id;
   {
     std::lock_guard lock(m_impl->mutex);
@@ -661,10 +729,54 @@ Result<QByteArray> RenderClient::snapshotPng(int width, int height) {
   request.set_session_id(id);
   request.set_width(width);
   request.set_height(height);
+  if (step) {
+    request.set_step(*step);
+  }
   v1::SnapshotResponse response;
   CRACKVIS_RETURN_IF_ERROR(
-      rpc::fromGrpcStatus(m_impl->stub->Snapshot(&context, request, &response), "Snapshot"));
+      m_impl->failure(m_impl->stub->Snapshot(&context, request, &response), "Snapshot"));
   return QByteArray::fromStdString(response.png());
+}
+
+Status RenderClient::recordMovie(const QString& path, const std::vector<int>& steps, int width,
+                                 int height, int fps,
+                                 const std::function<bool(int, int)>& progress) {
+  if (!hasSession()) {
+    return failedPrecondition("no session to record");
+  }
+  if (steps.empty()) {
+    return invalidArgument("a movie needs at least one step");
+  }
+  auto movie = record::MovieWriter::start(path.toStdString(), {width, height, fps, 0});
+  if (!movie) {
+    return movie.status();
+  }
+  encode::RgbFrame frame;
+  const auto total = static_cast<int>(steps.size());
+  for (int k = 0; k < total; ++k) {
+    auto png = snapshotPng(width, height, steps[static_cast<std::size_t>(k)]);
+    Status status = png.status();
+    if (status) {
+      status = rgbFromPng(*png, width, height, frame);
+    }
+    if (status) {
+      status = (*movie)->add(frame);
+    }
+    if (status && progress && !progress(k + 1, total)) {
+      status = cancelled(fmt::format("recording {} cancelled", path.toStdString()));
+    }
+    if (!status) {
+      movie->reset();
+      std::filesystem::remove(path.toStdString());
+      return status;
+    }
+  }
+  return (*movie)->finish();
+}
+
+QSize RenderClient::frameSize() const {
+  std::lock_guard lock(m_impl->mutex);
+  return {m_impl->frameWidth, m_impl->frameHeight};
 }
 
 Status RenderClient::startRecording(const QString& path) {

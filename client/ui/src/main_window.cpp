@@ -1,5 +1,6 @@
 #include <QAction>
 #include <QComboBox>
+#include <QDataStream>
 #include <QDialogButtonBox>
 #include <QDockWidget>
 #include <QDoubleSpinBox>
@@ -12,14 +13,19 @@
 #include <QLineEdit>
 #include <QMenuBar>
 #include <QPlainTextEdit>
+#include <QProgressDialog>
 #include <QPushButton>
 #include <QScrollArea>
 #include <QSettings>
 #include <QSlider>
+#include <QSpinBox>
 #include <QSplitter>
 #include <QStatusBar>
+#include <QTextBlock>
+#include <QTextCursor>
 #include <QTreeWidget>
 #include <QVBoxLayout>
+#include <algorithm>
 
 #include <crackvis/client/main_window.hpp>
 
@@ -98,6 +104,10 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   logDock->setWidget(m_log);
   addDockWidget(Qt::BottomDockWidgetArea, logDock);
 
+  auto* stepsDock = new QDockWidget(tr("Steps"), this);
+  stepsDock->setWidget(buildStepDock());
+  splitDockWidget(logDock, stepsDock, Qt::Horizontal);
+
   m_stats = new QLabel;
   statusBar()->addPermanentWidget(m_stats);
   buildMenus();
@@ -109,9 +119,14 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
     m_slider->setValue(step);
     m_stepLabel->setText(tr("step %1 / %2").arg(step).arg(steps - 1));
     m_play->setText(playing ? tr("Pause") : tr("Play"));
+    m_plot->setCurrentStep(step);
   });
   connect(&m_client, &RenderClient::eventFailed, this,
           [this](quint64, const QString& message) { report(message); });
+  connect(&m_client, &RenderClient::picked, this,
+          [this](quint64, const QString& text, const QString&, qint64) {
+            report(tr("picked: %1").arg(text));
+          });
   // A crack method that maps few broken bonds to faces says so in the status
   // bar and the messages pane, once per cause (the numbers change with every
   // step; the cause follows the first ": ").
@@ -137,6 +152,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   connect(m_panel, &PipelinePanel::changed, this, [this](const pipeline::PipelineDescription& d) {
     if (m_client.hasSession()) {
       auto next = d;
+      next.view.camera.reset();  // the panel does not move the camera
       next.file = m_file.toStdString();
       next.step = m_client.step();
       next.view.width = m_viewport->width() & ~1;
@@ -155,6 +171,45 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
 
 MainWindow::~MainWindow() {
   m_client.closeSession();
+}
+
+QWidget* MainWindow::buildStepDock() {
+  auto* dock = new QWidget;
+  auto* layout = new QVBoxLayout(dock);
+  auto* choice = new QHBoxLayout;
+  m_plotScalar = new QComboBox;
+  m_plotScalar->addItem(tr("none"));
+  choice->addWidget(new QLabel(tr("beside the broken bonds:")));
+  choice->addWidget(m_plotScalar, 1);
+  m_plot = new StepPlot;
+  layout->addLayout(choice);
+  layout->addWidget(m_plot, 1);
+  connect(m_plotScalar, &QComboBox::currentIndexChanged, this, [this](int index) {
+    m_plot->setScalar(index > 0 ? m_plotScalar->itemText(index) : QString());
+  });
+  connect(m_plot, &StepPlot::stepClicked, this, [this](int step) { m_slider->setValue(step); });
+  return dock;
+}
+
+// The opened file's steps in the plot; the scalar chosen stays chosen when
+// the new file has it too.
+void MainWindow::showHistory(const QString& file) {
+  auto history = m_client.stepHistory(file);
+  if (!history) {
+    report(tr("no step plot for %1: %2")
+               .arg(file, QString::fromStdString(history.status().message())));
+    m_plot->setHistory({});
+    return;
+  }
+  const QString chosen = m_plot->scalar();
+  const QSignalBlocker blocker(m_plotScalar);
+  m_plotScalar->clear();
+  m_plotScalar->addItem(tr("none"));
+  m_plotScalar->addItems(history->scalarNames);
+  m_plot->setHistory(*history);
+  m_plotScalar->setCurrentIndex(std::max(0, static_cast<int>(m_plotScalar->findText(chosen))));
+  m_plot->setScalar(m_plotScalar->currentIndex() > 0 ? chosen : QString());
+  m_plot->setCurrentStep(m_slider->value());
 }
 
 QWidget* MainWindow::buildTimeBar() {
@@ -185,12 +240,19 @@ QWidget* MainWindow::buildTimeBar() {
 void MainWindow::buildMenus() {
   auto* file = menuBar()->addMenu(tr("&File"));
   file->addAction(tr("&Connect..."), this, &MainWindow::showConnectDialog);
-  file->addAction(tr("&Screenshot (full resolution)..."), this, [this] { saveScreenshot(); });
-  file->addAction(tr("&Record to MP4..."), this, [this] { toggleRecording(); });
+  file->addAction(tr("&Open view..."), this, &MainWindow::openViewDialog);
+  file->addAction(tr("Save &view..."), this, &MainWindow::saveViewDialog);
+  file->addSeparator();
+  file->addAction(tr("&Screenshot (rendered on the server, any size)..."), this,
+                  &MainWindow::showScreenshotDialog);
+  m_recordAction =
+      file->addAction(tr("&Record the stream to MP4..."), this, [this] { toggleRecording(); });
+  file->addAction(tr("Record a full-resolution &movie of steps..."), this,
+                  &MainWindow::showMovieDialog);
   file->addSeparator();
   file->addAction(tr("&Quit"), this, &QWidget::close);
   auto* view = menuBar()->addMenu(tr("&View"));
-  view->addAction(tr("&Reset camera (r)"), this, [this] { m_client.resetCamera(); });
+  view->addAction(tr("&Fit the whole specimen (r)"), this, [this] { m_client.resetCamera(); });
   view->addAction(tr("&Play / pause (space)"), this, &MainWindow::togglePlay);
 }
 
@@ -198,9 +260,21 @@ QString MainWindow::messages() const {
   return m_log->toPlainText();
 }
 
+// A message that repeats the last one (a failing step while playing, a
+// reconnect loop) replaces its line with a count instead of flooding the
+// pane.
 void MainWindow::report(const QString& message) {
-  m_lastMessage = message;
   statusBar()->showMessage(message, 10000);
+  if (message == m_lastMessage && !m_log->document()->isEmpty()) {
+    ++m_lastMessageRepeats;
+    QTextCursor cursor(m_log->document());
+    cursor.movePosition(QTextCursor::End);
+    cursor.movePosition(QTextCursor::StartOfBlock, QTextCursor::KeepAnchor);
+    cursor.insertText(tr("%1 (%2 times)").arg(message).arg(m_lastMessageRepeats + 1));
+    return;
+  }
+  m_lastMessage = message;
+  m_lastMessageRepeats = 0;
   m_log->appendPlainText(message);
 }
 
@@ -247,8 +321,22 @@ void MainWindow::describe(const QString& file) {
 }
 
 bool MainWindow::openFile(const QString& file) {
+  return openFile(file, -1);
+}
+
+bool MainWindow::openFile(const QString& file, std::int64_t step) {
+  auto view = m_panel->description();
+  view.file = file.toStdString();
+  view.step = step;
+  view.view.camera.reset();  // fitted to this file, not where the last one was seen from
+  return openView(view);
+}
+
+bool MainWindow::openView(const pipeline::PipelineDescription& view) {
+  const QString file = QString::fromStdString(view.file);
+  m_panel->setDescription(view);
   describe(file);  // the file's extra arrays for the colour-by list
-  auto d = m_panel->description();
+  auto d = view;
   // An extra array of the previous file that this one lacks: back to the default.
   const QString prefix = QStringLiteral("extra: ");
   if (d.particles.colourBy == pipeline::ParticleColourBy::kExtra &&
@@ -263,8 +351,7 @@ bool MainWindow::openFile(const QString& file) {
     d.bonds.colourBy = pipeline::BondColourBy::kState;
     d.bonds.colourByExtra.clear();
   }
-  d.file = file.toStdString();
-  d.step = -1;
+  m_panel->setDescription(d);
   d.view.width = std::max(16, m_viewport->width() & ~1);
   d.view.height = std::max(16, m_viewport->height() & ~1);
   if (Status status = m_client.openSession(QString::fromStdString(pipeline::toXml(d))); !status) {
@@ -274,12 +361,99 @@ bool MainWindow::openFile(const QString& file) {
   m_file = file;
   const QSignalBlocker blocker(m_slider);
   m_slider->setRange(0, std::max(0, m_client.stepCount() - 1));
-  m_slider->setValue(m_client.stepCount() - 1);
+  m_slider->setValue(d.step >= 0 ? static_cast<int>(d.step) : m_client.stepCount() - 1);
   m_stepLabel->setText(tr("step %1 / %2").arg(m_slider->value()).arg(m_client.stepCount() - 1));
   setWindowTitle(tr("crackvis - %1").arg(file));
   report(tr("opened %1 (%2 steps)").arg(file).arg(m_client.stepCount()));
+  showHistory(file);
   m_viewport->setFocus();
   return true;
+}
+
+namespace {
+
+// The window's docks and size as one base64 string (<client layout>).
+std::string layoutOf(const QMainWindow& window) {
+  QByteArray bytes;
+  QDataStream out(&bytes, QIODevice::WriteOnly);
+  out << window.saveGeometry() << window.saveState();
+  return bytes.toBase64().toStdString();
+}
+
+void restoreLayout(QMainWindow& window, const std::string& layout) {
+  QByteArray bytes = QByteArray::fromBase64(QByteArray::fromStdString(layout));
+  QDataStream in(&bytes, QIODevice::ReadOnly);
+  QByteArray geometry;
+  QByteArray state;
+  in >> geometry >> state;
+  if (in.status() == QDataStream::Ok) {
+    window.restoreGeometry(geometry);
+    window.restoreState(state);
+  }
+}
+
+}  // namespace
+
+bool MainWindow::loadView(const QString& path) {
+  QFile in(path);
+  if (!in.open(QIODevice::ReadOnly)) {
+    report(tr("cannot read the view %1: %2").arg(path, in.errorString()));
+    return false;
+  }
+  auto view = pipeline::parsePipeline(in.readAll().toStdString());
+  if (!view) {
+    report(tr("%1 is no view: %2").arg(path, QString::fromStdString(view.status().message())));
+    return false;
+  }
+  if (!view->clientLayout.empty()) {
+    restoreLayout(*this, view->clientLayout);
+  }
+  if (!m_client.connected() || view->file.empty()) {
+    m_panel->setDescription(*view);  // shown now, used by the next file opened
+    report(tr("loaded the view %1 (no file opened: %2)")
+               .arg(path, m_client.connected() ? tr("it names none") : tr("not connected")));
+    return true;
+  }
+  return openView(*view);
+}
+
+bool MainWindow::saveView(const QString& path) {
+  // The server's state holds what is shown (step, size, the camera where
+  // the user left it); without a session, what the panel would show.
+  pipeline::PipelineDescription view = m_panel->description();
+  if (m_client.hasSession()) {
+    auto shown = pipeline::parsePipeline(m_client.pipelineXml().toStdString());
+    if (!shown) {
+      report(tr("cannot save the view: %1").arg(QString::fromStdString(shown.status().message())));
+      return false;
+    }
+    view = *shown;
+  }
+  view.clientLayout = layoutOf(*this);
+  QFile out(path);
+  const QByteArray bytes = QByteArray::fromStdString(pipeline::toXml(view));
+  if (!out.open(QIODevice::WriteOnly | QIODevice::Truncate) || out.write(bytes) != bytes.size()) {
+    report(tr("cannot write %1: %2").arg(path, out.errorString()));
+    return false;
+  }
+  report(tr("saved the view to %1").arg(path));
+  return true;
+}
+
+void MainWindow::openViewDialog() {
+  const QString path = QFileDialog::getOpenFileName(this, tr("Open view"), QString(),
+                                                    tr("Pipeline description (*.xml)"));
+  if (!path.isEmpty()) {
+    loadView(path);
+  }
+}
+
+void MainWindow::saveViewDialog() {
+  const QString path = QFileDialog::getSaveFileName(
+      this, tr("Save view"), QStringLiteral("view.xml"), tr("Pipeline description (*.xml)"));
+  if (!path.isEmpty()) {
+    saveView(path);
+  }
 }
 
 void MainWindow::showConnectDialog() {
@@ -289,7 +463,58 @@ void MainWindow::showConnectDialog() {
   }
 }
 
-void MainWindow::saveScreenshot(const QString& given) {
+namespace {
+
+// Even sizes (H.264's 4:2:0 and the server's rule), up to the server's
+// largest view.
+QSpinBox* sizeBox(int value, int most) {
+  auto* box = new QSpinBox;
+  box->setRange(16, most);
+  box->setSingleStep(2);
+  box->setValue(std::clamp(value & ~1, 16, most));
+  box->setSuffix(QStringLiteral(" px"));
+  return box;
+}
+
+QDialogButtonBox* okCancel(QDialog* dialog) {
+  auto* buttons = new QDialogButtonBox(QDialogButtonBox::Ok | QDialogButtonBox::Cancel);
+  QObject::connect(buttons, &QDialogButtonBox::accepted, dialog, &QDialog::accept);
+  QObject::connect(buttons, &QDialogButtonBox::rejected, dialog, &QDialog::reject);
+  return buttons;
+}
+
+}  // namespace
+
+QSize MainWindow::streamSize() const {
+  const QSize size = m_client.frameSize();
+  return size.isEmpty() ? QSize(m_viewport->width() & ~1, m_viewport->height() & ~1) : size;
+}
+
+void MainWindow::showScreenshotDialog() {
+  if (!m_client.hasSession()) {
+    report(tr("no view to take a screenshot of: open a file first"));
+    return;
+  }
+  QDialog dialog(this);
+  dialog.setWindowTitle(tr("Screenshot"));
+  auto* form = new QFormLayout(&dialog);
+  auto* width = sizeBox(streamSize().width(), 3840);
+  auto* height = sizeBox(streamSize().height(), 2160);
+  form->addRow(tr("width"), width);
+  form->addRow(tr("height"), height);
+  form->addRow(new QLabel(tr("Rendered by the server at this size, full resolution.")));
+  form->addRow(okCancel(&dialog));
+  if (dialog.exec() != QDialog::Accepted) {
+    return;
+  }
+  const QString path = QFileDialog::getSaveFileName(this, tr("Screenshot"),
+                                                    QStringLiteral("view.png"), tr("PNG (*.png)"));
+  if (!path.isEmpty()) {
+    saveScreenshot(path, QSize(width->value(), height->value()));
+  }
+}
+
+void MainWindow::saveScreenshot(const QString& given, QSize size) {
   const QString path =
       given.isEmpty() ? QFileDialog::getSaveFileName(this, tr("Screenshot"),
                                                      QStringLiteral("view.png"), tr("PNG (*.png)"))
@@ -297,7 +522,7 @@ void MainWindow::saveScreenshot(const QString& given) {
   if (path.isEmpty()) {
     return;
   }
-  auto png = m_client.snapshotPng();
+  auto png = m_client.snapshotPng(size.width(), size.height());
   if (!png) {
     report(QString::fromStdString(png.status().message()));
     return;
@@ -313,7 +538,9 @@ void MainWindow::saveScreenshot(const QString& given) {
 void MainWindow::toggleRecording(const QString& given) {
   if (m_client.recording()) {
     const Status status = m_client.stopRecording();
-    report(status ? tr("recording stopped") : QString::fromStdString(status.message()));
+    m_recordAction->setText(tr("&Record the stream to MP4..."));
+    report(status ? tr("recording stopped: %1 frames").arg(m_client.recordedFrames())
+                  : QString::fromStdString(status.message()));
     return;
   }
   const QString path = given.isEmpty()
@@ -324,7 +551,88 @@ void MainWindow::toggleRecording(const QString& given) {
     return;
   }
   const Status status = m_client.startRecording(path);
-  report(status ? tr("recording to %1").arg(path) : QString::fromStdString(status.message()));
+  if (status) {
+    m_recordAction->setText(tr("Stop &recording"));
+  }
+  report(status ? tr("recording the stream to %1").arg(path)
+                : QString::fromStdString(status.message()));
+}
+
+void MainWindow::showMovieDialog() {
+  if (!m_client.hasSession()) {
+    report(tr("no view to record: open a file first"));
+    return;
+  }
+  const int lastStep = std::max(0, m_client.stepCount() - 1);
+  QDialog dialog(this);
+  dialog.setWindowTitle(tr("Full-resolution movie"));
+  auto* form = new QFormLayout(&dialog);
+  auto stepBox = [lastStep](int value) {
+    auto* box = new QSpinBox;
+    box->setRange(0, lastStep);
+    box->setValue(value);
+    return box;
+  };
+  auto* first = stepBox(0);
+  auto* last = stepBox(lastStep);
+  auto* stride = new QSpinBox;
+  stride->setRange(1, std::max(1, lastStep));
+  auto* width = sizeBox(streamSize().width(), 3840);
+  auto* height = sizeBox(streamSize().height(), 2160);
+  auto* fps = new QSpinBox;
+  fps->setRange(1, 120);
+  fps->setValue(30);
+  form->addRow(tr("first step"), first);
+  form->addRow(tr("last step"), last);
+  form->addRow(tr("every k-th step"), stride);
+  form->addRow(tr("width"), width);
+  form->addRow(tr("height"), height);
+  form->addRow(tr("frames per second"), fps);
+  form->addRow(
+      new QLabel(tr("Every frame is rendered again on the server at full resolution\n"
+                    "(the stream's reduced interactive frames are not used).")));
+  form->addRow(okCancel(&dialog));
+  if (dialog.exec() != QDialog::Accepted) {
+    return;
+  }
+  const QString path = QFileDialog::getSaveFileName(this, tr("Movie"), QStringLiteral("movie.mp4"),
+                                                    tr("MP4 (*.mp4)"));
+  if (!path.isEmpty()) {
+    recordMovie(path, first->value(), last->value(), stride->value(),
+                QSize(width->value(), height->value()), fps->value());
+  }
+}
+
+bool MainWindow::recordMovie(const QString& path, int first, int last, int stride, QSize size,
+                             int fps) {
+  std::vector<int> steps;
+  for (int step = first; step <= last; step += std::max(1, stride)) {
+    steps.push_back(step);
+  }
+  if (size.isEmpty()) {
+    size = streamSize();
+  }
+  QProgressDialog progress(tr("Rendering %1 frames on the server...").arg(steps.size()),
+                           tr("Cancel"), 0, static_cast<int>(steps.size()), this);
+  progress.setWindowModality(Qt::WindowModal);
+  progress.setMinimumDuration(500);
+  const Status status = m_client.recordMovie(path, steps, size.width() & ~1, size.height() & ~1,
+                                             fps, [&progress](int done, int) {
+                                               progress.setValue(done);
+                                               return !progress.wasCanceled();
+                                             });
+  if (!status) {
+    report(QString::fromStdString(status.message()));
+    return false;
+  }
+  report(tr("wrote %1: %2 full-resolution frames at %3x%4, steps %5..%6")
+             .arg(path)
+             .arg(steps.size())
+             .arg(size.width() & ~1)
+             .arg(size.height() & ~1)
+             .arg(first)
+             .arg(steps.empty() ? first : steps.back()));
+  return true;
 }
 
 void MainWindow::togglePlay() {

@@ -2,12 +2,17 @@
 #include <QColor>
 #include <QComboBox>
 #include <QDoubleSpinBox>
+#include <QDoubleValidator>
 #include <QFormLayout>
 #include <QGroupBox>
 #include <QHBoxLayout>
+#include <QLabel>
 #include <QLineEdit>
 #include <QSpinBox>
 #include <QVBoxLayout>
+#include <cmath>
+#include <limits>
+#include <optional>
 
 #include <crackvis/client/pipeline_panel.hpp>
 
@@ -57,6 +62,115 @@ Colour colour(const QString& text, Colour otherwise) {
           static_cast<std::uint8_t>(parsed.blue())};
 }
 
+// A number field where empty means "none given" (an open threshold end).
+QLineEdit* numberField(const QString& placeholder) {
+  auto* field = new QLineEdit;
+  field->setPlaceholderText(placeholder);
+  field->setValidator(new QDoubleValidator(field));
+  return field;
+}
+
+QString numberText(double value) {
+  return std::isfinite(value) ? QString::number(value, 'g', 10) : QString();
+}
+
+// The field's number, or `otherwise` when it is empty or no number.
+double numberIn(const QLineEdit* field, double otherwise) {
+  bool ok = false;
+  const double value = field->text().toDouble(&ok);
+  return ok && std::isfinite(value) ? value : otherwise;
+}
+
+// A threshold's quantities: a layer's colour-by entries without solid.
+QComboBox* quantityBox(const QComboBox* colourBy, int solidValue) {
+  auto* box = new QComboBox;
+  for (int i = 0; i < colourBy->count(); ++i) {
+    if (colourBy->itemData(i).toInt() != solidValue) {
+      box->addItem(colourBy->itemText(i), colourBy->itemData(i));
+    }
+  }
+  return box;
+}
+
+QHBoxLayout* row(std::initializer_list<QWidget*> widgets) {
+  auto* layout = new QHBoxLayout;
+  for (QWidget* widget : widgets) {
+    layout->addWidget(widget);
+  }
+  return layout;
+}
+
+// The range editor, clip switch and threshold row of one layer, added to
+// `form`.
+PipelinePanel::LayerControls layerControls(QFormLayout* form, const QComboBox* colourBy,
+                                           int solidValue) {
+  PipelinePanel::LayerControls c;
+  c.rangeMode = combo<RangeMode>({{"per step", RangeMode::kStep},
+                                  {"over all steps", RangeMode::kSeries},
+                                  {"set", RangeMode::kUser}});
+  c.rangeMin = numberField(QObject::tr("min"));
+  c.rangeMax = numberField(QObject::tr("max"));
+  form->addRow(QObject::tr("colour range"), row({c.rangeMode, c.rangeMin, c.rangeMax}));
+  c.clip = new QCheckBox(QObject::tr("cut by the clipping plane"));
+  form->addRow(c.clip);
+  c.threshold = new QCheckBox(QObject::tr("threshold"));
+  c.thresholdBy = quantityBox(colourBy, solidValue);
+  c.thresholdMin = numberField(QObject::tr("from (open)"));
+  c.thresholdMax = numberField(QObject::tr("to (open)"));
+  form->addRow(row({c.threshold, c.thresholdBy, c.thresholdMin, c.thresholdMax}));
+  return c;
+}
+
+template <typename Layer>
+void showLayer(const PipelinePanel::LayerControls& c, const Layer& layer) {
+  select(c.rangeMode, layer.range.mode);
+  c.rangeMin->setText(layer.range.mode == RangeMode::kUser ? numberText(layer.range.min)
+                                                           : QString());
+  c.rangeMax->setText(layer.range.mode == RangeMode::kUser ? numberText(layer.range.max)
+                                                           : QString());
+  c.clip->setChecked(layer.clip.has_value());
+  c.threshold->setChecked(layer.threshold.has_value());
+  if (layer.threshold) {
+    const int value = static_cast<int>(layer.threshold->by);
+    int index = c.thresholdBy->findData(value);
+    if (!layer.threshold->byExtra.empty()) {
+      index = c.thresholdBy->findText(QStringLiteral("extra: ") +
+                                      QString::fromStdString(layer.threshold->byExtra));
+    }
+    c.thresholdBy->setCurrentIndex(std::max(0, index));
+    c.thresholdMin->setText(numberText(layer.threshold->min));
+    c.thresholdMax->setText(numberText(layer.threshold->max));
+  }
+}
+
+// `extraValue`: the layer's colour-by value of an extra array (none for
+// cracks: a value no entry has).
+template <typename Layer>
+void collectLayer(const PipelinePanel::LayerControls& c, const std::optional<ClipPlane>& plane,
+                  int extraValue, Layer& layer) {
+  layer.range.mode = selected<RangeMode>(c.rangeMode);
+  if (layer.range.mode == RangeMode::kUser) {
+    layer.range.min = numberIn(c.rangeMin, 0.0);
+    layer.range.max = numberIn(c.rangeMax, layer.range.min + 1.0);
+  }
+  layer.clip.reset();
+  if (c.clip->isChecked()) {
+    layer.clip = plane;
+  }
+  layer.threshold.reset();
+  if (c.threshold->isChecked() && c.thresholdBy->count() > 0) {
+    using By = decltype(layer.threshold->by);
+    Threshold<By> t;
+    t.by = static_cast<By>(c.thresholdBy->currentData().toInt());
+    if (c.thresholdBy->currentData().toInt() == extraValue) {
+      t.byExtra = c.thresholdBy->currentText().mid(QStringLiteral("extra: ").size()).toStdString();
+    }
+    t.min = numberIn(c.thresholdMin, -std::numeric_limits<double>::infinity());
+    t.max = numberIn(c.thresholdMax, std::numeric_limits<double>::infinity());
+    layer.threshold = t;
+  }
+}
+
 }  // namespace
 
 PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
@@ -99,6 +213,7 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
   crackForm->addRow(tr("largest components"), m_largest);
   crackForm->addRow(tr("colour by"), m_crackColour);
   crackForm->addRow(tr("opacity"), m_crackOpacity);
+  m_crackLayer = layerControls(crackForm, m_crackColour, static_cast<int>(CrackColourBy::kSolid));
   layout->addWidget(cracks);
 
   auto* particles = new QGroupBox(tr("Particles"));
@@ -113,7 +228,6 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
                                               {"velocity", ParticleColourBy::kVelocity},
                                               {"damage", ParticleColourBy::kDamage}});
   m_particleOpacity = spin(0.0, 1.0, 0.1, 2);
-  m_clip = new QCheckBox(tr("clip (hide the side the normal points to)"));
   auto* clipRow = new QHBoxLayout;
   for (int k = 0; k < 3; ++k) {
     m_clipOrigin[k] = spin(-1e6, 1e6, 1.0, 2);
@@ -130,9 +244,8 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
   particleForm->addRow(tr("representation"), m_particleRepresentation);
   particleForm->addRow(tr("colour by"), m_particleColour);
   particleForm->addRow(tr("opacity"), m_particleOpacity);
-  particleForm->addRow(m_clip);
-  particleForm->addRow(tr("clip origin"), clipRow);
-  particleForm->addRow(tr("clip normal"), normalRow);
+  m_particleLayer =
+      layerControls(particleForm, m_particleColour, static_cast<int>(ParticleColourBy::kSolid));
   layout->addWidget(particles);
 
   auto* bonds = new QGroupBox(tr("Bonds and decomposition"));
@@ -153,9 +266,17 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
   bondForm->addRow(tr("as"), m_bondRepresentation);
   bondForm->addRow(tr("colour by"), m_bondColour);
   bondForm->addRow(tr("tube radius"), m_tubeRadius);
+  m_bondLayer = layerControls(bondForm, m_bondColour, static_cast<int>(BondColourBy::kSolid));
   bondForm->addRow(m_decomposition);
   bondForm->addRow(m_inconsistent);
   layout->addWidget(bonds);
+
+  auto* clip = new QGroupBox(tr("Clipping plane (hides the side the normal points to)"));
+  auto* clipForm = new QFormLayout(clip);
+  clipForm->addRow(tr("origin (m)"), clipRow);
+  clipForm->addRow(tr("normal"), normalRow);
+  clipForm->addRow(new QLabel(tr("Cuts each layer whose \"cut by the clipping plane\" is on.")));
+  layout->addWidget(clip);
 
   auto* view = new QGroupBox(tr("View and stream"));
   auto* viewForm = new QFormLayout(view);
@@ -164,7 +285,8 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
                                   {"cool to warm", ColourMap::kCoolWarm},
                                   {"rainbow", ColourMap::kRainbow},
                                   {"grayscale", ColourMap::kGrayscale}});
-  m_scalarBar = new QCheckBox(tr("scalar bar"));
+  m_scalarBar = new QCheckBox(tr("scalar bars"));
+  m_annotations = new QCheckBox(tr("annotations (step, time, method, axes, scale bar)"));
   m_fps = new QSpinBox;
   m_fps->setRange(1, 120);
   m_bitrate = new QSpinBox;
@@ -173,6 +295,7 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
   viewForm->addRow(tr("background"), m_background);
   viewForm->addRow(tr("colour map"), m_colourMap);
   viewForm->addRow(m_scalarBar);
+  viewForm->addRow(m_annotations);
   viewForm->addRow(tr("stream fps"), m_fps);
   viewForm->addRow(tr("bitrate"), m_bitrate);
   layout->addWidget(view);
@@ -191,7 +314,9 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
   for (auto* box : findChildren<QSpinBox*>()) {
     connect(box, &QSpinBox::editingFinished, this, &PipelinePanel::collect);
   }
-  connect(m_background, &QLineEdit::editingFinished, this, &PipelinePanel::collect);
+  for (auto* field : findChildren<QLineEdit*>()) {
+    connect(field, &QLineEdit::editingFinished, this, &PipelinePanel::collect);
+  }
 }
 
 // Extra entries carry kExtra as data and the array's name as their text
@@ -231,6 +356,9 @@ void PipelinePanel::setExtras(const QStringList& particleNames, const QStringLis
   m_updating = true;
   replaceExtras(m_particleColour, static_cast<int>(ParticleColourBy::kExtra), particleNames);
   replaceExtras(m_bondColour, static_cast<int>(BondColourBy::kExtra), bondNames);
+  replaceExtras(m_particleLayer.thresholdBy, static_cast<int>(ParticleColourBy::kExtra),
+                particleNames);
+  replaceExtras(m_bondLayer.thresholdBy, static_cast<int>(BondColourBy::kExtra), bondNames);
   m_updating = false;
   show(m_description);
 }
@@ -247,8 +375,9 @@ void PipelinePanel::show(const pipeline::PipelineDescription& d) {
   selectColourBy(m_particleColour, d.particles.colourBy, ParticleColourBy::kExtra,
                  d.particles.colourByExtra);
   m_particleOpacity->setValue(d.particles.opacity);
-  m_clip->setChecked(d.particles.clip.has_value());
-  const ClipPlane clip = d.particles.clip.value_or(ClipPlane{{0, 0, 0}, {1, 0, 0}});
+  // One plane in the panel: the first layer's that has one.
+  const ClipPlane clip = d.particles.clip.value_or(
+      d.cracks.clip.value_or(d.bonds.clip.value_or(ClipPlane{{0, 0, 0}, {1, 0, 0}})));
   const double origin[3] = {clip.origin.x, clip.origin.y, clip.origin.z};
   const double normal[3] = {clip.normal.x, clip.normal.y, clip.normal.z};
   for (int k = 0; k < 3; ++k) {
@@ -264,6 +393,9 @@ void PipelinePanel::show(const pipeline::PipelineDescription& d) {
   m_largest->setValue(d.cracks.largest);
   select(m_crackColour, d.cracks.colourBy);
   m_crackOpacity->setValue(d.cracks.opacity);
+  showLayer(m_particleLayer, d.particles);
+  showLayer(m_crackLayer, d.cracks);
+  showLayer(m_bondLayer, d.bonds);
   select(m_bondsShow, d.bonds.show);
   select(m_bondRepresentation, d.bonds.representation);
   selectColourBy(m_bondColour, d.bonds.colourBy, BondColourBy::kExtra, d.bonds.colourByExtra);
@@ -273,6 +405,7 @@ void PipelinePanel::show(const pipeline::PipelineDescription& d) {
   m_background->setText(hex(d.view.background));
   select(m_colourMap, d.view.colourMap);
   m_scalarBar->setChecked(d.view.scalarBar);
+  m_annotations->setChecked(d.annotations.show);
   m_fps->setValue(d.stream.fps);
   m_bitrate->setValue(d.stream.bitrate / 1000);
   m_updating = false;
@@ -289,12 +422,12 @@ void PipelinePanel::collect() {
   d.particles.colourByExtra =
       selectedExtra(m_particleColour, static_cast<int>(ParticleColourBy::kExtra));
   d.particles.opacity = m_particleOpacity->value();
-  d.particles.clip.reset();
-  if (m_clip->isChecked()) {
-    d.particles.clip =
-        ClipPlane{{m_clipOrigin[0]->value(), m_clipOrigin[1]->value(), m_clipOrigin[2]->value()},
-                  {m_clipNormal[0]->value(), m_clipNormal[1]->value(), m_clipNormal[2]->value()}};
-  }
+  const std::optional<ClipPlane> plane =
+      ClipPlane{{m_clipOrigin[0]->value(), m_clipOrigin[1]->value(), m_clipOrigin[2]->value()},
+                {m_clipNormal[0]->value(), m_clipNormal[1]->value(), m_clipNormal[2]->value()}};
+  collectLayer(m_particleLayer, plane, static_cast<int>(ParticleColourBy::kExtra), d.particles);
+  collectLayer(m_crackLayer, plane, -1, d.cracks);
+  collectLayer(m_bondLayer, plane, static_cast<int>(BondColourBy::kExtra), d.bonds);
   d.cracks.visible = m_cracksVisible->isChecked();
   d.cracks.method = selected<cracks::Method>(m_method);
   d.cracks.validation = m_validation->isChecked();
@@ -314,6 +447,7 @@ void PipelinePanel::collect() {
   d.view.background = colour(m_background->text(), d.view.background);
   d.view.colourMap = selected<ColourMap>(m_colourMap);
   d.view.scalarBar = m_scalarBar->isChecked();
+  d.annotations.show = m_annotations->isChecked();
   d.stream.fps = m_fps->value();
   d.stream.bitrate = m_bitrate->value() * 1000;
   if (d == m_description) {

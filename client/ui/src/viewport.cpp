@@ -35,11 +35,33 @@ void Viewport::paintEvent(QPaintEvent*) {
     painter.drawText(rect(), Qt::AlignCenter, tr("Connect and open a file (File menu)"));
     return;
   }
-  // The stream has the window's size once a resize went through; until
-  // then the picture is scaled, keeping its aspect ratio.
+  painter.drawImage(pictureRect(), m_image);
+}
+
+// The stream has the window's size once a resize went through; until then
+// the picture is scaled, keeping its aspect ratio.
+QRect Viewport::pictureRect() const {
+  if (m_image.isNull()) {
+    return rect();
+  }
   const QSize size = m_image.size().scaled(this->size(), Qt::KeepAspectRatio);
-  const QRect target(QPoint((width() - size.width()) / 2, (height() - size.height()) / 2), size);
-  painter.drawImage(target, m_image);
+  return {QPoint((width() - size.width()) / 2, (height() - size.height()) / 2), size};
+}
+
+bool Viewport::pickAt(QPoint point) {
+  const QRect picture = pictureRect();
+  if (!m_client.hasSession() || !picture.contains(point) || picture.isEmpty()) {
+    return false;
+  }
+  m_client.pick((point.x() - picture.left() + 0.5) / picture.width(),
+                (point.y() - picture.top() + 0.5) / picture.height());
+  return true;
+}
+
+void Viewport::mouseDoubleClickEvent(QMouseEvent* event) {
+  if (event->button() == Qt::LeftButton) {
+    pickAt(event->position().toPoint());
+  }
 }
 
 void Viewport::mousePressEvent(QMouseEvent* event) {

@@ -11,6 +11,7 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "grpc_convert.hpp"
 #include <crackvis/dataservice/data_client.hpp>
+#include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
 
 namespace crackvis::dataservice {
@@ -286,6 +287,15 @@ struct DataClient::Impl {
   std::unique_ptr<grpc::TemplatedGenericStub<v1::ReadRequest, grpc::ByteBuffer>> readStub;
   std::string authorization;
 
+  // crackvis-data as the user named it, for connection_advice's messages.
+  rpc::Peer peer(rpc::ServerKind kind = rpc::ServerKind::kData) const {
+    return {kind, options.target, options.insecure, options.tls.flagPrefix, true};
+  }
+  Status failure(const grpc::Status& status, const char* call,
+                 rpc::ServerKind kind = rpc::ServerKind::kData) const {
+    return rpc::fromGrpcStatus(status, call, peer(kind), channel);
+  }
+
   void prepare(grpc::ClientContext& context) const {
     context.set_deadline(std::chrono::system_clock::now() +
                          std::chrono::duration_cast<std::chrono::system_clock::duration>(
@@ -365,8 +375,18 @@ Status DataClient::checkHealth(const std::string& service) const {
   request.set_service(service);
   grpc::health::v1::HealthCheckResponse response;
   const grpc::Status status = m_impl->health->Check(&context, request, &response);
+  if (status.error_code() == grpc::StatusCode::NOT_FOUND && !service.empty()) {
+    // The health service knows no such name: say what answered instead.
+    const rpc::ServerKind kind = rpc::identifyServer(m_impl->channel);
+    return notFound(fmt::format("{}{} does not serve '{}'", m_impl->options.target,
+                                kind == rpc::ServerKind::kAny
+                                    ? std::string()
+                                    : fmt::format(" (a {})", rpc::programName(kind)),
+                                service));
+  }
   if (!status.ok()) {
-    return fromGrpcStatus(status, "health check");
+    // Health is served by both kinds of server.
+    return m_impl->failure(status, "health check", rpc::ServerKind::kAny);
   }
   if (response.status() != grpc::health::v1::HealthCheckResponse::SERVING) {
     return Status(
@@ -375,6 +395,11 @@ Status DataClient::checkHealth(const std::string& service) const {
                     grpc::health::v1::HealthCheckResponse::ServingStatus_Name(response.status())));
   }
   return Status::ok();
+}
+
+std::string DataClient::serverProgram() const {
+  const rpc::ServerKind kind = rpc::identifyServer(m_impl->channel);
+  return kind == rpc::ServerKind::kAny ? std::string() : std::string(rpc::programName(kind));
 }
 
 Result<std::vector<FileEntry>> DataClient::listFiles(const std::string& folder,
@@ -387,7 +412,7 @@ Result<std::vector<FileEntry>> DataClient::listFiles(const std::string& folder,
   v1::ListFilesResponse response;
   const grpc::Status status = m_impl->stub->ListFiles(&context, request, &response);
   if (!status.ok()) {
-    return fromGrpcStatus(status, "ListFiles");
+    return m_impl->failure(status, "ListFiles");
   }
   std::vector<FileEntry> files;
   for (const v1::FileEntry& entry : response.files()) {
@@ -406,7 +431,7 @@ Result<FileDescription> DataClient::describe(const std::string& file, bool uncac
   v1::DescribeResponse response;
   const grpc::Status status = m_impl->stub->Describe(&context, request, &response);
   if (!status.ok()) {
-    return fromGrpcStatus(status, "Describe");
+    return m_impl->failure(status, "Describe");
   }
   return fromProto(response);
 }
@@ -419,6 +444,7 @@ struct DataClient::PendingRead::Call {
   grpc::ClientContext context;
   std::unique_ptr<grpc::ClientAsyncReaderWriter<v1::ReadRequest, grpc::ByteBuffer>> stream;
   std::size_t slabs = 0;
+  std::shared_ptr<const DataClient::Impl> client;  // for the advice on a failure
   bool requestSent = false;
   bool finished = false;
 
@@ -471,6 +497,7 @@ DataClient::PendingRead DataClient::startRead(const std::string& file,
   }
   auto call = std::make_unique<PendingRead::Call>();
   call->slabs = slabs.size();
+  call->client = m_impl;
   m_impl->prepare(call->context);
   // The initial metadata leaves with the request in one batch, and only
   // that batch completes (StartCall then posts no operation of its own).
@@ -513,7 +540,7 @@ Status DataClient::PendingRead::receive(const SlabSink& sink, const ChunkCallbac
     return error;
   }
   if (!status.ok()) {
-    return fromGrpcStatus(status, "Read");
+    return call.client->failure(status, "Read");
   }
   return receiver.complete();
 }
@@ -569,7 +596,7 @@ Result<std::uint64_t> DataClient::fetch(const std::string& file, const FetchSink
     return sinkError;
   }
   if (!status.ok()) {
-    return fromGrpcStatus(status, "Fetch");
+    return m_impl->failure(status, "Fetch");
   }
   if (received != fileBytes) {
     return internalError(

@@ -13,6 +13,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <crackvis/common/unique_fd.hpp>
 #include <crackvis/dataservice/raw_tls_client.hpp>
 
 namespace crackvis::dataservice {
@@ -27,21 +28,7 @@ struct SslFree {
   void operator()(SSL* ssl) const { SSL_free(ssl); }
 };
 
-class Socket {
- public:
-  explicit Socket(int fd) : m_fd(fd) {}
-  Socket(const Socket&) = delete;
-  Socket& operator=(const Socket&) = delete;
-  ~Socket() {
-    if (m_fd >= 0) {
-      ::close(m_fd);
-    }
-  }
-  int get() const { return m_fd; }
-
- private:
-  int m_fd;
-};
+using Socket = UniqueFd;
 
 Result<int> connectTcp(const std::string& host, const std::string& port) {
   addrinfo hints{};

@@ -1,8 +1,4 @@
-#include <cerrno>
-#include <cstring>
-#include <fstream>
 #include <memory>
-#include <sstream>
 
 #include <fmt/format.h>
 #include <openssl/bio.h>
@@ -10,6 +6,7 @@
 #include <openssl/pem.h>
 #include <openssl/x509.h>
 
+#include <crackvis/common/certificates.hpp>
 #include <crackvis/dataservice/tls_material.hpp>
 
 namespace crackvis::dataservice {
@@ -25,18 +22,13 @@ struct KeyFree {
   void operator()(EVP_PKEY* key) const { EVP_PKEY_free(key); }
 };
 
-Result<std::string> readPem(const std::string& path, const char* what) {
-  if (path.empty()) {
-    return failedPrecondition(fmt::format("no {} file given", what));
+// How the user sets one of the files ("--ca or tls.ca in the configuration file").
+std::string setBy(const TlsFiles& files, const char* option) {
+  if (files.keyPrefix.empty()) {
+    return fmt::format("{}{}", files.flagPrefix, option);
   }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    return failedPrecondition(
-        fmt::format("cannot read {} '{}': {}", what, path, std::strerror(errno)));
-  }
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
+  return fmt::format("{}{} or {}{} in the configuration file", files.flagPrefix, option,
+                     files.keyPrefix, option);
 }
 
 std::unique_ptr<BIO, BioFree> memoryBio(const std::string& text) {
@@ -78,17 +70,27 @@ std::string opensslError() {
   return text;
 }
 
-Result<TlsMaterial> loadTlsMaterial(const TlsFiles& files) {
+TlsFiles defaultTlsFiles(const std::string& name, std::string flagPrefix, std::string keyPrefix) {
+  return {defaultCertificatePath("ca.pem"), defaultCertificatePath(name + ".pem"),
+          defaultCertificatePath(name + ".key"), std::move(flagPrefix), std::move(keyPrefix)};
+}
+
+Result<TlsMaterial> loadTlsMaterial(const TlsFiles& given) {
+  // Messages name the files read: a default may have been found installed.
+  TlsFiles files = given;
+  files.ca = locateCertificate(given.ca);
+  files.cert = locateCertificate(given.cert);
+  files.key = locateCertificate(given.key);
   TlsMaterial material;
-  auto ca = readPem(files.ca, "CA certificate");
+  auto ca = readCertificateFile(given.ca, "CA certificate", setBy(files, "ca"));
   if (!ca) {
     return ca.status();
   }
-  auto cert = readPem(files.cert, "certificate");
+  auto cert = readCertificateFile(given.cert, "certificate", setBy(files, "cert"));
   if (!cert) {
     return cert.status();
   }
-  auto key = readPem(files.key, "private key");
+  auto key = readCertificateFile(given.key, "private key", setBy(files, "key"));
   if (!key) {
     return key.status();
   }

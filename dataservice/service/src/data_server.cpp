@@ -76,6 +76,7 @@ Result<std::unique_ptr<DataServer>> DataServer::start(const ServerConfig& config
   Impl* self = impl.get();
   rpc::ServerSettings settings;
   settings.program = "crackvis-data";
+  settings.service = crackvis::v1::DataService::service_full_name();
   settings.maxReceiveMessageBytes = 4 << 20;
   settings.maxConcurrentStreams = config.limits.maxConcurrentStreams;
   settings.reapPeriod = std::chrono::milliseconds(100);

@@ -602,6 +602,10 @@ Result<PipelineDescription> convert(const xmlNode* root) {
       status = convertAnnotations(node, d.annotations);
     } else if (named(node, "stream")) {
       status = convertStream(node, d.stream);
+    } else if (named(node, "client")) {
+      Attributes a(node);
+      d.clientLayout = a.text("layout");
+      status = a.status();
     }
     CRACKVIS_RETURN_IF_ERROR(status);
   }
@@ -775,6 +779,9 @@ std::string toXml(const PipelineDescription& d) {
       "  <annotations show=\"{}\" time=\"{}\" method=\"{}\" axes=\"{}\" scale-bar=\"{}\"/>\n",
       text(n.show), text(n.time), text(n.method), text(n.axes), text(n.scaleBar));
   out += fmt::format("  <stream fps=\"{}\" bitrate=\"{}\"/>\n", d.stream.fps, d.stream.bitrate);
+  if (!d.clientLayout.empty()) {  // base64: nothing to escape
+    out += fmt::format("  <client layout=\"{}\"/>\n", d.clientLayout);
+  }
   out += "</pipeline>\n";
   return out;
 }

@@ -1,6 +1,8 @@
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numbers>
 #include <optional>
 
@@ -395,6 +397,29 @@ void addBonds(const pipeline::PipelineDescription& d, const SceneInput& input,
   renderer->AddActor(actor);
 }
 
+// xmin, xmax, ymin, ymax, zmin, zmax of the particles with their radii;
+// empty (min > max) without particles.
+std::array<double, 6> specimenBounds(const cracks::StepInput& step) {
+  std::array<double, 6> b{0, -1, 0, -1, 0, -1};
+  if (step.positions.empty()) {
+    return b;
+  }
+  b = {std::numeric_limits<double>::max(), std::numeric_limits<double>::lowest(),
+       std::numeric_limits<double>::max(), std::numeric_limits<double>::lowest(),
+       std::numeric_limits<double>::max(), std::numeric_limits<double>::lowest()};
+  for (std::size_t i = 0; i < step.positions.size(); ++i) {
+    const double r = i < step.radius.size() ? step.radius[i] : 0.0;
+    const dem::Vec3& p = step.positions[i];
+    b[0] = std::min(b[0], p.x - r);
+    b[1] = std::max(b[1], p.x + r);
+    b[2] = std::min(b[2], p.y - r);
+    b[3] = std::max(b[3], p.y + r);
+    b[4] = std::min(b[4], p.z - r);
+    b[5] = std::max(b[5], p.z + r);
+  }
+  return b;
+}
+
 }  // namespace
 
 struct SceneRenderer::Impl {
@@ -407,6 +432,17 @@ struct SceneRenderer::Impl {
   vtkSmartPointer<vtkPointSpriteSphereMapper> impostors;  // null unless particles are impostors
   ImpostorOptions impostorOptions;
   std::unique_ptr<Overlays> overlays;  // scalar bars and annotations
+  // The whole specimen at the step shown (every particle with its radius):
+  // what a camera reset fits, whatever is hidden, clipped or thresholded.
+  std::array<double, 6> specimenBounds{0, -1, 0, -1, 0, -1};
+
+  void resetCamera() {
+    if (specimenBounds[0] <= specimenBounds[1]) {
+      renderer->ResetCamera(specimenBounds.data());
+    } else {
+      renderer->ResetCamera();
+    }
+  }
 
   void applyImpostorOptions() {
     if (impostors) {
@@ -507,11 +543,12 @@ Status SceneRenderer::setScene(const pipeline::PipelineDescription& d, const Sce
   }
   // Before the camera: the legend strip narrows the scene's viewport.
   impl.overlays->setScene(d, input, std::move(legends));
+  impl.specimenBounds = specimenBounds(input.step);
   if (resetCamera || !impl.cameraSet) {
     if (d.view.camera) {
       setCamera(*d.view.camera);
     } else {
-      renderer->ResetCamera();
+      impl.resetCamera();
     }
     impl.cameraSet = true;
   }
@@ -622,7 +659,7 @@ void SceneRenderer::moveCamera(CameraMove move, double dx, double dy) {
       camera->Dolly(std::exp(dx));
       break;
     case CameraMove::kReset:
-      renderer->ResetCamera();
+      m_impl->resetCamera();
       break;
   }
   renderer->ResetCameraClippingRange();
@@ -640,6 +677,30 @@ pipeline::CameraDescription SceneRenderer::camera() const {
   c.viewUp = {v[0], v[1], v[2]};
   c.viewAngle = camera->GetViewAngle();
   return c;
+}
+
+scene::Ray SceneRenderer::viewRay(double x, double y, int width, int height) {
+  Impl& impl = *m_impl;
+  width = std::clamp(width, 1, impl.width);
+  height = std::clamp(height, 1, impl.height);
+  // The frame's layout, as renderFrame makes it, decides the scene's viewport.
+  impl.window->SetSize(width, height);
+  impl.overlays->layout(width, height);
+  vtkRenderer* renderer = impl.renderer;
+  const double px = x * width;
+  const double py = (1.0 - y) * height;  // VTK's display origin is bottom-left
+  double ends[2][4];
+  for (int k = 0; k < 2; ++k) {
+    renderer->SetDisplayPoint(px, py, k == 0 ? 0.0 : 1.0);
+    renderer->DisplayToWorld();
+    renderer->GetWorldPoint(ends[k]);
+    for (int axis = 0; axis < 3; ++axis) {
+      ends[k][axis] /= ends[k][3] != 0.0 ? ends[k][3] : 1.0;
+    }
+  }
+  const dem::Vec3 near{ends[0][0], ends[0][1], ends[0][2]};
+  const dem::Vec3 far{ends[1][0], ends[1][1], ends[1][2]};
+  return {near, far - near};
 }
 
 void SceneRenderer::setCamera(const pipeline::CameraDescription& c) {

@@ -20,13 +20,16 @@ double millisecondsSince(std::chrono::steady_clock::time_point start) {
       .count();
 }
 
-// A description's step in a file of `stepCount` steps: negative is the last.
-// Steps beyond int are out of range anyway; clamping keeps them so.
+// A description's step in a file of `stepCount` steps: -1 is the last; any
+// other step is itself, so that checkStepInRange refuses one the file lacks
+// (other negative ones too) naming the file's steps, rather than another
+// step being shown.
 int resolveStep(std::int64_t step, int stepCount) {
-  if (step < 0) {
+  if (step == -1) {
     return stepCount - 1;
   }
-  return static_cast<int>(std::min<std::int64_t>(step, std::numeric_limits<int>::max()));
+  return static_cast<int>(std::clamp<std::int64_t>(step, std::numeric_limits<int>::min(),
+                                                   std::numeric_limits<int>::max()));
 }
 
 // A step source whose exceptions become errors. Its reads run on the owner's

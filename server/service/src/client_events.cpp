@@ -50,6 +50,9 @@ Result<SessionEvent> toSessionEvent(const v1::ClientEvent& in) {
     case v1::ClientEvent::kRequestKeyframe:
       out.what = KeyframeEvent{};
       return out;
+    case v1::ClientEvent::kPick:
+      out.what = PickEvent{in.pick().x(), in.pick().y()};
+      return out;
     case v1::ClientEvent::kAttachSessionId:
       return invalidArgument(
           fmt::format("event {}: a stream attaches once, in its first message", in.event_id()));

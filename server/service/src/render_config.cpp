@@ -2,6 +2,7 @@
 #include <nlohmann/json.hpp>
 
 #include <crackvis/common/json_config.hpp>
+#include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/service/render_server.hpp>
 
 namespace crackvis::service {
@@ -100,6 +101,8 @@ Status validateRenderServerConfig(const RenderServerConfig& config) {
   if (config.data.target.empty()) {
     return invalidArgument("--data-server must name crackvis-data's host:port");
   }
+  CRACKVIS_RETURN_IF_ERROR(
+      rpc::checkHostPort("--data-server (data_service.target)", config.data.target));
   CRACKVIS_RETURN_IF_ERROR(
       checkSetting({"--max-sessions", "limits.max_sessions"}, config.maxSessions, 1, 256));
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-sessions-per-user", "limits.max_sessions_per_user"},

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <condition_variable>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -16,10 +17,13 @@
 #include "crackvis/v1/render.grpc.pb.h"
 #include <crackvis/common/log.hpp>
 #include <crackvis/dataservice/data_root.hpp>
+#include <crackvis/dataservice/remote_dem_file.hpp>
 #include <crackvis/dataservice/tls_material.hpp>
+#include <crackvis/dem/layout.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/rpc/access_log.hpp>
 #include <crackvis/rpc/call.hpp>
+#include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/credentials.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
 #include <crackvis/rpc/server.hpp>
@@ -52,7 +56,9 @@ std::string newSessionId() {
 class DataAccess {
  public:
   DataAccess(const dataservice::ClientOptions& options, std::shared_ptr<grpc::Channel> channel)
-      : m_options(options), m_stub(v1::DataService::NewStub(std::move(channel))) {}
+      : m_options(options),
+        m_channel(std::move(channel)),
+        m_stub(v1::DataService::NewStub(m_channel)) {}
 
   v1::DataService::Stub& stub() { return *m_stub; }
 
@@ -65,7 +71,12 @@ class DataAccess {
     if (!m_options.token.empty()) {
       client.AddMetadata("authorization", "Bearer " + m_options.token);
     }
-    return rpc::fromGrpcStatus(call(&client), fmt::format("crackvis-data {}", name));
+    // Unreachable, another kind of server or the wrong transport: one line
+    // of advice (connection_advice.hpp), as the CLI and the client say it.
+    const rpc::Peer peer{rpc::ServerKind::kData, m_options.target, m_options.insecure,
+                         m_options.tls.flagPrefix, true};
+    return rpc::fromGrpcStatus(call(&client), fmt::format("crackvis-data {}", name), peer,
+                               m_channel);
   }
 
   // The caller's folder rule on the file as named and, asking crackvis-data
@@ -90,6 +101,7 @@ class DataAccess {
 
  private:
   dataservice::ClientOptions m_options;
+  std::shared_ptr<grpc::Channel> m_channel;
   std::unique_ptr<v1::DataService::Stub> m_stub;
 };
 
@@ -355,6 +367,26 @@ v1::ServerMessage toMessage(const SessionNotice& notice) {
     error->set_message(notice.error.message());
     return message;
   }
+  if (notice.pick) {
+    const scene::PickResult& picked = *notice.pick;
+    auto* pick = message.mutable_pick();
+    pick->set_event_id(notice.eventId);
+    pick->set_kind(picked.kind == scene::PickedKind::kParticle ? "particle"
+                   : picked.kind == scene::PickedKind::kCrack  ? "crack element"
+                                                               : "");
+    pick->set_index(picked.index);
+    pick->set_x(picked.point.x);
+    pick->set_y(picked.point.y);
+    pick->set_z(picked.point.z);
+    for (const scene::PickedValue& v : picked.values) {
+      auto* value = pick->add_values();
+      value->set_name(v.name);
+      value->set_value(v.value);
+      value->set_unit(v.unit);
+    }
+    pick->set_text(scene::describePick(picked));
+    return message;
+  }
   if (notice.state) {
     auto* state = message.mutable_state();
     state->set_step(notice.state->step);
@@ -367,6 +399,39 @@ v1::ServerMessage toMessage(const SessionNotice& notice) {
     state->set_crack_warning(notice.state->crackWarning);
   }
   return message;
+}
+
+// Times, broken bonds and step scalars per step: every attribute of a step
+// group but its time is a named scalar (docs/data-format.md).
+void stepHistory(const dataservice::RemoteDemFile& file, const std::vector<std::int32_t>& breaks,
+                 v1::StepHistoryResponse& response) {
+  const int steps = file.stepCount();
+  for (const std::int64_t broken : dem::brokenBondsPerStep(breaks, steps)) {
+    response.add_broken_bonds(broken);
+  }
+  response.set_bond_count(file.bondCount());
+  std::map<std::string, int> series;  // name -> index in response.scalars
+  for (int k = 0; k < steps; ++k) {
+    const dataservice::StepEntry& entry = file.steps()[static_cast<std::size_t>(k)];
+    response.add_time(entry.time);
+    const dataservice::GroupInfo* group = file.description().findGroup(entry.group);
+    if (group == nullptr) {
+      continue;
+    }
+    for (const dataservice::AttributeInfo& attribute : group->attributes) {
+      const auto value = group->floatAttribute(attribute.name);
+      if (attribute.name == "time" || !value) {
+        continue;
+      }
+      auto [at, added] = series.try_emplace(attribute.name, response.scalars_size());
+      if (added) {
+        auto* s = response.add_scalars();
+        s->set_name(attribute.name);
+        s->mutable_values()->Resize(steps, std::numeric_limits<double>::quiet_NaN());
+      }
+      response.mutable_scalars(at->second)->set_values(k, *value);
+    }
+  }
 }
 
 class RenderServiceImpl final : public v1::RenderService::Service {
@@ -450,6 +515,26 @@ class RenderServiceImpl final : public v1::RenderService::Service {
       return m_dataAccess->call("Describe", context->deadline(), [&](grpc::ClientContext* client) {
         return m_dataAccess->stub().Describe(client, *request, response);
       });
+    });
+  }
+
+  grpc::Status StepHistory(grpc::ServerContext* context, const v1::StepHistoryRequest* request,
+                           v1::StepHistoryResponse* response) override {
+    return handle(context, "StepHistory", [&](const Caller& caller, AccessRecord& record) {
+      record.file = request->file();
+      CRACKVIS_RETURN_IF_ERROR(
+          m_dataAccess->checkAccess(caller, request->file(), context->deadline()));
+      auto file = dataservice::RemoteDemFile::open(m_data, request->file());
+      if (!file) {
+        return file.status();
+      }
+      auto breakSteps = file->breakSteps();
+      if (!breakSteps) {
+        return breakSteps.status();
+      }
+      stepHistory(*file, *breakSteps, *response);
+      record.bytes = breakSteps->size() * sizeof(std::int32_t);
+      return Status::ok();
     });
   }
 
@@ -622,7 +707,9 @@ class RenderServiceImpl final : public v1::RenderService::Service {
     // Checked again: a link may have been changed since the session opened.
     CRACKVIS_RETURN_IF_ERROR(m_dataAccess->checkAccess(caller, record.file, context.deadline()));
     int step = 0;
-    auto image = (*session)->snapshot(request.width(), request.height(), &step);
+    const std::optional<int> atStep =
+        request.has_step() ? std::optional<int>(request.step()) : std::nullopt;
+    auto image = (*session)->snapshot(request.width(), request.height(), &step, atStep);
     if (!image) {
       return image.status();
     }
@@ -669,8 +756,7 @@ Result<std::shared_ptr<grpc::Channel>> dataChannel(const dataservice::ClientOpti
 dataservice::ClientOptions defaultDataOptions() {
   dataservice::ClientOptions options;
   options.target = "localhost:50051";
-  options.tls = {"certs/generated/ca.pem", "certs/generated/crackvis-render.pem",
-                 "certs/generated/crackvis-render.key"};
+  options.tls = dataservice::defaultTlsFiles("crackvis-render", "--data-", "data_service.");
   return options;
 }
 
@@ -720,6 +806,7 @@ Result<std::unique_ptr<RenderServer>> RenderServer::start(const RenderServerConf
   RenderServiceImpl* service = impl->service.get();
   rpc::ServerSettings settings;
   settings.program = kProgram;
+  settings.service = v1::RenderService::service_full_name();
   settings.maxReceiveMessageBytes = static_cast<int>(pipeline::kMaxPipelineBytes) + 4096;
   settings.reapPeriod = std::chrono::milliseconds(200);
   settings.reap = [service] {

@@ -20,7 +20,8 @@ double millisecondsSince(Clock::time_point start) {
 // What an event is, for the log and error messages.
 const char* eventName(const SessionEvent& event) {
   static constexpr const char* kNames[] = {"camera",           "resize", "set_step", "play",
-                                           "replace_pipeline", "still",  "keyframe"};
+                                           "replace_pipeline", "still",  "keyframe", "pick"};
+  static_assert(std::size(kNames) == std::variant_size_v<decltype(event.what)>);
   return kNames[event.what.index()];
 }
 
@@ -67,6 +68,7 @@ struct Session::Worker {
   std::uint64_t lastEventId = 0;
   std::optional<Clock::time_point> lastEventReceived;
   std::uint64_t frameId = 0;
+  bool cameraMoved = false;  // since the last state sent
 
   explicit Worker(Session& owner) : session(owner) {}
 
@@ -167,9 +169,22 @@ struct Session::Worker {
 
   SessionState state() const {
     const scene::ScenePipeline::CrackMapping& mapping = scene->crackMapping();
-    return {
-        scene->step(),    stepCount(),    playing, width, height, pipeline::toXml(description()),
-        mapping.fraction, mapping.warning};
+    return {scene->step(), stepCount(), playing,          width,
+            height,        viewXml(),   mapping.fraction, mapping.warning};
+  }
+
+  // The description in force as a saved view holds it: the step shown, the
+  // stream's size and the camera where the user left it, so that the client
+  // can save the view and reopen it as it was.
+  std::string viewXml() const {
+    pipeline::PipelineDescription d = description();
+    d.step = scene->step();
+    d.view.width = width;
+    d.view.height = height;
+    if (renderer) {
+      d.view.camera = renderer->camera();
+    }
+    return pipeline::toXml(d);
   }
 
   void interacted(const SessionEvent& event) {
@@ -197,6 +212,7 @@ struct Session::Worker {
       return;
     }
     renderer->moveCamera(camera.move, camera.dx, camera.dy);
+    cameraMoved = true;
     if (camera.still) {
       stillFrame(event);
       return;
@@ -291,6 +307,17 @@ struct Session::Worker {
 
   void handle(const SessionEvent& event, const StillEvent&) { stillFrame(event); }
 
+  void handle(const SessionEvent& event, const PickEvent& at) {
+    if (Status status = needRenderer(); !status) {
+      reject(event, status);
+      return;
+    }
+    const scene::Ray ray = renderer->viewRay(at.x, at.y, width, height);
+    SessionNotice notice{event.id, Status::ok(), std::nullopt};
+    notice.pick = scene::pick(description(), scene->input(), ray);
+    session.notify(std::move(notice));
+  }
+
   void stillFrame(const SessionEvent& event) {
     forceFull = true;
     lastEventReceived = event.received;
@@ -384,7 +411,12 @@ struct Session::Worker {
       adaptReduction(frame.timings.renderMs);
     }
     frame.frameId = ++frameId;
+    const bool settled = frame.fullResolution && cameraMoved;
     session.publish(std::move(frame));
+    if (settled) {  // the camera came to rest: the state carries it
+      cameraMoved = false;
+      session.notify({0, Status::ok(), state()});
+    }
     stepTimings = {};
     lastEventReceived.reset();
     dirty = false;
@@ -424,11 +456,20 @@ struct Session::Worker {
   }
 
   // A full-resolution picture of the current state (0: the view's size).
-  Result<render::Image> snapshot(int w, int h, int& step) {
+  Result<render::Image> snapshot(int w, int h, int& step, std::optional<int> atStep) {
     w = w > 0 ? w : width;
     h = h > 0 ? h : height;
     CRACKVIS_RETURN_IF_ERROR(checkViewSize(w, h, session.m_limits));
     CRACKVIS_RETURN_IF_ERROR(ensureRenderer(w, h));
+    if (atStep) {
+      const int shown = *atStep == -1 ? stepCount() - 1 : *atStep;
+      CRACKVIS_RETURN_IF_ERROR(dem::checkStepInRange(description().file, shown, stepCount()));
+      if (shown != scene->step()) {
+        CRACKVIS_RETURN_IF_ERROR(showStep(shown));
+        scene->prefetch(shown + 1);
+        session.notify({0, Status::ok(), state()});
+      }
+    }
     render::Image image;
     CRACKVIS_RETURN_IF_ERROR(renderer->renderFrame(w, h, image));
     step = scene->step();
@@ -726,7 +767,8 @@ void Session::notify(SessionNotice notice) {
   m_outgoing.notify_all();
 }
 
-Result<render::Image> Session::snapshot(int width, int height, int* step) {
+Result<render::Image> Session::snapshot(int width, int height, int* step,
+                                        std::optional<int> atStep) {
   auto promise = std::make_shared<std::promise<Result<render::Image>>>();
   auto future = promise->get_future();
   auto stepOut = std::make_shared<int>(0);
@@ -735,10 +777,10 @@ Result<render::Image> Session::snapshot(int width, int height, int* step) {
     if (m_closing) {
       return failedPrecondition(fmt::format("session {} is closed", m_id));
     }
-    m_tasks.push_back([promise, width, height, stepOut, this](Worker& worker) {
+    m_tasks.push_back([promise, width, height, stepOut, atStep, this](Worker& worker) {
       Result<render::Image> result = Status(StatusCode::kInternal, "");
       const Status status = guarded(m_id, "snapshot", [&] {
-        result = worker.snapshot(width, height, *stepOut);
+        result = worker.snapshot(width, height, *stepOut, atStep);
         return result.status();
       });
       promise->set_value(status ? std::move(result) : Result<render::Image>(status));

@@ -44,6 +44,14 @@ struct EventCheck {
   Status operator()(const SetStepEvent&) const { return Status::ok(); }
   Status operator()(const StillEvent&) const { return Status::ok(); }
   Status operator()(const KeyframeEvent&) const { return Status::ok(); }
+  Status operator()(const PickEvent& pick) const {
+    if (!(pick.x >= 0.0 && pick.x <= 1.0 && pick.y >= 0.0 && pick.y <= 1.0)) {
+      return invalidArgument(
+          fmt::format("pick event {}: x, y must be fractions of the view (0..1), not {}, {}",
+                      event.id, pick.x, pick.y));
+    }
+    return Status::ok();
+  }
 };
 
 }  // namespace

@@ -115,4 +115,10 @@ StepList listSteps(std::int64_t count, const StepTimeLookup& stepTime);
 // range (the file has steps 0..N-1)" ("... has no steps" when empty).
 Status checkStepInRange(const std::string& file, int step, int stepCount);
 
+// The bonds broken at or before each of the file's `stepCount` steps, from
+// /bonds/break_step (bonds never heal; a break step beyond the complete
+// steps, which a writer may have named already, counts nowhere).
+std::vector<std::int64_t> brokenBondsPerStep(std::span<const std::int32_t> breakSteps,
+                                             int stepCount);
+
 }  // namespace crackvis::dem

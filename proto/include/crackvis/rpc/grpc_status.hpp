@@ -13,7 +13,9 @@ namespace crackvis::rpc {
 
 grpc::Status toGrpcStatus(const Status& status);
 // `call` names the call in messages about transport failures
-// ("Describe: UNAVAILABLE: failed to connect").
+// ("Describe: UNAVAILABLE: failed to connect"). A client that knows which
+// server it meant uses connection_advice.hpp's overload, which says what
+// to do when the server cannot be reached.
 Status fromGrpcStatus(const grpc::Status& status, const std::string& call);
 const char* grpcCodeName(grpc::StatusCode code);
 

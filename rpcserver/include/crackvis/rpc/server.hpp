@@ -44,6 +44,10 @@ Result<Listener> prepareListener(const std::string& listen, bool insecure,
 
 struct ServerSettings {
   std::string program;  // "crackvis-data", for messages and the plaintext warning
+  // The program's own gRPC service ("crackvis.v1.DataService"): the health
+  // service reports it by name too, so a client that reached the wrong kind
+  // of server can say which it reached (connection_advice.hpp).
+  std::string service;
   int maxReceiveMessageBytes = 4 << 20;
   int maxConcurrentStreams = 0;  // per connection; 0: gRPC's default
   int maxThreads = 0;            // gRPC's handler threads (sync services); 0: unbounded

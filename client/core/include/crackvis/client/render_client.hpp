@@ -12,21 +12,27 @@
 
 #include <QImage>
 #include <QObject>
+#include <QSize>
 #include <QString>
 #include <QStringList>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
+#include <crackvis/common/certificates.hpp>
 #include <crackvis/common/status.hpp>
 
 namespace crackvis::client {
 
+// The defaults: certs/generated/ (a source checkout's development
+// certificates), or where those are missing /etc/crackvis/certs.
 struct ConnectionSettings {
   QString address = QStringLiteral("localhost:50052");
-  QString caPath = QStringLiteral("certs/generated/ca.pem");
-  QString certPath = QStringLiteral("certs/generated/client.pem");
-  QString keyPath = QStringLiteral("certs/generated/client.key");
+  QString caPath = QString::fromStdString(defaultCertificatePath("ca.pem"));
+  QString certPath = QString::fromStdString(defaultCertificatePath("client.pem"));
+  QString keyPath = QString::fromStdString(defaultCertificatePath("client.key"));
   QString token;  // sent as "authorization: Bearer <token>" when set
 };
 
@@ -51,6 +57,16 @@ struct FileSummary {
   // extra/particles/NAME, constant or per step).
   QStringList particleExtras;
   QStringList bondExtras;  // likewise extra/bonds/NAME
+};
+
+// A file's course over its steps (RenderService.StepHistory), for the
+// client's step plot.
+struct StepHistory {
+  std::vector<double> time;         // per step, s
+  std::vector<qint64> brokenBonds;  // broken at or before each step
+  qint64 bondCount = 0;
+  QStringList scalarNames;                   // the file's step scalars
+  std::vector<std::vector<double>> scalars;  // [scalar][step], NaN where a step lacks it
 };
 
 struct FrameInfo {
@@ -80,13 +96,17 @@ class RenderClient : public QObject {
   explicit RenderClient(QObject* parent = nullptr);
   ~RenderClient() override;
 
-  // Reads the TLS files and checks the server's health (one round trip).
+  // Checks the address (HOST:PORT), reads the TLS files and lists the
+  // server's files (one round trip); a failure says what to do
+  // (crackvis/rpc/connection_advice.hpp: not running, not a crackvis-render,
+  // plaintext).
   Status connectTo(const ConnectionSettings& settings);
   bool connected() const;
   const ConnectionSettings& settings() const;
 
   Result<std::vector<FileEntry>> listFiles();
   Result<FileSummary> describe(const QString& file);
+  Result<StepHistory> stepHistory(const QString& file);
 
   // Opens a session with a pipeline description and attaches its stream.
   Status openSession(const QString& pipelineXml);
@@ -107,9 +127,26 @@ class RenderClient : public QObject {
   quint64 resize(int width, int height);
   quint64 replacePipeline(const QString& xml);
   quint64 requestStill();
+  // What is drawn at (x, y), fractions of the view from its top-left
+  // corner; the answer comes through picked().
+  quint64 pick(double x, double y);
 
-  // A full-resolution PNG of the session (blocking: one call).
-  Result<QByteArray> snapshotPng(int width = 0, int height = 0);
+  // A full-resolution PNG of the session (blocking: one call), at any size
+  // the server allows (0: the stream's). With `step` the session moves to
+  // that step first (-1: the last) and stays there.
+  Result<QByteArray> snapshotPng(int width = 0, int height = 0,
+                                 std::optional<int> step = std::nullopt);
+
+  // A movie of full-resolution frames re-rendered on the server (a Snapshot
+  // at each of `steps`, width x height, even), encoded here with libx264 at
+  // constant quality: unlike a recording of the stream, no frame is a
+  // reduced interactive one. `progress(done, total)` after each frame;
+  // returning false stops it (CANCELLED, the file removed). The session is
+  // left at the last step.
+  Status recordMovie(const QString& path, const std::vector<int>& steps, int width, int height,
+                     int fps, const std::function<bool(int, int)>& progress = {});
+  // The stream's frame size (0 x 0 before the first frame).
+  QSize frameSize() const;
 
   // Recording of the received stream to MP4 (remuxed, not re-encoded).
   Status startRecording(const QString& path);
@@ -127,6 +164,10 @@ class RenderClient : public QObject {
   // the server's warning when fewer than 95 % did (empty otherwise).
   void crackMappingChanged(double mappedFraction, const QString& warning);
   void eventFailed(quint64 eventId, const QString& message);
+  // The answer to pick(): "particle 120 at (...) m: radius ..., damage ..."
+  // (or "nothing there"), the kind ("particle", "crack element" or empty)
+  // and the particle's or element's index.
+  void picked(quint64 eventId, const QString& text, const QString& kind, qint64 index);
   void connectionLost(const QString& why);
   void reconnected();
 

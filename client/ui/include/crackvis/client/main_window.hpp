@@ -1,20 +1,29 @@
 // crackvis-client's window: a file browser (the data root through the render
 // server, with each file's description), the pipeline panel, the viewport,
 // a time bar (step slider, play/pause, fps), a status bar (fps, event-to-
-// frame latency, bitrate), a full-resolution screenshot and MP4 recording.
-// Server errors become messages in the status bar and the log pane, never a
-// crash. ConnectDialog asks for the address, certificates and token and
-// remembers them (QSettings).
+// frame latency, bitrate), screenshots of any size (server Snapshot), MP4
+// recording of the stream or of full-resolution frames re-rendered on the
+// server, and views saved and loaded as pipeline descriptions (file, step,
+// camera, size and everything the panel sets: what `crackvis snapshot` and
+// `crackvis movie` take). Server errors become messages in the status bar
+// and the log pane (a repeated one folded into a count), never a crash.
+// ConnectDialog asks for the address, certificates and token and remembers
+// them (QSettings).
 #pragma once
 
 #include <QDialog>
 #include <QMainWindow>
+#include <QSize>
 #include <QTimer>
+#include <cstdint>
 
 #include <crackvis/client/pipeline_panel.hpp>
 #include <crackvis/client/render_client.hpp>
+#include <crackvis/client/step_plot.hpp>
 #include <crackvis/client/viewport.hpp>
 
+class QAction;
+class QComboBox;
 class QLabel;
 class QLineEdit;
 class QPlainTextEdit;
@@ -53,6 +62,9 @@ class MainWindow : public QMainWindow {
   PipelinePanel& pipelinePanel() { return *m_panel; }
   QTreeWidget& fileTree() { return *m_files; }
   QSlider& stepSlider() { return *m_slider; }
+  StepPlot& stepPlot() { return *m_plot; }
+  // The step scalar drawn beside the broken bonds ("none" and the file's).
+  QComboBox& plotScalarBox() { return *m_plotScalar; }
   QString lastMessage() const { return m_lastMessage; }
   // Everything reported so far, one message a line (the messages pane).
   QString messages() const;
@@ -60,16 +72,41 @@ class MainWindow : public QMainWindow {
  public slots:
   // Connects, lists the files; false (and a message) on failure.
   bool connectTo(const crackvis::client::ConnectionSettings& settings);
-  // Opens a session on `file` with the panel's description.
+  // Opens a session on `file` with the panel's description at its last
+  // step; false (and a message) on failure.
   bool openFile(const QString& file);
+  // The same at `step` (-1: the last): a step the file lacks is the
+  // server's OUT_OF_RANGE, reported, not replaced by another step. A file
+  // opens with the camera fitted to it, whatever the previous one showed.
+  bool openFile(const QString& file, std::int64_t step);
+  // Opens the view's file at its step with its camera (none: fitted) and
+  // shows its settings in the panel; false (and a message) on failure.
+  bool openView(const pipeline::PipelineDescription& view);
+  // A saved view (File > Open view): a pipeline description file.
+  bool loadView(const QString& path);
+  // The view as shown (server's state: step, camera, size) to `path`.
+  bool saveView(const QString& path);
   void showConnectDialog();
-  void saveScreenshot(const QString& path = QString());
+  // A PNG rendered by the server at `size` (empty: the stream's size).
+  void saveScreenshot(const QString& path = QString(), QSize size = QSize());
+  // Starts or stops the recording of the received stream (remuxed).
   void toggleRecording(const QString& path = QString());
+  // Steps first..last (stride) re-rendered on the server at full resolution
+  // at `size` (empty: the stream's), encoded into the MP4 `path` with a
+  // progress dialog; false (and a message) on failure or when cancelled.
+  bool recordMovie(const QString& path, int first, int last, int stride, QSize size, int fps);
 
  private:
   void buildMenus();
+  void showScreenshotDialog();
+  void showMovieDialog();
+  void openViewDialog();
+  void saveViewDialog();
+  QSize streamSize() const;  // the stream's frame size, else the viewport's
   QWidget* buildTimeBar();
   void describe(const QString& file);
+  QWidget* buildStepDock();
+  void showHistory(const QString& file);
   void report(const QString& message);
   void updateStatus();
   void togglePlay();
@@ -81,6 +118,8 @@ class MainWindow : public QMainWindow {
   QPlainTextEdit* m_description;
   QPlainTextEdit* m_log;
   QSlider* m_slider;
+  StepPlot* m_plot;
+  QComboBox* m_plotScalar;
   QPushButton* m_play;
   QDoubleSpinBox* m_fps;
   QLabel* m_stepLabel;
@@ -88,6 +127,8 @@ class MainWindow : public QMainWindow {
   QTimer m_statusTimer;
   QString m_file;
   QString m_lastMessage;
+  int m_lastMessageRepeats = 0;  // further times it came, folded into one line
+  QAction* m_recordAction = nullptr;
   QString m_lastCrackWarning;  // the cause of the server's last, reported once
 };
 

@@ -1,7 +1,9 @@
 // Edits every element of a pipeline description (pipeline-schemas/
-// pipeline.xsd): crack method and validation, colour-bys, representations,
-// opacities, clipping plane, bonds, decomposition and inconsistency marks,
-// background, colour map, scalar bar, stream rate. What it emits is a typed
+// pipeline.xsd): crack method and validation, colour-bys with their colour
+// ranges (per step, over the series, or set), representations, opacities,
+// one clipping plane for any of the three layers, a threshold on any of a
+// layer's quantities, bonds, decomposition and inconsistency marks,
+// background, colour map, scalar bar, annotations, stream rate. What it emits is a typed
 // description; crackvis::pipeline::toXml turns it into a valid document.
 #pragma once
 
@@ -33,6 +35,25 @@ class PipelinePanel : public QWidget {
   QComboBox* particleColourBox() const { return m_particleColour; }
   QComboBox* bondColourBox() const { return m_bondColour; }
 
+  // A coloured layer's range editor, its switch for the clipping plane and
+  // its threshold: the same controls for particles, cracks and bonds. An
+  // empty bound is open (the threshold) or left to the data (the range).
+  struct LayerControls {
+    QComboBox* rangeMode = nullptr;  // per step, over the series, set
+    QLineEdit* rangeMin = nullptr;
+    QLineEdit* rangeMax = nullptr;
+    QCheckBox* clip = nullptr;  // the panel's plane cuts this layer
+    QCheckBox* threshold = nullptr;
+    QComboBox* thresholdBy = nullptr;  // the layer's colour-by quantities but solid
+    QLineEdit* thresholdMin = nullptr;
+    QLineEdit* thresholdMax = nullptr;
+  };
+  const LayerControls& particleControls() const { return m_particleLayer; }
+  const LayerControls& crackControls() const { return m_crackLayer; }
+  const LayerControls& bondControls() const { return m_bondLayer; }
+  QDoubleSpinBox* clipOrigin(int axis) const { return m_clipOrigin[axis]; }
+  QDoubleSpinBox* clipNormal(int axis) const { return m_clipNormal[axis]; }
+
  signals:
   void changed(const crackvis::pipeline::PipelineDescription& description);
 
@@ -46,7 +67,9 @@ class PipelinePanel : public QWidget {
   QComboBox* m_particleRepresentation;
   QComboBox* m_particleColour;
   QDoubleSpinBox* m_particleOpacity;
-  QCheckBox* m_clip;
+  LayerControls m_particleLayer;
+  LayerControls m_crackLayer;
+  LayerControls m_bondLayer;
   QDoubleSpinBox* m_clipOrigin[3];
   QDoubleSpinBox* m_clipNormal[3];
   QCheckBox* m_cracksVisible;
@@ -67,6 +90,7 @@ class PipelinePanel : public QWidget {
   QLineEdit* m_background;
   QComboBox* m_colourMap;
   QCheckBox* m_scalarBar;
+  QCheckBox* m_annotations;
   QSpinBox* m_fps;
   QSpinBox* m_bitrate;
 };

@@ -25,12 +25,11 @@
 namespace crackvis::dataservice {
 
 struct ClientOptions {
-  std::string target = "localhost:50051";  // host:port of crackvis-data
-  TlsFiles tls{"certs/generated/ca.pem", "certs/generated/client.pem",
-               "certs/generated/client.key"};
-  bool insecure = false;  // plaintext, for a server started with --insecure
-  std::string token;      // sent as "authorization: Bearer <token>"
-  std::string user;       // with `password`: sent as Basic credentials
+  std::string target = "localhost:50051";    // host:port of crackvis-data
+  TlsFiles tls = defaultTlsFiles("client");  // certs/generated/{ca,client}.pem, client.key
+  bool insecure = false;                     // plaintext, for a server started with --insecure
+  std::string token;                         // sent as "authorization: Bearer <token>"
+  std::string user;                          // with `password`: sent as Basic credentials
   std::string password;
   std::string serverName;         // name the server certificate must carry; default: target's host
   double timeoutSeconds = 120.0;  // deadline of each call
@@ -76,8 +75,12 @@ class DataClient {
 
   const ClientOptions& options() const;
 
-  // grpc.health.v1 Check: OK when the server reports SERVING.
+  // grpc.health.v1 Check: OK when the server reports SERVING. Health is
+  // served by crackvis-render too: a failure's message names neither.
   Status checkHealth(const std::string& service = "") const;
+  // Which crackvis server answers ("crackvis-data", "crackvis-render"), as
+  // its health service tells; empty when it names neither.
+  std::string serverProgram() const;
   Result<std::vector<FileEntry>> listFiles(const std::string& folder = "",
                                            bool recursive = true) const;
   // `uncached`: the server walks the file even when it holds an answer for

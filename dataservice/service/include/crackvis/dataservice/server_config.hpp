@@ -65,8 +65,7 @@ struct UserEntry {
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  // host:port; port 0 lets the OS choose
   std::string dataRoot;
-  TlsFiles tls{"certs/generated/ca.pem", "certs/generated/server.pem",
-               "certs/generated/server.key"};
+  TlsFiles tls = defaultTlsFiles("server", "--", "tls.");
   bool insecure = false;  // plaintext, loopback only
   Limits limits;
   std::vector<UserEntry> users;  // empty: every certified client reads the whole root

@@ -157,6 +157,9 @@ struct PipelineDescription {
   ViewDescription view;
   AnnotationsDescription annotations;
   StreamDescription stream;
+  // <client layout="...">: crackvis-client's window state (base64, opaque
+  // here) in a saved view; empty: none.
+  std::string clientLayout;
   friend bool operator==(const PipelineDescription&, const PipelineDescription&) = default;
 };
 

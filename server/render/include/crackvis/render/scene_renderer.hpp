@@ -24,6 +24,7 @@
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/camera_move.hpp>
 #include <crackvis/scene/scene_input.hpp>
+#include <crackvis/scene/scene_pick.hpp>
 
 namespace crackvis::render {
 
@@ -71,6 +72,10 @@ class SceneRenderer {
   void moveCamera(CameraMove move, double dx, double dy);
   pipeline::CameraDescription camera() const;
   void setCamera(const pipeline::CameraDescription& camera);
+  // The ray from the eye through (x, y) of a width x height frame, as
+  // fractions of it from its top-left corner (a double click), through the
+  // scene's viewport (the legend strip beside it is not the scene).
+  scene::Ray viewRay(double x, double y, int width, int height);
 
   // How impostor particles are drawn, for tests and benchmarks: with VTK's
   // geometry shader (vtkOpenGLSphereMapper's way) instead of points, and

@@ -22,8 +22,7 @@ dataservice::ClientOptions defaultDataOptions();
 
 struct RenderServerConfig {
   std::string listen = "127.0.0.1:50052";  // host:port; port 0 lets the OS choose
-  dataservice::TlsFiles tls{"certs/generated/ca.pem", "certs/generated/server.pem",
-                            "certs/generated/server.key"};
+  dataservice::TlsFiles tls = dataservice::defaultTlsFiles("server", "--", "tls.");
   bool insecure = false;                      // plaintext, loopback only
   std::vector<dataservice::UserEntry> users;  // empty: every certified client
   // crackvis-data, reached with the render server's own client certificate.

@@ -30,6 +30,7 @@
 #include <crackvis/common/status.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/scene_renderer.hpp>
+#include <crackvis/scene/scene_pick.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 #include <crackvis/service/session_event.hpp>
 #include <crackvis/source/step_source.hpp>
@@ -76,8 +77,9 @@ struct SessionState {
 // or its state after a change.
 struct SessionNotice {
   std::uint64_t eventId = 0;
-  Status error;                       // not OK: an event error
-  std::optional<SessionState> state;  // set: a state message
+  Status error;                                          // not OK: an event error
+  std::optional<SessionState> state;                     // set: a state message
+  std::optional<scene::PickResult> pick = std::nullopt;  // set: the answer to a pick event
 };
 
 struct SessionInfo {
@@ -127,7 +129,8 @@ class Session {
 
   // A full-resolution picture of the current state (width/height 0: the
   // view's), rendered on the session's thread.
-  Result<render::Image> snapshot(int width, int height, int* step = nullptr);
+  Result<render::Image> snapshot(int width, int height, int* step = nullptr,
+                                 std::optional<int> atStep = std::nullopt);
 
   // What waits in the session's queues, and what bounded them so far.
   struct QueueStats {

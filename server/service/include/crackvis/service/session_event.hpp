@@ -57,12 +57,16 @@ struct ReplacePipelineEvent {
 };
 struct StillEvent {};
 struct KeyframeEvent {};
+struct PickEvent {
+  double x = 0.0;  // fractions of the view from its top-left corner, 0..1
+  double y = 0.0;
+};
 
 struct SessionEvent {
   std::uint64_t id = 0;
   Clock::time_point received = Clock::now();
   std::variant<CameraEvent, ResizeEvent, SetStepEvent, PlayEvent, ReplacePipelineEvent, StillEvent,
-               KeyframeEvent>
+               KeyframeEvent, PickEvent>
       what;
 };
 
@@ -72,7 +76,8 @@ Status checkViewSize(int width, int height, const SessionLimits& limits);
 
 // What can be checked of an event without the session's data or renderer:
 // a camera move's finite, bounded deltas, a resize's view size, a play's
-// fps (0..240), a replacement's size (kMaxPipelineBytes). INVALID_ARGUMENT
+// fps (0..240), a replacement's size (kMaxPipelineBytes), a pick's point
+// (finite, within the view). INVALID_ARGUMENT
 // naming the event; a step is checked against the file by the session.
 Status checkEvent(const SessionEvent& event, const SessionLimits& limits);
 

@@ -1,0 +1,161 @@
+#include <QMouseEvent>
+#include <QPainter>
+#include <QPainterPath>
+#include <algorithm>
+#include <cmath>
+
+#include <crackvis/client/step_plot.hpp>
+
+namespace crackvis::client {
+namespace {
+
+const QColor kBrokenColour(0xff, 0x9f, 0x1c);
+const QColor kScalarColour(0x4c, 0xc9, 0xf0);
+
+// The finite values' range (0..1 without any).
+std::pair<double, double> rangeOf(const std::vector<double>& values) {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -lo;
+  for (const double v : values) {
+    if (std::isfinite(v)) {
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  }
+  if (!(lo <= hi)) {
+    return {0.0, 1.0};
+  }
+  return lo == hi ? std::pair{lo - 0.5, hi + 0.5} : std::pair{lo, hi};
+}
+
+QString label(double value) {
+  return QString::number(value, 'g', 4);
+}
+
+}  // namespace
+
+StepPlot::StepPlot(QWidget* parent) : QWidget(parent) {
+  setMinimumHeight(120);
+  setToolTip(tr("Click or drag to go to a step"));
+}
+
+void StepPlot::setHistory(const StepHistory& history) {
+  const QString chosen = scalar();
+  m_history = history;
+  m_scalar = -1;
+  if (!chosen.isEmpty()) {
+    setScalar(chosen);
+  }
+  update();
+}
+
+void StepPlot::setCurrentStep(int step) {
+  m_step = step;
+  update();
+}
+
+bool StepPlot::setScalar(const QString& name) {
+  m_scalar = static_cast<int>(m_history.scalarNames.indexOf(name));
+  update();
+  return m_scalar >= 0;
+}
+
+QString StepPlot::scalar() const {
+  return m_scalar >= 0 ? m_history.scalarNames.at(m_scalar) : QString();
+}
+
+QRect StepPlot::plotArea() const {
+  return rect().adjusted(64, 22, -64, -26);
+}
+
+int StepPlot::xOf(int step) const {
+  const QRect area = plotArea();
+  const auto steps = static_cast<int>(m_history.brokenBonds.size());
+  return steps <= 1 ? area.center().x() : area.left() + step * area.width() / (steps - 1);
+}
+
+int StepPlot::stepAt(int x) const {
+  const auto steps = static_cast<int>(m_history.brokenBonds.size());
+  if (steps == 0) {
+    return -1;
+  }
+  const QRect area = plotArea();
+  if (steps == 1 || area.width() <= 0) {
+    return 0;
+  }
+  const double at = static_cast<double>(x - area.left()) * (steps - 1) / area.width();
+  return std::clamp(static_cast<int>(std::lround(at)), 0, steps - 1);
+}
+
+void StepPlot::mousePressEvent(QMouseEvent* event) {
+  if (const int step = stepAt(event->position().toPoint().x()); step >= 0) {
+    emit stepClicked(step);
+  }
+}
+
+void StepPlot::mouseMoveEvent(QMouseEvent* event) {
+  if (event->buttons() & Qt::LeftButton) {
+    mousePressEvent(event);
+  }
+}
+
+void StepPlot::paintEvent(QPaintEvent*) {
+  QPainter painter(this);
+  painter.setRenderHint(QPainter::Antialiasing);
+  painter.fillRect(rect(), QColor(30, 30, 40));
+  const QRect area = plotArea();
+  const auto steps = static_cast<int>(m_history.brokenBonds.size());
+  painter.setPen(Qt::lightGray);
+  if (steps == 0 || area.width() <= 0 || area.height() <= 0) {
+    painter.drawText(rect(), Qt::AlignCenter, tr("Open a file to see its steps"));
+    return;
+  }
+  painter.drawRect(area);
+  // Axes: the step below, broken bonds on the left, the scalar on the right.
+  painter.drawText(QRect(area.left(), area.bottom() + 4, area.width(), 20), Qt::AlignLeft,
+                   QStringLiteral("0"));
+  painter.drawText(QRect(area.left(), area.bottom() + 4, area.width(), 20), Qt::AlignCenter,
+                   tr("step"));
+  painter.drawText(QRect(area.left(), area.bottom() + 4, area.width(), 20), Qt::AlignRight,
+                   QString::number(steps - 1));
+  std::vector<double> broken(m_history.brokenBonds.begin(), m_history.brokenBonds.end());
+  auto curve = [&](const std::vector<double>& values, const QColor& colour, bool left) {
+    const auto [lo, hi] = rangeOf(values);
+    QPainterPath path;
+    bool open = false;
+    for (int k = 0; k < steps && k < static_cast<int>(values.size()); ++k) {
+      const double v = values[static_cast<std::size_t>(k)];
+      if (!std::isfinite(v)) {
+        open = false;  // a step without the scalar breaks the line
+        continue;
+      }
+      const QPointF p(xOf(k), area.bottom() - (v - lo) / (hi - lo) * area.height());
+      open ? path.lineTo(p) : path.moveTo(p);
+      open = true;
+    }
+    painter.setPen(QPen(colour, 2));
+    painter.drawPath(path);
+    const QRect labels = left ? QRect(0, area.top() - 8, area.left() - 4, area.height() + 16)
+                              : QRect(area.right() + 4, area.top() - 8, 60, area.height() + 16);
+    const auto align = left ? Qt::AlignRight : Qt::AlignLeft;
+    painter.drawText(labels, align | Qt::AlignTop, label(hi));
+    painter.drawText(labels, align | Qt::AlignBottom, label(lo));
+  };
+  curve(broken, kBrokenColour, true);
+  QString title = tr("broken bonds (of %1)").arg(m_history.bondCount);
+  if (m_scalar >= 0) {
+    curve(m_history.scalars[static_cast<std::size_t>(m_scalar)], kScalarColour, false);
+  }
+  painter.setPen(kBrokenColour);
+  painter.drawText(QRect(area.left(), 2, area.width(), 18), Qt::AlignLeft, title);
+  if (m_scalar >= 0) {
+    painter.setPen(kScalarColour);
+    painter.drawText(QRect(area.left(), 2, area.width(), 18), Qt::AlignRight, scalar());
+  }
+  if (m_step >= 0 && m_step < steps) {
+    painter.setPen(QPen(Qt::white, 1, Qt::DashLine));
+    painter.drawLine(xOf(m_step), area.top(), xOf(m_step), area.bottom());
+  }
+}
+
+}  // namespace crackvis::client

@@ -1,0 +1,161 @@
+// crackvis-client as a user starts it (issue 18, errors that say what to
+// do): without a display, with a misspelt option, and --window-screenshot
+// runs that cannot succeed, which print the reason at once and exit 1
+// instead of waiting out their 60 s. The services run in this process.
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+
+#include <catch2/catch.hpp>
+#include <fmt/format.h>
+
+#include "dataservice/service_fixture.hpp"
+#include "server/render_fixture.hpp"
+#include "support/network.hpp"
+#include "support/process.hpp"
+#include "support/temp_dir.hpp"
+#include <crackvis/pipeline/pipeline_description.hpp>
+
+using namespace crackvis;
+using namespace crackvis::testing;
+
+namespace {
+
+const std::string kClient = CRACKVIS_CLIENT;
+
+// The client with this environment ("-u NAME" removes, "NAME=value" sets).
+ProcessResult runClient(const std::vector<std::string>& environment,
+                        const std::vector<std::string>& args) {
+  std::vector<std::string> argv{"env"};
+  argv.insert(argv.end(), environment.begin(), environment.end());
+  argv.push_back(kClient);
+  argv.insert(argv.end(), args.begin(), args.end());
+  return runProcess(argv);
+}
+
+const std::vector<std::string> kNoDisplay{"-u", "DISPLAY",        "-u", "WAYLAND_DISPLAY",
+                                          "-u", "QT_QPA_PLATFORM"};
+const std::vector<std::string> kOffscreen{"QT_QPA_PLATFORM=offscreen"};
+
+// The lines crackvis-client printed itself (Qt's own notes, such as the
+// offscreen plugin's, are not its messages).
+std::vector<std::string> clientLines(const std::string& err) {
+  std::vector<std::string> own;
+  for (const std::string& line : lines(err)) {
+    if (line.starts_with("crackvis-client: ")) {
+      own.push_back(line);
+    }
+  }
+  return own;
+}
+
+std::vector<std::string> connection(const std::string& address) {
+  const auto tls = clientTls("client");
+  return {"--connect", address, "--ca", tls.ca, "--cert", tls.cert, "--key", tls.key};
+}
+
+struct TimedRun {
+  ProcessResult result;
+  double seconds = 0.0;
+};
+
+TimedRun screenshotRun(const std::vector<std::string>& args) {
+  const auto start = std::chrono::steady_clock::now();
+  TimedRun run{runClient(kOffscreen, args), 0.0};
+  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
+
+}  // namespace
+
+TEST_CASE("crackvis-client without a display says what to run instead", "[client]") {
+  const std::string expected =
+      "crackvis-client: no display (DISPLAY and WAYLAND_DISPLAY are not set): run the scripted "
+      "session without a window with --demo FOLDER, or the window off screen with "
+      "QT_QPA_PLATFORM=offscreen\n";
+  for (const auto& platform :
+       {std::vector<std::string>{}, std::vector<std::string>{"QT_QPA_PLATFORM=xcb"},
+        std::vector<std::string>{"QT_QPA_PLATFORM=wayland"}}) {
+    auto environment = kNoDisplay;
+    environment.insert(environment.end(), platform.begin(), platform.end());
+    const auto result = runClient(environment, {"--connect", "localhost:50052"});
+    CHECK(result.exitCode == 2);  // not Qt's abort (134)
+    CHECK(result.err == expected);
+  }
+  // --help needs no display.
+  const auto help = runClient(kNoDisplay, {"--help"});
+  CHECK(help.exitCode == 0);
+  CHECK_THAT(help.out, Catch::Contains("--window-screenshot"));
+}
+
+TEST_CASE("crackvis-client names a misspelt option and the nearest one", "[client]") {
+  const auto typo = runClient(kOffscreen, {"--conect", "localhost:50052"});
+  CHECK(typo.exitCode == 2);
+  CHECK(clientLines(typo.err) ==
+        std::vector<std::string>{
+            "crackvis-client: unknown option '--conect' (did you mean --connect?)"});
+  const auto unknown = runClient(kOffscreen, {"--frobnicate"});
+  CHECK(unknown.exitCode == 2);
+  CHECK(clientLines(unknown.err) ==
+        std::vector<std::string>{"crackvis-client: unknown option '--frobnicate'"});
+}
+
+TEST_CASE(
+    "with --window-screenshot the client prints why it cannot take the picture and exits at once",
+    "[client][integration]") {
+  auto services = startServices();
+  TempDir out;
+  const std::string png = out.file("shot.png");
+  SECTION("a file the server refuses") {
+    auto args = connection(services.render->address());
+    args.insert(args.end(), {"--file", "missing.h5", "--window-screenshot", png});
+    const TimedRun run = screenshotRun(args);
+    INFO(run.result.err);
+    CHECK(run.result.exitCode == 1);
+    const auto own = clientLines(run.result.err);
+    REQUIRE(own.size() == 1);
+    CHECK_THAT(own[0], Catch::StartsWith("crackvis-client: cannot open missing.h5: ") &&
+                           Catch::Contains("missing.h5"));
+    CHECK(run.seconds < 20.0);
+  }
+  SECTION("a --pipeline step the file lacks") {
+    auto view = crackView();
+    view.file = "cuboidA.h5";
+    view.step = 100000;
+    const std::string xml = out.file("view.xml");
+    std::ofstream(xml) << pipeline::toXml(view);
+    auto args = connection(services.render->address());
+    args.insert(args.end(),
+                {"--file", "cuboidA.h5", "--pipeline", xml, "--window-screenshot", png});
+    const TimedRun run = screenshotRun(args);
+    INFO(run.result.err);
+    CHECK(run.result.exitCode == 1);
+    const auto own = clientLines(run.result.err);
+    REQUIRE(own.size() == 1);
+    CHECK_THAT(own[0], Catch::Contains("step 100000 out of range (the file has steps 0.."));
+    CHECK(run.seconds < 20.0);
+  }
+  SECTION("no render server") {
+    const std::string address = fmt::format("localhost:{}", closedPort());
+    auto args = connection(address);
+    args.insert(args.end(), {"--file", "cuboidA.h5", "--window-screenshot", png});
+    const TimedRun run = screenshotRun(args);
+    CHECK(run.result.exitCode == 1);
+    CHECK(clientLines(run.result.err) ==
+          std::vector<std::string>{fmt::format(
+              "crackvis-client: cannot connect: no crackvis-render at {} (connection refused): "
+              "is it running? see docs/deploy.md",
+              address)});
+    CHECK(run.seconds < 20.0);
+  }
+  SECTION("no file to show") {
+    auto args = connection(services.render->address());
+    args.insert(args.end(), {"--window-screenshot", png});
+    const auto result = runClient(kOffscreen, args);
+    CHECK(result.exitCode == 2);
+    CHECK(clientLines(result.err) ==
+          std::vector<std::string>{"crackvis-client: --window-screenshot needs --connect "
+                                   "and --file (or a --pipeline view that names a file)"});
+  }
+  CHECK_FALSE(std::filesystem::exists(png));
+}

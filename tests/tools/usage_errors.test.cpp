@@ -1,0 +1,57 @@
+// A misspelt subcommand or option is one line with the nearest right one
+// (issue 18: errors that say what to do); every case exits 2 and prints
+// nothing else.
+#include <catch2/catch.hpp>
+
+#include "support/process.hpp"
+
+using crackvis::testing::lines;
+using crackvis::testing::runProcess;
+
+namespace {
+const std::string kCli = CRACKVIS_CLI;
+}
+
+TEST_CASE("crackvis names the subcommand or option it did not know, and the nearest one", "[cli]") {
+  struct Case {
+    std::vector<std::string> args;
+    std::string line;
+  };
+  for (const Case& c : std::vector<Case>{
+           {{"extrat", "a.h5"}, "crackvis: unknown subcommand 'extrat' (did you mean extract?)"},
+           {{"extrat", "a.h5", "--method", "cell-cut"},
+            "crackvis: unknown subcommand 'extrat' (did you mean extract?)"},
+           {{"bench", "tranfer"},
+            "crackvis bench: unknown subcommand 'tranfer' (did you mean transfer?)"},
+           {{"frobnicate"},
+            "crackvis: unknown subcommand 'frobnicate' (one of: bench, generate, import, info, "
+            "extract"},
+           {{"extract", "a.h5", "--stpes", "0:3"},
+            "crackvis extract: unknown option '--stpes' (did you mean --steps?)"},
+           {{"extract", "a.h5", "--metods=cell-cut"},
+            "crackvis extract: unknown option '--metods' (did you mean --method?)"},
+           {{"info", "--jsno", "a.h5"},
+            "crackvis info: unknown option '--jsno' (did you mean --json?)"},
+           {{"info", "--frobnicate", "a.h5"}, "crackvis info: unknown option '--frobnicate'"},
+           {{"--verison"}, "crackvis: unknown option '--verison' (did you mean --version?)"}}) {
+    std::vector<std::string> argv{kCli};
+    argv.insert(argv.end(), c.args.begin(), c.args.end());
+    DYNAMIC_SECTION(c.args.front() << " " << c.args.back()) {
+      const auto result = runProcess(argv);
+      CHECK(result.exitCode == 2);
+      CHECK(result.out.empty());
+      const auto errorLines = lines(result.err);
+      REQUIRE(errorLines.size() == 1);
+      CHECK_THAT(errorLines[0], Catch::StartsWith(c.line));
+    }
+  }
+}
+
+TEST_CASE("Other usage errors keep CLI11's message", "[cli]") {
+  const auto missing = runProcess({kCli, "info"});
+  CHECK(missing.exitCode == 2);
+  CHECK_THAT(missing.err, Catch::Contains("file is required"));
+  const auto none = runProcess({kCli, "bench"});
+  CHECK(none.exitCode == 2);
+  CHECK_THAT(none.err, Catch::Contains("subcommand is required"));
+}
