@@ -259,6 +259,17 @@ TEST_CASE("legend labels are round numbers written for their quantity", "[scene]
   CHECK(labels == std::vector<std::string>{"0.1", "0.15", "0.2", "0.25", "0.3", "0.35"});
 }
 
+TEST_CASE("legend titles wrap at spaces to stay within the strip", "[scene][legend]") {
+  CHECK(scene::wrapTitle("particles: damage (broken bond share)", 20) ==
+        "particles: damage\n(broken bond share)");
+  CHECK(scene::wrapTitle("crack: break step", 40) == "crack: break step");
+  // A word longer than a line stands alone; spaces do not pile up.
+  CHECK(scene::wrapTitle("a  verylongwordindeed b", 6) == "a\nverylongwordindeed\nb");
+  for (const std::string& line : {std::string("particles: damage"), std::string("(broken")}) {
+    CHECK(line.size() <= 20);
+  }
+}
+
 TEST_CASE("the length scale bar is a round length in metres", "[scene][legend]") {
   auto bar = scene::scaleBar(0.2e-3, 300);  // 0.2 mm per pixel, at most 300 px: 60 mm
   CHECK(bar.metres == Approx(0.05));

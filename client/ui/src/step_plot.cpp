@@ -28,7 +28,11 @@ std::pair<double, double> rangeOf(const std::vector<double>& values) {
   return lo == hi ? std::pair{lo - 0.5, hi + 0.5} : std::pair{lo, hi};
 }
 
+// Counts in full ("17653", not "1.765e+04"); other values with four digits.
 QString label(double value) {
+  if (value == std::round(value) && std::abs(value) < 1e7) {
+    return QString::number(static_cast<qint64>(value));
+  }
   return QString::number(value, 'g', 4);
 }
 

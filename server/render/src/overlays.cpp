@@ -184,6 +184,11 @@ void Overlays::layout(int width, int height) {
     bar->SetPosition(0.06, bottom + 0.06 * slot);
     bar->SetPosition2(0.9, slot * 0.88);
     bar->SetMaximumWidthInPixels(std::max(16, static_cast<int>(m_strip * width)));
+    // Arial's letters average about 0.55 of the font size: the title's lines
+    // stay within the strip.
+    const auto titleChars =
+        static_cast<std::size_t>(std::max(8.0, 0.9 * m_strip * width / (0.55 * fontSize(height))));
+    bar->SetTitle(scene::wrapTitle(m_legendsShown[k].quantity.title, titleChars).c_str());
     bar->SetVerticalTitleSeparation(std::max(2, font / 2));
     bar->SetTextPad(std::max(1, font / 4));
     for (vtkTextProperty* text : {bar->GetTitleTextProperty(), bar->GetLabelTextProperty()}) {

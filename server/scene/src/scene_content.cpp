@@ -399,6 +399,30 @@ std::string formatTick(const LegendTicks& ticks, double value) {
   return text;
 }
 
+std::string wrapTitle(const std::string& title, std::size_t maxChars) {
+  std::string out;
+  std::size_t lineLength = 0;
+  std::size_t start = 0;
+  while (start < title.size()) {
+    std::size_t end = title.find(' ', start);
+    end = end == std::string::npos ? title.size() : end;
+    const std::size_t word = end - start;
+    if (word > 0) {
+      if (lineLength > 0 && lineLength + 1 + word > maxChars) {
+        out += '\n';
+        lineLength = 0;
+      } else if (lineLength > 0) {
+        out += ' ';
+        ++lineLength;
+      }
+      out.append(title, start, word);
+      lineLength += word;
+    }
+    start = end + 1;
+  }
+  return out;
+}
+
 ScaleBar scaleBar(double metresPerPixel, double maxPixels) {
   ScaleBar bar;
   if (!(metresPerPixel > 0.0) || !(maxPixels > 0.0) || !std::isfinite(metresPerPixel)) {

@@ -61,6 +61,11 @@ struct LegendTicks {
 LegendTicks legendTicks(ValueRange range, bool integral, int count = 5);
 std::string formatTick(const LegendTicks& ticks, double value);
 
+// A legend's title broken at spaces into lines of at most `maxChars` (a word
+// longer than that stands on a line of its own), so that it stays within
+// the legend strip instead of running off the picture.
+std::string wrapTitle(const std::string& title, std::size_t maxChars);
+
 // A length scale bar: the round length (1, 2 or 5 times a power of ten
 // metres) drawn at most `maxPixels` long where one pixel is `metresPerPixel`
 // at the focal plane, and its label ("2 mm", "50 µm", "1 m").
