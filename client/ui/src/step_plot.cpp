@@ -116,12 +116,16 @@ void StepPlot::paintEvent(QPaintEvent*) {
   }
   painter.drawRect(area);
   // Axes: the step below, broken bonds on the left, the scalar on the right.
-  painter.drawText(QRect(area.left(), area.bottom() + 4, area.width(), 20), Qt::AlignLeft,
-                   QStringLiteral("0"));
-  painter.drawText(QRect(area.left(), area.bottom() + 4, area.width(), 20), Qt::AlignCenter,
-                   tr("step"));
-  painter.drawText(QRect(area.left(), area.bottom() + 4, area.width(), 20), Qt::AlignRight,
-                   QString::number(steps - 1));
+  // The ends of the step axis with their simulated times.
+  const QRect below(area.left(), area.bottom() + 4, area.width(), 20);
+  auto end = [&](int step) {
+    const auto k = static_cast<std::size_t>(step);
+    return k < m_history.time.size() ? tr("%1 (t = %2 s)").arg(step).arg(label(m_history.time[k]))
+                                     : QString::number(step);
+  };
+  painter.drawText(below, Qt::AlignLeft, end(0));
+  painter.drawText(below, Qt::AlignCenter, tr("step"));
+  painter.drawText(below, Qt::AlignRight, end(steps - 1));
   std::vector<double> broken(m_history.brokenBonds.begin(), m_history.brokenBonds.end());
   auto curve = [&](const std::vector<double>& values, const QColor& colour, bool left) {
     const auto [lo, hi] = rangeOf(values);
