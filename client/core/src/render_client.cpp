@@ -135,6 +135,18 @@ struct RenderClient::Impl {
     return rpc::fromGrpcStatus(status, call, renderPeer(settings.address), channel);
   }
 
+  // One unary call of the connection's file calls: authorized, its failure
+  // worded by connection_advice. `call(context, response)` makes the call.
+  template <typename Response, typename Call>
+  Status unary(const char* name, Response& response, Call&& call) {
+    if (!stub) {
+      return failedPrecondition("not connected");
+    }
+    grpc::ClientContext context;
+    authorize(context);
+    return failure(call(context, response), name);
+  }
+
   void authorize(grpc::ClientContext& context) const {
     if (!settings.token.isEmpty()) {
       context.AddMetadata("authorization", "Bearer " + settings.token.toStdString());
@@ -506,16 +518,13 @@ const ConnectionSettings& RenderClient::settings() const {
 }
 
 Result<std::vector<FileEntry>> RenderClient::listFiles() {
-  if (!connected()) {
-    return failedPrecondition("not connected");
-  }
-  grpc::ClientContext context;
-  m_impl->authorize(context);
   v1::ListFilesRequest request;
   request.set_recursive(true);
   v1::ListFilesResponse response;
   CRACKVIS_RETURN_IF_ERROR(
-      m_impl->failure(m_impl->stub->ListFiles(&context, request, &response), "ListFiles"));
+      m_impl->unary("ListFiles", response, [&](grpc::ClientContext& context, auto& out) {
+        return m_impl->stub->ListFiles(&context, request, &out);
+      }));
   std::vector<FileEntry> out;
   for (const auto& file : response.files()) {
     out.push_back({QString::fromStdString(file.path()), static_cast<qint64>(file.size_bytes()),
@@ -525,16 +534,13 @@ Result<std::vector<FileEntry>> RenderClient::listFiles() {
 }
 
 Result<StepHistory> RenderClient::stepHistory(const QString& file) {
-  if (!connected()) {
-    return failedPrecondition("not connected");
-  }
-  grpc::ClientContext context;
-  m_impl->authorize(context);
   v1::StepHistoryRequest request;
   request.set_file(file.toStdString());
   v1::StepHistoryResponse response;
   CRACKVIS_RETURN_IF_ERROR(
-      m_impl->failure(m_impl->stub->StepHistory(&context, request, &response), "StepHistory"));
+      m_impl->unary("StepHistory", response, [&](grpc::ClientContext& context, auto& out) {
+        return m_impl->stub->StepHistory(&context, request, &out);
+      }));
   StepHistory history;
   history.time.assign(response.time().begin(), response.time().end());
   history.brokenBonds.assign(response.broken_bonds().begin(), response.broken_bonds().end());
@@ -547,16 +553,13 @@ Result<StepHistory> RenderClient::stepHistory(const QString& file) {
 }
 
 Result<FileSummary> RenderClient::describe(const QString& file) {
-  if (!connected()) {
-    return failedPrecondition("not connected");
-  }
-  grpc::ClientContext context;
-  m_impl->authorize(context);
   v1::DescribeRequest request;
   request.set_file(file.toStdString());
   v1::DescribeResponse response;
   CRACKVIS_RETURN_IF_ERROR(
-      m_impl->failure(m_impl->stub->Describe(&context, request, &response), "Describe"));
+      m_impl->unary("Describe", response, [&](grpc::ClientContext& context, auto& out) {
+        return m_impl->stub->Describe(&context, request, &out);
+      }));
   FileSummary summary;
   summary.file = file;
   summary.format = QString::fromStdString(response.format());
