@@ -431,6 +431,12 @@ TEST_CASE("a saved view opens again as it was: file, step, camera; another file 
     return camera && dem::norm(camera->position - savedCamera.position) > 1e-3;
   }));
 
+  // Before a file is open there is no view to save.
+  client::MainWindow empty;
+  CHECK_FALSE(empty.saveView(QString::fromStdString(out.file("empty.xml"))));
+  CHECK(empty.lastMessage().contains(QStringLiteral("open a file first")));
+  CHECK_FALSE(std::filesystem::exists(out.file("empty.xml")));
+
   // A file that is no view: one message, nothing changes.
   const std::string bad = out.file("bad.xml");
   std::ofstream(bad) << "<pipeline><particles opacity='2'/></pipeline>";

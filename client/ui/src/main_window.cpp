@@ -419,16 +419,18 @@ bool MainWindow::loadView(const QString& path) {
 
 bool MainWindow::saveView(const QString& path) {
   // The server's state holds what is shown (step, size, the camera where
-  // the user left it); without a session, what the panel would show.
-  pipeline::PipelineDescription view = m_panel->description();
-  if (m_client.hasSession()) {
-    auto shown = pipeline::parsePipeline(m_client.pipelineXml().toStdString());
-    if (!shown) {
-      report(tr("cannot save the view: %1").arg(QString::fromStdString(shown.status().message())));
-      return false;
-    }
-    view = *shown;
+  // the user left it); a view needs a file, so nothing is saved before one
+  // is open.
+  if (!m_client.hasSession()) {
+    report(tr("no view to save: open a file first"));
+    return false;
   }
+  auto shown = pipeline::parsePipeline(m_client.pipelineXml().toStdString());
+  if (!shown) {
+    report(tr("cannot save the view: %1").arg(QString::fromStdString(shown.status().message())));
+    return false;
+  }
+  pipeline::PipelineDescription view = *shown;
   view.clientLayout = layoutOf(*this);
   QFile out(path);
   const QByteArray bytes = QByteArray::fromStdString(pipeline::toXml(view));
