@@ -334,7 +334,6 @@ bool MainWindow::openFile(const QString& file, std::int64_t step) {
 
 bool MainWindow::openView(const pipeline::PipelineDescription& view) {
   const QString file = QString::fromStdString(view.file);
-  m_panel->setDescription(view);
   describe(file);  // the file's extra arrays for the colour-by list
   auto d = view;
   // An extra array of the previous file that this one lacks: back to the default.

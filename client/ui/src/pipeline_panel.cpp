@@ -62,6 +62,39 @@ Colour colour(const QString& text, Colour otherwise) {
           static_cast<std::uint8_t>(parsed.blue())};
 }
 
+// Extra entries carry kExtra as data and the array's name as their text
+// after the prefix.
+const QString kExtraPrefix = QStringLiteral("extra: ");
+
+// Replaces a colour-by box's extra entries (data `extraValue`) by `names`.
+void replaceExtras(QComboBox* box, int extraValue, const QStringList& names) {
+  for (int i = box->count() - 1; i >= 0; --i) {
+    if (box->itemData(i).toInt() == extraValue) {
+      box->removeItem(i);
+    }
+  }
+  for (const QString& name : names) {
+    box->addItem(kExtraPrefix + name, extraValue);
+  }
+}
+
+// Selects `value`, or the extra entry of `extra` when value is the extra kind.
+template <typename Enum>
+void selectColourBy(QComboBox* box, Enum value, Enum extraValue, const std::string& extra) {
+  if (value == extraValue) {
+    box->setCurrentIndex(box->findText(kExtraPrefix + QString::fromStdString(extra)));
+  } else {
+    select(box, value);
+  }
+}
+
+// The selected extra entry's name; empty unless it is the extra kind.
+std::string selectedExtra(const QComboBox* box, int extraValue) {
+  return box->currentData().toInt() == extraValue
+             ? box->currentText().mid(kExtraPrefix.size()).toStdString()
+             : std::string();
+}
+
 // A number field where empty means "none given" (an open threshold end).
 QLineEdit* numberField(const QString& placeholder) {
   auto* field = new QLineEdit;
@@ -134,8 +167,8 @@ void showLayer(const PipelinePanel::LayerControls& c, const Layer& layer) {
     const int value = static_cast<int>(layer.threshold->by);
     int index = c.thresholdBy->findData(value);
     if (!layer.threshold->byExtra.empty()) {
-      index = c.thresholdBy->findText(QStringLiteral("extra: ") +
-                                      QString::fromStdString(layer.threshold->byExtra));
+      index =
+          c.thresholdBy->findText(kExtraPrefix + QString::fromStdString(layer.threshold->byExtra));
     }
     c.thresholdBy->setCurrentIndex(std::max(0, index));
     c.thresholdMin->setText(numberText(layer.threshold->min));
@@ -162,9 +195,7 @@ void collectLayer(const PipelinePanel::LayerControls& c, const std::optional<Cli
     using By = decltype(layer.threshold->by);
     Threshold<By> t;
     t.by = static_cast<By>(c.thresholdBy->currentData().toInt());
-    if (c.thresholdBy->currentData().toInt() == extraValue) {
-      t.byExtra = c.thresholdBy->currentText().mid(QStringLiteral("extra: ").size()).toStdString();
-    }
+    t.byExtra = selectedExtra(c.thresholdBy, extraValue);
     t.min = numberIn(c.thresholdMin, -std::numeric_limits<double>::infinity());
     t.max = numberIn(c.thresholdMax, std::numeric_limits<double>::infinity());
     layer.threshold = t;
@@ -317,39 +348,6 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
   for (auto* field : findChildren<QLineEdit*>()) {
     connect(field, &QLineEdit::editingFinished, this, &PipelinePanel::collect);
   }
-}
-
-// Extra entries carry kExtra as data and the array's name as their text
-// after the prefix.
-const QString kExtraPrefix = QStringLiteral("extra: ");
-
-// Replaces a colour-by box's extra entries (data `extraValue`) by `names`.
-void replaceExtras(QComboBox* box, int extraValue, const QStringList& names) {
-  for (int i = box->count() - 1; i >= 0; --i) {
-    if (box->itemData(i).toInt() == extraValue) {
-      box->removeItem(i);
-    }
-  }
-  for (const QString& name : names) {
-    box->addItem(kExtraPrefix + name, extraValue);
-  }
-}
-
-// Selects `value`, or the extra entry of `extra` when value is the extra kind.
-template <typename Enum>
-void selectColourBy(QComboBox* box, Enum value, Enum extraValue, const std::string& extra) {
-  if (value == extraValue) {
-    box->setCurrentIndex(box->findText(kExtraPrefix + QString::fromStdString(extra)));
-  } else {
-    select(box, value);
-  }
-}
-
-// The selected extra entry's name; empty unless it is the extra kind.
-std::string selectedExtra(const QComboBox* box, int extraValue) {
-  return box->currentData().toInt() == extraValue
-             ? box->currentText().mid(kExtraPrefix.size()).toStdString()
-             : std::string();
 }
 
 void PipelinePanel::setExtras(const QStringList& particleNames, const QStringList& bondNames) {

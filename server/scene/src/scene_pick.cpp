@@ -233,14 +233,24 @@ PickResult pick(const pipeline::PipelineDescription& d, const SceneInput& input,
   return result;
 }
 
+const char* pickedKindName(PickedKind kind) {
+  switch (kind) {
+    case PickedKind::kParticle:
+      return "particle";
+    case PickedKind::kCrack:
+      return "crack element";
+    case PickedKind::kNothing:
+      break;
+  }
+  return "";
+}
+
 std::string describePick(const PickResult& result) {
   if (result.kind == PickedKind::kNothing) {
     return "nothing there";
   }
-  std::string text =
-      fmt::format("{} {} at ({:.6g}, {:.6g}, {:.6g}) m",
-                  result.kind == PickedKind::kParticle ? "particle" : "crack element", result.index,
-                  result.point.x, result.point.y, result.point.z);
+  std::string text = fmt::format("{} {} at ({:.6g}, {:.6g}, {:.6g}) m", pickedKindName(result.kind),
+                                 result.index, result.point.x, result.point.y, result.point.z);
   const char* separator = ": ";
   for (const PickedValue& v : result.values) {
     text += fmt::format("{}{} {:.6g}{}{}", separator, v.name, v.value, v.unit.empty() ? "" : " ",

@@ -371,9 +371,7 @@ v1::ServerMessage toMessage(const SessionNotice& notice) {
     const scene::PickResult& picked = *notice.pick;
     auto* pick = message.mutable_pick();
     pick->set_event_id(notice.eventId);
-    pick->set_kind(picked.kind == scene::PickedKind::kParticle ? "particle"
-                   : picked.kind == scene::PickedKind::kCrack  ? "crack element"
-                                                               : "");
+    pick->set_kind(scene::pickedKindName(picked.kind));
     pick->set_index(picked.index);
     pick->set_x(picked.point.x);
     pick->set_y(picked.point.y);

@@ -41,6 +41,9 @@ struct PickResult {
 PickResult pick(const pipeline::PipelineDescription& description, const SceneInput& input,
                 const Ray& ray);
 
+// "particle", "crack element", or "" for nothing.
+const char* pickedKindName(PickedKind kind);
+
 // "particle 120 at (0.01, 0.02, 0.03) m: radius 0.0005 m, damage 0.25, ..."
 std::string describePick(const PickResult& result);
 
