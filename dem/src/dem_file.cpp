@@ -186,6 +186,13 @@ Status DemFileReader::readStructure() {
   }
   m_info.bondCount = static_cast<std::int64_t>(h5::describeDataset(pairs->get())->dims[0]);
   CRACKVIS_RETURN_IF_ERROR(checkIndexable());
+  // Kept, not returned: the file still opens, so a caller with size limits
+  // reports those first (RESOURCE_EXHAUSTED); every read that allocates N or
+  // M values returns this.
+  m_countsStored = checkStored(DemDataset::kRadius, m_info.particleCount);
+  if (m_countsStored) {
+    m_countsStored = checkStored(DemDataset::kPairs, m_info.bondCount);
+  }
   if (auto dataset = openChecked(DemDataset::kBreakStep); !dataset) {
     return dataset.status();
   }
@@ -219,6 +226,30 @@ Status DemFileReader::checkIndexable() const {
         "corrupt?)",
         static_cast<std::uint64_t>(m_info.particleCount),
         static_cast<std::uint64_t>(m_info.bondCount), kMaxIndexable)));
+  }
+  return Status::ok();
+}
+
+// N and M size every array the lattice allocates, so they must be backed by
+// data the file really holds: a 20 KB file the fuzzer made declared 9e8
+// radii in unwritten chunks (read as the fill value) and the reader
+// allocated 7 GB for them. Deflate cannot compress more than about 1032:1,
+// so a dataset claiming more than kMaxExpansion times its stored bytes is
+// corrupt or unwritten, never a real packing.
+Status DemFileReader::checkStored(DemDataset id, std::int64_t rows) const {
+  constexpr std::uint64_t kMaxExpansion = 1100;
+  constexpr std::uint64_t kRowBytes = 8;  // one float64 radius, or two int32 particle indices
+  auto dataset = openChecked(id);
+  if (!dataset) {
+    return dataset.status();
+  }
+  const auto declared = static_cast<std::uint64_t>(rows) * kRowBytes;
+  const std::uint64_t stored = h5::storedBytes(dataset->get());
+  if (declared > 0 && (stored == 0 || declared / kMaxExpansion > stored)) {
+    return fail(failedPrecondition(fmt::format(
+        "dataset {} declares {} rows ({} bytes) but the file stores only {} bytes of it "
+        "(unwritten or corrupt; deflate compresses at most about 1000:1)",
+        datasetPath(id), rows, declared, stored)));
   }
   return Status::ok();
 }
@@ -424,6 +455,7 @@ Result<Lattice> DemFileReader::readLattice() const {
   lattice.dimension = m_info.dimension;
   const auto n = static_cast<std::uint64_t>(m_info.particleCount);
   const auto m = static_cast<std::uint64_t>(m_info.bondCount);
+  CRACKVIS_RETURN_IF_ERROR(m_countsStored);
   lattice.radius.resize(n);
   lattice.bonds.resize(m);
   CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kRadius, 0, lattice.radius.data()));
@@ -473,6 +505,7 @@ Status DemFileReader::readOptional(DemDataset id, std::uint64_t count, std::vect
 }
 
 Result<std::vector<std::int32_t>> DemFileReader::readBreakSteps() const {
+  CRACKVIS_RETURN_IF_ERROR(m_countsStored);
   std::vector<std::int32_t> breakStep(static_cast<std::uint64_t>(m_info.bondCount));
   CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBreakStep, 0, breakStep.data()));
   for (size_t b = 0; b < breakStep.size(); ++b) {
@@ -486,6 +519,7 @@ Result<std::vector<std::int32_t>> DemFileReader::readBreakSteps() const {
 
 Result<StepState> DemFileReader::readStep(int step) const {
   CRACKVIS_RETURN_IF_ERROR(checkStepInRange(m_path, step, stepCount()));
+  CRACKVIS_RETURN_IF_ERROR(m_countsStored);
   const auto n = static_cast<std::uint64_t>(m_info.particleCount);
   const auto m = static_cast<std::uint64_t>(m_info.bondCount);
   StepState state;
@@ -520,6 +554,7 @@ Result<StepState> DemFileReader::readStep(int step) const {
 
 Result<std::vector<std::uint8_t>> DemFileReader::readBondState(int step) const {
   CRACKVIS_RETURN_IF_ERROR(checkStepInRange(m_path, step, stepCount()));
+  CRACKVIS_RETURN_IF_ERROR(m_countsStored);
   std::vector<std::uint8_t> state(static_cast<std::uint64_t>(m_info.bondCount));
   CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondState, step, state.data()));
   if (Status valid = validateBondStates(state); !valid) {

@@ -215,6 +215,10 @@ Result<DatasetShape> describeDataset(hid_t dataset) {
   return shape;
 }
 
+std::uint64_t storedBytes(hid_t dataset) {
+  return H5Dget_storage_size(dataset);
+}
+
 std::string formatDims(const std::vector<std::uint64_t>& dims) {
   return fmt::format("[{}]", fmt::join(dims, ","));
 }

@@ -147,3 +147,30 @@ TEST_CASE("crackvis info refuses a file whose extents no index can reach", "[cli
                            Catch::Contains("file corrupt?"));
   CHECK_THAT(info.err, !Catch::Contains("internal error"));
 }
+
+TEST_CASE("crackvis info refuses every file the fuzzers kept, with one line", "[cli][info]") {
+  // tests/fuzz/crashes: inputs that stopped a fuzz run (README "Findings").
+  // Outside ASan each is an ordinary corrupt file: exit 1, a one-line error
+  // naming the file, never "internal error".
+  const std::filesystem::path crashes = kData + "/../fuzz/crashes";
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(crashes)) {
+    if (entry.path().extension() != ".h5") {
+      continue;
+    }
+    ++files;
+    const std::string path = entry.path().string();
+    auto info = runProcess({kCli, "info", "--steps", path});
+    INFO(path << "\n" << info.err);
+    if (path.find("heap-overflow") != std::string::npos) {
+      // libhdf5's own memory bug (README "Findings"): the CLI dies of it
+      // (the services run HDF5 in supervised workers); never a success.
+      CHECK(info.exitCode != 0);
+      continue;
+    }
+    CHECK(info.exitCode == 1);
+    CHECK_THAT(info.err, Catch::Contains(path));
+    CHECK_THAT(info.err, !Catch::Contains("internal error"));
+  }
+  CHECK(files >= 4);
+}

@@ -131,6 +131,7 @@ class DemFileReader {
   Status readOptional(DemDataset id, std::uint64_t count, std::vector<T>& out) const;
   Status readProvenance();
   Status checkIndexable() const;
+  Status checkStored(DemDataset id, std::int64_t rows) const;
   Status listExtras();
   Result<h5::Handle> openExtra(const ExtraInfo& extra, int step) const;
   Result<ExtraArray> readExtra(const ExtraInfo& extra, int step) const;
@@ -139,6 +140,7 @@ class DemFileReader {
   std::string m_path;
   h5::Handle m_file;
   DemFileInfo m_info;
+  Status m_countsStored;  // whether N and M are backed by stored data (checkStored)
 };
 
 class DemFileWriter {

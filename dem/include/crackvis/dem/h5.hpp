@@ -114,6 +114,10 @@ struct DatasetShape {
   std::vector<std::uint64_t> chunkDims;  // empty when contiguous
 };
 Result<DatasetShape> describeDataset(hid_t dataset);
+// Bytes the file holds for `dataset`'s values (after its filters): 0 when
+// nothing was written, less than the logical size when compressed or when
+// chunks were never written (those read as the fill value).
+std::uint64_t storedBytes(hid_t dataset);
 std::string formatDims(const std::vector<std::uint64_t>& dims);
 
 // The path of the object `path` names in `file`, through hard links only:
