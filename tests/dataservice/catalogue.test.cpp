@@ -178,3 +178,43 @@ TEST_CASE("Describe is bounded in depth, objects and time, and stops when cancel
 
 }  // namespace
 }  // namespace crackvis::testing
+
+namespace crackvis::testing {
+namespace {
+
+using namespace crackvis::dataservice;
+
+TEST_CASE("A description finds every group and dataset by path, with and without its index",
+          "[dataservice]") {
+  // Depth-first by name is not byte order ("/a/b" comes before "/a-x"), so
+  // the index sorts on its own.
+  FileDescription description;
+  for (const char* path : {"/", "/a", "/a/b", "/a-x", "/steps", "/steps/000000"}) {
+    description.groups.push_back({path, {}});
+  }
+  for (const char* path : {"/a/b/d", "/a/c", "/a-x/e", "/steps/000000/positions", "/z"}) {
+    description.datasets.push_back({path, DataType::kFloat64, "float64", {3}, {}, {}});
+  }
+  const FileDescription unindexed = description;
+  description.buildIndex();
+  CHECK(description == unindexed);
+  for (const FileDescription* d : {&unindexed, static_cast<const FileDescription*>(&description)}) {
+    for (const GroupInfo& group : d->groups) {
+      CHECK(d->findGroup(group.path) == &group);
+    }
+    for (const DatasetInfo& dataset : d->datasets) {
+      CHECK(d->findDataset(dataset.path) == &dataset);
+    }
+    CHECK(d->findDataset("/a") == nullptr);
+    CHECK(d->findDataset("/a/b/d/") == nullptr);
+    CHECK(d->findDataset("") == nullptr);
+    CHECK(d->findGroup("/a/b/d") == nullptr);
+  }
+  // A list changed after the index: the stale index is ignored.
+  description.datasets.push_back({"/b", DataType::kInt32, "int32", {1}, {}, {}});
+  CHECK(description.findDataset("/b") == &description.datasets.back());
+  CHECK(description.findDataset("/a/c") == &description.datasets[1]);
+}
+
+}  // namespace
+}  // namespace crackvis::testing

@@ -274,6 +274,7 @@ FileDescription fromProto(const v1::DescribeResponse& in) {
   for (const v1::Step& step : in.steps()) {
     out.steps.push_back({step.index(), step.time(), step.group()});
   }
+  out.buildIndex();
   return out;
 }
 

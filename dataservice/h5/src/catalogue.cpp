@@ -700,6 +700,7 @@ Result<FileDescription> Catalogue::describe(const ResolvedPath& file,
     return failedPrecondition(
         fmt::format("{}: cannot walk the file's tree ({})", file.requested, h5::lastHdf5Error()));
   }
+  description.buildIndex();
   fillDemSummary(description);
   return description;
 }

@@ -1,3 +1,6 @@
+#include <algorithm>
+#include <numeric>
+
 #include <fmt/format.h>
 
 #include <crackvis/dataservice/types.hpp>
@@ -78,22 +81,45 @@ std::string formatBytes(std::uint64_t bytes) {
   return fmt::format("{:.2f} {}", value, units[unit]);
 }
 
-const DatasetInfo* FileDescription::findDataset(std::string_view path) const {
-  for (const DatasetInfo& dataset : datasets) {
-    if (dataset.path == path) {
-      return &dataset;
-    }
+namespace {
+
+// Positions of `items` sorted by their paths.
+template <typename Item>
+std::vector<std::uint32_t> sortedByPath(const std::vector<Item>& items) {
+  std::vector<std::uint32_t> order(items.size());
+  std::iota(order.begin(), order.end(), std::uint32_t{0});
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return items[a].path < items[b].path; });
+  return order;
+}
+
+template <typename Item>
+const Item* findByPath(const std::vector<Item>& items, const std::vector<std::uint32_t>& byPath,
+                       std::string_view path) {
+  if (byPath.size() != items.size()) {
+    auto found = std::find_if(items.begin(), items.end(),
+                              [&](const Item& item) { return item.path == path; });
+    return found == items.end() ? nullptr : &*found;
   }
-  return nullptr;
+  auto found =
+      std::lower_bound(byPath.begin(), byPath.end(), path,
+                       [&](std::uint32_t i, std::string_view p) { return items[i].path < p; });
+  return found != byPath.end() && items[*found].path == path ? &items[*found] : nullptr;
+}
+
+}  // namespace
+
+const DatasetInfo* FileDescription::findDataset(std::string_view path) const {
+  return findByPath(datasets, m_datasetsByPath, path);
 }
 
 const GroupInfo* FileDescription::findGroup(std::string_view path) const {
-  for (const GroupInfo& group : groups) {
-    if (group.path == path) {
-      return &group;
-    }
-  }
-  return nullptr;
+  return findByPath(groups, m_groupsByPath, path);
+}
+
+void FileDescription::buildIndex() {
+  m_datasetsByPath = sortedByPath(datasets);
+  m_groupsByPath = sortedByPath(groups);
 }
 
 const AttributeInfo* GroupInfo::findAttribute(std::string_view name) const {

@@ -149,10 +149,25 @@ struct FileDescription {
   int formatVersion = 0;              // root attribute 'version', if any
   std::vector<StepEntry> steps;       // crackvis-dem: the complete steps, in order
 
+  // By path: a binary search once buildIndex() has run on the final lists
+  // (a file's first view looked up 400 step datasets one by one, each a
+  // scan of 804), a scan otherwise.
   const DatasetInfo* findDataset(std::string_view path) const;
   const GroupInfo* findGroup(std::string_view path) const;
+  // Sorts an index of both lists by path; call it after the last change to
+  // them (an index of another length is ignored).
+  void buildIndex();
 
-  friend bool operator==(const FileDescription&, const FileDescription&) = default;
+  // The described tree only; the index follows from it.
+  friend bool operator==(const FileDescription& a, const FileDescription& b) {
+    return a.file == b.file && a.sizeBytes == b.sizeBytes && a.groups == b.groups &&
+           a.datasets == b.datasets && a.format == b.format && a.formatVersion == b.formatVersion &&
+           a.steps == b.steps;
+  }
+
+ private:
+  std::vector<std::uint32_t> m_datasetsByPath;  // positions in `datasets`, by path
+  std::vector<std::uint32_t> m_groupsByPath;
 };
 
 // A box [start, start + count) of a dataset. Both empty: the whole dataset.
