@@ -10,9 +10,12 @@
 #include <vtkCellCentreCrackFilter.h>
 #include <vtkCellCutCrackFilter.h>
 #include <vtkCellData.h>
+#include <vtkCrackvisDemReader.h>
 #include <vtkDataArray.h>
 #include <vtkDoubleArray.h>
 #include <vtkExecutive.h>
+#include <vtkFieldData.h>
+#include <vtkInformation.h>
 #include <vtkIdList.h>
 #include <vtkIntArray.h>
 #include <vtkLocalVoronoiCrackFilter.h>
@@ -20,6 +23,7 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkStreamingDemandDrivenPipeline.h>
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPolyDataReader.h>
@@ -28,6 +32,7 @@
 #include "crack_fixtures.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/cracks/mesh_writers.hpp>
+#include <crackvis/dem/dem_file.hpp>
 
 using namespace crackvis;
 using namespace crackvis::cracks;
@@ -252,4 +257,123 @@ TEST_CASE("writers: VTK reads back .vtp and .vtu; STL and OBJ have every face", 
     CHECK(writeMesh(mesh, dir.file("cut.ply")).message() ==
           dir.file("cut.ply") + ": unknown output format (expected .vtp, .vtu, .stl or .obj)");
   }
+}
+
+namespace {
+
+// The planted crack as a crackvis-dem file of two steps: intact, then the
+// crack (so the reader's time steps have something to choose).
+void writePlantedCrack(const testing::PlantedCrack& crack, const std::string& path) {
+  dem::DemMetadata metadata;
+  metadata.source = "vtk_filters test";
+  auto writer = dem::DemFileWriter::create(path, crack.block.lattice, metadata);
+  REQUIRE(writer.isOk());
+  dem::StepState intact;
+  intact.time = 0.5;
+  intact.positions = crack.block.positions;
+  intact.bondState.assign(crack.state.size(), 0);
+  REQUIRE(writer->appendStep(intact).isOk());
+  dem::StepState cracked = intact;
+  cracked.time = 1.5;
+  cracked.bondState = crack.state;
+  REQUIRE(writer->appendStep(cracked).isOk());
+  REQUIRE(writer->close().isOk());
+}
+
+}  // namespace
+
+TEST_CASE("the crackvis-dem reader gives the filters the lattice of the step asked for",
+          "[cracks][vtk]") {
+  const auto crack = sampleCrack();
+  testing::TempDir dir;
+  const std::string path = dir.file("planted.h5");
+  writePlantedCrack(crack, path);
+  vtkNew<vtkCrackvisDemReader> reader;
+  CHECK(reader->CanReadFile(path.c_str()) == 1);
+  CHECK(reader->CanReadFile(dir.file("missing.h5").c_str()) == 0);
+  reader->SetFileName(path.c_str());
+  reader->UpdateInformation();
+  vtkInformation* info = reader->GetOutputInformation(0);
+  REQUIRE(info->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) == 2);
+  CHECK(info->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS())[1] == 1.5);
+
+  // A time between the steps shows the earlier one.
+  reader->UpdateTimeStep(1.0);
+  vtkPolyData* intact = reader->GetOutput();
+  CHECK(intact->GetNumberOfPoints() == static_cast<vtkIdType>(crack.block.lattice.particleCount()));
+  CHECK(intact->GetNumberOfLines() == static_cast<vtkIdType>(crack.block.lattice.bondCount()));
+  CHECK(vtkIntArray::SafeDownCast(intact->GetFieldData()->GetArray("step"))->GetValue(0) == 0);
+  CHECK(intact->GetCellData()->GetArray("bond_state")->GetRange()[1] == 0.0);
+
+  reader->UpdateTimeStep(1.5);
+  vtkPolyData* cracked = reader->GetOutput();
+  CHECK(vtkIntArray::SafeDownCast(cracked->GetFieldData()->GetArray("step"))->GetValue(0) == 1);
+  REQUIRE(cracked->GetCellData()->GetArray("break_step") != nullptr);
+  double p[3];
+  cracked->GetPoint(5, p);
+  CHECK(dem::Vec3{p[0], p[1], p[2]} == crack.block.positions[5]);
+  vtkIdType ends[2];
+  const vtkIdType* ids = nullptr;
+  vtkIdType count = 0;
+  cracked->GetLines()->GetCellAtId(3, count, ids);
+  REQUIRE(count == 2);
+  std::copy(ids, ids + 2, ends);
+  CHECK(ends[0] == crack.block.lattice.bonds[3].first);
+  CHECK(ends[1] == crack.block.lattice.bonds[3].second);
+  CHECK(cracked->GetPointData()->GetArray("radius")->GetTuple1(5) == crack.block.lattice.radius[5]);
+
+  SECTION("into the local Voronoi filter: what the core extracts from the same step") {
+    vtkNew<vtkLocalVoronoiCrackFilter> filter;
+    filter->SetInputConnection(reader->GetOutputPort());
+    filter->UpdateTimeStep(1.5);
+    const CrackMesh mesh = core(Method::kLocalVoronoi, crack);
+    CHECK(filter->GetOutput()->GetNumberOfPolys() == static_cast<vtkIdType>(mesh.polygons.size()));
+    CHECK(mesh.polygons.size() > 0);
+    filter->UpdateTimeStep(0.5);  // back to the intact step: no crack
+    CHECK(filter->GetOutput()->GetNumberOfPolys() == 0);
+  }
+  SECTION("into the cell cut filter") {
+    vtkNew<vtkCellCutCrackFilter> filter;
+    filter->SetInputConnection(reader->GetOutputPort());
+    filter->UpdateTimeStep(1.5);
+    const CrackMesh mesh = core(Method::kCellCut, crack);
+    CHECK(filter->GetOutput()->GetNumberOfPolys() == static_cast<vtkIdType>(mesh.polygons.size()));
+  }
+}
+
+TEST_CASE("the crackvis-dem reader reports a file it cannot read, naming it", "[cracks][vtk]") {
+  testing::TempDir dir;
+  const std::string path = dir.file("not-hdf5.h5");
+  std::ofstream(path) << "not an HDF5 file\n";
+  vtkNew<vtkCrackvisDemReader> reader;
+  ErrorCounter counter;
+  reader->AddObserver(vtkCommand::ErrorEvent, counter.command);
+  reader->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, counter.command);
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  CHECK(counter.errors > 0);
+  CHECK(reader->GetOutput()->GetNumberOfPoints() == 0);
+  CHECK(reader->CanReadFile(path.c_str()) == 0);
+}
+
+TEST_CASE("the crack filters pass an empty piece through without an error", "[cracks][vtk]") {
+  // Under MPI the reader gives every rank but the first an empty piece.
+  vtkNew<vtkPolyData> empty;
+  ErrorCounter counter;
+  auto check = [&](vtkAlgorithm* filter) {
+    filter->AddObserver(vtkCommand::ErrorEvent, counter.command);
+    filter->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, counter.command);
+    filter->SetInputDataObject(0, empty);
+    filter->Update();
+    CHECK(vtkDataSet::SafeDownCast(filter->GetOutputDataObject(0))->GetNumberOfCells() == 0);
+  };
+  vtkNew<vtkCellCutCrackFilter> cut;
+  vtkNew<vtkLocalVoronoiCrackFilter> voronoi;
+  vtkNew<vtkCellCentreCrackFilter> centre;
+  vtkNew<vtkCellAttributeCrackFilter> attribute;
+  check(cut);
+  check(voronoi);
+  check(centre);
+  check(attribute);
+  CHECK(counter.errors == 0);
 }

@@ -164,6 +164,12 @@ bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptio
     error = "no input";
     return false;
   }
+  // An empty piece (an MPI rank the reader gave no particles) has no crack;
+  // the state of the pieces that do is kept.
+  if (input->GetNumberOfPoints() == 0 && input->GetNumberOfCells() == 0) {
+    mesh = CrackMesh{};
+    return true;
+  }
   if (!readLattice(input, radiusDefault, error)) {
     return false;
   }
