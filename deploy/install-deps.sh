@@ -34,6 +34,11 @@ readonly PACKAGES=(
   catch2 gnuplot-nox
   # fuzzing (tests/fuzz/): clang with libFuzzer and the sanitizer runtimes
   clang libclang-rt-14-dev
+  # paraview-plugin/: what building against Debian's ParaView (unpacked by
+  # deploy/paraview-prefix.sh, never installed) needs besides it: its Open MPI
+  # HDF5 and MPI, and the Qt 5 tools that make the plugin's documentation
+  libhdf5-openmpi-dev libopenmpi-dev openmpi-bin
+  qtbase5-dev qttools5-dev qttools5-dev-tools qtxmlpatterns5-dev-tools
 )
 
 # What crackvis-data, crackvis-render and the crackvis CLI load when they run
@@ -79,8 +84,16 @@ for package in "${selected[@]}"; do
   is_installed "$package" || missing+=("$package")
 done
 
+# Debian's ParaView, unpacked into a private prefix for the plugin's build
+# and tests (it conflicts with libvtk9-dev's python3-vtk9: never installed).
+unpack_paraview() {
+  [[ "${selected[*]}" == "${PACKAGES[*]}" ]] || return 0
+  bash "$(dirname "$0")/paraview-prefix.sh" >/dev/null
+}
+
 if ((${#missing[@]} == 0)); then
   echo "install-deps: all ${#selected[@]} packages present"
+  unpack_paraview
   exit 0
 fi
 
@@ -99,4 +112,5 @@ apt_get=("${as_root[@]}" apt-get -y -q -o Dpkg::Use-Pty=0 --no-install-recommend
 # The package lists of a fresh machine are empty or stale; refresh them once.
 "${as_root[@]}" apt-get update -q
 "${apt_get[@]}" install "${missing[@]}"
+unpack_paraview
 echo "install-deps: done"

@@ -14,12 +14,6 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 root=$(cd "$here/../.." && pwd)
 readonly here root
 readonly pv_version=5.11
-readonly pv_packages=(paraview python3-paraview)
-# Depends of those packages that pvserver and pvpython do not load: Tcl
-# wrapping, ParaViewWeb (twisted, autobahn), and ParaView itself.
-readonly pv_unneeded_depends=" paraview tclsh python3-autobahn python3-twisted "
-readonly cache=${CRACKVIS_PARAVIEW_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/crackvis/paraview-$pv_version}
-readonly prefix=$cache/prefix
 crackvis=${CRACKVIS:-$root/build/release/tools/crackvis}
 
 usage() {
@@ -46,7 +40,7 @@ render server shows for FILE.h5 at step S, and prints one JSON object on stdout.
 Environment: CRACKVIS (the CLI, default build/release/tools/crackvis),
 CRACKVIS_PARAVIEW_CACHE (default \${XDG_CACHE_HOME:-\$HOME/.cache}/crackvis/paraview-$pv_version),
 LP_NUM_THREADS (llvmpipe's render threads, passed on to pvserver).
-The first run downloads ~73 MB of .debs (~530 MB unpacked) into the cache.
+The first run downloads ~83 MB of .debs (deploy/paraview-prefix.sh) into the cache.
 EOF
 }
 
@@ -95,77 +89,6 @@ if ! [[ $ranks =~ ^[1-9][0-9]*$ ]]; then die "--ranks must be a positive integer
 [[ $colour_by == solid || $colour_by == radius ]] || die "--colour-by must be solid or radius"
 [[ -x $crackvis ]] || die "no crackvis CLI at $crackvis (build it, or set CRACKVIS)"
 
-# --- the private ParaView prefix -------------------------------------------
-is_installed() {
-  [[ $(dpkg-query -W -f='${db:Status-Status}' "$1" 2>/dev/null) == installed ]]
-}
-
-# Downloads and unpacks paraview + python3-paraview into $prefix once; the
-# .unpacked stamp is written last, so an interrupted run starts over.
-unpack_paraview() {
-  [[ -f $prefix/.unpacked ]] && return 0
-  if ! apt-cache show paraview >/dev/null 2>&1; then
-    ((EUID == 0)) || die "apt does not know the paraview package; run 'apt-get update' as root"
-    say "apt-get update (the package lists lack paraview)"
-    apt-get update -qq >&2 || die "apt-get update failed"
-  fi
-  local version
-  version=$(apt-cache policy paraview | awk '/Candidate:/ { print $2 }')
-  [[ $version == $pv_version.* ]] ||
-    die "apt offers paraview '$version', not $pv_version.x (this script expects Debian 12)"
-  say "downloading ${pv_packages[*]} $version into $cache/debs (~73 MB, once)"
-  mkdir -p "$cache/debs"
-  rm -f "$cache/debs/"*.deb
-  # As root, apt drops to the _apt user for downloads, which cannot write to
-  # a folder under /root; downloading as the caller avoids the warning.
-  (cd "$cache/debs" &&
-    apt-get -q -o APT::Sandbox::User="$(id -un)" download "${pv_packages[@]/%/=$version}" >&2) ||
-    die "apt-get download ${pv_packages[*]} failed"
-  say "unpacking into $prefix (dpkg -x: nothing is installed)"
-  rm -rf "$prefix" "$prefix.partial"
-  mkdir -p "$prefix.partial"
-  local deb
-  for deb in "$cache/debs/"*.deb; do
-    dpkg -x "$deb" "$prefix.partial" || die "dpkg -x $deb failed"
-    dpkg-deb -f "$deb" Depends >>"$prefix.partial/.depends"
-  done
-  echo "$version" >"$prefix.partial/.version"
-  mv "$prefix.partial" "$prefix"
-  touch "$prefix/.unpacked"
-}
-
-# The packages' Depends that are not installed: installed with apt when that
-# removes nothing (they are ordinary libraries), else unpacked into $prefix.
-ensure_depends() {
-  local group alternative missing=()
-  while read -r group; do
-    local satisfied=0 first=""
-    for alternative in ${group//|/ }; do
-      alternative=${alternative%%:*}
-      [[ -z $first ]] && first=$alternative
-      [[ $pv_unneeded_depends == *" $alternative "* ]] && satisfied=1
-      is_installed "$alternative" && satisfied=1
-    done
-    ((satisfied)) || missing+=("$first")
-  done < <(tr ',' '\n' <"$prefix/.depends" | sed 's/([^)]*)//g; s/^ *//; s/ *$//' | sort -u)
-  ((${#missing[@]})) || return 0
-  say "ParaView needs these packages: ${missing[*]}"
-  if ((EUID == 0)) && ! apt-get install -s --no-install-recommends "${missing[@]}" 2>&1 |
-    grep -q '^Remv'; then
-    say "installing them with apt-get (the simulation removes nothing)"
-    apt-get install -y -q --no-install-recommends "${missing[@]}" >&2 ||
-      die "apt-get install ${missing[*]} failed"
-  else
-    say "not installable without removing packages (or not root): unpacking them into $prefix"
-    (cd "$cache/debs" && apt-get -q -o APT::Sandbox::User="$(id -un)" download "${missing[@]}" >&2) ||
-      die "apt-get download ${missing[*]} failed"
-    local name
-    for name in "${missing[@]}"; do
-      dpkg -x "$cache/debs/${name}_"*.deb "$prefix" || die "dpkg -x $name failed"
-    done
-  fi
-}
-
 # --- processes, cleaned up on any exit --------------------------------------
 work=$(mktemp -d -t crackvis-paraview-peer.XXXXXX)
 xvfb_pid=""
@@ -197,15 +120,12 @@ say "exporting step $step of $file"
   die "crackvis extract failed"
 
 # --- ParaView, unpacked on the first run -----------------------------------
-unpack_paraview
-ensure_depends
-libdir=$(dirname "$(find "$prefix/usr/lib" -name "libvtkRemotingCore-pv$pv_version.so.1" | head -1)")
-[[ -d $libdir && $libdir != . ]] || die "no ParaView libraries under $prefix (remove it to unpack again)"
-multiarch=$(basename "$libdir")
-export LD_LIBRARY_PATH=$libdir:$prefix/lib/$multiarch${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-# Ahead of /usr/lib/python3/dist-packages, where python3-vtk9's vtkmodules
-# lives: ParaView's own vtkmodules must win.
-export PYTHONPATH=$prefix/usr/lib/python3/dist-packages${PYTHONPATH:+:$PYTHONPATH}
+# The private prefix (deploy/paraview-prefix.sh), unpacked on the first run.
+env_lines=$("$root/deploy/paraview-prefix.sh" --env) || die "no ParaView prefix (see above)"
+eval "$env_lines"
+prefix=$CRACKVIS_PARAVIEW_PREFIX
+libdir=$(dirname "$ParaView_DIR")
+libdir=$(dirname "$libdir")
 pvserver=$prefix/usr/bin/pvserver
 pvpython=$prefix/usr/bin/pvpython
 unresolved=$(ldd "$pvserver" "$pvpython" | awk '/not found/ { print $1 }' | sort -u | tr '\n' ' ')

@@ -11,6 +11,11 @@
 
 namespace crackvis::cracks::vtkadapter {
 
+// Point data of the lattice polydata holding the reference configuration
+// (the first step's positions, 3 components): the crackvis-dem reader writes
+// it and the crack filters use it as `crackvis extract` uses the first step.
+inline constexpr const char* kReferencePositionArray = "reference_position";
+
 void toPolyData(const CrackMesh& mesh, vtkPolyData* output);
 void toUnstructuredGrid(const CrackMesh& mesh, vtkUnstructuredGrid* output);
 

@@ -22,9 +22,14 @@
 
 #include <vtkPolyDataAlgorithm.h>
 
-namespace crackvis::cracks::vtkadapter {
+// Nested the C++14 way: VTK 9.1-9.2 wrappers (ParaView) cannot parse a::b.
+namespace crackvis {
+namespace cracks {
+namespace vtkadapter {
 class CrackFilterState;
-}
+}  // namespace vtkadapter
+}  // namespace cracks
+}  // namespace crackvis
 
 class vtkCellCentreCrackFilter : public vtkPolyDataAlgorithm {
  public:

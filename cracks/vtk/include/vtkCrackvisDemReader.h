@@ -4,10 +4,12 @@
 // steps (ParaView's time controls step through them).
 //
 // Output: points = particle centres at the step; lines = the bonds, one
-// 2-point line per bond in the file's bond order; point data "radius" and,
-// when the file holds them, "velocity", "particle_id", "particle_group" and
-// the per-particle extra arrays; cell data "bond_state", "break_step" and,
-// when present, "bond_force", "strength", "bond_flags" and the per-bond extra
+// 2-point line per bond in the file's bond order; point data "radius",
+// "reference_position" (the first step's positions, in which the filters make
+// material surfaces and triangulations, as `crackvis extract` does) and, when
+// the file holds them, "velocity", "particle_id", "particle_group" and the
+// per-particle extra arrays; cell data "bond_state", "break_step" and, when
+// present, "bond_force", "strength", "bond_flags" and the per-bond extra
 // arrays; field data "step" (the index read), "time" and the step scalars.
 //
 // Under MPI (pvbatch, pvserver) the whole data set is produced by piece 0 and
@@ -23,9 +25,14 @@
 
 #include <vtkPolyDataAlgorithm.h>
 
-namespace crackvis::cracks::vtkadapter {
+// Nested the C++14 way: VTK 9.1-9.2 wrappers (ParaView) cannot parse a::b.
+namespace crackvis {
+namespace cracks {
+namespace vtkadapter {
 struct DemReaderCache;
-}
+}  // namespace vtkadapter
+}  // namespace cracks
+}  // namespace crackvis
 
 class vtkCrackvisDemReader : public vtkPolyDataAlgorithm {
  public:

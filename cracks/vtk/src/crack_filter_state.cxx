@@ -131,6 +131,7 @@ bool CrackFilterState::readLattice(vtkPolyData* input, double radiusDefault, std
       m_force[static_cast<std::size_t>(b)] = static_cast<float>(force->GetComponent(b, 0));
     }
   }
+  readReference(input, n);
   m_breakStep.clear();
   if (vtkDataArray* breaks = cellArray(input, "break_step");
       breaks != nullptr && breaks->GetNumberOfTuples() == m) {
@@ -158,6 +159,23 @@ bool CrackFilterState::readLattice(vtkPolyData* input, double radiusDefault, std
   return true;
 }
 
+void CrackFilterState::readReference(vtkPolyData* input, vtkIdType n) {
+  m_reference.clear();
+  vtkDataArray* reference = input->GetPointData() != nullptr
+                                ? input->GetPointData()->GetArray(kReferencePositionArray)
+                                : nullptr;
+  if (reference == nullptr || reference->GetNumberOfComponents() != 3 ||
+      reference->GetNumberOfTuples() != n) {
+    return;
+  }
+  m_reference.resize(static_cast<std::size_t>(n));
+  for (vtkIdType i = 0; i < n; ++i) {
+    double p[3];
+    reference->GetTuple(i, p);
+    m_reference[static_cast<std::size_t>(i)] = {p[0], p[1], p[2]};
+  }
+}
+
 bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptions& options,
                            double radiusDefault, CrackMesh& mesh, std::string& error) {
   if (input == nullptr) {
@@ -178,9 +196,11 @@ bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptio
     m_options = options;
     m_extractor = makeExtractor(method, *m_graph, m_dimension, options);
   }
-  // No reference configuration: a pipeline has one time step at a time, so
-  // a triangulation is made in the first one the filter sees.
-  const StepInput step{m_positions, m_state, m_radius, m_force, m_breakStep, {}};
+  // The reference configuration comes as point data (the crackvis-dem
+  // reader gives the first step's positions): with it, local Voronoi faces
+  // are material surfaces and a triangulation is made in the reference, as
+  // `crackvis extract` does; without it, in the first step the filter sees.
+  const StepInput step{m_positions, m_state, m_radius, m_force, m_breakStep, m_reference};
   if (Status status = m_extractor->extract(step, mesh); !status) {
     error = status.message();
     return false;

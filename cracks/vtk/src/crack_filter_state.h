@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <vtkType.h>
+
 #include "crackvis_vtk_conversion.h"
 #include <crackvis/cracks/extractor.hpp>
 
@@ -25,6 +27,7 @@ class CrackFilterState {
 
  private:
   bool readLattice(vtkPolyData* input, double radiusDefault, std::string& error);
+  void readReference(vtkPolyData* input, vtkIdType n);
 
   std::vector<dem::Bond> m_bonds;
   std::vector<Vec3> m_positions;
@@ -32,6 +35,7 @@ class CrackFilterState {
   std::vector<std::uint8_t> m_state;
   std::vector<float> m_force;
   std::vector<std::int32_t> m_breakStep;
+  std::vector<Vec3> m_reference;  // empty: the input has no reference configuration
   std::unique_ptr<BondGraph> m_graph;
   std::unique_ptr<CrackExtractor> m_extractor;
   Method m_method = Method::kCellCut;

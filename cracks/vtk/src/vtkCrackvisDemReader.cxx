@@ -19,10 +19,12 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
 #include <vtkStreamingDemandDrivenPipeline.h>
 #include <vtkTypeInt64Array.h>
 #include <vtkUnsignedCharArray.h>
 
+#include "crackvis_vtk_conversion.h"
 #include <crackvis/dem/dem_file.hpp>
 
 namespace crackvis::cracks::vtkadapter {
@@ -35,6 +37,7 @@ struct DemReaderCache {
   dem::Lattice lattice;
   std::vector<std::int32_t> breakSteps;
   std::vector<double> times;
+  std::vector<dem::Vec3> reference;  // the first step's positions
 };
 
 namespace {
@@ -69,18 +72,27 @@ void addExtras(const std::vector<dem::ExtraArray>& extras, vtkPolyData* output) 
   }
 }
 
-void addPoints(const dem::StepState& step, vtkPolyData* output) {
-  vtkNew<vtkDoubleArray> coordinates;
+vtkSmartPointer<vtkDoubleArray> toArray(const std::vector<dem::Vec3>& positions) {
+  auto coordinates = vtkSmartPointer<vtkDoubleArray>::New();
   coordinates->SetNumberOfComponents(3);
-  coordinates->SetNumberOfTuples(static_cast<vtkIdType>(step.positions.size()));
+  coordinates->SetNumberOfTuples(static_cast<vtkIdType>(positions.size()));
   static_assert(sizeof(dem::Vec3) == 3 * sizeof(double));
-  if (!step.positions.empty()) {
-    std::memcpy(coordinates->GetPointer(0), step.positions.data(),
-                step.positions.size() * sizeof(dem::Vec3));
+  if (!positions.empty()) {
+    std::memcpy(coordinates->GetPointer(0), positions.data(), positions.size() * sizeof(dem::Vec3));
   }
+  return coordinates;
+}
+
+void addPoints(const dem::StepState& step, const std::vector<dem::Vec3>& reference,
+               vtkPolyData* output) {
   vtkNew<vtkPoints> points;
-  points->SetData(coordinates);
+  points->SetData(toArray(step.positions));
   output->SetPoints(points);
+  // The filters make local Voronoi faces and triangulations in it, as
+  // `crackvis extract` does in the file's first step.
+  vtkSmartPointer<vtkDoubleArray> first = toArray(reference);
+  first->SetName(kReferencePositionArray);
+  output->GetPointData()->AddArray(first);
 }
 
 void addBonds(const std::vector<dem::Bond>& bonds, vtkPolyData* output) {
@@ -120,7 +132,7 @@ void addFieldData(int step, const dem::StepState& state, vtkPolyData* output) {
 
 void fill(const DemReaderCache& cache, int step, const dem::StepState& state, vtkPolyData* output) {
   const dem::Lattice& lattice = cache.lattice;
-  addPoints(state, output);
+  addPoints(state, cache.reference, output);
   addBonds(lattice.bonds, output);
   vtkPointData* points = output->GetPointData();
   addArray<vtkDoubleArray>(points, "radius", lattice.radius);
@@ -195,6 +207,12 @@ int vtkCrackvisDemReader::RequestInformation(vtkInformation*, vtkInformationVect
       vtkErrorMacro(<< this->FileName << ": the file holds no complete step");
       return 0;
     }
+    auto first = reader->readStep(0);
+    if (!first) {
+      vtkErrorMacro(<< first.status().message());
+      return 0;
+    }
+    cache.reference = std::move(first->positions);
     for (const crackvis::dem::StepInfo& step : reader->info().steps) {
       cache.times.push_back(step.time);
     }
