@@ -1,6 +1,7 @@
 """The plugin inside ParaView against crackvis's own CLI, on one file.
 
 pvbatch [--no-mpi] plugin_matches_cli.py PLUGIN FILE.h5 REFERENCE_DIR
+pvpython plugin_matches_cli.py PLUGIN FILE.h5 REFERENCE_DIR HOST:PORT   (against a pvserver)
 
 REFERENCE_DIR holds `crackvis extract FILE.h5 -m METHOD -s -1` of each method
 (cell-cut.vtp, local-voronoi.vtp, cell-centre.vtp, cell-attribute.vtu). The
@@ -13,13 +14,18 @@ import json
 import sys
 
 from paraview import servermanager
-from paraview.simple import (IntegrateVariables, LoadPlugin, MergeBlocks, XMLPolyDataReader,
+from paraview.simple import (Connect, IntegrateVariables, LoadPlugin, XMLPolyDataReader,
                              XMLUnstructuredGridReader)
 
 plugin, data_file, reference_dir = sys.argv[1:4]
+# With a server (pvpython against pvserver): the pipeline runs there; the
+# server loaded the plugin from PV_PLUGIN_PATH, the client loads it here.
+server = sys.argv[4] if len(sys.argv) > 4 else ""
+if server:
+    host, port = server.rsplit(":", 1)
+    Connect(host, int(port))
 LoadPlugin(plugin, remote=False, ns=globals())
-controller = servermanager.vtkProcessModule.GetProcessModule()
-ranks = controller.GetNumberOfLocalPartitions()
+ranks = servermanager.ActiveConnection.GetNumberOfDataPartitions()
 
 reader = crackvisdemreader(FileName=data_file)  # noqa: F821 (made by LoadPlugin)
 times = reader.TimestepValues

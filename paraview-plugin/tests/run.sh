@@ -2,7 +2,8 @@
 # The plugin's tests (ctest runs this): on a lattice and on a random packing,
 # each with a planted through crack that opens, the plugin's reader and four
 # filters inside pvbatch at 1 and 2 MPI ranks must give what `crackvis
-# extract` gives for the last step (cells, points, area or volume).
+# extract` gives for the last step (cells, points, area or volume); then the
+# same from a pvpython client driving a 2-rank pvserver.
 #
 #   paraview-plugin/tests/run.sh CRACKVIS_CLI [PLUGIN]
 #
@@ -57,4 +58,25 @@ for name in lattice random; do
     fi
   done
 done
+# ParaView's client/server mode: pvpython drives a pvserver (2 ranks) that
+# loads the plugin from PV_PLUGIN_PATH and runs the pipeline.
+echo "== random, pvserver with 2 ranks, pvpython client"
+port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+PV_PLUGIN_PATH=$(dirname "$plugin") mpiexec --allow-run-as-root --oversubscribe -np 2 \
+  -x LD_LIBRARY_PATH -x PYTHONPATH -x PV_PLUGIN_PATH \
+  "$CRACKVIS_PARAVIEW_PREFIX/usr/bin/pvserver" --server-port="$port" >"$work/pvserver.log" 2>&1 &
+server_pid=$!
+for _ in $(seq 300); do
+  grep -q "Accepting connection" "$work/pvserver.log" && break
+  kill -0 "$server_pid" 2>/dev/null || break
+  sleep 0.1
+done
+if ! "$CRACKVIS_PARAVIEW_PREFIX/usr/bin/pvpython" "$here/plugin_matches_cli.py" "$plugin" \
+  "$work/random/data.h5" "$work/random" "localhost:$port" 2>"$work/client.log"; then
+  grep -v '^HDF5-DIAG\|^  ' "$work/client.log" | tail -20 >&2
+  tail -20 "$work/pvserver.log" >&2
+  failed=1
+fi
+kill "$server_pid" 2>/dev/null || true
+wait "$server_pid" 2>/dev/null || true
 exit "$failed"
