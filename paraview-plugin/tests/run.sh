@@ -79,4 +79,25 @@ if ! "$CRACKVIS_PARAVIEW_PREFIX/usr/bin/pvpython" "$here/plugin_matches_cli.py" 
 fi
 kill "$server_pid" 2>/dev/null || true
 wait "$server_pid" 2>/dev/null || true
+# deploy/pvserver-beside-data.sh (its own Xvfb): the server renders the crack
+# a pvpython client asks for.
+echo "== random, deploy/pvserver-beside-data.sh renders for a pvpython client"
+port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+env -u DISPLAY "$root/deploy/pvserver-beside-data.sh" --port "$port" >"$work/beside.log" 2>&1 &
+beside_pid=$!
+for _ in $(seq 600); do
+  grep -q "Accepting connection" "$work/beside.log" && break
+  kill -0 "$beside_pid" 2>/dev/null || break
+  sleep 0.1
+done
+# The client draws nothing itself but still needs a display for its window.
+if ! xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" "$CRACKVIS_PARAVIEW_PREFIX/usr/bin/pvpython" \
+  "$here/pvserver_renders.py" "$plugin" "$work/random/data.h5" "localhost:$port" \
+  "$work/beside.png" 2>"$work/beside-client.log"; then
+  grep -v '^HDF5-DIAG\|^  ' "$work/beside-client.log" | tail -20 >&2
+  tail -20 "$work/beside.log" >&2
+  failed=1
+fi
+kill "$beside_pid" 2>/dev/null || true
+wait "$beside_pid" 2>/dev/null || true
 exit "$failed"
