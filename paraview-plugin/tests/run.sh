@@ -21,6 +21,32 @@ pvbatch=$CRACKVIS_PARAVIEW_PREFIX/usr/bin/pvbatch
 work=$(mktemp -d -t crackvis-plugin-test.XXXXXX)
 trap 'rm -rf "$work"' EXIT
 
+free_port() {
+  python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
+}
+
+# Waits (at most 60 s) until the server process PID logs to LOG that it takes
+# connections, or dies.
+wait_for_server() {
+  local log=$1 pid=$2
+  for _ in $(seq 600); do
+    grep -q "Accepting connection" "$log" && return 0
+    kill -0 "$pid" 2>/dev/null || return 1
+    sleep 0.1
+  done
+  return 1
+}
+
+# Runs a pvpython client script; on failure prints its log and the server's.
+client_passes() {
+  local client_log=$1 server_log=$2
+  shift 2
+  "$@" 2>"$client_log" && return 0
+  grep -v '^HDF5-DIAG\|^  ' "$client_log" | tail -20 >&2
+  tail -20 "$server_log" >&2
+  return 1
+}
+
 make_case() {
   local name=$1
   shift
@@ -61,43 +87,29 @@ done
 # ParaView's client/server mode: pvpython drives a pvserver (2 ranks) that
 # loads the plugin from PV_PLUGIN_PATH and runs the pipeline.
 echo "== random, pvserver with 2 ranks, pvpython client"
-port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+port=$(free_port)
 PV_PLUGIN_PATH=$(dirname "$plugin") mpiexec --allow-run-as-root --oversubscribe -np 2 \
   -x LD_LIBRARY_PATH -x PYTHONPATH -x PV_PLUGIN_PATH \
   "$CRACKVIS_PARAVIEW_PREFIX/usr/bin/pvserver" --server-port="$port" >"$work/pvserver.log" 2>&1 &
 server_pid=$!
-for _ in $(seq 300); do
-  grep -q "Accepting connection" "$work/pvserver.log" && break
-  kill -0 "$server_pid" 2>/dev/null || break
-  sleep 0.1
-done
-if ! "$CRACKVIS_PARAVIEW_PREFIX/usr/bin/pvpython" "$here/plugin_matches_cli.py" "$plugin" \
-  "$work/random/data.h5" "$work/random" "localhost:$port" 2>"$work/client.log"; then
-  grep -v '^HDF5-DIAG\|^  ' "$work/client.log" | tail -20 >&2
-  tail -20 "$work/pvserver.log" >&2
-  failed=1
-fi
+wait_for_server "$work/pvserver.log" "$server_pid" || true
+client_passes "$work/client.log" "$work/pvserver.log" "$CRACKVIS_PARAVIEW_PREFIX/usr/bin/pvpython" \
+  "$here/plugin_matches_cli.py" "$plugin" "$work/random/data.h5" "$work/random" \
+  "localhost:$port" || failed=1
 kill "$server_pid" 2>/dev/null || true
 wait "$server_pid" 2>/dev/null || true
 # deploy/pvserver-beside-data.sh (its own Xvfb): the server renders the crack
 # a pvpython client asks for.
 echo "== random, deploy/pvserver-beside-data.sh renders for a pvpython client"
-port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+port=$(free_port)
 env -u DISPLAY "$root/deploy/pvserver-beside-data.sh" --port "$port" >"$work/beside.log" 2>&1 &
 beside_pid=$!
-for _ in $(seq 600); do
-  grep -q "Accepting connection" "$work/beside.log" && break
-  kill -0 "$beside_pid" 2>/dev/null || break
-  sleep 0.1
-done
+wait_for_server "$work/beside.log" "$beside_pid" || true
 # The client draws nothing itself but still needs a display for its window.
-if ! xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" "$CRACKVIS_PARAVIEW_PREFIX/usr/bin/pvpython" \
+client_passes "$work/beside-client.log" "$work/beside.log" \
+  xvfb-run -a -s "-screen 0 1280x1024x24 -noreset" "$CRACKVIS_PARAVIEW_PREFIX/usr/bin/pvpython" \
   "$here/pvserver_renders.py" "$plugin" "$work/random/data.h5" "localhost:$port" \
-  "$work/beside.png" 2>"$work/beside-client.log"; then
-  grep -v '^HDF5-DIAG\|^  ' "$work/beside-client.log" | tail -20 >&2
-  tail -20 "$work/beside.log" >&2
-  failed=1
-fi
+  "$work/beside.png" || failed=1
 kill "$beside_pid" 2>/dev/null || true
 wait "$beside_pid" 2>/dev/null || true
 exit "$failed"
