@@ -15,8 +15,8 @@
 #include <vtkDoubleArray.h>
 #include <vtkExecutive.h>
 #include <vtkFieldData.h>
-#include <vtkInformation.h>
 #include <vtkIdList.h>
+#include <vtkInformation.h>
 #include <vtkIntArray.h>
 #include <vtkLocalVoronoiCrackFilter.h>
 #include <vtkNew.h>

@@ -38,6 +38,7 @@ struct DemReaderCache {
   std::vector<std::int32_t> breakSteps;
   std::vector<double> times;
   std::vector<dem::Vec3> reference;  // the first step's positions
+  bool loaded = false;               // lattice, breakSteps and reference read
 };
 
 namespace {
@@ -130,6 +131,31 @@ void addFieldData(int step, const dem::StepState& state, vtkPolyData* output) {
   }
 }
 
+// The time-independent part and the reference configuration, read once by
+// the piece that shows the data (under MPI the other ranks never need them).
+Status loadLattice(DemReaderCache& cache) {
+  if (cache.loaded) {
+    return Status::ok();
+  }
+  auto lattice = cache.reader->readLattice();
+  if (!lattice) {
+    return lattice.status();
+  }
+  auto breakSteps = cache.reader->readBreakSteps();
+  if (!breakSteps) {
+    return breakSteps.status();
+  }
+  auto first = cache.reader->readStep(0);
+  if (!first) {
+    return first.status();
+  }
+  cache.lattice = std::move(*lattice);
+  cache.breakSteps = std::move(*breakSteps);
+  cache.reference = std::move(first->positions);
+  cache.loaded = true;
+  return Status::ok();
+}
+
 void fill(const DemReaderCache& cache, int step, const dem::StepState& state, vtkPolyData* output) {
   const dem::Lattice& lattice = cache.lattice;
   addPoints(state, cache.reference, output);
@@ -197,27 +223,13 @@ int vtkCrackvisDemReader::RequestInformation(vtkInformation*, vtkInformationVect
       vtkErrorMacro(<< reader.status().message());
       return 0;
     }
-    auto lattice = reader->readLattice();
-    auto breakSteps = lattice ? reader->readBreakSteps() : lattice.status();
-    if (!lattice || !breakSteps) {
-      vtkErrorMacro(<< (!lattice ? lattice.status() : breakSteps.status()).message());
-      return 0;
-    }
     if (reader->stepCount() == 0) {
       vtkErrorMacro(<< this->FileName << ": the file holds no complete step");
       return 0;
     }
-    auto first = reader->readStep(0);
-    if (!first) {
-      vtkErrorMacro(<< first.status().message());
-      return 0;
-    }
-    cache.reference = std::move(first->positions);
     for (const crackvis::dem::StepInfo& step : reader->info().steps) {
       cache.times.push_back(step.time);
     }
-    cache.lattice = std::move(*lattice);
-    cache.breakSteps = std::move(*breakSteps);
     cache.reader.emplace(std::move(*reader));
     cache.fileName = this->FileName;
   }
@@ -234,13 +246,17 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
                                       vtkInformationVector* outputVector) {
   vtkInformation* out = outputVector->GetInformationObject(0);
   vtkPolyData* output = vtkPolyData::GetData(out);
-  const DemReaderCache& cache = *this->Cache;
+  DemReaderCache& cache = *this->Cache;
   if (!cache.reader) {
     return 0;  // RequestInformation reported why
   }
   if (out->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) &&
       out->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) > 0) {
     return 1;  // piece 0 holds the whole data set
+  }
+  if (crackvis::Status loaded = crackvis::cracks::vtkadapter::loadLattice(cache); !loaded) {
+    vtkErrorMacro(<< loaded.message());
+    return 0;
   }
   const int step =
       out->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
