@@ -45,8 +45,14 @@ Result<StepInput> DemSeries::load(int step) {
       m_reference = std::move(first->positions);
     }
   }
-  return StepInput{m_state.positions, m_state.bondState, m_lattice.radius,
-                   m_state.bondForce, m_breakSteps,      m_reference};
+  return StepInput{m_state.positions,
+                   m_state.bondState,
+                   m_lattice.radius,
+                   m_state.bondForce,
+                   m_breakSteps,
+                   m_reference,
+                   {},
+                   {}};
 }
 
 }  // namespace crackvis::cracks

@@ -2,6 +2,7 @@
 
 #include "methods.hpp"
 #include <crackvis/cracks/extractor.hpp>
+#include <crackvis/cracks/partition.hpp>
 
 namespace crackvis::cracks {
 
@@ -53,16 +54,31 @@ Result<Decomposition> parseDecomposition(std::string_view name) {
       fmt::format("unknown decomposition '{}' (expected auto, lattice or triangulation)", name));
 }
 
-std::unique_ptr<CrackExtractor> makeExtractor(Method method, const BondGraph& graph, int dimension,
-                                              const ExtractOptions& options) {
-  Decomposition kind = options.decomposition;
-  if (kind == Decomposition::kAuto) {
-    kind =
-        isLatticeGraph(graph, dimension) ? Decomposition::kLattice : Decomposition::kTriangulation;
+namespace {
+
+// Adds each primitive's owner particle to what a lattice method outputs.
+class OwnerMarking final : public CrackExtractor {
+ public:
+  OwnerMarking(std::unique_ptr<CrackExtractor> inner, const BondGraph& graph)
+      : m_inner(std::move(inner)), m_graph(graph) {}
+  Method method() const override { return m_inner->method(); }
+  Status extract(const StepInput& step, CrackMesh& out) override {
+    CRACKVIS_RETURN_IF_ERROR(m_inner->extract(step, out));
+    appendOwnerParticles(out, m_graph.bonds());
+    return Status::ok();
   }
-  if (kind == Decomposition::kTriangulation) {
-    return makeTriangulated(method, graph, dimension, options);
-  }
+  std::size_t memoryBytes() const override { return m_inner->memoryBytes(); }
+  const LatticeDecomposition* decomposition() const override { return m_inner->decomposition(); }
+  std::size_t inconsistentBondCount() const override { return m_inner->inconsistentBondCount(); }
+  Decomposition decompositionKind() const override { return m_inner->decompositionKind(); }
+
+ private:
+  std::unique_ptr<CrackExtractor> m_inner;
+  const BondGraph& m_graph;
+};
+
+std::unique_ptr<CrackExtractor> makeLatticeExtractor(Method method, const BondGraph& graph,
+                                                     int dimension, const ExtractOptions& options) {
   switch (method) {
     case Method::kCellAttribute:
       return makeCellAttribute(graph, dimension, options);
@@ -76,6 +92,25 @@ std::unique_ptr<CrackExtractor> makeExtractor(Method method, const BondGraph& gr
   return nullptr;
 }
 
+}  // namespace
+
+std::unique_ptr<CrackExtractor> makeExtractor(Method method, const BondGraph& graph, int dimension,
+                                              const ExtractOptions& options) {
+  Decomposition kind = options.decomposition;
+  if (kind == Decomposition::kAuto) {
+    kind =
+        isLatticeGraph(graph, dimension) ? Decomposition::kLattice : Decomposition::kTriangulation;
+  }
+  if (kind == Decomposition::kTriangulation) {
+    return makeTriangulated(method, graph, dimension, options);
+  }
+  auto extractor = makeLatticeExtractor(method, graph, dimension, options);
+  if (options.ownerParticles) {
+    return std::make_unique<OwnerMarking>(std::move(extractor), graph);
+  }
+  return extractor;
+}
+
 Status checkStepInput(const BondGraph& graph, const StepInput& step) {
   const std::size_t n = graph.particleCount();
   const std::size_t m = graph.bondCount();
@@ -86,6 +121,10 @@ Status checkStepInput(const BondGraph& graph, const StepInput& step) {
   if (step.bondState.size() != m) {
     return invalidArgument(
         fmt::format("{} bond states for M = {} bonds", step.bondState.size(), m));
+  }
+  if ((!step.components.empty() && step.components.size() != n) ||
+      (!step.intactComponents.empty() && step.intactComponents.size() != n)) {
+    return invalidArgument(fmt::format("component arrays do not have N = {} values", n));
   }
   if ((!step.bondForce.empty() && step.bondForce.size() != m) ||
       (!step.breakStep.empty() && step.breakStep.size() != m)) {

@@ -268,10 +268,19 @@ class LocalVoronoiExtractor final : public CrackExtractor {
 
  private:
   Box grownDefaultDomain(std::span<const Vec3> positions, std::span<const double> radius) const {
-    Box box = defaultDomain(positions, radius, m_dimension);
-    if (m_options.domainMargin > 0.0 && !radius.empty()) {
-      const double margin =
-          m_options.domainMargin * *std::max_element(radius.begin(), radius.end());
+    // A piece of a larger set (partition.hpp) is given the whole set's box
+    // and largest radius: its own would clip the cells at its cut.
+    const bool whole = m_options.specimenCentres.has_value();
+    const double largest = whole            ? m_options.specimenLargestRadius
+                           : radius.empty() ? 0.0
+                                            : *std::max_element(radius.begin(), radius.end());
+    Box box = whole ? *m_options.specimenCentres : defaultDomain(positions, radius, m_dimension);
+    if (whole && m_dimension == 2) {
+      box.lo.z = -largest;
+      box.hi.z = largest;
+    }
+    if (m_options.domainMargin > 0.0 && largest > 0.0) {
+      const double margin = m_options.domainMargin * largest;
       box.lo = box.lo - Vec3{margin, margin, m_dimension == 3 ? margin : 0.0};
       box.hi = box.hi + Vec3{margin, margin, m_dimension == 3 ? margin : 0.0};
     }

@@ -30,6 +30,7 @@
 
 #include "methods.hpp"
 #include "surface_primitives.hpp"
+#include <crackvis/cracks/partition.hpp>
 #include <crackvis/cracks/triangulation.hpp>
 
 namespace crackvis::cracks {
@@ -77,6 +78,9 @@ class TriangulatedExtractor final : public CrackExtractor {
     extended.breakStep = step.breakStep.empty() ? std::span<const std::int32_t>{} : m_breakStep;
     CRACKVIS_RETURN_IF_ERROR(m_inner->extract(extended, out));
     dropVirtualInconsistencies(out);
+    if (m_options.ownerParticles) {
+      appendOwnerParticles(out, m_bonds);  // virtual bonds still have their ids here
+    }
     hideVirtualBondIds(out);
     return Status::ok();
   }
@@ -89,7 +93,8 @@ class TriangulatedExtractor final : public CrackExtractor {
       return invalidArgument(fmt::format("{} reference positions for N = {} particles",
                                          reference.size(), m_graph.particleCount()));
     }
-    auto triangulation = triangulate(reference, step.radius, m_dimension);
+    auto triangulation = m_options.triangulation ? given(*m_options.triangulation)
+                                                 : triangulate(reference, step.radius, m_dimension);
     if (!triangulation) {
       return triangulation.status();
     }
@@ -101,7 +106,11 @@ class TriangulatedExtractor final : public CrackExtractor {
         addSupport(edge);
       }
     }
-    markPieces({});
+    if (!step.intactComponents.empty()) {
+      usePieces(step.intactComponents);
+    } else {
+      markPieces({});
+    }
     m_joined.assign(m_supportStart.size() - 1, 0);
     for (std::size_t v = 0; v + 1 < m_supportStart.size(); ++v) {
       const dem::Bond& pair = m_bonds[m_graph.bondCount() + v];
@@ -114,6 +123,26 @@ class TriangulatedExtractor final : public CrackExtractor {
     m_cells = ExplicitCells(m_graph.particleCount(), std::move(triangulation->cells));
     m_inner = makeInner();
     return Status::ok();
+  }
+
+  // A triangulation the caller gives (ExtractOptions::triangulation),
+  // checked against the particles.
+  Result<Triangulation> given(const Triangulation& triangulation) const {
+    const auto n = static_cast<dem::ParticleIndex>(m_graph.particleCount());
+    auto outside = [n](dem::ParticleIndex i) { return i < -1 || i >= n; };
+    for (const auto& cell : triangulation.cells) {
+      if (std::any_of(cell.begin(), cell.end(), outside)) {
+        return invalidArgument(
+            fmt::format("a given triangulation cell names a particle beyond N = {}", n));
+      }
+    }
+    for (const dem::Bond& edge : triangulation.edges) {
+      if (edge.first < 0 || edge.second < 0 || outside(edge.first) || outside(edge.second)) {
+        return invalidArgument(
+            fmt::format("a given triangulation edge names a particle beyond N = {}", n));
+      }
+    }
+    return triangulation;
   }
 
   // The two-bond paths i-k-j between the ends of a never-bonded edge (both
@@ -183,7 +212,9 @@ class TriangulatedExtractor final : public CrackExtractor {
       m_force.assign(step.bondForce.begin(), step.bondForce.end());
       m_force.resize(m_bonds.size(), 0.0f);
     }
-    if (m_joinedCount > 0) {
+    if (m_joinedCount > 0 && !step.components.empty()) {
+      usePieces(step.components);
+    } else if (m_joinedCount > 0) {
       markPieces(step.bondState);
     }
     for (std::size_t v = 0; v < virtualCount; ++v) {
@@ -217,6 +248,12 @@ class TriangulatedExtractor final : public CrackExtractor {
         m_breakStep[m + v] = broken ? brokeAt : -1;
       }
     }
+  }
+
+  // The whole set's components, given for a piece of it (StepInput).
+  void usePieces(std::span<const std::int32_t> components) {
+    m_piece.assign(components.begin(), components.end());
+    m_marked.clear();  // markPieces marks afresh
   }
 
   // The piece (connected by intact bonds) of each particle, as the index of

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The plugin's tests (ctest runs this): on a lattice and on a random packing,
-# each with a planted through crack that opens, the plugin's reader and four
-# filters inside pvbatch at 1 and 2 MPI ranks must give what `crackvis
-# extract` gives for the last step (cells, points, area or volume); then the
-# same from a pvpython client driving a 2-rank pvserver.
+# each with a planted through crack that opens, and on the cuboids A and C
+# (scaled down), the plugin's reader and four filters inside pvbatch at 1 and
+# 2 MPI ranks must give what `crackvis extract` gives for the last step, face
+# for face, with every rank extracting its own slab; then the same from a
+# pvpython client driving a 2-rank pvserver.
 #
 #   paraview-plugin/tests/run.sh CRACKVIS_CLI [PLUGIN]
 #
@@ -47,11 +48,13 @@ client_passes() {
   return 1
 }
 
+# make_case NAME generate|sim ARGS...: the data set and the CLI's extraction
+# of its last step by each method.
 make_case() {
   local name=$1
   shift
   mkdir -p "$work/$name"
-  "$crackvis" generate "$@" --planted-crack 6 -o "$work/$name/data.h5" >/dev/null 2>&1
+  "$crackvis" "$@" -o "$work/$name/data.h5" >/dev/null 2>&1
   local method
   for method in cell-cut local-voronoi cell-centre; do
     "$crackvis" extract "$work/$name/data.h5" -m "$method" -s -1 -q -o "$work/$name/$method.vtp"
@@ -60,13 +63,19 @@ make_case() {
     -o "$work/$name/cell-attribute.vtu"
 }
 
-# An even number of sites: with an odd one the mid-plane holds a site plane
-# and almost no bond crosses it.
-make_case lattice --sites 10 10 10
-make_case random --packing random --box 0.01 0.01 0.01 --radius 0.0005
+# Specimens long enough that each of 2 ranks holds a slab of its own beside
+# the ghost layer (4 bond lengths), with a planted through crack on the cut
+# between the ranks' slabs that opens over 6 steps; an even number of sites
+# (with an odd one the mid-plane holds a site plane and almost no bond
+# crosses it). And the dissertation's cuboids, scaled down, with their
+# simulated cracks.
+make_case lattice generate --sites 24 8 8 --planted-crack 6
+make_case random generate --packing random --box 0.03 0.01 0.01 --radius 0.0005 --planted-crack 6
+make_case cuboidA sim cuboid3d --set A --scale 0.4 -q
+make_case cuboidC sim cuboid3d --set C --scale 0.3 -q
 
 failed=0
-for name in lattice random; do
+for name in lattice random cuboidA cuboidC; do
   for ranks in 1 2; do
     echo "== $name, $ranks rank(s)"
     if ((ranks == 1)); then

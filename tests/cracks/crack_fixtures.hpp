@@ -43,7 +43,7 @@ struct PlantedCrack {
   std::unique_ptr<cracks::BondGraph> graph;
 
   cracks::StepInput input() const {
-    return {block.positions, state, block.lattice.radius, {}, {}, {}};
+    return {block.positions, state, block.lattice.radius, {}, {}, {}, {}, {}};
   }
   std::size_t brokenCount() const {
     return static_cast<std::size_t>(std::count(state.begin(), state.end(), 1));

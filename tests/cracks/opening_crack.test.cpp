@@ -129,8 +129,8 @@ TEST_CASE("a through crack pulled 3 bond lengths open keeps its faces and covera
           // length per step: 3 bond lengths at step 6.
           const double opening = 0.5 * specimen.bondLength * step;
           const std::vector<Vec3> positions = opened(specimen, opening, step);
-          const StepInput input{positions, state, specimen.lattice.radius,
-                                {},        {},    specimen.positions};
+          const StepInput input{
+              positions, state, specimen.lattice.radius, {}, {}, specimen.positions, {}, {}};
           CrackMesh mesh;
           REQUIRE(extractor->extract(input, mesh).isOk());
           const SurfaceMetrics metrics = computeMetrics(mesh, positions, specimen.lattice.radius);
@@ -186,13 +186,15 @@ TEST_CASE("without a reference, an opened crack fails local Voronoi's validation
   const std::vector<Vec3> positions = opened(specimen, 3.0 * specimen.bondLength, 6);
   auto extractor = makeExtractor(Method::kLocalVoronoi, graph, 3);
   CrackMesh mesh;
-  REQUIRE(extractor->extract({positions, state, specimen.lattice.radius, {}, {}, {}}, mesh).isOk());
+  REQUIRE(extractor->extract({positions, state, specimen.lattice.radius, {}, {}, {}, {}, {}}, mesh)
+              .isOk());
   CHECK(extractor->inconsistentBondCount() > 0);
   // With the reference, none.
   auto material = makeExtractor(Method::kLocalVoronoi, graph, 3);
   REQUIRE(
       material
-          ->extract({positions, state, specimen.lattice.radius, {}, {}, specimen.positions}, mesh)
+          ->extract({positions, state, specimen.lattice.radius, {}, {}, specimen.positions, {}, {}},
+                    mesh)
           .isOk());
   CHECK(material->inconsistentBondCount() == 0);
 }

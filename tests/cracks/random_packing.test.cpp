@@ -98,7 +98,7 @@ TEST_CASE("every method covers a through crack in a random packing", "[cracks][p
       DYNAMIC_SECTION(toString(method) << ", radii " << rmin << " .. " << rmax) {
         auto extractor = makeExtractor(method, graph, 3);
         CrackMesh mesh;
-        const StepInput step{packing.positions, state, packing.lattice.radius, {}, {}, {}};
+        const StepInput step{packing.positions, state, packing.lattice.radius, {}, {}, {}, {}, {}};
         REQUIRE(extractor->extract(step, mesh).isOk());
         CHECK(extractor->decompositionKind() == Decomposition::kTriangulation);
         const SurfaceMetrics metrics =
@@ -229,7 +229,7 @@ TEST_CASE("a particle with more than 256 neighbours: its cells are left out, non
     DYNAMIC_SECTION(toString(method)) {
       auto extractor = makeExtractor(method, graph, 3);
       CrackMesh mesh;
-      REQUIRE(extractor->extract({positions, state, radius, {}, {}, {}}, mesh).isOk());
+      REQUIRE(extractor->extract({positions, state, radius, {}, {}, {}, {}, {}}, mesh).isOk());
       if (method != Method::kLocalVoronoi) {
         REQUIRE(extractor->decomposition() != nullptr);
         CHECK(extractor->decomposition()->skippedCells() > 0);

@@ -210,7 +210,8 @@ TEST_CASE("a triangulated packing's decomposition edges include its never-bonded
   const auto state = testing::bondsAcross(packing->lattice.bonds, packing->positions, 0.003);
   auto extractor = cracks::makeExtractor(cracks::Method::kCellCut, graph, 3);
   cracks::CrackMesh mesh;
-  const cracks::StepInput step{packing->positions, state, packing->lattice.radius, {}, {}, {}};
+  const cracks::StepInput step{
+      packing->positions, state, packing->lattice.radius, {}, {}, {}, {}, {}};
   REQUIRE(extractor->extract(step, mesh));
   scene::SceneInput input{&packing->lattice, step, {}, {}, nullptr, extractor->decomposition()};
   REQUIRE(input.decomposition != nullptr);

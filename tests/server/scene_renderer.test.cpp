@@ -98,7 +98,9 @@ struct Spheres {
     mesh.polygons.add({first, first + 1, first + 2, first + 3});
   }
   render::SceneInput input() const {
-    return {&lattice, {positions, {}, lattice.radius, {}, {}, {}}, {}, {}, &mesh, nullptr, {}, {}};
+    return {
+        &lattice, {positions, {}, lattice.radius, {}, {}, {}, {}, {}}, {}, {}, &mesh, nullptr, {},
+        {}};
   }
   static double focal() { return kHeight / 2.0 / std::tan(15.0 * std::numbers::pi / 180.0); }
   // Where a point of the scene lands, in pixels from the left and the top.

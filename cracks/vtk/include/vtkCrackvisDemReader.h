@@ -12,10 +12,19 @@
 // present, "bond_force", "strength", "bond_flags" and the per-bond extra
 // arrays; field data "step" (the index read), "time" and the step scalars.
 //
-// Under MPI (pvbatch, pvserver) the whole data set is produced by piece 0 and
-// the other pieces are empty (a spatial partition with ghosts is issue 19
-// point 2). A file that cannot be read is reported with vtkErrorMacro, naming
-// the file and the defect, and leaves the output empty.
+// Under MPI (pvbatch, pvserver: more than one piece asked for) each piece is
+// a slab of the reference configuration with equal particle counts plus a
+// ghost layer GhostWidth longest bonds wide (crackvis/cracks/partition.hpp):
+// points and bonds are then the piece's, in the file's order, with
+// "vtkGhostType" marking ghost particles and bonds owned by another piece
+// (a bond belongs to the piece owning its smaller-index end), global ids
+// (the file's particle and bond indices), and field data with the whole
+// set's box, largest radius and decomposition. The four filters output
+// exactly the piece's own primitives of what the whole set gives, so the
+// pieces together equal a single-process run face for face.
+//
+// A file that cannot be read is reported with vtkErrorMacro, naming the file
+// and the defect, and leaves the output empty.
 #ifndef vtkCrackvisDemReader_h
 #define vtkCrackvisDemReader_h
 
@@ -46,6 +55,13 @@ class vtkCrackvisDemReader : public vtkPolyDataAlgorithm {
   // attribute); ParaView asks this to pick a reader for an .h5 file.
   int CanReadFile(const char* fileName);
 
+  // The ghost layer of a piece under MPI, in longest reference bonds: wide
+  // enough for every method's neighbourhood (a cell, local Voronoi's
+  // validation sphere, a triangulation's cells) around the piece's own
+  // particles. Default 4.
+  vtkSetClampMacro(GhostWidth, double, 1.0, 1000.0);
+  vtkGetMacro(GhostWidth, double);
+
  protected:
   vtkCrackvisDemReader();
   ~vtkCrackvisDemReader() override;
@@ -53,6 +69,7 @@ class vtkCrackvisDemReader : public vtkPolyDataAlgorithm {
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   char* FileName = nullptr;
+  double GhostWidth = 4.0;
   std::unique_ptr<crackvis::cracks::vtkadapter::DemReaderCache> Cache;
 
  private:

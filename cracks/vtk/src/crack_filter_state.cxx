@@ -7,7 +7,9 @@
 #include <vtkCellArrayIterator.h>
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
+#include <vtkDataSetAttributes.h>
 #include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
 #include <vtkFloatArray.h>
 #include <vtkIntArray.h>
 #include <vtkPointData.h>
@@ -17,11 +19,25 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 
+#include <crackvis/cracks/partition.hpp>
+
 namespace crackvis::cracks::vtkadapter {
 namespace {
 
 vtkDataArray* cellArray(vtkPolyData* input, const char* name) {
   return input->GetCellData() != nullptr ? input->GetCellData()->GetArray(name) : nullptr;
+}
+
+// The n values of `array`, or none when it is missing or of another length.
+void readInts(vtkDataArray* array, vtkIdType n, std::vector<std::int32_t>& out) {
+  out.clear();
+  if (array == nullptr || array->GetNumberOfTuples() != n) {
+    return;
+  }
+  out.resize(static_cast<std::size_t>(n));
+  for (vtkIdType i = 0; i < n; ++i) {
+    out[static_cast<std::size_t>(i)] = static_cast<std::int32_t>(array->GetComponent(i, 0));
+  }
 }
 
 vtkSmartPointer<vtkCellArray> toCellArray(const PrimitiveList& list) {
@@ -176,7 +192,106 @@ void CrackFilterState::readReference(vtkPolyData* input, vtkIdType n) {
   }
 }
 
-bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptions& options,
+bool CrackFilterState::readPiece(vtkPolyData* input, ExtractOptions& options) {
+  vtkDataArray* ghost = input->GetPointData()->GetArray(vtkDataSetAttributes::GhostArrayName());
+  vtkDataArray* particles = input->GetPointData()->GetGlobalIds();
+  vtkDataArray* bonds = input->GetCellData()->GetGlobalIds();
+  vtkDataArray* centres = input->GetFieldData()->GetArray(kSpecimenCentresArray);
+  vtkDataArray* largest = input->GetFieldData()->GetArray(kLargestRadiusArray);
+  vtkDataArray* decomposition = input->GetFieldData()->GetArray(kDecompositionArray);
+  const vtkIdType n = input->GetNumberOfPoints();
+  const vtkIdType m = input->GetNumberOfCells();
+  if (ghost == nullptr || particles == nullptr || bonds == nullptr || centres == nullptr ||
+      largest == nullptr || decomposition == nullptr || ghost->GetNumberOfTuples() != n ||
+      particles->GetNumberOfTuples() != n || bonds->GetNumberOfTuples() != m ||
+      centres->GetNumberOfValues() != 6) {
+    m_owned.clear();
+    m_components.clear();
+    m_intactComponents.clear();
+    return false;
+  }
+  m_owned.resize(static_cast<std::size_t>(n));
+  m_globalParticle.resize(static_cast<std::size_t>(n));
+  for (vtkIdType i = 0; i < n; ++i) {
+    m_owned[static_cast<std::size_t>(i)] = ghost->GetComponent(i, 0) == 0.0 ? 1 : 0;
+    m_globalParticle[static_cast<std::size_t>(i)] =
+        static_cast<vtkIdType>(particles->GetComponent(i, 0));
+  }
+  m_globalBond.resize(static_cast<std::size_t>(m));
+  for (vtkIdType b = 0; b < m; ++b) {
+    m_globalBond[static_cast<std::size_t>(b)] = static_cast<vtkIdType>(bonds->GetComponent(b, 0));
+  }
+  double box[6];
+  for (int k = 0; k < 6; ++k) {
+    box[k] = centres->GetComponent(0, k);
+  }
+  options.specimenCentres = Box{{box[0], box[1], box[2]}, {box[3], box[4], box[5]}};
+  options.specimenLargestRadius = largest->GetComponent(0, 0);
+  options.ownerParticles = true;
+  if (options.decomposition == Decomposition::kAuto) {
+    options.decomposition = decomposition->GetComponent(0, 0) == 0.0
+                                ? Decomposition::kLattice
+                                : Decomposition::kTriangulation;
+  }
+  readTriangulation(input, options);
+  readInts(input->GetPointData()->GetArray(kComponentArray), n, m_components);
+  readInts(input->GetPointData()->GetArray(kIntactComponentArray), n, m_intactComponents);
+  return true;
+}
+
+void CrackFilterState::readTriangulation(vtkPolyData* input, ExtractOptions& options) {
+  vtkDataArray* cells = input->GetFieldData()->GetArray(kTriangulationCellsArray);
+  vtkDataArray* edges = input->GetFieldData()->GetArray(kTriangulationEdgesArray);
+  if (cells == nullptr || edges == nullptr || cells->GetNumberOfComponents() != 4 ||
+      edges->GetNumberOfComponents() != 2) {
+    m_triangulation.reset();
+    return;
+  }
+  Triangulation given;
+  given.dimension = m_dimension;
+  given.cells.resize(static_cast<std::size_t>(cells->GetNumberOfTuples()));
+  for (vtkIdType c = 0; c < cells->GetNumberOfTuples(); ++c) {
+    for (int k = 0; k < 4; ++k) {
+      given.cells[static_cast<std::size_t>(c)][static_cast<std::size_t>(k)] =
+          static_cast<dem::ParticleIndex>(cells->GetComponent(c, k));
+    }
+  }
+  given.edges.resize(static_cast<std::size_t>(edges->GetNumberOfTuples()));
+  for (vtkIdType e = 0; e < edges->GetNumberOfTuples(); ++e) {
+    given.edges[static_cast<std::size_t>(e)] = {
+        static_cast<dem::ParticleIndex>(edges->GetComponent(e, 0)),
+        static_cast<dem::ParticleIndex>(edges->GetComponent(e, 1))};
+  }
+  // The same cells as last step keep the extractor (and its increments).
+  if (m_triangulation == nullptr || m_triangulation->cells != given.cells ||
+      m_triangulation->edges != given.edges) {
+    m_triangulation = std::make_shared<const Triangulation>(std::move(given));
+  }
+  options.triangulation = m_triangulation;
+}
+
+// Keeps the piece's own primitives and gives their particle and bond ids in
+// the whole set's numbering, as a single-process run outputs them.
+void CrackFilterState::toWholeSet(CrackMesh& mesh) const {
+  keepOwned(mesh, m_owned);
+  auto remap = [](AttributeArray& array, const std::vector<vtkIdType>& global) {
+    for (double& id : array.values) {
+      const bool known = id >= 0.0 && id < static_cast<double>(global.size());
+      id = known ? static_cast<double>(global[static_cast<std::size_t>(id)]) : id;
+    }
+  };
+  for (auto* arrays : {&mesh.cellData, &mesh.pointData}) {
+    for (AttributeArray& array : *arrays) {
+      if (array.name == "bond_id" || array.name == "first_broken_bond") {
+        remap(array, m_globalBond);
+      } else if (array.name == "particle_id") {
+        remap(array, m_globalParticle);
+      }
+    }
+  }
+}
+
+bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptions& requested,
                            double radiusDefault, CrackMesh& mesh, std::string& error) {
   if (input == nullptr) {
     error = "no input";
@@ -191,6 +306,8 @@ bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptio
   if (!readLattice(input, radiusDefault, error)) {
     return false;
   }
+  ExtractOptions options = requested;
+  const bool piece = readPiece(input, options);
   if (m_extractor == nullptr || method != m_method || options != m_options) {
     m_method = method;
     m_options = options;
@@ -200,10 +317,14 @@ bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptio
   // reader gives the first step's positions): with it, local Voronoi faces
   // are material surfaces and a triangulation is made in the reference, as
   // `crackvis extract` does; without it, in the first step the filter sees.
-  const StepInput step{m_positions, m_state, m_radius, m_force, m_breakStep, m_reference};
+  const StepInput step{m_positions, m_state,     m_radius,     m_force,
+                       m_breakStep, m_reference, m_components, m_intactComponents};
   if (Status status = m_extractor->extract(step, mesh); !status) {
     error = status.message();
     return false;
+  }
+  if (piece) {
+    toWholeSet(mesh);
   }
   return true;
 }

@@ -28,6 +28,11 @@ class CrackFilterState {
  private:
   bool readLattice(vtkPolyData* input, double radiusDefault, std::string& error);
   void readReference(vtkPolyData* input, vtkIdType n);
+  // A piece of a larger set (the reader under MPI): what makes its output
+  // the piece's own share of the whole set's. False for a whole set.
+  bool readPiece(vtkPolyData* input, ExtractOptions& options);
+  void readTriangulation(vtkPolyData* input, ExtractOptions& options);
+  void toWholeSet(CrackMesh& mesh) const;
 
   std::vector<dem::Bond> m_bonds;
   std::vector<Vec3> m_positions;
@@ -36,6 +41,13 @@ class CrackFilterState {
   std::vector<float> m_force;
   std::vector<std::int32_t> m_breakStep;
   std::vector<Vec3> m_reference;  // empty: the input has no reference configuration
+  // A piece's: 1 for its own particles, and the whole set's indices.
+  std::vector<std::uint8_t> m_owned;
+  std::vector<vtkIdType> m_globalParticle;
+  std::vector<vtkIdType> m_globalBond;
+  std::shared_ptr<const Triangulation> m_triangulation;  // a piece's, kept while it is the same
+  std::vector<std::int32_t> m_components;                // a piece's (StepInput), else empty
+  std::vector<std::int32_t> m_intactComponents;
   std::unique_ptr<BondGraph> m_graph;
   std::unique_ptr<CrackExtractor> m_extractor;
   Method m_method = Method::kCellCut;

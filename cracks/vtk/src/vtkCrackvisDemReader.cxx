@@ -7,6 +7,7 @@
 
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
+#include <vtkDataSetAttributes.h>
 #include <vtkDoubleArray.h>
 #include <vtkFieldData.h>
 #include <vtkFloatArray.h>
@@ -25,6 +26,10 @@
 #include <vtkUnsignedCharArray.h>
 
 #include "crackvis_vtk_conversion.h"
+#include <crackvis/cracks/bond_graph.hpp>
+#include <crackvis/cracks/extractor.hpp>
+#include <crackvis/cracks/partition.hpp>
+#include <crackvis/cracks/triangulation.hpp>
 #include <crackvis/dem/dem_file.hpp>
 
 namespace crackvis::cracks::vtkadapter {
@@ -39,6 +44,21 @@ struct DemReaderCache {
   std::vector<double> times;
   std::vector<dem::Vec3> reference;  // the first step's positions
   bool loaded = false;               // lattice, breakSteps and reference read
+  // The piece last asked for (piece of pieces, with pieces > 1) and what it
+  // holds, kept while the request stays the same: every step of a piece
+  // holds the same particles and bonds, so the filters stay incremental.
+  int piece = 0;
+  int pieces = 1;
+  double ghostWidth = 0.0;
+  Piece part;
+  dem::Lattice pieceLattice;
+  std::vector<std::int32_t> pieceBreakSteps;
+  std::vector<dem::Vec3> pieceReference;
+  int decomposition = -1;  // of the whole set: 0 lattice, 1 triangulation; -1 not decided
+  std::optional<Triangulation> triangulation;  // the whole set's, when it is triangulated
+  std::vector<std::int32_t> pieceCells;        // its cells and edges in the piece
+  std::vector<std::int32_t> pieceEdges;
+  std::vector<std::int32_t> pieceIntactComponents;
 };
 
 namespace {
@@ -131,8 +151,8 @@ void addFieldData(int step, const dem::StepState& state, vtkPolyData* output) {
   }
 }
 
-// The time-independent part and the reference configuration, read once by
-// the piece that shows the data (under MPI the other ranks never need them).
+// The time-independent part and the reference configuration, read once (each
+// MPI rank reads the whole lattice: the partition is made from it).
 Status loadLattice(DemReaderCache& cache) {
   if (cache.loaded) {
     return Status::ok();
@@ -156,9 +176,10 @@ Status loadLattice(DemReaderCache& cache) {
   return Status::ok();
 }
 
-void fill(const DemReaderCache& cache, int step, const dem::StepState& state, vtkPolyData* output) {
-  const dem::Lattice& lattice = cache.lattice;
-  addPoints(state, cache.reference, output);
+void fill(const dem::Lattice& lattice, const std::vector<std::int32_t>& breakSteps,
+          const std::vector<dem::Vec3>& reference, int step, const dem::StepState& state,
+          vtkPolyData* output) {
+  addPoints(state, reference, output);
   addBonds(lattice.bonds, output);
   vtkPointData* points = output->GetPointData();
   addArray<vtkDoubleArray>(points, "radius", lattice.radius);
@@ -172,13 +193,183 @@ void fill(const DemReaderCache& cache, int step, const dem::StepState& state, vt
   addArray<vtkIntArray>(points, "particle_group", lattice.particleGroup);
   vtkCellData* cells = output->GetCellData();
   addArray<vtkUnsignedCharArray>(cells, "bond_state", state.bondState);
-  addArray<vtkIntArray>(cells, "break_step", cache.breakSteps);
+  addArray<vtkIntArray>(cells, "break_step", breakSteps);
   addArray<vtkFloatArray>(cells, "bond_force", state.bondForce);
   addArray<vtkDoubleArray>(cells, "strength", lattice.strength);
   addArray<vtkUnsignedCharArray>(cells, "bond_flags", lattice.bondFlags);
   addExtras(lattice.extras, output);
   addExtras(state.extras, output);
   addFieldData(step, state, output);
+}
+
+// The rows of `values` (rows of `width` values) at `rows`; empty stays empty.
+template <typename T, typename Index>
+std::vector<T> pick(const std::vector<T>& values, const std::vector<Index>& rows,
+                    std::size_t width = 1) {
+  std::vector<T> out;
+  if (values.empty()) {
+    return out;
+  }
+  out.reserve(rows.size() * width);
+  for (Index row : rows) {
+    const auto first =
+        values.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(row) * width);
+    out.insert(out.end(), first, first + static_cast<std::ptrdiff_t>(width));
+  }
+  return out;
+}
+
+std::vector<dem::ExtraArray> pickExtras(const std::vector<dem::ExtraArray>& extras,
+                                        const Piece& part) {
+  std::vector<dem::ExtraArray> out = extras;
+  for (dem::ExtraArray& extra : out) {
+    const auto width = static_cast<std::size_t>(extra.components);
+    extra.values = extra.owner == dem::ExtraOwner::kParticles
+                       ? pick(extra.values, part.particles, width)
+                       : pick(extra.values, part.bonds, width);
+  }
+  return out;
+}
+
+// How `crackvis extract` divides the whole set (decided once per file, on
+// the whole bond graph: a piece's graph, cut at its ghost layer, might not
+// look like a lattice), and its triangulation when it is no lattice.
+Status decideDecomposition(DemReaderCache& cache) {
+  if (cache.decomposition < 0) {
+    const BondGraph graph(cache.lattice.particleCount(), cache.lattice.bonds);
+    cache.decomposition = isLatticeGraph(graph, cache.lattice.dimension) ? 0 : 1;
+  }
+  if (cache.decomposition == 1 && !cache.triangulation) {
+    auto made = triangulate(cache.reference, cache.lattice.radius, cache.lattice.dimension);
+    if (!made) {
+      return made.status();
+    }
+    cache.triangulation = std::move(*made);
+  }
+  return Status::ok();
+}
+
+// The whole set's triangulation in piece indices: the cells and edges whose
+// nodes the piece holds, and the intact packing's components.
+void restrictTriangulation(DemReaderCache& cache) {
+  cache.pieceCells.clear();
+  cache.pieceEdges.clear();
+  std::vector<std::int32_t> local(cache.reference.size(), -1);
+  for (std::size_t k = 0; k < cache.part.particles.size(); ++k) {
+    local[static_cast<std::size_t>(cache.part.particles[k])] = static_cast<std::int32_t>(k);
+  }
+  auto held = [&](dem::ParticleIndex i) {
+    return i < 0 || local[static_cast<std::size_t>(i)] >= 0;
+  };
+  auto toLocal = [&](dem::ParticleIndex i) {
+    return i < 0 ? -1 : local[static_cast<std::size_t>(i)];
+  };
+  for (const auto& cell : cache.triangulation->cells) {
+    if (std::all_of(cell.begin(), cell.end(), held)) {
+      for (dem::ParticleIndex i : cell) {
+        cache.pieceCells.push_back(toLocal(i));
+      }
+    }
+  }
+  for (const dem::Bond& edge : cache.triangulation->edges) {
+    if (held(edge.first) && held(edge.second)) {
+      cache.pieceEdges.push_back(toLocal(edge.first));
+      cache.pieceEdges.push_back(toLocal(edge.second));
+    }
+  }
+  cache.pieceIntactComponents = pick(
+      connectedComponents(cache.reference.size(), cache.lattice.bonds, {}), cache.part.particles);
+}
+
+// Cuts the whole set into `pieces` and keeps piece `piece` (once per
+// request: the partition depends only on the reference configuration).
+Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBonds) {
+  const double width = ghostBonds * longestBond(cache.reference, cache.lattice.bonds);
+  if (cache.pieces == pieces && cache.piece == piece && cache.ghostWidth == width &&
+      !cache.part.particles.empty()) {
+    return Status::ok();
+  }
+  CRACKVIS_RETURN_IF_ERROR(decideDecomposition(cache));
+  cache.piece = piece;
+  cache.pieces = pieces;
+  cache.ghostWidth = width;
+  cache.part = partitionPiece(cache.reference, cache.lattice.bonds, piece, pieces, width,
+                              cache.triangulation ? &*cache.triangulation : nullptr);
+  const Piece& part = cache.part;
+  const dem::Lattice& whole = cache.lattice;
+  dem::Lattice& lattice = cache.pieceLattice;
+  lattice.dimension = whole.dimension;
+  lattice.radius = pick(whole.radius, part.particles);
+  lattice.bonds = part.localBonds;
+  lattice.strength = pick(whole.strength, part.bonds);
+  lattice.particleId = pick(whole.particleId, part.particles);
+  lattice.particleGroup = pick(whole.particleGroup, part.particles);
+  lattice.bondFlags = pick(whole.bondFlags, part.bonds);
+  lattice.extras = pickExtras(whole.extras, part);
+  cache.pieceBreakSteps = pick(cache.breakSteps, part.bonds);
+  cache.pieceReference = pick(cache.reference, part.particles);
+  if (cache.triangulation) {
+    restrictTriangulation(cache);
+  }
+  return Status::ok();
+}
+
+dem::StepState pieceState(dem::StepState state, const Piece& part) {
+  state.positions = pick(state.positions, part.particles);
+  state.velocities = pick(state.velocities, part.particles);
+  state.bondState = pick(state.bondState, part.bonds);
+  state.bondForce = pick(state.bondForce, part.bonds);
+  state.extras = pickExtras(state.extras, part);
+  return state;
+}
+
+template <typename Index>
+void addPieceMarks(vtkDataSetAttributes* attributes, const std::vector<Index>& global,
+                   const std::vector<std::uint8_t>& owned, bool points) {
+  vtkNew<vtkIdTypeArray> ids;
+  ids->SetName(points ? "GlobalPointIds" : "GlobalCellIds");
+  ids->SetNumberOfTuples(static_cast<vtkIdType>(global.size()));
+  vtkNew<vtkUnsignedCharArray> ghost;
+  ghost->SetName(vtkDataSetAttributes::GhostArrayName());
+  ghost->SetNumberOfTuples(static_cast<vtkIdType>(global.size()));
+  const auto duplicate =
+      static_cast<unsigned char>(points ? int{vtkDataSetAttributes::DUPLICATEPOINT}
+                                        : int{vtkDataSetAttributes::DUPLICATECELL});
+  for (std::size_t k = 0; k < global.size(); ++k) {
+    ids->SetValue(static_cast<vtkIdType>(k), global[k]);
+    ghost->SetValue(static_cast<vtkIdType>(k), owned[k] != 0 ? 0 : duplicate);
+  }
+  attributes->SetGlobalIds(ids);
+  attributes->AddArray(ghost);
+}
+
+// What makes the piece's filters equal the whole set's: ghost marks, global
+// ids, and the whole set's box, largest radius and decomposition.
+void addPieceData(const DemReaderCache& cache, vtkPolyData* output) {
+  addPieceMarks(output->GetPointData(), cache.part.particles, cache.part.owned, true);
+  addPieceMarks(output->GetCellData(), cache.part.bonds, cache.part.bondOwned, false);
+  const dem::Bounds box = dem::boundingBox(cache.reference);
+  const std::vector<double> centres{box.lo.x, box.lo.y, box.lo.z, box.hi.x, box.hi.y, box.hi.z};
+  vtkFieldData* field = output->GetFieldData();
+  addArray<vtkDoubleArray>(field, kSpecimenCentresArray, centres, 6);
+  const auto& radius = cache.lattice.radius;
+  addArray<vtkDoubleArray>(field, kLargestRadiusArray,
+                           std::vector<double>{*std::max_element(radius.begin(), radius.end())});
+  addArray<vtkIntArray>(field, kDecompositionArray, std::vector<int>{cache.decomposition});
+  addArray<vtkIntArray>(field, kTriangulationCellsArray, cache.pieceCells, 4);
+  addArray<vtkIntArray>(field, kTriangulationEdgesArray, cache.pieceEdges, 2);
+  addArray<vtkIntArray>(output->GetPointData(), kIntactComponentArray, cache.pieceIntactComponents);
+}
+
+// The step's components of the whole set, for a triangulated piece.
+void addComponents(const DemReaderCache& cache, const dem::StepState& whole, vtkPolyData* output) {
+  if (!cache.triangulation) {
+    return;
+  }
+  addArray<vtkIntArray>(
+      output->GetPointData(), kComponentArray,
+      pick(connectedComponents(cache.reference.size(), cache.lattice.bonds, whole.bondState),
+           cache.part.particles));
 }
 
 }  // namespace
@@ -200,6 +391,7 @@ vtkCrackvisDemReader::~vtkCrackvisDemReader() {
 void vtkCrackvisDemReader::PrintSelf(ostream& os, vtkIndent indent) {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "FileName: " << (this->FileName != nullptr ? this->FileName : "(none)") << "\n";
+  os << indent << "GhostWidth: " << this->GhostWidth << "\n";
 }
 
 int vtkCrackvisDemReader::CanReadFile(const char* fileName) {
@@ -250,9 +442,14 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
   if (!cache.reader) {
     return 0;  // RequestInformation reported why
   }
-  if (out->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) &&
-      out->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) > 0) {
-    return 1;  // piece 0 holds the whole data set
+  const int piece = out->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
+                        ? out->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
+                        : 0;
+  const int pieces = out->Has(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
+                         ? out->Get(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
+                         : 1;
+  if (piece < 0 || piece >= pieces) {
+    return 1;  // no such piece: empty
   }
   if (crackvis::Status loaded = crackvis::cracks::vtkadapter::loadLattice(cache); !loaded) {
     vtkErrorMacro(<< loaded.message());
@@ -268,7 +465,20 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
     vtkErrorMacro(<< state.status().message());
     return 0;
   }
-  crackvis::cracks::vtkadapter::fill(cache, step, *state, output);
+  namespace adapter = crackvis::cracks::vtkadapter;
+  if (pieces == 1) {
+    adapter::fill(cache.lattice, cache.breakSteps, cache.reference, step, *state, output);
+  } else {
+    if (crackvis::Status prepared = adapter::preparePiece(cache, piece, pieces, this->GhostWidth);
+        !prepared) {
+      vtkErrorMacro(<< this->FileName << ": " << prepared.message());
+      return 0;
+    }
+    adapter::addComponents(cache, *state, output);
+    adapter::fill(cache.pieceLattice, cache.pieceBreakSteps, cache.pieceReference, step,
+                  adapter::pieceState(std::move(*state), cache.part), output);
+    adapter::addPieceData(cache, output);
+  }
   output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), state->time);
   return 1;
 }

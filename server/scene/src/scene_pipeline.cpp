@@ -426,8 +426,14 @@ const source::StepSource& ScenePipeline::source() const {
 }
 
 cracks::StepInput ScenePipeline::stepInput(const source::SourceStep& step) const {
-  return {step.positions, step.bondState,        source().lattice().radius,
-          step.bondForce, source().breakSteps(), m_state.initial->positions};
+  return {step.positions,
+          step.bondState,
+          source().lattice().radius,
+          step.bondForce,
+          source().breakSteps(),
+          m_state.initial->positions,
+          {},
+          {}};
 }
 
 SceneInput ScenePipeline::input() const {

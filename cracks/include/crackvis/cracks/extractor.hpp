@@ -17,6 +17,7 @@
 #include <crackvis/cracks/bond_graph.hpp>
 #include <crackvis/cracks/crack_mesh.hpp>
 #include <crackvis/cracks/lattice_decomposition.hpp>
+#include <crackvis/cracks/triangulation.hpp>
 
 // dem::Bounds has no comparison of its own; ExtractOptions compares its domain.
 namespace crackvis::dem {
@@ -60,6 +61,13 @@ struct StepInput {
   // in (the file's first step); the positions of the first step extracted
   // when empty.
   std::span<const Vec3> referencePositions;
+  // [N] optional, for a piece of a larger set (partition.hpp): each
+  // particle's connected component by intact bonds in the whole set, at this
+  // step and in the intact packing. A triangulation opens a never-bonded pair
+  // when a crack separates its ends; the piece's own graph, cut at its ghost
+  // layer, may split what the whole set joins. Labels are only compared.
+  std::span<const std::int32_t> components;
+  std::span<const std::int32_t> intactComponents;
 };
 
 struct ExtractOptions {
@@ -82,6 +90,21 @@ struct ExtractOptions {
   // of lying outside the centres' box.
   std::optional<Box> domain;
   double domainMargin = 0.0;
+  // local Voronoi, when the input is one piece of a larger set (partition.hpp):
+  // the whole set's reference centres' box and largest radius, from which
+  // the default domain is made instead of the piece's, so that a piece clips
+  // its cells as the whole set does.
+  std::optional<Box> specimenCentres;
+  double specimenLargestRadius = 0.0;
+  // Add cell data "owner_particle" (appendOwnerParticles), which a piece
+  // keeps its own primitives by (keepOwned).
+  bool ownerParticles = false;
+  // triangulation: the cells and edges to use instead of triangulating the
+  // reference configuration. A piece of a larger set is given the whole
+  // set's, restricted to its particles: at the specimen's surface a
+  // triangulation is not local (flat cells there depend on particles far
+  // along the surface), so the piece's own would differ from the whole's.
+  std::shared_ptr<const Triangulation> triangulation;
   // cell centre: use the centroid of each whole octahedron instead of its two
   // pyramids (on an undeformed FCC lattice the faces are then the Voronoi faces).
   bool mergeOctahedra = false;

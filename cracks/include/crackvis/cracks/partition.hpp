@@ -1,0 +1,64 @@
+// A particle set cut into pieces for distributed extraction (one piece per
+// MPI rank under ParaView's pvbatch or pvserver), and the rule that makes the
+// pieces' crack meshes add up to the whole set's, face for face.
+//
+// The pieces are slabs across the longest axis of the reference
+// configuration with equal particle counts. A piece holds the particles it
+// owns plus a ghost layer: every particle within `ghostWidth` of its slab,
+// so that each primitive it owns is made from the same neighbourhood as in
+// the whole set. Every primitive has an owner particle, the smallest particle
+// index it is made from (ownerParticles); a piece keeps the primitives whose
+// owner particle it owns (keepOwned). A piece's particles and bonds keep the
+// whole set's relative order, so index-based choices (the smaller end, an
+// octahedron's diagonal) fall the same way in every piece.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <crackvis/cracks/crack_mesh.hpp>
+#include <crackvis/cracks/triangulation.hpp>
+#include <crackvis/dem/model.hpp>
+
+namespace crackvis::cracks {
+
+struct Piece {
+  std::vector<dem::ParticleIndex> particles;  // whole-set indices, ascending
+  std::vector<std::uint8_t> owned;            // per piece particle; 0: a ghost
+  std::vector<dem::BondIndex> bonds;          // whole-set indices, ascending: both ends held
+  std::vector<dem::Bond> localBonds;          // the same bonds in piece particle indices
+  std::vector<std::uint8_t> bondOwned;        // per piece bond: its smaller end is owned
+};
+
+// The longest reference bond (the unit of the default ghost width).
+double longestBond(std::span<const Vec3> reference, std::span<const dem::Bond> bonds);
+
+// Piece `piece` of `pieces` (0 <= piece < pieces); ghostWidth in metres.
+// With the whole set's triangulation (a packing that is no lattice), the
+// ghost layer also holds every node of a cell that touches the slab and
+// ghost layer, and those nodes' bonded neighbours: at the specimen's surface
+// flat cells reach particles far along it, and a cell's never-bonded edges
+// are held by paths through its nodes' neighbours.
+Piece partitionPiece(std::span<const Vec3> reference, std::span<const dem::Bond> bonds, int piece,
+                     int pieces, double ghostWidth, const Triangulation* triangulation = nullptr);
+
+// Each particle's connected component by the bonds that are intact in
+// `bondState` (all of them when it is empty), labelled by a member's index.
+std::vector<std::int32_t> connectedComponents(std::size_t particleCount,
+                                              std::span<const dem::Bond> bonds,
+                                              std::span<const std::uint8_t> bondState);
+
+// Cell data "owner_particle" for each primitive of `mesh`: the smallest
+// particle index among the particles it is made from, read from its
+// "bond_id" (cell data: the bond's ends; point data: the ends of its points'
+// bonds) or its points' "particle_id", with `bonds` the pairs bond ids refer
+// to; -1 where the mesh names none.
+void appendOwnerParticles(CrackMesh& mesh, std::span<const dem::Bond> bonds);
+
+// Keeps the primitives whose "owner_particle" is owned (or -1), drops that
+// array and the points no primitive uses, and keeps every attribute array in
+// step.
+void keepOwned(CrackMesh& mesh, std::span<const std::uint8_t> owned);
+
+}  // namespace crackvis::cracks
