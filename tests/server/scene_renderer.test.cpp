@@ -693,6 +693,11 @@ TEST_CASE("hidden spheres are left out without changing the picture", "[render][
   const dem::Vec3 centre = 0.5 * scene.crack.block.extent;
   scene.description.view.camera =
       pipeline::CameraDescription{centre + dem::Vec3{10, 7, 5}, centre, {0, 0, 1}, 30};
+  // Above a threshold of spheres in view (1e6-particle specimens) culling
+  // goes by cells of spheres: forced here, the picture must not change.
+  const bool cells = GENERATE(false, true);
+  INFO((cells ? "by cells" : "sphere by sphere"));
+  (*renderer)->setImpostorOptions({.occlusionCellThreshold = cells ? 0u : 1u << 30});
   SECTION("from outside") {}
   SECTION("with a clipping plane through the block") {
     scene.description.particles.clip = pipeline::ClipPlane{centre, {1, 1, 0}};
@@ -707,6 +712,7 @@ TEST_CASE("hidden spheres are left out without changing the picture", "[render][
   render::Image all;
   (*renderer)->setImpostorOptions({.geometryShader = false, .occlusionCulling = false});
   REQUIRE((*renderer)->renderFrame(kSize[0], kSize[1], all).isOk());
+  INFO("culled by cells: " << cells);
   // Only the spheres a clipping plane removes are left out.
   const auto unculled = (*renderer)->impostorStats();
   CHECK((unculled.drawn < unculled.spheres) == scene.description.particles.clip.has_value());
@@ -739,6 +745,11 @@ TEST_CASE("occlusion culling keeps a sphere that peeks out", "[render]") {
   const std::vector<float> r{1.0f, 0.5f, 0.5f, 0.5f};
   render::SphereSet spheres{x, y, z, r, {}};
   CHECK(render::unoccludedSpheres(view, spheres) == std::vector<std::int32_t>{0, 2});
+  // The same by cells of spheres (used above 65,536 spheres in view).
+  render::SphereOcclusion byCells;
+  byCells.setCellThreshold(0);
+  byCells.project(view, spheres);
+  CHECK(byCells.unoccluded(0) == std::vector<std::int32_t>{0, 2});
   // A sphere that may not be drawn (clipped) hides nothing.
   const std::vector<std::uint8_t> mayHide{0, 1, 1, 1};
   spheres.mayHide = mayHide;

@@ -42,6 +42,9 @@ class vtkPointSpriteSphereMapper : public vtkOpenGLSphereMapper {
   // Always draw with the geometry shader, as vtkOpenGLSphereMapper does (off).
   vtkSetMacro(ForceGeometryShader, bool);
   vtkGetMacro(ForceGeometryShader, bool);
+  // Spheres in view from which occlusion culling bins them into cells
+  // (SphereOcclusion); tests force either way.
+  void SetOcclusionCellThreshold(std::size_t spheres) { this->Occlusion.setCellThreshold(spheres); }
 
   // The last frame: how many spheres were drawn, of how many, and whether
   // as points (false: the geometry shader).

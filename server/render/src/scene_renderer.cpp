@@ -448,6 +448,7 @@ struct SceneRenderer::Impl {
     if (impostors) {
       impostors->SetForceGeometryShader(impostorOptions.geometryShader);
       impostors->SetOcclusionCulling(impostorOptions.occlusionCulling);
+      impostors->SetOcclusionCellThreshold(impostorOptions.occlusionCellThreshold);
     }
   }
 };

@@ -1,7 +1,11 @@
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <limits>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 #include <crackvis/render/sphere_occlusion.hpp>
 
@@ -47,50 +51,302 @@ std::uint32_t orderedBits(float value) {
   return (bits & 0x80000000u) != 0 ? ~bits : bits | 0x80000000u;
 }
 
+// Sorts keys (depth bits << 32 | index, made in index order) by their depth
+// bits: a stable LSD radix sort, four passes of 8 bits, so equal depths keep
+// the index order std::sort of the whole key would give. At 1e6 spheres per
+// frame it is several times faster than std::sort (docs/benchmarks.md).
+void sortByDepth(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& scratch) {
+  scratch.resize(keys.size());
+  for (int shift = 32; shift < 64; shift += 8) {
+    std::array<std::size_t, 257> start{};
+    for (const std::uint64_t key : keys) {
+      ++start[((key >> shift) & 0xffu) + 1];
+    }
+    if (start[1 + ((keys.empty() ? 0 : keys.front() >> shift) & 0xffu)] == keys.size()) {
+      continue;  // one bucket: this byte orders nothing
+    }
+    for (std::size_t b = 1; b < start.size(); ++b) {
+      start[b] += start[b - 1];
+    }
+    for (const std::uint64_t key : keys) {
+      scratch[start[(key >> shift) & 0xffu]++] = key;
+    }
+    keys.swap(scratch);
+  }
+}
+
 }  // namespace
 
 double SphereOcclusion::project(const OcclusionView& view, const SphereSet& spheres) {
   m_view = view;
   m_spheres = spheres;
   const std::size_t n = spheres.radius.size();
-  m_projected.assign(n, Projected{});
-  double largest = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::array<double, 3> c{spheres.x[i], spheres.y[i], spheres.z[i]};
-    const double r = spheres.radius[i];
-    const double diameter = spriteDiameter(c, r, view.parallel, view.rayScale);
-    Projected& p = m_projected[i];
-    p.front = -c[2] - r;
-    if (std::isinf(diameter)) {
-      largest = diameter;
-      p.half = diameter;  // the GPU decides
-      continue;
-    }
-    if (!(diameter > 0.0) || !(r > 0.0)) {
-      continue;  // behind the eye or nothing: no pixel
-    }
-    const double depth = -c[2];
-    p.u = ((view.parallel ? c[0] : c[0] / depth) - view.rayOffset[0]) / view.rayScale[0];
-    p.v = ((view.parallel ? c[1] : c[1] / depth) - view.rayOffset[1]) / view.rayScale[1];
-    // The pixel centres (k + 0.5) the point covers, with a pixel to spare.
-    p.half = 0.5 * diameter + 1.0;
-    p.inView = p.u + p.half >= 0.5 && p.u - p.half <= view.width - 0.5 && p.v + p.half >= 0.5 &&
-               p.v - p.half <= view.height - 0.5;
-    if (p.inView) {
-      largest = std::max(largest, diameter);
-    }
-  }
-  return largest;
+  m_projected.resize(n);
+  // Every sphere on its own: in parallel, each block returning its widest
+  // point (a 1e6-sphere frame spends several milliseconds here).
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 4096), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& range, double largest) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          largest = projectOne(i, largest);
+        }
+        return largest;
+      },
+      [](double a, double b) { return std::max(a, b); });
 }
 
-const std::vector<std::int32_t>& SphereOcclusion::unoccluded(int guard) {
+double SphereOcclusion::projectOne(std::size_t i, double largest) {
   const OcclusionView& view = m_view;
   const SphereSet& spheres = m_spheres;
-  const std::size_t n = m_projected.size();
+  const std::array<double, 3> c{spheres.x[i], spheres.y[i], spheres.z[i]};
+  const double r = spheres.radius[i];
+  const double diameter = spriteDiameter(c, r, view.parallel, view.rayScale);
+  Projected& p = m_projected[i];
+  p = Projected{};
+  p.front = -c[2] - r;
+  if (std::isinf(diameter)) {
+    p.half = diameter;  // the GPU decides
+    return diameter;
+  }
+  if (!(diameter > 0.0) || !(r > 0.0)) {
+    return largest;  // behind the eye or nothing: no pixel
+  }
+  const double depth = -c[2];
+  p.u = ((view.parallel ? c[0] : c[0] / depth) - view.rayOffset[0]) / view.rayScale[0];
+  p.v = ((view.parallel ? c[1] : c[1] / depth) - view.rayOffset[1]) / view.rayScale[1];
+  // The pixel centres (k + 0.5) the point covers, with a pixel to spare.
+  p.half = 0.5 * diameter + 1.0;
+  p.inView = p.u + p.half >= 0.5 && p.u - p.half <= view.width - 0.5 && p.v + p.half >= 0.5 &&
+             p.v - p.half <= view.height - 0.5;
+  return p.inView ? std::max(largest, diameter) : largest;
+}
+
+SphereOcclusion::PixelBox SphereOcclusion::pixelsIn(double uLo, double uHi, double vLo,
+                                                    double vHi) const {
+  // The pixel centres (k + 0.5) inside [lo, hi] on each axis.
+  return {std::max(0, static_cast<int>(std::ceil(uLo - 0.5))),
+          std::min(m_view.width - 1, static_cast<int>(std::floor(uHi - 0.5))),
+          std::max(0, static_cast<int>(std::ceil(vLo - 0.5))),
+          std::min(m_view.height - 1, static_cast<int>(std::floor(vHi - 0.5)))};
+}
+
+SphereOcclusion::PixelBox SphereOcclusion::pixelsOf(const Projected& p) const {
+  return pixelsIn(p.u - p.half, p.u + p.half, p.v - p.half, p.v + p.half);
+}
+
+bool SphereOcclusion::covered(const PixelBox& box, float limit) const {
+  const int width = m_view.width;
+  const int tilesX = (width + kTile - 1) / kTile;
+  // Whole tiles first, pixels where a tile is not enough.
+  for (int tj = box.j0 / kTile; tj <= box.j1 / kTile; ++tj) {
+    for (int ti = box.i0 / kTile; ti <= box.i1 / kTile; ++ti) {
+      if (m_tileFarthest[static_cast<std::size_t>(tj) * tilesX + ti] < limit) {
+        continue;
+      }
+      for (int j = std::max(box.j0, tj * kTile); j <= std::min(box.j1, tj * kTile + kTile - 1);
+           ++j) {
+        const float* row = m_nearest.data() + static_cast<std::size_t>(j) * width;
+        for (int k = std::max(box.i0, ti * kTile); k <= std::min(box.i1, ti * kTile + kTile - 1);
+             ++k) {
+          if (!(row[k] < limit)) {
+            return false;
+          }
+        }
+      }
+    }
+  }
+  return true;
+}
+
+void SphereOcclusion::visit(std::size_t i, int guard) {
+  const Projected& p = m_projected[i];
+  const PixelBox box = pixelsOf(p);
+  // Hidden when everything drawn under its point is nearer than its nearest
+  // point.
+  if (covered(box, static_cast<float>(p.front - kDepthMargin * std::abs(p.front)))) {
+    return;
+  }
+  m_keep[i] = 1;
+  drawSphere(i, box, guard);
+}
+
+void SphereOcclusion::drawSphere(std::size_t i, const PixelBox& box, int guard) {
+  const OcclusionView& view = m_view;
+  const SphereSet& spheres = m_spheres;
+  const Projected& p = m_projected[i];
   const int width = view.width;
   const int height = view.height;
   const int tilesX = (width + kTile - 1) / kTile;
-  const int tilesY = (height + kTile - 1) / kTile;
+  // Only a sphere drawn whole hides: inside the clipping range, its centre
+  // where GL draws its point.
+  const double cx = spheres.x[i];
+  const double cy = spheres.y[i];
+  const double cz = spheres.z[i];
+  const double r = spheres.radius[i];
+  const double depth = -cz;
+  if ((!spheres.mayHide.empty() && spheres.mayHide[i] == 0) || depth - r <= view.nearDepth ||
+      depth + r >= view.farDepth || p.u < -guard || p.v < -guard || p.u > width + guard ||
+      p.v > height + guard) {
+    return;
+  }
+  // A slightly smaller sphere, so that it covers no pixel the GPU's sphere
+  // leaves out (nor one the geometry shader's billboard, a little smaller
+  // than the silhouette in perspective, leaves out). Its depth at a pixel:
+  // that of the ray's point nearest the centre, never nearer than the hit.
+  const double shrink =
+      view.parallel ? 1.0 : 1.0 / std::sqrt(1.0 + r * r / (cx * cx + cy * cy + cz * cz));
+  const double rHide = r * shrink * (1.0 - kRimMargin);
+  // In floats, to vectorize: rounding moves the rim by about 1e-6 r.
+  const auto r2 = static_cast<float>(rHide * rHide);
+  const auto scaleX = static_cast<float>(view.rayScale[0]);
+  const auto offsetX = static_cast<float>(view.rayOffset[0]);
+  const float parallel = view.parallel ? 1.0f : 0.0f;
+  const auto fx = static_cast<float>(cx);
+  const auto fy = static_cast<float>(cy);
+  const auto fz = static_cast<float>(cz);
+  for (int j = box.j0; j <= box.j1; ++j) {
+    float* row = m_nearest.data() + static_cast<std::size_t>(j) * width;
+    const auto qy = static_cast<float>((j + 0.5) * view.rayScale[1] + view.rayOffset[1]);
+    // Ray o + t d with d.z = -1: t is a depth.
+    const float oy = parallel * qy;
+    const float dy = (1.0f - parallel) * qy;
+    const float my = oy - fy;
+    for (int k = box.i0; k <= box.i1; ++k) {
+      const float qx = (static_cast<float>(k) + 0.5f) * scaleX + offsetX;
+      const float ox = parallel * qx;
+      const float dx = (1.0f - parallel) * qx;
+      const float mx = ox - fx;
+      const float mz = -fz;
+      const float dd = dx * dx + dy * dy + 1.0f;
+      const float closest = -(dx * mx + dy * my - mz) / dd;
+      const float bx = mx + closest * dx;
+      const float by = my + closest * dy;
+      const float bz = mz - closest;
+      const bool inside = bx * bx + by * by + bz * bz <= r2;
+      row[k] = inside && closest < row[k] ? closest : row[k];
+    }
+  }
+  for (int tj = box.j0 / kTile; tj <= box.j1 / kTile; ++tj) {
+    for (int ti = box.i0 / kTile; ti <= box.i1 / kTile; ++ti) {
+      float farthest = -std::numeric_limits<float>::infinity();
+      for (int j = tj * kTile; j < std::min(height, tj * kTile + kTile); ++j) {
+        const float* row = m_nearest.data() + static_cast<std::size_t>(j) * width;
+        for (int k = ti * kTile; k < std::min(width, ti * kTile + kTile); ++k) {
+          farthest = row[k] > farthest ? row[k] : farthest;
+        }
+      }
+      m_tileFarthest[static_cast<std::size_t>(tj) * tilesX + ti] = farthest;
+    }
+  }
+}
+
+// Every sphere in view front to back by its nearest point.
+void SphereOcclusion::sortedOrder() {
+  sortByDepth(m_order, m_orderScratch);
+}
+
+// Cells of a view-space grid front to back (SphereOcclusion's comment).
+void SphereOcclusion::cellOrder(int guard) {
+  // The grid: about 64 spheres to a cell over the box of the centres in view.
+  double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                  std::numeric_limits<double>::infinity()};
+  double hi[3] = {-lo[0], -lo[1], -lo[2]};
+  for (const std::uint64_t key : m_order) {
+    const auto i = static_cast<std::size_t>(key & 0xffffffffu);
+    const double c[3] = {m_spheres.x[i], m_spheres.y[i], m_spheres.z[i]};
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], c[a]);
+      hi[a] = std::max(hi[a], c[a]);
+    }
+  }
+  const double cells = std::max(1.0, static_cast<double>(m_order.size()) / 64.0);
+  // A flat set (a 2D specimen seen face on) gets cells a thousandth of its
+  // size deep, not a grid of millions of empty cells.
+  const double widest = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
+  double extent[3];
+  double volume = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    extent[a] = std::max(hi[a] - lo[a], 1e-3 * widest);
+    volume *= extent[a];
+  }
+  const double side = std::cbrt(volume / cells);
+  int count[3];
+  for (int a = 0; a < 3; ++a) {
+    count[a] = std::clamp(static_cast<int>(extent[a] / side) + 1, 1, 1024);
+  }
+  m_cells.assign(static_cast<std::size_t>(count[0]) * count[1] * count[2], Cell{});
+  m_cellOf.resize(m_order.size());
+  for (std::size_t k = 0; k < m_order.size(); ++k) {
+    const auto i = static_cast<std::size_t>(m_order[k] & 0xffffffffu);
+    const double c[3] = {m_spheres.x[i], m_spheres.y[i], m_spheres.z[i]};
+    int at[3];
+    for (int a = 0; a < 3; ++a) {
+      at[a] = std::min(count[a] - 1, static_cast<int>((c[a] - lo[a]) / extent[a] * count[a]));
+    }
+    const auto id = static_cast<std::int32_t>((at[2] * count[1] + at[1]) * count[0] + at[0]);
+    m_cellOf[k] = id;
+    Cell& cell = m_cells[static_cast<std::size_t>(id)];
+    const Projected& p = m_projected[i];
+    // The same sums pixelsOf makes, so the union holds each sphere's pixels.
+    cell.lo[0] = std::min(cell.lo[0], p.u - p.half);
+    cell.hi[0] = std::max(cell.hi[0], p.u + p.half);
+    cell.lo[1] = std::min(cell.lo[1], p.v - p.half);
+    cell.hi[1] = std::max(cell.hi[1], p.v + p.half);
+    cell.front = std::min(cell.front, static_cast<float>(p.front));
+    ++cell.count;
+  }
+  // Each cell's pixels: the union of its spheres' (ceil and floor keep order).
+  for (Cell& cell : m_cells) {
+    if (cell.count > 0) {
+      cell.box = pixelsIn(cell.lo[0], cell.hi[0], cell.lo[1], cell.hi[1]);
+    }
+  }
+  // The spheres grouped by cell (counting sort, index order kept within).
+  std::int32_t start = 0;
+  for (Cell& cell : m_cells) {
+    cell.first = start;
+    start += cell.count;
+    cell.count = 0;
+  }
+  m_cellSpheres.resize(m_order.size());
+  for (std::size_t k = 0; k < m_order.size(); ++k) {
+    Cell& cell = m_cells[static_cast<std::size_t>(m_cellOf[k])];
+    m_cellSpheres[static_cast<std::size_t>(cell.first + cell.count++)] =
+        static_cast<std::int32_t>(m_order[k] & 0xffffffffu);
+  }
+  m_cellOrder.clear();
+  for (std::size_t c = 0; c < m_cells.size(); ++c) {
+    if (m_cells[c].count > 0) {
+      m_cellOrder.push_back(static_cast<std::int32_t>(c));
+    }
+  }
+  std::sort(m_cellOrder.begin(), m_cellOrder.end(), [&](std::int32_t a, std::int32_t b) {
+    const float fa = m_cells[static_cast<std::size_t>(a)].front;
+    const float fb = m_cells[static_cast<std::size_t>(b)].front;
+    return fa < fb || (fa == fb && a < b);
+  });
+  for (const std::int32_t c : m_cellOrder) {
+    const Cell& cell = m_cells[static_cast<std::size_t>(c)];
+    // A cell hidden whole: every sphere in it is nearer-bounded by its front.
+    if (covered(cell.box, cell.front - static_cast<float>(kDepthMargin) * std::abs(cell.front))) {
+      continue;
+    }
+    const auto first = m_cellSpheres.begin() + cell.first;
+    std::sort(first, first + cell.count, [&](std::int32_t a, std::int32_t b) {
+      const double fa = m_projected[static_cast<std::size_t>(a)].front;
+      const double fb = m_projected[static_cast<std::size_t>(b)].front;
+      return fa < fb || (fa == fb && a < b);
+    });
+    for (auto it = first; it != first + cell.count; ++it) {
+      visit(static_cast<std::size_t>(*it), guard);
+    }
+  }
+}
+
+const std::vector<std::int32_t>& SphereOcclusion::unoccluded(int guard) {
+  const std::size_t n = m_projected.size();
+  const int tilesX = (m_view.width + kTile - 1) / kTile;
+  const int tilesY = (m_view.height + kTile - 1) / kTile;
   m_keep.assign(n, 0);
   m_order.clear();
   for (std::size_t i = 0; i < n; ++i) {
@@ -102,106 +358,16 @@ const std::vector<std::int32_t>& SphereOcclusion::unoccluded(int guard) {
                         static_cast<std::uint32_t>(i));
     }
   }
-  // Front to back by the nearest point.
-  std::sort(m_order.begin(), m_order.end());
-  m_nearest.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height),
+  m_nearest.assign(static_cast<std::size_t>(m_view.width) * static_cast<std::size_t>(m_view.height),
                    std::numeric_limits<float>::infinity());
   m_tileFarthest.assign(static_cast<std::size_t>(tilesX) * static_cast<std::size_t>(tilesY),
                         std::numeric_limits<float>::infinity());
-  auto nearestRow = [&](int j) { return m_nearest.data() + static_cast<std::size_t>(j) * width; };
-
-  for (const std::uint64_t key : m_order) {
-    const auto i = static_cast<std::size_t>(key & 0xffffffffu);
-    const Projected& p = m_projected[i];
-    const int i0 = std::max(0, static_cast<int>(std::ceil(p.u - p.half - 0.5)));
-    const int i1 = std::min(width - 1, static_cast<int>(std::floor(p.u + p.half - 0.5)));
-    const int j0 = std::max(0, static_cast<int>(std::ceil(p.v - p.half - 0.5)));
-    const int j1 = std::min(height - 1, static_cast<int>(std::floor(p.v + p.half - 0.5)));
-    // Hidden when everything drawn under its point is nearer than its
-    // nearest point: whole tiles first, pixels where a tile is not enough.
-    const auto limit = static_cast<float>(p.front - kDepthMargin * std::abs(p.front));
-    bool hidden = true;
-    for (int tj = j0 / kTile; tj <= j1 / kTile && hidden; ++tj) {
-      for (int ti = i0 / kTile; ti <= i1 / kTile && hidden; ++ti) {
-        if (m_tileFarthest[static_cast<std::size_t>(tj) * tilesX + ti] < limit) {
-          continue;
-        }
-        for (int j = std::max(j0, tj * kTile); j <= std::min(j1, tj * kTile + kTile - 1) && hidden;
-             ++j) {
-          const float* row = nearestRow(j);
-          for (int k = std::max(i0, ti * kTile); k <= std::min(i1, ti * kTile + kTile - 1); ++k) {
-            if (!(row[k] < limit)) {
-              hidden = false;
-              break;
-            }
-          }
-        }
-      }
-    }
-    if (hidden) {
-      continue;
-    }
-    m_keep[i] = 1;
-    // Only a sphere drawn whole hides: inside the clipping range, its centre
-    // where GL draws its point.
-    const double cx = spheres.x[i];
-    const double cy = spheres.y[i];
-    const double cz = spheres.z[i];
-    const double r = spheres.radius[i];
-    const double depth = -cz;
-    if ((!spheres.mayHide.empty() && spheres.mayHide[i] == 0) || depth - r <= view.nearDepth ||
-        depth + r >= view.farDepth || p.u < -guard || p.v < -guard || p.u > width + guard ||
-        p.v > height + guard) {
-      continue;
-    }
-    // A slightly smaller sphere, so that it covers no pixel the GPU's sphere
-    // leaves out (nor one the geometry shader's billboard, a little smaller
-    // than the silhouette in perspective, leaves out). Its depth at a pixel:
-    // that of the ray's point nearest the centre, never nearer than the hit.
-    const double shrink =
-        view.parallel ? 1.0 : 1.0 / std::sqrt(1.0 + r * r / (cx * cx + cy * cy + cz * cz));
-    const double rHide = r * shrink * (1.0 - kRimMargin);
-    // In floats, to vectorize: rounding moves the rim by about 1e-6 r.
-    const auto r2 = static_cast<float>(rHide * rHide);
-    const auto scaleX = static_cast<float>(view.rayScale[0]);
-    const auto offsetX = static_cast<float>(view.rayOffset[0]);
-    const float parallel = view.parallel ? 1.0f : 0.0f;
-    const auto fx = static_cast<float>(cx);
-    const auto fy = static_cast<float>(cy);
-    const auto fz = static_cast<float>(cz);
-    for (int j = j0; j <= j1; ++j) {
-      float* row = nearestRow(j);
-      const auto qy = static_cast<float>((j + 0.5) * view.rayScale[1] + view.rayOffset[1]);
-      // Ray o + t d with d.z = -1: t is a depth.
-      const float oy = parallel * qy;
-      const float dy = (1.0f - parallel) * qy;
-      const float my = oy - fy;
-      for (int k = i0; k <= i1; ++k) {
-        const float qx = (static_cast<float>(k) + 0.5f) * scaleX + offsetX;
-        const float ox = parallel * qx;
-        const float dx = (1.0f - parallel) * qx;
-        const float mx = ox - fx;
-        const float mz = -fz;
-        const float dd = dx * dx + dy * dy + 1.0f;
-        const float closest = -(dx * mx + dy * my - mz) / dd;
-        const float bx = mx + closest * dx;
-        const float by = my + closest * dy;
-        const float bz = mz - closest;
-        const bool inside = bx * bx + by * by + bz * bz <= r2;
-        row[k] = inside && closest < row[k] ? closest : row[k];
-      }
-    }
-    for (int tj = j0 / kTile; tj <= j1 / kTile; ++tj) {
-      for (int ti = i0 / kTile; ti <= i1 / kTile; ++ti) {
-        float farthest = -std::numeric_limits<float>::infinity();
-        for (int j = tj * kTile; j < std::min(height, tj * kTile + kTile); ++j) {
-          const float* row = nearestRow(j);
-          for (int k = ti * kTile; k < std::min(width, ti * kTile + kTile); ++k) {
-            farthest = row[k] > farthest ? row[k] : farthest;
-          }
-        }
-        m_tileFarthest[static_cast<std::size_t>(tj) * tilesX + ti] = farthest;
-      }
+  if (m_order.size() >= m_cellThreshold) {
+    cellOrder(guard);
+  } else {
+    sortedOrder();
+    for (const std::uint64_t key : m_order) {
+      visit(static_cast<std::size_t>(key & 0xffffffffu), guard);
     }
   }
   m_visible.clear();

@@ -84,6 +84,8 @@ class SceneRenderer {
   struct ImpostorOptions {
     bool geometryShader = false;
     bool occlusionCulling = true;
+    // Spheres in view from which culling goes by cells (SphereOcclusion).
+    std::size_t occlusionCellThreshold = 65536;
   };
   void setImpostorOptions(const ImpostorOptions& options);
   // The last frame's impostors: spheres drawn, of how many, and whether as
