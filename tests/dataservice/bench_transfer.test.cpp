@@ -87,6 +87,27 @@ TEST_CASE("crackvis bench transfer measures Fetch, a first and a warm view, and 
   CHECK(report.at("load_before").size() == 3);
   CHECK(report.at("goals").at("met").is_boolean());
 
+  SECTION("--views-only: the view reads alone, --repeat rounds, no Fetch and no --raw") {
+    std::vector<std::string> args = {common.begin(), common.begin() + 5};
+    args.insert(args.end(), common.begin() + 7, common.end());  // without --raw
+    args.insert(args.end(), {"--views-only", "--json"});
+    const ProcessResult views = runProcess(args);
+    INFO(views.err);
+    REQUIRE(views.exitCode == 0);
+    const auto only = nlohmann::json::parse(views.out);
+    CHECK(only.at("views_only") == true);
+    CHECK(only.at("runs") == 3);
+    CHECK(only.at("grpc_first_view").at("bytes") == viewBytes);
+    CHECK(only.at("grpc_warm_view").at("seconds_all").size() == 3);
+    CHECK(only.at("grpc_warm_view").at("seconds_median").get<double>() > 0.0);
+    CHECK_FALSE(only.contains("grpc_fetch_full"));
+    CHECK_FALSE(only.contains("ratios"));
+    args.pop_back();
+    args.pop_back();
+    const ProcessResult noRaw = runProcess(args);  // neither --raw nor --views-only
+    CHECK(noRaw.exitCode == 1);
+    CHECK_THAT(noRaw.err, Catch::Contains("--raw is required"));
+  }
   SECTION("without the raw TLS baseline: one clear line") {
     std::vector<std::string> args = common;
     args[6] = "127.0.0.1:1";  // --raw: nothing listens there

@@ -38,6 +38,9 @@ struct TransferOptions {
   int maxRepeat = 30;
   double settle = 0.02;
   bool jsonOnly = false;
+  // Only the view reads (b, c), --repeat rounds: for files too large to
+  // fetch whole in a benchmark (tools/bench/scale.sh); no ratios.
+  bool viewsOnly = false;
 };
 
 struct Timing {
@@ -45,7 +48,9 @@ struct Timing {
   std::vector<double> seconds;
 
   double median() const { return cli::median(seconds); }
-  double best() const { return *std::min_element(seconds.begin(), seconds.end()); }
+  double best() const {
+    return seconds.empty() ? 0.0 : *std::min_element(seconds.begin(), seconds.end());
+  }
   double megabytesPerSecond() const {
     return median() > 0.0 ? static_cast<double>(bytes) / 1e6 / median() : 0.0;
   }
@@ -94,7 +99,12 @@ Result<Connections> connect(const TransferOptions& options, Report& report) {
   CRACKVIS_RETURN_IF_ERROR(checkHostPort("--server", options.server));
   // No default: in the documented layout the port after crackvis-data's is
   // crackvis-render's, not the raw TLS baseline's.
-  CRACKVIS_RETURN_IF_ERROR(checkHostPort("--raw", options.raw));
+  if (!options.viewsOnly && options.raw.empty()) {
+    return invalidArgument("--raw is required (the raw TLS baseline), unless --views-only");
+  }
+  if (!options.viewsOnly) {
+    CRACKVIS_RETURN_IF_ERROR(checkHostPort("--raw", options.raw));
+  }
   report.raw = options.raw;
   ds::ClientOptions clientOptions;
   clientOptions.target = options.server;
@@ -257,6 +267,13 @@ Result<Report> measure(const TransferOptions& options) {
     return connections.status();
   }
   report.loadBefore = loadAverage();
+  if (options.viewsOnly) {
+    for (int round = -1; round < options.repeat; ++round) {
+      CRACKVIS_RETURN_IF_ERROR(timeViews(*connections, report, round >= 0));
+    }
+    report.loadAfter = loadAverage();
+    return report;
+  }
   for (int round = -1; round < options.maxRepeat; ++round) {
     const bool timed = round >= 0;
     const bool forward = round % 2 == 0;
@@ -290,6 +307,24 @@ nlohmann::json toJson(const Report& report, const TransferOptions& options) {
                           {"seconds_all", t.seconds},
                           {"mb_per_s", t.megabytesPerSecond()}};
   };
+  if (options.viewsOnly) {
+    return {{"file", report.file},
+            {"step", report.step},
+            {"warm_step", report.warmStep},
+            {"server", report.server},
+            {"views_only", true},
+            {"runs", report.firstView.seconds.size()},
+            {"machine", machineDescription()},
+            {"load_before", toJson(report.loadBefore)},
+            {"load_after", toJson(report.loadAfter)},
+            {"describe",
+             {{"held_answer", true},
+              {"seconds_median", report.describe.median()},
+              {"seconds_all", report.describe.seconds}}},
+            {"grpc_cold_first_view", timing(report.coldFirstView)},
+            {"grpc_first_view", timing(report.firstView)},
+            {"grpc_warm_view", timing(report.warmView)}};
+  }
   const auto ratios = medianRatios(report.rounds, report.rounds.size());
   return {
       {"file", report.file},
@@ -340,7 +375,29 @@ nlohmann::json toJson(const Report& report, const TransferOptions& options) {
   };
 }
 
+void printViews(const Report& report, const nlohmann::json& json) {
+  fmt::print("crackvis bench transfer --views-only: {} step {} (then step {}) from {}\n",
+             report.file, report.step, report.warmStep, report.server);
+  fmt::print("machine: {}; load before {}, after {}\n", json.at("machine").get<std::string>(),
+             loadText(json.at("load_before")), loadText(json.at("load_after")));
+  fmt::print("medians of {} rounds after one warm-up; MB = 10^6 bytes\n\n",
+             report.firstView.seconds.size());
+  fmt::print("{:<44} {:>14} {:>11} {:>10}\n", "transfer", "bytes", "seconds", "MB/s");
+  auto row = [](const std::string& name, const Timing& t) {
+    fmt::print("{:<44} {:>14} {:>11.6f} {:>10.1f}\n", name, t.bytes, t.median(),
+               t.megabytesPerSecond());
+  };
+  row(fmt::format("(b) first view of step {}: Describe + Read", report.step), report.firstView);
+  row("(b') cold first view: walked Describe + Read", report.coldFirstView);
+  row(fmt::format("(c) warm view: step {}, one Read", report.warmStep), report.warmView);
+  fmt::print("\n");
+}
+
 void printTable(const Report& report, const nlohmann::json& json) {
+  if (json.value("views_only", false)) {
+    printViews(report, json);
+    return;
+  }
   fmt::print("crackvis bench transfer: {} step {} (then step {}) from {} (raw TLS {}, {})\n",
              report.file, report.step, report.warmStep, report.server, report.raw, report.tls);
   fmt::print("machine: {}; load before {}, after {}\n", json.at("machine").get<std::string>(),
@@ -419,10 +476,9 @@ Command addBenchTransferCommand(CLI::App& bench) {
       ->add_option("--file", options->file, "crackvis-dem file, relative to the server's data root")
       ->required();
   command->add_option("--step", options->step, "step the view shows (default: the last)");
-  command
-      ->add_option("--raw", options->raw,
-                   "raw TLS baseline address, HOST:PORT: crackvis-data's --raw-tls-listen")
-      ->required();
+  command->add_option("--raw", options->raw,
+                      "raw TLS baseline address, HOST:PORT: crackvis-data's --raw-tls-listen "
+                      "(required unless --views-only)");
   command->add_option("--ca", options->tls.ca, "CA certificate that signed the server's (PEM)")
       ->capture_default_str();
   command->add_option("--cert", options->tls.cert, "client certificate (PEM)")
@@ -443,6 +499,9 @@ Command addBenchTransferCommand(CLI::App& bench) {
                    "fraction")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
+  command->add_flag("--views-only", options->viewsOnly,
+                    "time only the first and the warm view (b, c), --repeat rounds: no Fetch, no "
+                    "raw TLS, no ratios; for files too large to fetch whole in a benchmark");
   command->add_flag("--json", options->jsonOnly, "print only the JSON");
   return {command, [options] { return runTransfer(*options); }};
 }
