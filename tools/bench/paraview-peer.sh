@@ -20,7 +20,7 @@ usage() {
   cat <<EOF
 usage: tools/bench/paraview-peer.sh FILE.h5 [--step S] [--size WxH] [--frames N] [--json OUT]
                                    [--colour-by solid|radius] [--fxaa] [--ranks R]
-                                   [--screenshot PNG] [--keep]
+                                   [--plugin] [--screenshot PNG] [--keep]
 
 Times ParaView $pv_version client/server (Debian's packages) on the scene crackvis's
 render server shows for FILE.h5 at step S, and prints one JSON object on stdout.
@@ -34,6 +34,11 @@ render server shows for FILE.h5 at step S, and prints one JSON object on stdout.
   --ranks R       pvserver's MPI ranks (default 1, like crackvis's one process). ParaView
                   renders at 1/ImageReductionFactor during interaction only with R >= 2
                   (its IceT compositor); one rank renders every frame at full size
+  --plugin        pvserver beside the data: it loads the crackvis plugin (paraview-plugin/,
+                  built into build/paraview-plugin) and reads FILE.h5 itself with the
+                  crackvis-dem reader and the local Voronoi filter, instead of files that
+                  crackvis export and extract wrote beforehand (the load time then includes
+                  the extraction)
   --screenshot P  save ParaView's first still frame as PNG P (to compare with crackvis's)
   --keep          keep the temporary folder (exported data, pvserver log)
 
@@ -64,6 +69,7 @@ fxaa=()
 ranks=1
 screenshot=()
 keep=0
+plugin=""
 while (($#)); do
   case $1 in
     -h | --help) usage; exit 0 ;;
@@ -76,6 +82,10 @@ while (($#)); do
     --ranks) ranks=${2:?--ranks needs a value}; shift 2 ;;
     --screenshot) screenshot=(--screenshot "$(realpath -m "${2:?--screenshot needs a value}")"); shift 2 ;;
     --keep) keep=1; shift ;;
+    --plugin)
+      plugin=$(find "$root/build/paraview-plugin" -name Crackvis.so -path '*/plugins/*' 2>/dev/null | head -1)
+      [[ -n $plugin ]] || die "--plugin: no plugin built; run paraview-plugin/build.sh first"
+      shift ;;
     -*) die "unknown option $1 (see --help)" ;;
     *) [[ -z $file ]] || die "one FILE.h5 only (see --help)"; file=$1; shift ;;
   esac
@@ -113,11 +123,19 @@ steps=$("$crackvis" info "$file" --json | sed -n 's/^ *"steps": *\([0-9]*\),*$/\
 [[ -n $steps ]] || die "crackvis info gave no step count for $file"
 ((step < 0)) && step=$((steps + step))
 ((step >= 0 && step < steps)) || die "step $step is outside 0..$((steps - 1)) of $file"
-say "exporting step $step of $file"
-"$crackvis" export "$file" --particles -s "$step" -q -o "$work/particles.pvd" >&2 ||
-  die "crackvis export failed"
-"$crackvis" extract "$file" -m local-voronoi -s "$step" -q -o "$work/crack.vtp" >&2 ||
-  die "crackvis extract failed"
+if [[ -n $plugin ]]; then
+  # pvserver reads the file itself through the plugin.
+  scene=(--h5 "$(realpath "$file")" --plugin "$plugin")
+  export PV_PLUGIN_PATH
+  PV_PLUGIN_PATH=$(dirname "$plugin")
+else
+  say "exporting step $step of $file"
+  "$crackvis" export "$file" --particles -s "$step" -q -o "$work/particles.pvd" >&2 ||
+    die "crackvis export failed"
+  "$crackvis" extract "$file" -m local-voronoi -s "$step" -q -o "$work/crack.vtp" >&2 ||
+    die "crackvis extract failed"
+  scene=(--particles "$work/particles.pvd" --crack "$work/crack.vtp")
+fi
 
 # --- ParaView, unpacked on the first run -----------------------------------
 # The private prefix (deploy/paraview-prefix.sh), unpacked on the first run.
@@ -168,6 +186,7 @@ else
   # Debian's ParaView is built against Open MPI: its mpiexec, which wants
   # --allow-run-as-root for root and --oversubscribe for more ranks than cores.
   mpi_env=(-x LD_LIBRARY_PATH -x PYTHONPATH)
+  [[ -n ${PV_PLUGIN_PATH:-} ]] && mpi_env+=(-x PV_PLUGIN_PATH)
   [[ -n ${DISPLAY:-} ]] && mpi_env+=(-x DISPLAY)
   [[ -n ${LP_NUM_THREADS:-} ]] && mpi_env+=(-x LP_NUM_THREADS)
   mpiexec --allow-run-as-root --oversubscribe -np "$ranks" "${mpi_env[@]}" \
@@ -186,8 +205,8 @@ say "pvserver ($ranks rank(s)) on port $port ($render_path)"
 # The client renders nothing but pastes the server's images: offscreen too.
 # In the background with `wait`, so that a signal reaches the trap at once.
 "$pvpython" --no-mpi --disable-registry --force-offscreen-rendering \
-  "$here/paraview_peer.py" --port "$port" --particles "$work/particles.pvd" \
-  --crack "$work/crack.vtp" --step "$step" --size "$size" --frames "$frames" \
+  "$here/paraview_peer.py" --port "$port" "${scene[@]}" --work "$work" \
+  --step "$step" --size "$size" --frames "$frames" \
   --colour-by "$colour_by" "${fxaa[@]}" "${screenshot[@]}" --ranks "$ranks" \
   --render-path "$render_path" \
   --package-version "$(cat "$prefix/.version")" --json-out "$work/result.json" >&2 &

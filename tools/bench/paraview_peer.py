@@ -40,8 +40,12 @@ def log(message):
 def parse_args():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--port", type=int, required=True, help="pvserver's port on localhost")
-    parser.add_argument("--particles", required=True, help="particles .pvd (crackvis export)")
+    parser.add_argument("--particles", help="particles .pvd (crackvis export)")
     parser.add_argument("--crack", help="crack surface .vtp (crackvis extract); omit for none")
+    parser.add_argument("--h5", help="read this crackvis-dem file on pvserver through the crackvis "
+                        "plugin (its reader and local Voronoi filter) instead of --particles/--crack")
+    parser.add_argument("--plugin", help="the plugin (Crackvis.so) for the client, with --h5")
+    parser.add_argument("--work", required=True, help="a folder for the radius check's files")
     parser.add_argument("--step", type=int, required=True, help="the step shown (reported only)")
     parser.add_argument("--size", default="1280x720", help="view size WxH")
     parser.add_argument("--frames", type=int, default=20, help="timed frames per measurement")
@@ -55,6 +59,8 @@ def parse_args():
     parser.add_argument("--package-version", default="", help="Debian version (reported only)")
     parser.add_argument("--json-out", required=True)
     args = parser.parse_args()
+    if bool(args.h5) == bool(args.particles) or (args.h5 and not args.plugin):
+        parser.error("give --particles (and --crack), or --h5 with --plugin")
     try:
         width, height = (int(v) for v in args.size.lower().split("x"))
     except ValueError:
@@ -259,24 +265,34 @@ def main():
     view.UseFXAA = 1 if args.fxaa else 0
     simple.SetActiveView(view)
 
-    # Load: the server reads both files (the readers run on pvserver).
+    # Load: the server reads both files (the readers run on pvserver); with
+    # the plugin it reads the crackvis-dem file and extracts the crack itself.
     sources = []
 
     def load():
-        sources.append(simple.PVDReader(FileName=args.particles))
-        if args.crack:
-            sources.append(simple.XMLPolyDataReader(FileName=[args.crack]))
+        if args.h5:
+            simple.LoadPlugin(args.plugin, remote=False, ns=globals())
+            reader = globals()["crackvisdemreader"](FileName=args.h5)
+            times = reader.TimestepValues or [0.0]
+            view.ViewTime = times[args.step] if args.step < len(times) else times[-1]
+            sources.append(reader)
+            sources.append(globals()["CrackSurfaceLocalVoronoi"](Input=reader))
+        else:
+            sources.append(simple.PVDReader(FileName=args.particles))
+            if args.crack:
+                sources.append(simple.XMLPolyDataReader(FileName=[args.crack]))
         for source in sources:
-            source.UpdatePipeline()
+            source.UpdatePipeline(view.ViewTime)
 
     load_ms = timed_ms(load)
     particles = sources[0]
     particle_count = particles.GetDataInformation().GetNumberOfPoints()
     if particle_count == 0:
-        raise SystemExit("paraview_peer: no particles in " + args.particles)
+        raise SystemExit("paraview_peer: no particles in " + (args.h5 or args.particles))
     if RADIUS_ARRAY not in particles.PointData.keys():
-        raise SystemExit("paraview_peer: %s has no point array '%s'" % (args.particles, RADIUS_ARRAY))
-    crack_cells = sources[1].GetDataInformation().GetNumberOfCells() if args.crack else 0
+        raise SystemExit("paraview_peer: %s has no point array '%s'"
+                         % (args.h5 or args.particles, RADIUS_ARRAY))
+    crack_cells = sources[1].GetDataInformation().GetNumberOfCells() if len(sources) > 1 else 0
     geometry_mb = sum(s.GetDataInformation().GetMemorySize() for s in sources) / 1024.0
     log("loaded %d particles, %d crack polygons in %.0f ms" % (particle_count, crack_cells, load_ms))
 
@@ -285,7 +301,7 @@ def main():
     # shaders compiled, the first image on the client.
     def first_frame():
         show_spheres(particles, view, args.colour_by)
-        if args.crack:
+        if len(sources) > 1:
             show_surface(sources[1], view)
         view.CameraPosition = [0, 0, 1]
         view.CameraFocalPoint = [0, 0, 0]
@@ -333,7 +349,7 @@ def main():
         % (percentile(sorted(interactive), 0.5), effective_reduction, view.ImageReductionFactor)
     )
 
-    check = None if args.no_radius_check else radius_check(os.path.dirname(args.particles))
+    check = None if args.no_radius_check else radius_check(args.work)
     load_after = os.getloadavg()
 
     lod_threshold_mb = float(view.LODThreshold)
@@ -359,6 +375,8 @@ def main():
         "load_ms": round(load_ms, 1),
         "representation": "Point Gaussian, Sphere shader (Emissive off, scale by '%s', "
         "GaussianRadius 1) + crack surface" % RADIUS_ARRAY,
+        "data_path": "pvserver reads the .h5 through the crackvis plugin and extracts the crack "
+        "(local Voronoi)" if args.h5 else "crackvis export/extract files read by ParaView's XML readers",
         "colouring": (
             "particles solid #b0b0b0, crack solid #e03c31 (crackvis defaults)"
             if args.colour_by == "solid"

@@ -15,7 +15,7 @@ readonly build
 usage() {
   cat <<EOF
 usage: tools/bench/render-vs-paraview.sh DATA_ROOT FILE [--runs R] [--size WxH] [--seconds S]
-                                         [--frames N] [--max-reduction K] [--out DIR]
+                                         [--frames N] [--max-reduction K] [--plugin] [--out DIR]
 
 Alternates R runs (default 5) of 'crackvis bench render' and of tools/bench/paraview-peer.sh on
 DATA_ROOT/FILE's last step at WxH (default 1280x720), then prints the medians side by side:
@@ -27,6 +27,9 @@ frame) against ParaView's still render, and both interactive latencies.
   --seconds S   length of crackvis's drag (default 5)
   --frames N    ParaView's timed frames and crackvis's still frames per run (default 20)
   --max-reduction K  crackvis-render's largest image reduction factor (default: the server's, 8)
+  --plugin      ParaView as deploy/pvserver-beside-data.sh runs it: pvserver reads FILE itself
+                through the crackvis plugin (reader + local Voronoi filter) instead of files
+                crackvis exported beforehand
   --out DIR     keep every run's JSON and the summary there (default: a temporary folder)
 
 Starts its own crackvis-data and crackvis-render from $build (CRACKVIS_BUILD) on free loopback
@@ -44,6 +47,7 @@ size=1280x720
 seconds=5
 frames=20
 max_reduction=8
+plugin=()
 out=
 positional=()
 while (($#)); do
@@ -55,6 +59,7 @@ while (($#)); do
     --frames) frames=${2:?--frames needs a value}; shift 2 ;;
     --max-reduction) max_reduction=${2:?--max-reduction needs a value}; shift 2 ;;
     --out) out=${2:?--out needs a value}; shift 2 ;;
+    --plugin) plugin=(--plugin); shift ;;
     -*) die "unknown option $1 (see --help)" ;;
     *) positional+=("$1"); shift ;;
   esac
@@ -114,13 +119,14 @@ for k in $(seq "$runs"); do
     die "crackvis bench render failed: $(tail -3 "$out/crackvis-$k.log")"
   echo "run $k of $runs: ParaView (load $(cut -d' ' -f1-3 /proc/loadavg))" >&2
   CRACKVIS="$build/tools/crackvis" "$here/paraview-peer.sh" "$data_root/$file" --size "$size" \
-    --frames "$frames" --json "$out/paraview-$k.json" >/dev/null 2>"$out/paraview-$k.log" ||
+    --frames "$frames" "${plugin[@]}" --json "$out/paraview-$k.json" >/dev/null \
+    2>"$out/paraview-$k.log" ||
     die "paraview-peer.sh failed: $(tail -3 "$out/paraview-$k.log")"
 done
 
-python3 - "$out" "$runs" "$max_reduction" <<'EOF'
+python3 - "$out" "$runs" "$max_reduction" "${#plugin[@]}" <<'EOF'
 import json, statistics, sys
-out, runs = sys.argv[1], int(sys.argv[2])
+out, runs, plugin = sys.argv[1], int(sys.argv[2]), sys.argv[4] == "1"
 cv = [json.load(open(f"{out}/crackvis-{k}.json")) for k in range(1, runs + 1)]
 pv = [json.load(open(f"{out}/paraview-{k}.json")) for k in range(1, runs + 1)]
 med = lambda values: statistics.median(values)
@@ -128,6 +134,8 @@ rows = {
     "crackvis full-resolution event-to-frame p50 ms": med([c["full_resolution_event_to_frame_ms"]["p50"] for c in cv]),
     "crackvis full-resolution render p50 ms": med([c["full_resolution_render_ms"]["p50"] for c in cv]),
     "ParaView still render p50 ms": med([p["still_render_ms"]["p50"] for p in pv]),
+    "ParaView load (read, extract) ms": med([p["load_ms"] for p in pv]),
+    "ParaView first frame ms": med([p["first_frame_ms"] for p in pv]),
     "crackvis interactive event-to-frame p50 ms": med([c["event_to_frame_ms"]["p50"] for c in cv]),
     "ParaView interactive render p50 ms": med([p["interactive_ms"]["p50"] for p in pv]),
 }
@@ -142,6 +150,8 @@ for c in cv:
 summary = {
     "runs": runs,
     "crackvis_max_reduction": int(sys.argv[3]),
+    "paraview_data_path": pv[0].get("data_path"),
+    "paraview_plugin": plugin,
     "size": cv[0]["size"],
     "particles": cv[0]["particles"],
     "medians": rows,
@@ -158,6 +168,7 @@ summary = {
 json.dump(summary, open(f"{out}/summary.json", "w"), indent=2)
 print(f"crackvis vs ParaView 5.11, {summary['size']}, {summary['particles']} particles, medians of {runs} alternating runs"
       f" (crackvis-render --max-reduction {summary['crackvis_max_reduction']})")
+print(f"  ParaView's data: {summary['paraview_data_path']}")
 for name, value in rows.items():
     print(f"  {name:<48} {value:9.1f}")
 for name, value in ratios.items():
