@@ -443,6 +443,11 @@ void printTable(const Report& report, const nlohmann::json& json) {
 }
 
 int runTransfer(const TransferOptions& options) {
+  if (!options.viewsOnly && options.raw.empty()) {
+    // A usage error, as CLI11 reports a missing required option.
+    printError("bench transfer", "--raw is required (the raw TLS baseline), unless --views-only");
+    return kExitUsage;
+  }
   auto report = measure(options);
   if (!report) {
     printError("bench transfer", report.status().message());
