@@ -2,6 +2,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "surface_primitives.hpp"
 #include <crackvis/cracks/partition.hpp>
 
 namespace crackvis::cracks {
@@ -186,23 +187,15 @@ std::vector<std::int32_t> connectedComponents(std::size_t particleCount,
                                               std::span<const std::uint8_t> bondState) {
   std::vector<std::int32_t> parent(particleCount);
   std::iota(parent.begin(), parent.end(), 0);
-  auto root = [&](std::int32_t i) {
-    while (parent[static_cast<std::size_t>(i)] != i) {
-      auto& up = parent[static_cast<std::size_t>(i)];
-      up = parent[static_cast<std::size_t>(up)];  // path halving
-      i = up;
-    }
-    return i;
-  };
   for (std::size_t b = 0; b < bonds.size(); ++b) {
     if (bondState.empty() || bondState[b] == 0) {
-      const std::int32_t a = root(bonds[b].first);
-      const std::int32_t c = root(bonds[b].second);
+      const std::int32_t a = findRoot(parent, bonds[b].first);
+      const std::int32_t c = findRoot(parent, bonds[b].second);
       parent[static_cast<std::size_t>(std::max(a, c))] = std::min(a, c);
     }
   }
   for (std::size_t i = 0; i < particleCount; ++i) {
-    parent[i] = root(static_cast<std::int32_t>(i));
+    parent[i] = findRoot(parent, static_cast<std::int32_t>(i));
   }
   return parent;
 }

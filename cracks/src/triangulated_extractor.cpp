@@ -53,13 +53,12 @@ class TriangulatedExtractor final : public CrackExtractor {
   }
   std::size_t inconsistentBondCount() const override { return m_inconsistent; }
   std::size_t memoryBytes() const override {
-    std::size_t bytes = m_bonds.capacity() * sizeof(dem::Bond) + m_cells.memoryBytes() +
-                        m_supportStart.capacity() * sizeof(std::int32_t) +
-                        m_support.capacity() * sizeof(m_support[0]) + m_state.capacity() +
-                        m_force.capacity() * sizeof(float) +
-                        m_breakStep.capacity() * sizeof(std::int32_t) +
-                        (m_piece.capacity() + m_pieceSize.capacity()) * sizeof(std::int32_t) +
-                        m_joined.capacity() + m_marked.capacity();
+    std::size_t bytes =
+        m_bonds.capacity() * sizeof(dem::Bond) + m_cells.memoryBytes() +
+        m_supportStart.capacity() * sizeof(std::int32_t) +
+        m_support.capacity() * sizeof(m_support[0]) + m_state.capacity() +
+        m_force.capacity() * sizeof(float) + m_breakStep.capacity() * sizeof(std::int32_t) +
+        m_piece.capacity() * sizeof(std::int32_t) + m_joined.capacity() + m_marked.capacity();
     if (m_extended) {
       bytes += m_extended->memoryBytes();
     }
@@ -256,9 +255,9 @@ class TriangulatedExtractor final : public CrackExtractor {
     m_marked.clear();  // markPieces marks afresh
   }
 
-  // The piece (connected by intact bonds) of each particle, as the index of
-  // its root; with no state, of the intact packing. Union by size keeps the
-  // trees shallow; a state equal to the last one marked is not marked again.
+  // The piece (connected by intact bonds) of each particle; with no state,
+  // of the intact packing. A state equal to the last one marked is not
+  // marked again.
   void markPieces(std::span<const std::uint8_t> bondState) {
     const std::size_t m = m_graph.bondCount();
     if (!bondState.empty() && m_marked.size() == m &&
@@ -266,27 +265,7 @@ class TriangulatedExtractor final : public CrackExtractor {
       return;
     }
     m_marked.assign(bondState.begin(), bondState.end());
-    const std::size_t n = m_graph.particleCount();
-    m_piece.resize(n);
-    std::iota(m_piece.begin(), m_piece.end(), 0);
-    m_pieceSize.assign(n, 1);
-    for (std::size_t b = 0; b < m; ++b) {
-      if (bondState.empty() || bondState[b] == 0) {
-        const dem::Bond& bond = m_graph.bond(static_cast<dem::BondIndex>(b));
-        auto a = static_cast<std::size_t>(findRoot(m_piece, bond.first));
-        auto c = static_cast<std::size_t>(findRoot(m_piece, bond.second));
-        if (a != c) {
-          if (m_pieceSize[a] < m_pieceSize[c]) {
-            std::swap(a, c);
-          }
-          m_piece[c] = static_cast<std::int32_t>(a);
-          m_pieceSize[a] += m_pieceSize[c];
-        }
-      }
-    }
-    for (std::size_t p = 0; p < n; ++p) {
-      m_piece[p] = findRoot(m_piece, static_cast<std::int32_t>(p));
-    }
+    m_piece = connectedComponents(m_graph.particleCount(), m_graph.bonds(), bondState);
   }
 
   // A virtual bond no short path holds, between particles the intact packing
@@ -382,8 +361,7 @@ class TriangulatedExtractor final : public CrackExtractor {
   // packing joins (1 each, over the virtual bonds), and how many.
   std::vector<std::uint8_t> m_joined;
   std::size_t m_joinedCount = 0;
-  std::vector<std::int32_t> m_piece;  // markPieces: the root of each particle's piece
-  std::vector<std::int32_t> m_pieceSize;
+  std::vector<std::int32_t> m_piece;   // markPieces: the root of each particle's piece
   std::vector<std::uint8_t> m_marked;  // the bond state m_piece is of
   std::size_t m_inconsistent = 0;
 };

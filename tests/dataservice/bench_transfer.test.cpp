@@ -105,7 +105,7 @@ TEST_CASE("crackvis bench transfer measures Fetch, a first and a warm view, and 
     args.pop_back();
     args.pop_back();
     const ProcessResult noRaw = runProcess(args);  // neither --raw nor --views-only
-    CHECK(noRaw.exitCode == 2);  // a usage error
+    CHECK(noRaw.exitCode == 2);                    // a usage error
     CHECK_THAT(noRaw.err, Catch::Contains("--raw is required"));
   }
   SECTION("without the raw TLS baseline: one clear line") {

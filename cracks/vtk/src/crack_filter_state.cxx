@@ -247,6 +247,13 @@ void CrackFilterState::readTriangulation(vtkPolyData* input, ExtractOptions& opt
     m_triangulation.reset();
     return;
   }
+  // The reader adds the same arrays every step: unchanged, nothing to read.
+  const std::pair<vtkMTimeType, vtkMTimeType> stamp{cells->GetMTime(), edges->GetMTime()};
+  if (m_triangulation != nullptr && stamp == m_triangulationStamp) {
+    options.triangulation = m_triangulation;
+    return;
+  }
+  m_triangulationStamp = stamp;
   Triangulation given;
   given.dimension = m_dimension;
   given.cells.resize(static_cast<std::size_t>(cells->GetNumberOfTuples()));

@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <vtkType.h>
@@ -46,7 +47,8 @@ class CrackFilterState {
   std::vector<vtkIdType> m_globalParticle;
   std::vector<vtkIdType> m_globalBond;
   std::shared_ptr<const Triangulation> m_triangulation;  // a piece's, kept while it is the same
-  std::vector<std::int32_t> m_components;                // a piece's (StepInput), else empty
+  std::pair<vtkMTimeType, vtkMTimeType> m_triangulationStamp{0, 0};  // its arrays' times
+  std::vector<std::int32_t> m_components;  // a piece's (StepInput), else empty
   std::vector<std::int32_t> m_intactComponents;
   std::unique_ptr<BondGraph> m_graph;
   std::unique_ptr<CrackExtractor> m_extractor;

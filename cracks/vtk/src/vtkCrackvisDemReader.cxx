@@ -59,6 +59,11 @@ struct DemReaderCache {
   std::vector<std::int32_t> pieceCells;        // its cells and edges in the piece
   std::vector<std::int32_t> pieceEdges;
   std::vector<std::int32_t> pieceIntactComponents;
+  // The arrays every step of the piece shares (ghost marks, global ids, the
+  // whole set's box, decomposition and triangulation), made once and added
+  // by reference: an unchanged array tells the filters nothing changed.
+  vtkSmartPointer<vtkPolyData> pieceData;
+  double longestBond = -1.0;  // of the reference configuration; -1: not measured
 };
 
 namespace {
@@ -281,48 +286,6 @@ void restrictTriangulation(DemReaderCache& cache) {
       connectedComponents(cache.reference.size(), cache.lattice.bonds, {}), cache.part.particles);
 }
 
-// Cuts the whole set into `pieces` and keeps piece `piece` (once per
-// request: the partition depends only on the reference configuration).
-Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBonds) {
-  const double width = ghostBonds * longestBond(cache.reference, cache.lattice.bonds);
-  if (cache.pieces == pieces && cache.piece == piece && cache.ghostWidth == width &&
-      !cache.part.particles.empty()) {
-    return Status::ok();
-  }
-  CRACKVIS_RETURN_IF_ERROR(decideDecomposition(cache));
-  cache.piece = piece;
-  cache.pieces = pieces;
-  cache.ghostWidth = width;
-  cache.part = partitionPiece(cache.reference, cache.lattice.bonds, piece, pieces, width,
-                              cache.triangulation ? &*cache.triangulation : nullptr);
-  const Piece& part = cache.part;
-  const dem::Lattice& whole = cache.lattice;
-  dem::Lattice& lattice = cache.pieceLattice;
-  lattice.dimension = whole.dimension;
-  lattice.radius = pick(whole.radius, part.particles);
-  lattice.bonds = part.localBonds;
-  lattice.strength = pick(whole.strength, part.bonds);
-  lattice.particleId = pick(whole.particleId, part.particles);
-  lattice.particleGroup = pick(whole.particleGroup, part.particles);
-  lattice.bondFlags = pick(whole.bondFlags, part.bonds);
-  lattice.extras = pickExtras(whole.extras, part);
-  cache.pieceBreakSteps = pick(cache.breakSteps, part.bonds);
-  cache.pieceReference = pick(cache.reference, part.particles);
-  if (cache.triangulation) {
-    restrictTriangulation(cache);
-  }
-  return Status::ok();
-}
-
-dem::StepState pieceState(dem::StepState state, const Piece& part) {
-  state.positions = pick(state.positions, part.particles);
-  state.velocities = pick(state.velocities, part.particles);
-  state.bondState = pick(state.bondState, part.bonds);
-  state.bondForce = pick(state.bondForce, part.bonds);
-  state.extras = pickExtras(state.extras, part);
-  return state;
-}
-
 template <typename Index>
 void addPieceMarks(vtkDataSetAttributes* attributes, const std::vector<Index>& global,
                    const std::vector<std::uint8_t>& owned, bool points) {
@@ -359,6 +322,67 @@ void addPieceData(const DemReaderCache& cache, vtkPolyData* output) {
   addArray<vtkIntArray>(field, kTriangulationCellsArray, cache.pieceCells, 4);
   addArray<vtkIntArray>(field, kTriangulationEdgesArray, cache.pieceEdges, 2);
   addArray<vtkIntArray>(output->GetPointData(), kIntactComponentArray, cache.pieceIntactComponents);
+}
+
+// Cuts the whole set into `pieces` and keeps piece `piece` (once per
+// request: the partition depends only on the reference configuration).
+Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBonds) {
+  if (cache.longestBond < 0.0) {
+    cache.longestBond = longestBond(cache.reference, cache.lattice.bonds);
+  }
+  const double width = ghostBonds * cache.longestBond;
+  if (cache.pieces == pieces && cache.piece == piece && cache.ghostWidth == width &&
+      !cache.part.particles.empty()) {
+    return Status::ok();
+  }
+  CRACKVIS_RETURN_IF_ERROR(decideDecomposition(cache));
+  cache.piece = piece;
+  cache.pieces = pieces;
+  cache.ghostWidth = width;
+  cache.part = partitionPiece(cache.reference, cache.lattice.bonds, piece, pieces, width,
+                              cache.triangulation ? &*cache.triangulation : nullptr);
+  const Piece& part = cache.part;
+  const dem::Lattice& whole = cache.lattice;
+  dem::Lattice& lattice = cache.pieceLattice;
+  lattice.dimension = whole.dimension;
+  lattice.radius = pick(whole.radius, part.particles);
+  lattice.bonds = part.localBonds;
+  lattice.strength = pick(whole.strength, part.bonds);
+  lattice.particleId = pick(whole.particleId, part.particles);
+  lattice.particleGroup = pick(whole.particleGroup, part.particles);
+  lattice.bondFlags = pick(whole.bondFlags, part.bonds);
+  lattice.extras = pickExtras(whole.extras, part);
+  cache.pieceBreakSteps = pick(cache.breakSteps, part.bonds);
+  cache.pieceReference = pick(cache.reference, part.particles);
+  if (cache.triangulation) {
+    restrictTriangulation(cache);
+  }
+  cache.pieceData = vtkSmartPointer<vtkPolyData>::New();
+  addPieceData(cache, cache.pieceData);
+  return Status::ok();
+}
+
+dem::StepState pieceState(dem::StepState state, const Piece& part) {
+  state.positions = pick(state.positions, part.particles);
+  state.velocities = pick(state.velocities, part.particles);
+  state.bondState = pick(state.bondState, part.bonds);
+  state.bondForce = pick(state.bondForce, part.bonds);
+  state.extras = pickExtras(state.extras, part);
+  return state;
+}
+
+// The piece's shared arrays into this step's output.
+void sharePieceData(vtkPolyData* piece, vtkPolyData* output) {
+  for (auto [from, to] :
+       {std::pair<vtkFieldData*, vtkFieldData*>{piece->GetPointData(), output->GetPointData()},
+        {piece->GetCellData(), output->GetCellData()},
+        {piece->GetFieldData(), output->GetFieldData()}}) {
+    for (int k = 0; k < from->GetNumberOfArrays(); ++k) {
+      to->AddArray(from->GetAbstractArray(k));
+    }
+  }
+  output->GetPointData()->SetGlobalIds(piece->GetPointData()->GetGlobalIds());
+  output->GetCellData()->SetGlobalIds(piece->GetCellData()->GetGlobalIds());
 }
 
 // The step's components of the whole set, for a triangulated piece.
@@ -477,7 +501,7 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
     adapter::addComponents(cache, *state, output);
     adapter::fill(cache.pieceLattice, cache.pieceBreakSteps, cache.pieceReference, step,
                   adapter::pieceState(std::move(*state), cache.part), output);
-    adapter::addPieceData(cache, output);
+    adapter::sharePieceData(cache.pieceData, output);
   }
   output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), state->time);
   return 1;

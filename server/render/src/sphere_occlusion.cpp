@@ -4,9 +4,6 @@
 #include <cmath>
 #include <limits>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
-
 #include <crackvis/render/sphere_occlusion.hpp>
 
 namespace crackvis::render {
@@ -82,17 +79,11 @@ double SphereOcclusion::project(const OcclusionView& view, const SphereSet& sphe
   m_spheres = spheres;
   const std::size_t n = spheres.radius.size();
   m_projected.resize(n);
-  // Every sphere on its own: in parallel, each block returning its widest
-  // point (a 1e6-sphere frame spends several milliseconds here).
-  return tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, n, 4096), 0.0,
-      [&](const tbb::blocked_range<std::size_t>& range, double largest) {
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          largest = projectOne(i, largest);
-        }
-        return largest;
-      },
-      [](double a, double b) { return std::max(a, b); });
+  double largest = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    largest = projectOne(i, largest);
+  }
+  return largest;
 }
 
 double SphereOcclusion::projectOne(std::size_t i, double largest) {
@@ -240,11 +231,6 @@ void SphereOcclusion::drawSphere(std::size_t i, const PixelBox& box, int guard) 
   }
 }
 
-// Every sphere in view front to back by its nearest point.
-void SphereOcclusion::sortedOrder() {
-  sortByDepth(m_order, m_orderScratch);
-}
-
 // Cells of a view-space grid front to back (SphereOcclusion's comment).
 void SphereOcclusion::cellOrder(int guard) {
   // The grid: about 64 spheres to a cell over the box of the centres in view.
@@ -365,7 +351,7 @@ const std::vector<std::int32_t>& SphereOcclusion::unoccluded(int guard) {
   if (m_order.size() >= m_cellThreshold) {
     cellOrder(guard);
   } else {
-    sortedOrder();
+    sortByDepth(m_order, m_orderScratch);  // front to back by the nearest point
     for (const std::uint64_t key : m_order) {
       visit(static_cast<std::size_t>(key & 0xffffffffu), guard);
     }

@@ -111,7 +111,6 @@ class SphereOcclusion {
   void drawSphere(std::size_t i, const PixelBox& box, int guard);
   // Tests sphere i against the depth buffer; keeps and draws it if it shows.
   void visit(std::size_t i, int guard);
-  void sortedOrder();
   void cellOrder(int guard);
 
   std::size_t m_cellThreshold = 65536;
