@@ -8,6 +8,28 @@
 
 namespace crackvis::dem {
 
+namespace {
+
+// The plane x = cut half way between the particles nearest the middle of
+// [lo, hi] on either side. A lattice with an odd number of site planes has a
+// plane of particles at the middle itself: a cut there would cross no bond
+// (every bond would end on it) and plant no crack.
+double cutBetweenPlanes(const std::vector<Vec3>& positions, double lo, double hi) {
+  const double middle = 0.5 * (lo + hi);
+  const double tolerance = 1e-9 * std::max(hi - lo, 1e-300);
+  double below = lo;
+  for (const Vec3& p : positions) {
+    below = p.x <= middle + tolerance ? std::max(below, p.x) : below;
+  }
+  double above = hi;
+  for (const Vec3& p : positions) {
+    above = p.x > below + tolerance ? std::min(above, p.x) : above;
+  }
+  return above > below ? 0.5 * (below + above) : middle;
+}
+
+}  // namespace
+
 Result<PlantedCrack> PlantedCrack::create(const Lattice& lattice, std::vector<Vec3> initial,
                                           const PlantedCrackSpec& spec) {
   CRACKVIS_RETURN_IF_ERROR(validateTopology(lattice));
@@ -24,7 +46,7 @@ Result<PlantedCrack> PlantedCrack::create(const Lattice& lattice, std::vector<Ve
   crack.m_initial = std::move(initial);
   crack.m_spec = spec;
   const auto [lo, hi] = boundingBox(crack.m_initial);
-  crack.m_cut = 0.5 * (lo.x + hi.x);
+  crack.m_cut = cutBetweenPlanes(crack.m_initial, lo.x, hi.x);
   crack.m_up = lattice.dimension == 2 ? 1 : 2;
   crack.m_bottom = component(lo, crack.m_up);
   crack.m_height = std::max(component(hi, crack.m_up) - crack.m_bottom, 1e-300);

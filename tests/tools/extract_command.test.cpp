@@ -1,5 +1,7 @@
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <sstream>
 
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
@@ -153,6 +155,37 @@ TEST_CASE("crackvis bench methods prints per-step times and ratios as JSON", "[c
   CHECK_THAT(table.out, Catch::Contains("1 thread: the four methods against Voro++") &&
                             Catch::Contains("load before") && Catch::Contains("goals, 1 thread"));
   CHECK_THAT(table.out, !Catch::Contains("2 threads:"));
+}
+
+TEST_CASE("crackvis bench methods without the baseline shows every step and no ratio",
+          "[cli][bench]") {
+  TempDir dir;
+  const std::string data = dir.file("run.h5");
+  crackvis::testing::writeSampleFile(data, 3, 3);
+  auto run = runProcess(
+      {kCli, "bench", "methods", data, "--json", "-q", "--threads", "1", "--voro-every", "0"});
+  REQUIRE(run.exitCode == 0);
+  const auto json = nlohmann::json::parse(run.out);
+  const auto& lv = json["configs"][0]["methods"]["local-voronoi"];
+  CHECK(lv["over_voro++_last_step"].is_null());
+  CHECK(lv["over_voro++_median_over_steps"].is_null());
+  // A goal the run did not measure is neither met nor failed.
+  CHECK(json["goals"]["met"].is_null());
+
+  auto table = runProcess(
+      {kCli, "bench", "methods", data, "-q", "--runs", "1", "--threads", "1", "--voro-every", "0"});
+  REQUIRE(table.exitCode == 0);
+  // One row per step, the baseline's columns empty.
+  bool lastStepRow = false;
+  std::istringstream lines(table.out);
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream words(line);
+    std::vector<std::string> row{std::istream_iterator<std::string>(words), {}};
+    lastStepRow =
+        lastStepRow || (row.size() == 8 && row[0] == "2" && row[6] == "-" && row[7] == "-");
+  }
+  CHECK(lastStepRow);
+  CHECK_THAT(table.out, Catch::Contains("not measured") && !Catch::Contains(": met"));
 }
 
 TEST_CASE("addresses without a port are refused before anything connects", "[cli][bench]") {

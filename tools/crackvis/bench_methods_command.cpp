@@ -268,11 +268,15 @@ nlohmann::json configJson(const Measurement& measurement, const Config& config) 
         {"max_ms", largest},
         {"total_s", total / 1000.0},
         {"last_step_ms", med.methodMs[last][m]},
-        {"over_voro++_last_step",
-         med.voroMs[last] > 0.0 ? med.methodMs[last][m] / med.voroMs[last] : 0.0},
-        {"over_voro++_median_over_steps", median(ratios)},
+        // null where the baseline did not run (--voro-every 0).
+        {"over_voro++_last_step", med.voroMs[last] > 0.0
+                                      ? nlohmann::json(med.methodMs[last][m] / med.voroMs[last])
+                                      : nlohmann::json(nullptr)},
+        {"over_voro++_median_over_steps",
+         ratios.empty() ? nlohmann::json(nullptr) : nlohmann::json(median(ratios))},
         {"over_voro++_max_over_steps",
-         ratios.empty() ? 0.0 : *std::max_element(ratios.begin(), ratios.end())}};
+         ratios.empty() ? nlohmann::json(nullptr)
+                        : nlohmann::json(*std::max_element(ratios.begin(), ratios.end()))}};
   }
   std::vector<double> voro;
   for (double v : med.voroMs) {
@@ -322,8 +326,13 @@ nlohmann::json reportJson(const BenchMethodsOptions& options, const cracks::DemS
                             {"components", f.crack.components}};
   }
   const nlohmann::json& single = configs.front().at("methods").at(methodName(kLocalVoronoi));
-  const double last = single.at("over_voro++_last_step").get<double>();
-  const double overSteps = single.at("over_voro++_median_over_steps").get<double>();
+  const nlohmann::json& last = single.at("over_voro++_last_step");
+  const nlohmann::json& overSteps = single.at("over_voro++_median_over_steps");
+  // Not measured without the baseline: null, not a ratio of 0 that passes.
+  const nlohmann::json met =
+      last.is_null() || overSteps.is_null()
+          ? nlohmann::json(nullptr)
+          : nlohmann::json(last.get<double>() <= 0.02 && overSteps.get<double>() <= 0.05);
   return {{"file", options.file},
           {"particles", series.lattice().particleCount()},
           {"bonds", series.lattice().bondCount()},
@@ -342,7 +351,12 @@ nlohmann::json reportJson(const BenchMethodsOptions& options, const cracks::DemS
             {"local_voronoi_over_voro++_1_thread_last_step_goal", 0.02},
             {"local_voronoi_over_voro++_1_thread_median_over_steps", overSteps},
             {"local_voronoi_over_voro++_1_thread_median_over_steps_goal", 0.05},
-            {"met", last <= 0.02 && overSteps <= 0.05}}}};
+            {"met", met}}}};
+}
+
+// A ratio as a percentage, or "-" where the baseline did not run.
+std::string percentOrDash(const nlohmann::json& ratio) {
+  return ratio.is_null() ? std::string("-") : fmt::format("{:.2f}%", 100.0 * ratio.get<double>());
 }
 
 void printConfig(const nlohmann::json& config) {
@@ -353,25 +367,25 @@ void printConfig(const nlohmann::json& config) {
               "cell-cut ms", "local-voronoi ms", "cell-centre ms", "voro++ ms", "LV/voro++");
   const std::string lv = methodName(kLocalVoronoi) + "_ms";
   for (const auto& row : config.at("per_step")) {
-    if (row.at("voro++_ms").is_null()) {
-      continue;
-    }
-    const double voro = row.at("voro++_ms").get<double>();
+    const bool baseline = !row.at("voro++_ms").is_null();
+    const double voro = baseline ? row.at("voro++_ms").get<double>() : 0.0;
     std::printf(
-        "%6d %8zu %14.3f %11.3f %16.3f %14.3f %11.3f %9.2f%%\n", row.at("step").get<int>(),
+        "%6d %8zu %14.3f %11.3f %16.3f %14.3f %11s %10s\n", row.at("step").get<int>(),
         row.at("broken_bonds").get<std::size_t>(), row.at(methodName(0) + "_ms").get<double>(),
         row.at(methodName(1) + "_ms").get<double>(), row.at(lv).get<double>(),
-        row.at(methodName(3) + "_ms").get<double>(), voro, 100.0 * row.at(lv).get<double>() / voro);
+        row.at(methodName(3) + "_ms").get<double>(),
+        baseline ? fmt::format("{:.3f}", voro).c_str() : "-",
+        baseline ? fmt::format("{:.2f}%", 100.0 * row.at(lv).get<double>() / voro).c_str() : "-");
   }
   std::printf("%-16s %14s %13s %10s %9s %14s %16s\n", "method", "median ms/step", "last step ms",
               "max ms", "total s", "/voro++ last", "/voro++ median");
   for (std::size_t m = 0; m < kMethods.size(); ++m) {
     const auto& s = config.at("methods").at(methodName(m));
-    std::printf("%-16s %14.3f %13.3f %10.3f %9.3f %13.2f%% %15.2f%%\n", methodName(m).c_str(),
+    std::printf("%-16s %14.3f %13.3f %10.3f %9.3f %14s %16s\n", methodName(m).c_str(),
                 s.at("median_ms").get<double>(), s.at("last_step_ms").get<double>(),
                 s.at("max_ms").get<double>(), s.at("total_s").get<double>(),
-                100.0 * s.at("over_voro++_last_step").get<double>(),
-                100.0 * s.at("over_voro++_median_over_steps").get<double>());
+                percentOrDash(s.at("over_voro++_last_step")).c_str(),
+                percentOrDash(s.at("over_voro++_median_over_steps")).c_str());
   }
   const auto& voro = config.at("voro++");
   std::printf("voro++: median %.3f ms over %zu steps, last step %.3f ms; %s\n",
@@ -414,11 +428,17 @@ void printReport(const nlohmann::json& json) {
                 f.at("state_bytes_per_particle").get<double>());
   }
   const auto& goals = json.at("goals");
+  if (goals.at("met").is_null()) {
+    std::printf(
+        "\ngoals, 1 thread, local Voronoi / lean Voro++: not measured (the baseline did not run: "
+        "--voro-every 0)\n");
+    return;
+  }
   std::printf(
-      "\ngoals, 1 thread, local Voronoi / lean Voro++: last step %.2f %% (goal <= 2 %%), median "
-      "over the steps %.2f %% (goal <= 5 %%): %s\n",
-      100.0 * goals.at("local_voronoi_over_voro++_1_thread_last_step").get<double>(),
-      100.0 * goals.at("local_voronoi_over_voro++_1_thread_median_over_steps").get<double>(),
+      "\ngoals, 1 thread, local Voronoi / lean Voro++: last step %s (goal <= 2 %%), median "
+      "over the steps %s (goal <= 5 %%): %s\n",
+      percentOrDash(goals.at("local_voronoi_over_voro++_1_thread_last_step")).c_str(),
+      percentOrDash(goals.at("local_voronoi_over_voro++_1_thread_median_over_steps")).c_str(),
       goals.at("met").get<bool>() ? "met" : "NOT met");
 }
 

@@ -1,6 +1,7 @@
 // A planted through crack over a series of steps, for benchmarks and tests
 // that need a known main crack in any specimen (a random packing has no
-// lattice plane to break along): the bonds across the mid-plane x break from
+// lattice plane to break along): the bonds across the mid-plane x (moved half
+// way to the next particle plane where particles lie on it) break from
 // the bottom face (z in 3D, y in 2D) upwards as a front that reaches the top
 // at 3/4 of the steps; meanwhile the right half moves away along x, up to
 // `opening` mean bond lengths at the last step; and isolated bonds anywhere
