@@ -702,6 +702,10 @@ TEST_CASE("hidden spheres are left out without changing the picture", "[render][
   SECTION("with a clipping plane through the block") {
     scene.description.particles.clip = pipeline::ClipPlane{centre, {1, 1, 0}};
   }
+  SECTION("close: cells too wide on screen go sphere by sphere") {
+    scene.description.view.camera =
+        pipeline::CameraDescription{centre + dem::Vec3{7, 4.9, 3.5}, centre, {0, 0, 1}, 30};
+  }
   render::Image culled;
   REQUIRE((*renderer)->render(scene.description, scene.input(), culled).isOk());
   const auto stats = (*renderer)->impostorStats();
@@ -745,11 +749,31 @@ TEST_CASE("occlusion culling keeps a sphere that peeks out", "[render]") {
   const std::vector<float> r{1.0f, 0.5f, 0.5f, 0.5f};
   render::SphereSet spheres{x, y, z, r, {}};
   CHECK(render::unoccludedSpheres(view, spheres) == std::vector<std::int32_t>{0, 2});
-  // The same by cells of spheres (used above 65,536 spheres in view).
+  // The same by cells of spheres (used from 65,536 spheres on), the model
+  // coordinates being the view's.
+  std::vector<double> xyz;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    xyz.insert(xyz.end(), {x[i], y[i], z[i]});
+  }
+  render::SphereCells cells;
+  cells.build(xyz, r);
+  render::ModelToView identity;
+  identity.rows = {{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}}};
   render::SphereOcclusion byCells;
-  byCells.setCellThreshold(0);
-  byCells.project(view, spheres);
-  CHECK(byCells.unoccluded(0) == std::vector<std::int32_t>{0, 2});
+  byCells.projectCells(view, cells, identity, 255.0);
+  CHECK(byCells.unoccludedInCells(0) == std::vector<std::int32_t>{0, 2});
+  // A clipping plane z <= -11 removes the large sphere: the one behind it
+  // shows. One through the large sphere's centre (x >= 0) lets it hide
+  // nothing.
+  const std::vector<render::ClipPlane> behind{{0, 0, -1, -11}};
+  identity.planes = behind;
+  byCells.projectCells(view, cells, identity, 255.0);
+  CHECK(byCells.unoccludedInCells(0) == std::vector<std::int32_t>{1, 2});
+  const std::vector<render::ClipPlane> throughCentre{{1, 0, 0, 0}};
+  identity.planes = throughCentre;
+  byCells.projectCells(view, cells, identity, 255.0);
+  CHECK(byCells.unoccludedInCells(0) == std::vector<std::int32_t>{0, 1, 2});
+  identity.planes = {};
   // A sphere that may not be drawn (clipped) hides nothing.
   const std::vector<std::uint8_t> mayHide{0, 1, 1, 1};
   spheres.mayHide = mayHide;

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <ios>
+#include <span>
 
 #include <EGL/egl.h>
 #include <vtkActor.h>
@@ -232,6 +233,41 @@ void vtkPointSpriteSphereMapper::ReleaseGraphicsResources(vtkWindow* window) {
   this->Superclass::ReleaseGraphicsResources(window);
 }
 
+void vtkPointSpriteSphereMapper::UpdateCells(vtkDataArray* positions, vtkDataArray* radii) {
+  const CellsSource source{positions, positions->GetMTime(), radii,
+                           radii != nullptr ? radii->GetMTime() : 0, this->Radius};
+  if (source == this->CellsBuiltFrom) {
+    return;
+  }
+  const auto n = static_cast<std::size_t>(positions->GetNumberOfTuples());
+  std::vector<double> xyz;
+  std::span<const double> centres;
+  if (auto* doubles = vtkDoubleArray::FastDownCast(positions)) {
+    centres = {doubles->GetPointer(0), 3 * n};
+  } else {
+    xyz.resize(3 * n);
+    for (std::size_t i = 0; i < n; ++i) {
+      positions->GetTuple(static_cast<vtkIdType>(i), xyz.data() + 3 * i);
+    }
+    centres = xyz;
+  }
+  std::vector<float> sizes;
+  std::span<const float> radius;
+  if (auto* floats = vtkFloatArray::FastDownCast(radii)) {
+    radius = {floats->GetPointer(0), n};
+  } else {
+    sizes.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      sizes[i] = radii != nullptr
+                     ? static_cast<float>(radii->GetComponent(static_cast<vtkIdType>(i), 0))
+                     : static_cast<float>(this->Radius);
+    }
+    radius = sizes;
+  }
+  this->Cells.build(centres, radius);
+  this->CellsBuiltFrom = source;
+}
+
 void vtkPointSpriteSphereMapper::SelectSpheres(vtkRenderer* ren, vtkActor* act,
                                                const int viewport[4], int guard) {
   vtkPolyData* poly = this->CurrentInput;
@@ -243,16 +279,30 @@ void vtkPointSpriteSphereMapper::SelectSpheres(vtkRenderer* ren, vtkActor* act,
   vtkNew<vtkMatrix4x4> mcvc;  // untransposed
   vtkMatrix4x4::Multiply4x4(ren->GetActiveCamera()->GetModelViewTransformMatrix(), act->GetMatrix(),
                             mcvc);
-  double m[3][4];
+  ModelToView transform;
   for (int row = 0; row < 3; ++row) {
     for (int column = 0; column < 4; ++column) {
-      m[row][column] = mcvc->GetElement(row, column);
+      transform.rows[row][column] = mcvc->GetElement(row, column);
     }
   }
-  std::vector<std::array<double, 4>> planes(
-      static_cast<std::size_t>(this->GetNumberOfClippingPlanes()));
+  std::vector<ClipPlane> planes(static_cast<std::size_t>(this->GetNumberOfClippingPlanes()));
   for (std::size_t k = 0; k < planes.size(); ++k) {
     this->GetClippingPlaneInDataCoords(act->GetMatrix(), static_cast<int>(k), planes[k].data());
+  }
+  transform.planes = planes;
+  const bool culling = this->OcclusionCulling && !act->HasTranslucentPolygonalGeometry() &&
+                       ren->GetSelector() == nullptr;
+
+  if (culling && static_cast<std::size_t>(n) >= this->OcclusionCellThreshold) {
+    // Large sets: by cells kept between frames, no pass over every sphere.
+    this->UpdateCells(positions, radii);
+    const double largest =
+        this->Occlusion.projectCells(view, this->Cells, transform, this->MaxPointSize);
+    this->DrawPoints = !this->ForceGeometryShader && largest <= this->MaxPointSize;
+    const std::vector<std::int32_t>& shown =
+        this->Occlusion.unoccludedInCells(this->DrawPoints ? guard : 0);
+    this->Drawn.assign(shown.begin(), shown.end());
+    return;
   }
 
   // The spheres no clipping plane removes, in view coordinates.
@@ -264,26 +314,16 @@ void vtkPointSpriteSphereMapper::SelectSpheres(vtkRenderer* ren, vtkActor* act,
   this->MayHide.clear();
   auto* doubles = vtkDoubleArray::FastDownCast(positions);
   auto* floatRadii = vtkFloatArray::FastDownCast(radii);
+  const auto& m = transform.rows;
   for (vtkIdType i = 0; i < n; ++i) {
-    double p[3];
+    std::array<double, 3> p;
     if (doubles != nullptr) {
-      std::copy_n(doubles->GetPointer(3 * i), 3, p);
+      std::copy_n(doubles->GetPointer(3 * i), 3, p.data());
     } else {
-      positions->GetTuple(i, p);
+      positions->GetTuple(i, p.data());
     }
-    // The fragment shader drops a sphere whose centre a plane puts below 0;
-    // near 0 the GPU's float arithmetic decides, so such a sphere is drawn
-    // but hides nothing.
-    bool clipped = false;
-    bool nearPlane = false;
-    for (const auto& e : planes) {
-      const double distance = e[0] * p[0] + e[1] * p[1] + e[2] * p[2] + e[3];
-      const double tolerance = 1e-5 * (std::abs(e[0] * p[0]) + std::abs(e[1] * p[1]) +
-                                       std::abs(e[2] * p[2]) + std::abs(e[3]));
-      clipped = clipped || distance < -tolerance;
-      nearPlane = nearPlane || distance <= tolerance;
-    }
-    if (clipped) {
+    const ClipTest clip = clipCentre(planes, p);
+    if (clip.clipped) {
       continue;
     }
     this->Candidates.push_back(static_cast<std::uint32_t>(i));
@@ -293,14 +333,13 @@ void vtkPointSpriteSphereMapper::SelectSpheres(vtkRenderer* ren, vtkActor* act,
     this->Radii.push_back(floatRadii != nullptr ? floatRadii->GetValue(i)
                           : radii != nullptr    ? static_cast<float>(radii->GetComponent(i, 0))
                                                 : this->Radius);
-    this->MayHide.push_back(nearPlane ? 0 : 1);
+    this->MayHide.push_back(clip.nearPlane ? 0 : 1);
   }
   const double largest = this->Occlusion.project(
       view, SphereSet{this->X, this->Y, this->Z, this->Radii, this->MayHide});
   this->DrawPoints = !this->ForceGeometryShader && largest <= this->MaxPointSize;
 
-  if (this->OcclusionCulling && !act->HasTranslucentPolygonalGeometry() &&
-      ren->GetSelector() == nullptr) {
+  if (culling) {
     const std::vector<std::int32_t>& shown =
         this->Occlusion.unoccluded(this->DrawPoints ? guard : 0);
     this->Drawn.clear();

@@ -42,9 +42,9 @@ class vtkPointSpriteSphereMapper : public vtkOpenGLSphereMapper {
   // Always draw with the geometry shader, as vtkOpenGLSphereMapper does (off).
   vtkSetMacro(ForceGeometryShader, bool);
   vtkGetMacro(ForceGeometryShader, bool);
-  // Spheres in view from which occlusion culling bins them into cells
-  // (SphereOcclusion); tests force either way.
-  void SetOcclusionCellThreshold(std::size_t spheres) { this->Occlusion.setCellThreshold(spheres); }
+  // Spheres from which occlusion culling goes by cells of spheres kept
+  // between frames (SphereCells); tests force either way.
+  void SetOcclusionCellThreshold(std::size_t spheres) { this->OcclusionCellThreshold = spheres; }
 
   // The last frame: how many spheres were drawn, of how many, and whether
   // as points (false: the geometry shader).
@@ -76,6 +76,8 @@ class vtkPointSpriteSphereMapper : public vtkOpenGLSphereMapper {
   // Chooses this frame's way (DrawPoints) and the spheres to draw
   // (this->Drawn). guard: the guard band of points.
   void SelectSpheres(vtkRenderer* ren, vtkActor* act, const int viewport[4], int guard);
+  // Groups the input's spheres into cells again when they changed.
+  void UpdateCells(vtkDataArray* positions, vtkDataArray* radii);
 
   bool OcclusionCulling = true;
   bool ForceGeometryShader = false;
@@ -89,6 +91,18 @@ class vtkPointSpriteSphereMapper : public vtkOpenGLSphereMapper {
   std::vector<float> Radii;
   std::vector<std::uint8_t> MayHide;
   SphereOcclusion Occlusion;
+  std::size_t OcclusionCellThreshold = 65536;
+  SphereCells Cells;
+  // What Cells were built from: the arrays and their modification times.
+  struct CellsSource {
+    vtkDataArray* positions = nullptr;
+    vtkMTimeType positionsTime = 0;
+    vtkDataArray* radii = nullptr;
+    vtkMTimeType radiiTime = 0;
+    double radius = 0.0;
+    bool operator==(const CellsSource&) const = default;
+  };
+  CellsSource CellsBuiltFrom;
   std::vector<std::uint32_t> Drawn;
   vtkNew<vtkOpenGLBufferObject> DrawnIndices;
   using DrawElementsFunction = void (*)(unsigned int mode, int count, unsigned int type,

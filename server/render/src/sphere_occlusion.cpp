@@ -231,108 +231,17 @@ void SphereOcclusion::drawSphere(std::size_t i, const PixelBox& box, int guard) 
   }
 }
 
-// Cells of a view-space grid front to back (SphereOcclusion's comment).
-void SphereOcclusion::cellOrder(int guard) {
-  // The grid: about 64 spheres to a cell over the box of the centres in view.
-  double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                  std::numeric_limits<double>::infinity()};
-  double hi[3] = {-lo[0], -lo[1], -lo[2]};
-  for (const std::uint64_t key : m_order) {
-    const auto i = static_cast<std::size_t>(key & 0xffffffffu);
-    const double c[3] = {m_spheres.x[i], m_spheres.y[i], m_spheres.z[i]};
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], c[a]);
-      hi[a] = std::max(hi[a], c[a]);
-    }
-  }
-  const double cells = std::max(1.0, static_cast<double>(m_order.size()) / 64.0);
-  // A flat set (a 2D specimen seen face on) gets cells a thousandth of its
-  // size deep, not a grid of millions of empty cells.
-  const double widest = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
-  double extent[3];
-  double volume = 1.0;
-  for (int a = 0; a < 3; ++a) {
-    extent[a] = std::max(hi[a] - lo[a], 1e-3 * widest);
-    volume *= extent[a];
-  }
-  const double side = std::cbrt(volume / cells);
-  int count[3];
-  for (int a = 0; a < 3; ++a) {
-    count[a] = std::clamp(static_cast<int>(extent[a] / side) + 1, 1, 1024);
-  }
-  m_cells.assign(static_cast<std::size_t>(count[0]) * count[1] * count[2], Cell{});
-  m_cellOf.resize(m_order.size());
-  for (std::size_t k = 0; k < m_order.size(); ++k) {
-    const auto i = static_cast<std::size_t>(m_order[k] & 0xffffffffu);
-    const double c[3] = {m_spheres.x[i], m_spheres.y[i], m_spheres.z[i]};
-    int at[3];
-    for (int a = 0; a < 3; ++a) {
-      at[a] = std::min(count[a] - 1, static_cast<int>((c[a] - lo[a]) / extent[a] * count[a]));
-    }
-    const auto id = static_cast<std::int32_t>((at[2] * count[1] + at[1]) * count[0] + at[0]);
-    m_cellOf[k] = id;
-    Cell& cell = m_cells[static_cast<std::size_t>(id)];
-    const Projected& p = m_projected[i];
-    // The same sums pixelsOf makes, so the union holds each sphere's pixels.
-    cell.lo[0] = std::min(cell.lo[0], p.u - p.half);
-    cell.hi[0] = std::max(cell.hi[0], p.u + p.half);
-    cell.lo[1] = std::min(cell.lo[1], p.v - p.half);
-    cell.hi[1] = std::max(cell.hi[1], p.v + p.half);
-    cell.front = std::min(cell.front, static_cast<float>(p.front));
-    ++cell.count;
-  }
-  // Each cell's pixels: the union of its spheres' (ceil and floor keep order).
-  for (Cell& cell : m_cells) {
-    if (cell.count > 0) {
-      cell.box = pixelsIn(cell.lo[0], cell.hi[0], cell.lo[1], cell.hi[1]);
-    }
-  }
-  // The spheres grouped by cell (counting sort, index order kept within).
-  std::int32_t start = 0;
-  for (Cell& cell : m_cells) {
-    cell.first = start;
-    start += cell.count;
-    cell.count = 0;
-  }
-  m_cellSpheres.resize(m_order.size());
-  for (std::size_t k = 0; k < m_order.size(); ++k) {
-    Cell& cell = m_cells[static_cast<std::size_t>(m_cellOf[k])];
-    m_cellSpheres[static_cast<std::size_t>(cell.first + cell.count++)] =
-        static_cast<std::int32_t>(m_order[k] & 0xffffffffu);
-  }
-  m_cellOrder.clear();
-  for (std::size_t c = 0; c < m_cells.size(); ++c) {
-    if (m_cells[c].count > 0) {
-      m_cellOrder.push_back(static_cast<std::int32_t>(c));
-    }
-  }
-  std::sort(m_cellOrder.begin(), m_cellOrder.end(), [&](std::int32_t a, std::int32_t b) {
-    const float fa = m_cells[static_cast<std::size_t>(a)].front;
-    const float fb = m_cells[static_cast<std::size_t>(b)].front;
-    return fa < fb || (fa == fb && a < b);
-  });
-  for (const std::int32_t c : m_cellOrder) {
-    const Cell& cell = m_cells[static_cast<std::size_t>(c)];
-    // A cell hidden whole: every sphere in it is nearer-bounded by its front.
-    if (covered(cell.box, cell.front - static_cast<float>(kDepthMargin) * std::abs(cell.front))) {
-      continue;
-    }
-    const auto first = m_cellSpheres.begin() + cell.first;
-    std::sort(first, first + cell.count, [&](std::int32_t a, std::int32_t b) {
-      const double fa = m_projected[static_cast<std::size_t>(a)].front;
-      const double fb = m_projected[static_cast<std::size_t>(b)].front;
-      return fa < fb || (fa == fb && a < b);
-    });
-    for (auto it = first; it != first + cell.count; ++it) {
-      visit(static_cast<std::size_t>(*it), guard);
-    }
-  }
+void SphereOcclusion::clearDepth() {
+  const int tilesX = (m_view.width + kTile - 1) / kTile;
+  const int tilesY = (m_view.height + kTile - 1) / kTile;
+  m_nearest.assign(static_cast<std::size_t>(m_view.width) * static_cast<std::size_t>(m_view.height),
+                   std::numeric_limits<float>::infinity());
+  m_tileFarthest.assign(static_cast<std::size_t>(tilesX) * static_cast<std::size_t>(tilesY),
+                        std::numeric_limits<float>::infinity());
 }
 
 const std::vector<std::int32_t>& SphereOcclusion::unoccluded(int guard) {
   const std::size_t n = m_projected.size();
-  const int tilesX = (m_view.width + kTile - 1) / kTile;
-  const int tilesY = (m_view.height + kTile - 1) / kTile;
   m_keep.assign(n, 0);
   m_order.clear();
   for (std::size_t i = 0; i < n; ++i) {
@@ -344,17 +253,10 @@ const std::vector<std::int32_t>& SphereOcclusion::unoccluded(int guard) {
                         static_cast<std::uint32_t>(i));
     }
   }
-  m_nearest.assign(static_cast<std::size_t>(m_view.width) * static_cast<std::size_t>(m_view.height),
-                   std::numeric_limits<float>::infinity());
-  m_tileFarthest.assign(static_cast<std::size_t>(tilesX) * static_cast<std::size_t>(tilesY),
-                        std::numeric_limits<float>::infinity());
-  if (m_order.size() >= m_cellThreshold) {
-    cellOrder(guard);
-  } else {
-    sortByDepth(m_order, m_orderScratch);  // front to back by the nearest point
-    for (const std::uint64_t key : m_order) {
-      visit(static_cast<std::size_t>(key & 0xffffffffu), guard);
-    }
+  clearDepth();
+  sortByDepth(m_order, m_orderScratch);  // front to back by the nearest point
+  for (const std::uint64_t key : m_order) {
+    visit(static_cast<std::size_t>(key & 0xffffffffu), guard);
   }
   m_visible.clear();
   for (std::size_t i = 0; i < n; ++i) {
@@ -362,6 +264,324 @@ const std::vector<std::int32_t>& SphereOcclusion::unoccluded(int guard) {
       m_visible.push_back(static_cast<std::int32_t>(i));
     }
   }
+  return m_visible;
+}
+
+ClipTest clipCentre(std::span<const ClipPlane> planes, const std::array<double, 3>& p) {
+  ClipTest test;
+  for (const ClipPlane& e : planes) {
+    const double distance = e[0] * p[0] + e[1] * p[1] + e[2] * p[2] + e[3];
+    const double tolerance = 1e-5 * (std::abs(e[0] * p[0]) + std::abs(e[1] * p[1]) +
+                                     std::abs(e[2] * p[2]) + std::abs(e[3]));
+    test.clipped = test.clipped || distance < -tolerance;
+    test.nearPlane = test.nearPlane || distance <= tolerance;
+  }
+  return test;
+}
+
+void SphereCells::build(std::span<const double> xyz, std::span<const float> radius) {
+  const std::size_t n = radius.size();
+  m_cells.clear();
+  m_index.resize(n);
+  m_centre.resize(n);
+  m_radius.resize(n);
+  if (n == 0) {
+    return;
+  }
+  auto at = [&](std::size_t i) {
+    return std::array<double, 3>{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
+  };
+  // The grid: about 64 spheres to a cell over the box of the centres. A flat
+  // set (a 2D specimen) gets cells a thousandth of its size deep, not a grid
+  // of millions of empty cells.
+  std::array<double, 3> lo = at(0);
+  std::array<double, 3> hi = lo;
+  for (std::size_t i = 1; i < n; ++i) {
+    const auto c = at(i);
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], c[a]);
+      hi[a] = std::max(hi[a], c[a]);
+    }
+  }
+  const double widest = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
+  std::array<double, 3> extent{};
+  double volume = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    extent[a] = std::max(hi[a] - lo[a], 1e-3 * widest);
+    volume *= extent[a];
+  }
+  const double side = std::cbrt(volume / std::max(1.0, static_cast<double>(n) / 64.0));
+  std::array<int, 3> count{};
+  for (int a = 0; a < 3; ++a) {
+    count[a] = std::clamp(static_cast<int>(extent[a] / side) + 1, 1, 1024);
+  }
+  std::vector<std::int32_t> cellOf(n);
+  std::vector<std::int32_t> start(static_cast<std::size_t>(count[0]) * count[1] * count[2] + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto c = at(i);
+    std::array<int, 3> k{};
+    for (int a = 0; a < 3; ++a) {
+      k[a] = std::clamp(static_cast<int>((c[a] - lo[a]) / extent[a] * count[a]), 0, count[a] - 1);
+    }
+    cellOf[i] = (k[2] * count[1] + k[1]) * count[0] + k[0];
+    ++start[static_cast<std::size_t>(cellOf[i]) + 1];
+  }
+  for (std::size_t c = 1; c < start.size(); ++c) {
+    start[c] += start[c - 1];
+  }
+  // Members in cell order (a counting sort: input order within a cell).
+  std::vector<std::int32_t> next(start.begin(), start.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto member = static_cast<std::size_t>(next[static_cast<std::size_t>(cellOf[i])]++);
+    m_index[member] = static_cast<std::int32_t>(i);
+    m_centre[member] = at(i);
+    m_radius[member] = radius[i];
+  }
+  for (std::size_t c = 0; c + 1 < start.size(); ++c) {
+    if (start[c + 1] == start[c]) {
+      continue;
+    }
+    Cell cell;
+    cell.first = start[c];
+    cell.count = start[c + 1] - start[c];
+    std::array<double, 3> cellLo = m_centre[static_cast<std::size_t>(cell.first)];
+    std::array<double, 3> cellHi = cellLo;
+    for (std::int32_t m = cell.first; m < cell.first + cell.count; ++m) {
+      const auto& p = m_centre[static_cast<std::size_t>(m)];
+      for (int a = 0; a < 3; ++a) {
+        cellLo[a] = std::min(cellLo[a], p[a]);
+        cellHi[a] = std::max(cellHi[a], p[a]);
+      }
+      cell.largestRadius = std::max(cell.largestRadius, m_radius[static_cast<std::size_t>(m)]);
+    }
+    for (int a = 0; a < 3; ++a) {
+      cell.centre[a] = 0.5 * (cellLo[a] + cellHi[a]);
+    }
+    double spread2 = 0.0;
+    for (std::int32_t m = cell.first; m < cell.first + cell.count; ++m) {
+      const auto& p = m_centre[static_cast<std::size_t>(m)];
+      const double dx = p[0] - cell.centre[0];
+      const double dy = p[1] - cell.centre[1];
+      const double dz = p[2] - cell.centre[2];
+      spread2 = std::max(spread2, dx * dx + dy * dy + dz * dz);
+    }
+    // A hair more than the farthest centre: the bound must hold after rounding.
+    cell.spread = std::sqrt(spread2) * (1.0 + 1e-9) + 1e-300;
+    m_cells.push_back(cell);
+  }
+}
+
+std::size_t SphereCells::memoryBytes() const {
+  return m_cells.capacity() * sizeof(Cell) + m_index.capacity() * sizeof(std::int32_t) +
+         m_centre.capacity() * sizeof(std::array<double, 3>) + m_radius.capacity() * sizeof(float);
+}
+
+namespace {
+
+// The largest factor by which the 3x3 part of `rows` stretches a length
+// (its columns' largest norm times sqrt 3 bounds it; exact for a rotation
+// times a uniform scale, the cameras and actors VTK makes, up to the sqrt 3).
+double stretchBound(const ModelToView& transform) {
+  double largest = 0.0;
+  for (int column = 0; column < 3; ++column) {
+    double sum = 0.0;
+    for (int row = 0; row < 3; ++row) {
+      sum += transform.rows[row][column] * transform.rows[row][column];
+    }
+    largest = std::max(largest, sum);
+  }
+  // A rotation's columns are orthonormal: the stretch is the column norm.
+  bool orthogonal = true;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = a + 1; b < 3; ++b) {
+      double dot = 0.0;
+      for (int row = 0; row < 3; ++row) {
+        dot += transform.rows[row][a] * transform.rows[row][b];
+      }
+      orthogonal = orthogonal && std::abs(dot) <= 1e-9 * largest;
+    }
+  }
+  return std::sqrt(largest) * (orthogonal ? 1.0 + 1e-9 : std::sqrt(3.0));
+}
+
+std::array<double, 3> toView(const ModelToView& transform, const std::array<double, 3>& p) {
+  std::array<double, 3> out{};
+  for (int row = 0; row < 3; ++row) {
+    const auto& m = transform.rows[row];
+    out[row] = m[0] * p[0] + m[1] * p[1] + m[2] * p[2] + m[3];
+  }
+  return out;
+}
+
+}  // namespace
+
+double SphereOcclusion::projectCells(const OcclusionView& view, const SphereCells& cells,
+                                     const ModelToView& transform, double pointLimit) {
+  m_view = view;
+  m_cellSet = &cells;
+  m_planes.assign(transform.planes.begin(), transform.planes.end());
+  m_transform = transform;
+  m_transform.planes = m_planes;
+  m_cellsInView.clear();
+  m_x.clear();
+  m_y.clear();
+  m_z.clear();
+  m_radius.clear();
+  m_mayHide.clear();
+  m_source.clear();
+  m_projected.clear();
+  const double stretch = stretchBound(transform);
+  double largest = 0.0;
+  const auto& all = cells.cells();
+  for (std::size_t c = 0; c < all.size(); ++c) {
+    const SphereCells::Cell& cell = all[c];
+    CellInView inView;
+    inView.cell = static_cast<std::int32_t>(c);
+    // Cells every sphere of which a plane removes are left out; cells near a
+    // plane test their spheres (clipCentre's tolerance, bounded over the cell).
+    bool removed = false;
+    for (const ClipPlane& e : m_planes) {
+      const double distance =
+          e[0] * cell.centre[0] + e[1] * cell.centre[1] + e[2] * cell.centre[2] + e[3];
+      const double tolerance =
+          1e-5 * (std::abs(e[0]) * (std::abs(cell.centre[0]) + cell.spread) +
+                  std::abs(e[1]) * (std::abs(cell.centre[1]) + cell.spread) +
+                  std::abs(e[2]) * (std::abs(cell.centre[2]) + cell.spread) + std::abs(e[3]));
+      const double margin =
+          std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) * cell.spread + tolerance;
+      removed = removed || distance < -margin;
+      inView.clip = distance <= margin ? Clip::kSome : inView.clip;
+    }
+    if (removed) {
+      continue;
+    }
+    // The bounding sphere in view coordinates holds every sphere of the cell.
+    const std::array<double, 3> centre = toView(transform, cell.centre);
+    const double reach = stretch * cell.spread + cell.largestRadius;
+    const double depth = -centre[2];
+    if (!view.parallel && depth + reach <= 0.0) {
+      continue;  // every centre behind the eye: no pixel (as projectOne)
+    }
+    const double diameter = view.parallel || depth - reach > 0.0
+                                ? spriteDiameter(centre, reach, view.parallel, view.rayScale)
+                                : std::numeric_limits<double>::infinity();
+    // A sphere inside has its point centred within the bounding silhouette
+    // and no wider than that silhouette: at most twice the bounding point.
+    const double innerPoint = 2.0 * (diameter - 1.0) + 1.0;
+    if (std::isinf(diameter) || innerPoint > pointLimit) {
+      // The eye plane cuts it, or its spheres may be too wide for points:
+      // its spheres one by one, projected now for the exact widest point.
+      inView.open = true;
+      inView.front = static_cast<float>(depth - reach);
+      inView.first = static_cast<std::int32_t>(m_x.size());
+      largest = appendCell(inView, largest);
+      inView.count = static_cast<std::int32_t>(m_x.size()) - inView.first;
+      if (inView.count > 0) {
+        m_cellsInView.push_back(inView);
+      }
+      continue;
+    }
+    const double u =
+        ((view.parallel ? centre[0] : centre[0] / depth) - view.rayOffset[0]) / view.rayScale[0];
+    const double v =
+        ((view.parallel ? centre[1] : centre[1] / depth) - view.rayOffset[1]) / view.rayScale[1];
+    // In view when an inner sphere's point may reach the viewport (as
+    // projectOne decides for each).
+    const double half = 0.5 * diameter + 1.0;
+    const double pointReach = half + 0.5 * innerPoint + 1.0;
+    if (u + pointReach < 0.5 || u - pointReach > view.width - 0.5 || v + pointReach < 0.5 ||
+        v - pointReach > view.height - 0.5) {
+      continue;
+    }
+    // Hidden when the bounding silhouette's pixels (with one to spare) are.
+    inView.box = pixelsIn(u - half, u + half, v - half, v + half);
+    inView.front = static_cast<float>(depth - reach);
+    largest = std::max(largest, innerPoint);
+    m_cellsInView.push_back(inView);
+  }
+  return largest;
+}
+
+double SphereOcclusion::appendCell(const CellInView& cell, double largest) {
+  const SphereCells::Cell& c = m_cellSet->cells()[static_cast<std::size_t>(cell.cell)];
+  const auto first = m_x.size();
+  for (std::int32_t m = c.first; m < c.first + c.count; ++m) {
+    const auto member = static_cast<std::size_t>(m);
+    const std::array<double, 3>& p = m_cellSet->centre(member);
+    std::uint8_t mayHide = 1;
+    if (cell.clip == Clip::kSome) {
+      const ClipTest test = clipCentre(m_planes, p);
+      if (test.clipped) {
+        continue;
+      }
+      mayHide = test.nearPlane ? 0 : 1;
+    }
+    const std::array<double, 3> q = toView(m_transform, p);
+    m_x.push_back(q[0]);
+    m_y.push_back(q[1]);
+    m_z.push_back(q[2]);
+    m_radius.push_back(m_cellSet->radius(member));
+    m_mayHide.push_back(mayHide);
+    m_source.push_back(m_cellSet->index(member));
+  }
+  m_spheres = SphereSet{m_x, m_y, m_z, m_radius, m_mayHide};
+  m_projected.resize(m_x.size());
+  for (std::size_t i = first; i < m_x.size(); ++i) {
+    largest = projectOne(i, largest);
+  }
+  return largest;
+}
+
+void SphereOcclusion::visitInOrder(std::int32_t first, std::int32_t count, int guard) {
+  m_cellSpheres.clear();
+  for (std::int32_t i = first; i < first + count; ++i) {
+    const Projected& p = m_projected[static_cast<std::size_t>(i)];
+    if (std::isinf(p.half)) {
+      m_keep[static_cast<std::size_t>(i)] = 1;  // the GPU decides
+    } else if (p.inView) {
+      m_cellSpheres.push_back(i);
+    }
+  }
+  std::sort(m_cellSpheres.begin(), m_cellSpheres.end(), [&](std::int32_t a, std::int32_t b) {
+    const double fa = m_projected[static_cast<std::size_t>(a)].front;
+    const double fb = m_projected[static_cast<std::size_t>(b)].front;
+    return fa < fb || (fa == fb && a < b);
+  });
+  for (const std::int32_t i : m_cellSpheres) {
+    visit(static_cast<std::size_t>(i), guard);
+  }
+}
+
+const std::vector<std::int32_t>& SphereOcclusion::unoccludedInCells(int guard) {
+  clearDepth();
+  m_keep.assign(m_x.size(), 0);
+  m_order.clear();
+  for (std::size_t k = 0; k < m_cellsInView.size(); ++k) {
+    m_order.push_back(static_cast<std::uint64_t>(orderedBits(m_cellsInView[k].front)) << 32 |
+                      static_cast<std::uint32_t>(k));
+  }
+  sortByDepth(m_order, m_orderScratch);  // cells front to back
+  for (const std::uint64_t key : m_order) {
+    CellInView& cell = m_cellsInView[static_cast<std::size_t>(key & 0xffffffffu)];
+    if (!cell.open) {
+      // A cell hidden whole: every sphere in it lies behind its front.
+      if (covered(cell.box, cell.front - static_cast<float>(kDepthMargin) * std::abs(cell.front))) {
+        continue;
+      }
+      cell.first = static_cast<std::int32_t>(m_x.size());
+      appendCell(cell, 0.0);
+      cell.count = static_cast<std::int32_t>(m_x.size()) - cell.first;
+      m_keep.resize(m_x.size(), 0);
+    }
+    visitInOrder(cell.first, cell.count, guard);
+  }
+  m_visible.clear();
+  for (std::size_t i = 0; i < m_keep.size(); ++i) {
+    if (m_keep[i] != 0) {
+      m_visible.push_back(m_source[i]);
+    }
+  }
+  std::sort(m_visible.begin(), m_visible.end());
   return m_visible;
 }
 

@@ -84,7 +84,8 @@ class SceneRenderer {
   struct ImpostorOptions {
     bool geometryShader = false;
     bool occlusionCulling = true;
-    // Spheres in view from which culling goes by cells (SphereOcclusion).
+    // Spheres from which culling goes by cells kept between frames
+    // (SphereCells, sphere_occlusion.hpp).
     std::size_t occlusionCellThreshold = 65536;
   };
   void setImpostorOptions(const ImpostorOptions& options);

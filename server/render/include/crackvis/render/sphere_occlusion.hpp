@@ -54,17 +54,71 @@ struct SphereSet {
 double spriteDiameter(const std::array<double, 3>& centre, double radius, bool parallel,
                       const std::array<double, 2>& scale);
 
+// A clipping plane e: a point p is kept where e0 p.x + e1 p.y + e2 p.z + e3
+// >= 0 (model coordinates).
+using ClipPlane = std::array<double, 4>;
+
+// What the clipping planes do to a sphere centred at p: the fragment shader
+// drops a sphere whose centre a plane puts below 0; near 0 the GPU's float
+// arithmetic decides, so such a sphere is drawn but may hide nothing.
+struct ClipTest {
+  bool clipped = false;
+  bool nearPlane = false;
+};
+ClipTest clipCentre(std::span<const ClipPlane> planes, const std::array<double, 3>& p);
+
+// The spheres of a data set in model coordinates, grouped into cells of
+// about 64 neighbours (a grid over their centres) and kept from frame to
+// frame while the spheres do not move: a frame then projects and tests
+// cells, and only the spheres of cells that may show. Members are copied in
+// cell order, so a cell's spheres are contiguous in memory.
+class SphereCells {
+ public:
+  struct Cell {
+    std::array<double, 3> centre{};  // of the box of its sphere centres
+    double spread = 0.0;             // the farthest centre from `centre`
+    float largestRadius = 0.0f;
+    std::int32_t first = 0;  // its members
+    std::int32_t count = 0;
+  };
+  // xyz: 3 per sphere, interleaved; radius: one per sphere.
+  void build(std::span<const double> xyz, std::span<const float> radius);
+  std::size_t sphereCount() const { return m_index.size(); }
+  const std::vector<Cell>& cells() const { return m_cells; }
+  // Members in cell order: the sphere's index, its centre, its radius.
+  std::int32_t index(std::size_t member) const { return m_index[member]; }
+  const std::array<double, 3>& centre(std::size_t member) const { return m_centre[member]; }
+  float radius(std::size_t member) const { return m_radius[member]; }
+  std::size_t memoryBytes() const;
+
+ private:
+  std::vector<Cell> m_cells;
+  std::vector<std::int32_t> m_index;
+  std::vector<std::array<double, 3>> m_centre;
+  std::vector<float> m_radius;
+};
+
+// From model to view coordinates: the rows of the 3x4 affine matrix, and the
+// clipping planes in model coordinates. Radii are not transformed (as the
+// impostor shaders draw them).
+struct ModelToView {
+  std::array<std::array<double, 4>, 3> rows{};
+  std::span<const ClipPlane> planes;
+};
+
 // Keeps its buffers from frame to frame. Not thread-safe.
 //
-// Above cellThreshold spheres in view (1e6-particle specimens) the spheres
-// are first binned into cells of a grid in view space, about 64 to a cell;
-// cells go front to back by their nearest sphere, a cell whose every pixel
-// is already nearer than its nearest sphere is left out whole, and the
-// spheres of the others go front to back within their cell. The interior of
-// a block then costs a test per cell instead of a sort and a test per
-// sphere. It may keep a few spheres the sorted order would leave out (one
-// farther away drawn before what hides it), never fewer: the picture is the
-// same.
+// Two ways to one answer:
+//  - sphere by sphere (project, unoccluded): every sphere in view is
+//    projected, sorted front to back and tested;
+//  - by cells (projectCells, unoccludedInCells), for large data sets
+//    (1e6-particle specimens): cells go front to back by their bounding
+//    sphere; a cell whose bounding sphere's pixels all hold a nearer depth
+//    already is left out whole, unprojected; the spheres of the others go
+//    front to back within their cell. The interior of a block then costs a
+//    test per cell instead of a projection, a sort and a test per sphere.
+//    It may keep a few spheres the sorted order would leave out (one farther
+//    away drawn before what hides it), never fewer: the picture is the same.
 class SphereOcclusion {
  public:
   // Projects a frame's spheres (viewed, not copied: they must outlive
@@ -77,8 +131,16 @@ class SphereOcclusion {
   // and the point still drawn (GL drops a point whose centre is outside the
   // viewport it is drawn into).
   const std::vector<std::int32_t>& unoccluded(int guard);
-  // Spheres in view from which on cells are used (tests force either way).
-  void setCellThreshold(std::size_t spheres) { m_cellThreshold = spheres; }
+
+  // By cells: projects the cells of `cells` (viewed: they must outlive
+  // unoccludedInCells()) and returns the widest point a sphere in view may
+  // need, exact where it matters: a cell whose bound exceeds `pointLimit`
+  // (or that the eye plane cuts) has its spheres projected one by one.
+  double projectCells(const OcclusionView& view, const SphereCells& cells,
+                      const ModelToView& transform, double pointLimit);
+  // The indices (SphereCells' input order) of the spheres that may show,
+  // ascending; clipped spheres are left out.
+  const std::vector<std::int32_t>& unoccludedInCells(int guard);
 
  private:
   struct Projected {
@@ -90,15 +152,14 @@ class SphereOcclusion {
   struct PixelBox {
     int i0 = 0, i1 = -1, j0 = 0, j1 = -1;  // pixel index ranges, inclusive
   };
-  struct Cell {
-    // Its spheres' points, pixels: the union of u +- half, v +- half.
-    double lo[2] = {std::numeric_limits<double>::infinity(),
-                    std::numeric_limits<double>::infinity()};
-    double hi[2] = {-std::numeric_limits<double>::infinity(),
-                    -std::numeric_limits<double>::infinity()};
-    PixelBox box;
-    float front = std::numeric_limits<float>::infinity();
-    std::int32_t first = 0;  // its spheres in m_cellSpheres
+  enum class Clip : std::uint8_t { kNone, kSome };
+  struct CellInView {
+    PixelBox box;  // the pixels its bounding sphere covers
+    float front = 0.0f;
+    bool open = false;  // its spheres are tested one by one, the cell not
+    Clip clip = Clip::kNone;
+    std::int32_t cell = 0;
+    std::int32_t first = 0;  // an open cell's spheres, projected already
     std::int32_t count = 0;
   };
   PixelBox pixelsIn(double uLo, double uHi, double vLo, double vHi) const;
@@ -111,13 +172,15 @@ class SphereOcclusion {
   void drawSphere(std::size_t i, const PixelBox& box, int guard);
   // Tests sphere i against the depth buffer; keeps and draws it if it shows.
   void visit(std::size_t i, int guard);
-  void cellOrder(int guard);
+  // Clears the depth buffer and its tiles.
+  void clearDepth();
+  // Transforms, clip-tests and projects the spheres of a cell into the
+  // frame's sphere arrays; returns the widest point in view.
+  double appendCell(const CellInView& cell, double largest);
+  // Visits the spheres [first, first + count) of the frame's arrays front to
+  // back.
+  void visitInOrder(std::int32_t first, std::int32_t count, int guard);
 
-  std::size_t m_cellThreshold = 65536;
-  std::vector<Cell> m_cells;
-  std::vector<std::int32_t> m_cellOf;       // per sphere in view
-  std::vector<std::int32_t> m_cellSpheres;  // sphere indices, grouped by cell
-  std::vector<std::int32_t> m_cellOrder;
   OcclusionView m_view;
   SphereSet m_spheres;
   std::vector<Projected> m_projected;
@@ -127,6 +190,17 @@ class SphereOcclusion {
   std::vector<float> m_tileFarthest;
   std::vector<std::uint8_t> m_keep;
   std::vector<std::int32_t> m_visible;
+  // By cells: the cells in view, and the spheres projected this frame
+  // (their view coordinates and the index each came from).
+  const SphereCells* m_cellSet = nullptr;
+  ModelToView m_transform;
+  std::vector<ClipPlane> m_planes;
+  std::vector<CellInView> m_cellsInView;
+  std::vector<double> m_x, m_y, m_z;
+  std::vector<float> m_radius;
+  std::vector<std::uint8_t> m_mayHide;
+  std::vector<std::int32_t> m_source;
+  std::vector<std::int32_t> m_cellSpheres;
 };
 
 // One frame without keeping buffers: project, then unoccluded(0).
