@@ -749,7 +749,7 @@ TEST_CASE("occlusion culling keeps a sphere that peeks out", "[render]") {
   const std::vector<float> r{1.0f, 0.5f, 0.5f, 0.5f};
   render::SphereSet spheres{x, y, z, r, {}};
   CHECK(render::unoccludedSpheres(view, spheres) == std::vector<std::int32_t>{0, 2});
-  // The same by cells of spheres (used from 65,536 spheres on), the model
+  // The same by cells of spheres (used from 16,384 spheres on), the model
   // coordinates being the view's.
   std::vector<double> xyz;
   for (std::size_t i = 0; i < x.size(); ++i) {

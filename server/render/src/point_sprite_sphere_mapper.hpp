@@ -91,7 +91,7 @@ class vtkPointSpriteSphereMapper : public vtkOpenGLSphereMapper {
   std::vector<float> Radii;
   std::vector<std::uint8_t> MayHide;
   SphereOcclusion Occlusion;
-  std::size_t OcclusionCellThreshold = 65536;
+  std::size_t OcclusionCellThreshold = 16384;
   SphereCells Cells;
   // What Cells were built from: the arrays and their modification times.
   struct CellsSource {

@@ -86,7 +86,7 @@ class SceneRenderer {
     bool occlusionCulling = true;
     // Spheres from which culling goes by cells kept between frames
     // (SphereCells, sphere_occlusion.hpp).
-    std::size_t occlusionCellThreshold = 65536;
+    std::size_t occlusionCellThreshold = 16384;
   };
   void setImpostorOptions(const ImpostorOptions& options);
   // The last frame's impostors: spheres drawn, of how many, and whether as
