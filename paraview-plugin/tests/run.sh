@@ -48,7 +48,7 @@ client_passes() {
   return 1
 }
 
-# make_case NAME generate|sim ARGS...: the data set and the CLI's extraction
+# make_case NAME generate|sim|import ARGS...: the data set and the CLI's extraction
 # of its last step by each method.
 make_case() {
   local name=$1
@@ -65,17 +65,19 @@ make_case() {
 
 # Specimens long enough that each of 2 ranks holds a slab of its own beside
 # the ghost layer (4 bond lengths), with a planted through crack on the cut
-# between the ranks' slabs that opens over 6 steps; an even number of sites
-# (with an odd one the mid-plane holds a site plane and almost no bond
-# crosses it). And the dissertation's cuboids, scaled down, with their
-# simulated cracks.
+# between the ranks' slabs that opens over 6 steps. The dissertation's
+# cuboids, scaled down, with their simulated cracks. And the notched bars
+# Yade, ESyS-Particle and LAMMPS broke (tests/data), imported.
 make_case lattice generate --sites 24 8 8 --planted-crack 6
 make_case random generate --packing random --box 0.03 0.01 0.01 --radius 0.0005 --planted-crack 6
 make_case cuboidA sim cuboid3d --set A --scale 0.4 -q
 make_case cuboidC sim cuboid3d --set C --scale 0.3 -q
+for code in yade esys lammps; do
+  make_case "$code" import "$code" "$root/tests/data/$code/notched_bar"
+done
 
 failed=0
-for name in lattice random cuboidA cuboidC; do
+for name in lattice random cuboidA cuboidC yade esys lammps; do
   for ranks in 1 2; do
     echo "== $name, $ranks rank(s)"
     if ((ranks == 1)); then
