@@ -15,6 +15,29 @@ namespace {
 // break_step, when the cell first cracked (the earliest break); bond_force,
 // the largest magnitude on the cell's bonds (the load around the crack). The
 // state is broken_bonds itself.
+// The nodes of a volume cell in the order VTK counts its volume positive:
+// a tetrahedron's first three points turn counter-clockwise seen from the
+// fourth, a pyramid's base does so seen from its apex. The decomposition
+// keeps a tetrahedron's nodes by particle index, so about half of them came
+// out inside out (ParaView's Integrate Variables summed a negative volume).
+// The current positions decide: the picture is of this step.
+std::array<dem::ParticleIndex, kMaxCellNodes> vtkOrder(const LatticeCell& cell,
+                                                       std::span<const dem::Vec3> positions) {
+  std::array<dem::ParticleIndex, kMaxCellNodes> nodes = cell.nodes;
+  auto at = [&](int k) { return positions[static_cast<std::size_t>(nodes[k])]; };
+  if (cell.type == CellType::kTetrahedron) {
+    if (dem::dot(at(1) - at(0), cross(at(2) - at(0), at(3) - at(0))) < 0.0) {
+      std::swap(nodes[1], nodes[2]);
+    }
+  } else if (cell.type == CellType::kPyramid) {
+    const dem::Vec3 normal = cross(at(2) - at(0), at(3) - at(1));
+    if (dem::dot(normal, at(4) - at(0)) < 0.0) {
+      std::swap(nodes[1], nodes[3]);  // the base cycle the other way round
+    }
+  }
+  return nodes;
+}
+
 class CellBondValues {
  public:
   explicit CellBondValues(const StepInput& step)
@@ -101,8 +124,9 @@ class CellAttributeExtractor final : public CrackExtractor {
       }
       std::array<std::int32_t, kMaxCellNodes> ids{};
       const int count = cell.nodeCount();
+      const std::array<dem::ParticleIndex, kMaxCellNodes> nodes = vtkOrder(cell, step.positions);
       for (int k = 0; k < count; ++k) {
-        const auto particle = static_cast<std::size_t>(cell.nodes[static_cast<std::size_t>(k)]);
+        const auto particle = static_cast<std::size_t>(nodes[static_cast<std::size_t>(k)]);
         if (m_pointOf[particle] < 0) {
           m_pointOf[particle] = static_cast<std::int32_t>(used.size());
           used.push_back(static_cast<dem::ParticleIndex>(particle));

@@ -252,3 +252,57 @@ TEST_CASE("a particle with more than 256 neighbours: its cells are left out, non
     }
   }
 }
+
+namespace {
+
+// The volume VTK gives a cell (vtkTetra::ComputeVolume's sign convention; a
+// pyramid as the tetrahedra 0 1 2 4 and 0 2 3 4), times 6.
+double vtkSignedVolume(const CrackMesh& mesh, std::size_t cell) {
+  const auto begin = static_cast<std::size_t>(mesh.volumeCells.offsets[cell]);
+  auto at = [&](std::size_t k) {
+    return mesh.points[static_cast<std::size_t>(mesh.volumeCells.connectivity[begin + k])];
+  };
+  auto tet = [](dem::Vec3 a, dem::Vec3 b, dem::Vec3 c, dem::Vec3 d) {
+    return dem::dot(b - a, cross(c - a, d - a));
+  };
+  if (mesh.volumeCellTypes[cell] == 10) {
+    return tet(at(0), at(1), at(2), at(3));
+  }
+  return tet(at(0), at(1), at(2), at(4)) + tet(at(0), at(2), at(3), at(4));
+}
+
+void requireRightSideOut(const CrackMesh& mesh) {
+  REQUIRE(mesh.volumeCellTypes.size() > 0);
+  std::size_t insideOut = 0;
+  for (std::size_t c = 0; c < mesh.volumeCellTypes.size(); ++c) {
+    insideOut += vtkSignedVolume(mesh, c) > 0.0 ? 0 : 1;
+  }
+  INFO(insideOut << " of " << mesh.volumeCellTypes.size() << " cells inside out");
+  CHECK(insideOut == 0);
+}
+
+}  // namespace
+
+TEST_CASE("cell attribute's cells are right side out, as VTK counts volume", "[cracks][packing]") {
+  // Before, a tetrahedron's nodes came in particle order and about half had
+  // a negative volume in ParaView.
+  SECTION("FCC lattice: tetrahedra and the pyramids of octahedra") {
+    const testing::PlantedCrack crack =
+        testing::fccPlaneCrack(4, {1, 0, 0}, 0.5 + 3.5 / std::sqrt(2.0));
+    auto extractor = makeExtractor(Method::kCellAttribute, *crack.graph, 3);
+    CrackMesh mesh;
+    REQUIRE(extractor->extract(crack.input(), mesh).isOk());
+    CHECK(std::count(mesh.volumeCellTypes.begin(), mesh.volumeCellTypes.end(), 14) > 0);
+    requireRightSideOut(mesh);
+  }
+  SECTION("random packing: the triangulation's tetrahedra") {
+    const dem::RandomPacking packing = makePacking(2.5e-4, 5e-4);
+    const BondGraph graph(packing.lattice.particleCount(), packing.lattice.bonds);
+    const auto state = throughCrack(packing, 0.01);
+    auto extractor = makeExtractor(Method::kCellAttribute, graph, 3);
+    CrackMesh mesh;
+    const StepInput step{packing.positions, state, packing.lattice.radius, {}, {}, {}, {}, {}};
+    REQUIRE(extractor->extract(step, mesh).isOk());
+    requireRightSideOut(mesh);
+  }
+}
