@@ -16,6 +16,7 @@
 #include "crackvis/v1/data.pb.h"
 #include "service_fixture.hpp"
 #include "support/h5_tamper.hpp"
+#include "support/process.hpp"
 #include <crackvis/dataservice/catalogue.hpp>
 #include <crackvis/dataservice/remote_dem_file.hpp>
 
@@ -266,13 +267,60 @@ TEST_CASE("A bond list with an index out of range is refused, naming the bond",
   config.dataRoot = root.path().string();
   auto server = startServer(config);
   auto client = connect(clientOptions(*server));
-  auto file = dataservice::RemoteDemFile::open(client, "run.h5");
+  // Read with the first step, or asked for with the description.
+  const bool prefetch = GENERATE(false, true);
+  INFO("bond list prefetched: " << prefetch);
+  auto file = dataservice::RemoteDemFile::open(client, "run.h5", {.prefetchBondList = prefetch});
   REQUIRE(file.isOk());
   auto step = file->readStep(1);
   CHECK(step.status().code() == StatusCode::kFailedPrecondition);
   CHECK_THAT(step.status().message(),
              Catch::Contains(fmt::format("bond {} joins particles 3 and -1", lastBond)));
   CHECK_FALSE(file->bondsLoaded());
+  REQUIRE(waitUntil([&] { return server->activeStreams() == 0; }));
+}
+
+TEST_CASE("A bond list asked for with the description is the one read with a step",
+          "[dataservice][integration]") {
+  const SampleRoot& sample = sampleRoot();
+  auto server = startServer(baseConfig());
+  auto client = connect(clientOptions(*server));
+  auto plain = dataservice::RemoteDemFile::open(client, "run.h5");
+  auto early = dataservice::RemoteDemFile::open(client, "run.h5", {.prefetchBondList = true});
+  REQUIRE(plain.isOk());
+  REQUIRE(early.isOk());
+  CHECK_FALSE(early->bondsLoaded());  // taken on first use
+  for (const int step : {2, 0}) {
+    auto a = plain->readStep(step);
+    auto b = early->readStep(step);
+    REQUIRE(a.isOk());
+    REQUIRE(b.isOk());
+    CHECK(a->positions == b->positions);
+    CHECK(a->bondState == b->bondState);
+  }
+  auto bonds = early->bonds();
+  REQUIRE(bonds.isOk());
+  CHECK(**bonds == sample.sample3d.lattice.bonds);
+  // bonds() alone takes it too.
+  auto listOnly = dataservice::RemoteDemFile::open(client, "run.h5", {.prefetchBondList = true});
+  REQUIRE(listOnly.isOk());
+  auto again = listOnly->bonds();
+  REQUIRE(again.isOk());
+  CHECK(**again == sample.sample3d.lattice.bonds);
+
+  // A file dropped before its first step cancels the list's stream.
+  {
+    auto dropped = dataservice::RemoteDemFile::open(client, "run.h5", {.prefetchBondList = true});
+    REQUIRE(dropped.isOk());
+  }
+  REQUIRE(waitUntil([&] { return server->activeStreams() == 0; }));
+  // A file that is not there: the description's answer, as without.
+  auto missing = dataservice::RemoteDemFile::open(client, "none.h5", {.prefetchBondList = true});
+  CHECK(missing.status().code() == StatusCode::kNotFound);
+  CHECK(missing.status().message() ==
+        dataservice::RemoteDemFile::open(client, "none.h5").status().message());
+  REQUIRE(waitUntil([&] { return server->activeStreams() == 0; }));
+  requireServerHealthy(*server);
 }
 
 // Whether this process holds `path` open (the catalogue's kept files).

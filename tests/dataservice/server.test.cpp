@@ -446,6 +446,38 @@ TEST_CASE("Health checking and server reflection are served", "[dataservice][int
   }
 }
 
+TEST_CASE("A Describe request that is no DescribeRequest is refused, and the server keeps serving",
+          "[dataservice][integration]") {
+  // Describe takes its request as bytes (it answers with the held bytes):
+  // the parse is the handler's, so a malformed request must still be
+  // INVALID_ARGUMENT.
+  auto server = startServer(baseConfig());
+  auto channel = rawChannel(*server);
+  grpc::GenericStub stub(channel);
+  grpc::CompletionQueue queue;
+  grpc::ClientContext context;
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+  const char garbage[] = {0x0a, 0x7f, 'x'};  // field 1 announces 127 bytes and holds 1
+  grpc::Slice slice(garbage, sizeof(garbage));
+  const grpc::ByteBuffer request(&slice, 1);
+  auto call = stub.PrepareUnaryCall(&context, "/crackvis.v1.DataService/Describe", request, &queue);
+  call->StartCall();
+  grpc::ByteBuffer reply;
+  grpc::Status status;
+  call->Finish(&reply, &status, reinterpret_cast<void*>(1));
+  void* got = nullptr;
+  bool ok = false;
+  REQUIRE(queue.Next(&got, &ok));
+  CHECK(status.error_code() == grpc::StatusCode::INVALID_ARGUMENT);
+  CHECK_THAT(status.error_message(), Catch::Contains("malformed crackvis.v1.DescribeRequest"));
+  queue.Shutdown();
+  while (queue.Next(&got, &ok)) {
+  }
+  auto client = connect(clientOptions(*server));
+  CHECK(client.describe("run.h5").isOk());
+  requireServerHealthy(*server);
+}
+
 struct BadInput {
   std::string name;
   std::string file;

@@ -150,7 +150,9 @@ Status timeViews(const Connections& c, Report& report, bool timed) {
   }
   const double coldSeconds = since(start);
   start = Clock::now();
-  auto view = ds::RemoteDemFile::open(c.client, report.file);
+  // As crackvis-render's step source opens a view: the bond list asked for
+  // with the description.
+  auto view = ds::RemoteDemFile::open(c.client, report.file, {.prefetchBondList = true});
   if (!view) {
     return view.status();
   }

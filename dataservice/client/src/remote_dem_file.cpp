@@ -108,7 +108,14 @@ Status checkBonds(std::span<const dem::Bond> bonds, std::int64_t particles, cons
 
 }  // namespace
 
-Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::string& file) {
+Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::string& file,
+                                          const OpenOptions& options) {
+  // Sent before the Describe: its chunks arrive while the answer is checked.
+  std::shared_ptr<DataClient::PendingRead> bonds;
+  if (options.prefetchBondList) {
+    bonds = std::make_shared<DataClient::PendingRead>(
+        client.startRead(file, {Hyperslab::whole("/bonds/pairs")}));
+  }
   auto description = client.describe(file);
   if (!description) {
     return description.status();
@@ -142,7 +149,42 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   remote.m_particles = sizes.particles;
   remote.m_bonds = sizes.bonds;
   remote.m_description = std::make_shared<const FileDescription>(std::move(*description));
+  remote.m_prefetchedBonds = std::move(bonds);
   return remote;
+}
+
+Status RemoteDemFile::takePrefetchedBonds() {
+  if (!m_prefetchedBonds) {
+    return Status::ok();
+  }
+  const std::shared_ptr<DataClient::PendingRead> pending = std::move(m_prefetchedBonds);
+  m_prefetchedBonds.reset();
+  const auto m = static_cast<std::uint64_t>(m_bonds);
+  std::vector<dem::Bond> bonds(static_cast<std::size_t>(m));
+  bool arrived = false;
+  std::size_t checked = 0;
+  CRACKVIS_RETURN_IF_ERROR(pending->receive(
+      [&](const DataClient::SlabHeader& slab) -> Result<std::byte*> {
+        if (slab.dtype != DataType::kInt32 || slab.shape != std::vector<std::uint64_t>{m, 2}) {
+          return failedPrecondition(
+              fmt::format("{}: /bonds/pairs arrived as {} [{}], expected int32 [{},2]", m_file,
+                          dataTypeName(slab.dtype), fmt::join(slab.shape, ","), m));
+        }
+        arrived = true;
+        return reinterpret_cast<std::byte*>(bonds.data());
+      },
+      [&](std::size_t /*slab*/, std::uint64_t offset, std::uint64_t bytes) -> Status {
+        // As readStep: each chunk checked while it is in the cache.
+        const auto complete = static_cast<std::size_t>((offset + bytes) / sizeof(dem::Bond));
+        const std::size_t first = checked;
+        checked = complete;
+        return checkBonds({bonds.data() + first, complete - first}, m_particles, m_file, first);
+      }));
+  if ((!arrived && m != 0) || checked != bonds.size()) {
+    return internalError(fmt::format("{}: /bonds/pairs arrived incomplete", m_file));
+  }
+  m_bondList = std::make_shared<const std::vector<dem::Bond>>(std::move(bonds));
+  return Status::ok();
 }
 
 Status RemoteDemFile::checkStep(int step) const {
@@ -190,6 +232,7 @@ Result<std::vector<std::uint8_t>> RemoteDemFile::toBondState(const TypedArray& a
 }
 
 Result<std::shared_ptr<const std::vector<dem::Bond>>> RemoteDemFile::bonds() {
+  CRACKVIS_RETURN_IF_ERROR(takePrefetchedBonds());
   if (!m_bondList) {
     auto arrays = m_client->read(m_file, {Hyperslab::whole("/bonds/pairs")});
     if (!arrays) {
@@ -249,7 +292,7 @@ Result<RemoteStep> RemoteDemFile::readStep(int step, StepExtras extras) {
   }
   std::vector<Hyperslab> slabs = {Hyperslab::whole(positionsPath(step)),
                                   Hyperslab::whole(bondStatePath(step))};
-  const bool withBonds = !m_bondList;
+  const bool withBonds = !m_bondList && !m_prefetchedBonds;
   const std::size_t bondsSlab = withBonds ? slabs.size() : SIZE_MAX;
   if (withBonds) {
     slabs.push_back(Hyperslab::whole("/bonds/pairs"));
@@ -290,6 +333,8 @@ Result<RemoteStep> RemoteDemFile::readStep(int step, StepExtras extras) {
   // cuboid A, page faults and zeroing included) while the server opens the
   // file and reads the first piece, not before the server hears of the call.
   auto pending = m_client->startRead(m_file, slabs);
+  // A prefetched bond list is taken meanwhile (most of it has arrived).
+  CRACKVIS_RETURN_IF_ERROR(takePrefetchedBonds());
   result.index = step;
   result.time = steps()[static_cast<size_t>(step)].time;
   result.positions.resize(n);

@@ -1,6 +1,9 @@
 #include "data_service.hpp"
 
 #include <cstring>
+#include <mutex>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -66,19 +69,69 @@ Status checkDatasetPaths(const v1::ReadRequest& request) {
 static_assert(kStreamBufferBytes >= kMaxChunkBytes + 64,
               "a stream's reservation covers one chunk and its header");
 
-class ChunkData {
+// Chunk buffers kept for the next chunk. A fresh 1 MiB buffer is mapped
+// anew by malloc and page-faults on every page the read writes into: a
+// fifth of a view's Read and a tenth of a Fetch on the server
+// (docs/benchmarks.md). Buffers come back when gRPC has sent their slice;
+// at most kKept idle ones are held (16 MiB beyond the streams' reservations).
+class ChunkPool {
  public:
-  explicit ChunkData(std::size_t size) : m_data(new char[size]), m_size(size) {}
-  char* data() { return m_data.get(); }
-  std::size_t size() const { return m_size; }
-  void shrink(std::size_t size) { m_size = std::min(m_size, size); }
-  grpc::Slice release() {
-    return grpc::Slice(m_data.release(), m_size,
-                       [](void* data) { delete[] static_cast<char*>(data); });
+  static char* take() {
+    {
+      const std::lock_guard lock(mutex());
+      if (!idle().empty()) {
+        char* buffer = idle().back();
+        idle().pop_back();
+        return buffer;
+      }
+    }
+    return new char[kMaxChunkBytes];
+  }
+  static void give(void* buffer) {
+    {
+      const std::lock_guard lock(mutex());
+      if (idle().size() < kKept) {
+        idle().push_back(static_cast<char*>(buffer));
+        return;
+      }
+    }
+    delete[] static_cast<char*>(buffer);
   }
 
  private:
-  std::unique_ptr<char[]> m_data;
+  static constexpr std::size_t kKept = 16;
+  static std::mutex& mutex() {
+    static std::mutex instance;
+    return instance;
+  }
+  static std::vector<char*>& idle() {
+    static std::vector<char*> instance;
+    return instance;
+  }
+};
+
+class ChunkData {
+ public:
+  explicit ChunkData(std::size_t size) : m_data(ChunkPool::take()), m_size(size) {}
+  ChunkData(ChunkData&& other) noexcept
+      : m_data(std::exchange(other.m_data, nullptr)), m_size(other.m_size) {}
+  ChunkData(const ChunkData&) = delete;
+  ChunkData& operator=(const ChunkData&) = delete;
+  ChunkData& operator=(ChunkData&&) = delete;
+  ~ChunkData() {
+    if (m_data != nullptr) {
+      ChunkPool::give(m_data);
+    }
+  }
+  char* data() { return m_data; }
+  std::size_t size() const { return m_size; }
+  void shrink(std::size_t size) { m_size = std::min(m_size, size); }
+  grpc::Slice release() {
+    return grpc::Slice(std::exchange(m_data, nullptr), m_size, &ChunkPool::give);
+  }
+
+ private:
+  char* m_data;  // kMaxChunkBytes, from the pool
   std::size_t m_size;
 };
 
@@ -292,6 +345,11 @@ class ReadReactor final : public StreamReactor {
       return;
     }
     m_piece = std::move(*piece);
+    if (m_piece.bytes > kMaxChunkBytes) {  // the planner splits pieces to a chunk
+      finish(internalError(fmt::format("a piece of {} bytes is over the chunk size {}",
+                                       m_piece.bytes, kMaxChunkBytes)));
+      return;
+    }
     ChunkData data(m_piece.bytes);
     const bool first = m_first;
     m_first = false;
@@ -461,10 +519,9 @@ Result<ResolvedPath> DataServiceImpl::resolveFor(const Caller& caller,
 }
 
 template <typename Body>
-grpc::ServerUnaryReactor* DataServiceImpl::unary(grpc::CallbackServerContext* context,
-                                                 const char* method, const std::string& file,
-                                                 const google::protobuf::Message& response,
-                                                 Body&& body) {
+grpc::ServerUnaryReactor* DataServiceImpl::unaryCall(grpc::CallbackServerContext* context,
+                                                     const char* method, const std::string& file,
+                                                     Body&& body) {
   const auto start = Clock::now();
   AccessRecord record;
   record.method = method;
@@ -474,12 +531,43 @@ grpc::ServerUnaryReactor* DataServiceImpl::unary(grpc::CallbackServerContext* co
     if (!caller) {
       return caller.status();
     }
-    return body(*caller);
+    return body(*caller, record);
   });
-  record.bytes = status.isOk() ? response.ByteSizeLong() : 0;
   auto* reactor = context->DefaultReactor();
   reactor->Finish(rpc::finishCall(m_log, record, start, status));
   return reactor;
+}
+
+template <typename Body>
+grpc::ServerUnaryReactor* DataServiceImpl::unary(grpc::CallbackServerContext* context,
+                                                 const char* method, const std::string& file,
+                                                 const google::protobuf::Message& response,
+                                                 Body&& body) {
+  return unaryCall(context, method, file, [&](const Caller& caller, AccessRecord& record) {
+    const Status status = body(caller);
+    record.bytes = status.isOk() ? response.ByteSizeLong() : 0;
+    return status;
+  });
+}
+
+template <typename Body>
+grpc::ServerUnaryReactor* DataServiceImpl::unaryRaw(grpc::CallbackServerContext* context,
+                                                    const char* method, const std::string& file,
+                                                    grpc::ByteBuffer* response, Body&& body) {
+  return unaryCall(context, method, file, [&](const Caller& caller, AccessRecord& record) {
+    Result<std::string> answer = body(caller);
+    if (!answer) {
+      return answer.status();
+    }
+    // The bytes go to gRPC as they are, freed when it is done with them.
+    auto* owned = new std::string(std::move(*answer));
+    grpc::Slice slice(
+        owned->data(), owned->size(), [](void* held) { delete static_cast<std::string*>(held); },
+        owned);
+    record.bytes = slice.size();
+    *response = grpc::ByteBuffer(&slice, 1);
+    return Status::ok();
+  });
 }
 
 grpc::ServerUnaryReactor* DataServiceImpl::ListFiles(grpc::CallbackServerContext* context,
@@ -518,49 +606,44 @@ grpc::ServerUnaryReactor* DataServiceImpl::ListFiles(grpc::CallbackServerContext
   });
 }
 
-namespace {
-
-Status parseDescription(const std::string& answer, const std::string& file,
-                        v1::DescribeResponse& response) {
-  if (!response.ParseFromString(answer)) {
-    return internalError(
-        fmt::format("Describe of {}: an HDF5 worker sent an unreadable answer", echoed(file)));
-  }
-  return Status::ok();
-}
-
-}  // namespace
-
 grpc::ServerUnaryReactor* DataServiceImpl::Describe(grpc::CallbackServerContext* context,
-                                                    const v1::DescribeRequest* request,
-                                                    v1::DescribeResponse* response) {
-  return unary(context, "Describe", request->file(), *response, [&](const Caller& caller) {
-    auto resolved = resolveFor(caller, request->file());
-    if (!resolved) {
-      return resolved.status();
-    }
-    // The answer is the file's as named by the caller (it echoes the name).
-    const std::string key = resolved->absolute.string() + '\n' + resolved->requested;
-    const std::optional<FileStamp> stamp = stampOf(resolved->absolute.string());
-    if (stamp && !request->uncached()) {
-      if (auto held = m_descriptions.find(key, *stamp)) {
-        return parseDescription(*held, request->file(), *response);
-      }
-    }
-    // A client that gave up (or whose deadline passed) stops the walk (its
-    // worker is replaced): a hostile file must not hold a worker for a
-    // caller who is gone.
-    auto described = m_workers.describe(*resolved, m_limits.describe,
-                                        [context] { return context->IsCancelled(); });
-    if (!described) {
-      return described.status();
-    }
-    CRACKVIS_RETURN_IF_ERROR(parseDescription(*described, request->file(), *response));
-    if (stamp) {
-      m_descriptions.store(key, *stamp, std::move(*described));
-    }
-    return Status::ok();
-  });
+                                                    const grpc::ByteBuffer* request,
+                                                    grpc::ByteBuffer* response) {
+  v1::DescribeRequest parsed;
+  const Status readable = parseRequest(request, parsed);
+  return unaryRaw(
+      context, "Describe", parsed.file(), response,
+      [&](const Caller& caller) -> Result<std::string> {
+        CRACKVIS_RETURN_IF_ERROR(readable);
+        auto resolved = resolveFor(caller, parsed.file());
+        if (!resolved) {
+          return resolved.status();
+        }
+        // The answer is the file's as named by the caller (it echoes the name).
+        const std::string key = resolved->absolute.string() + '\n' + resolved->requested;
+        const std::optional<FileStamp> stamp = stampOf(resolved->absolute.string());
+        if (stamp && !parsed.uncached()) {
+          if (auto held = m_descriptions.find(key, *stamp)) {
+            return std::move(*held);  // checked when it was stored
+          }
+        }
+        // A client that gave up (or whose deadline passed) stops the walk (its
+        // worker is replaced): a hostile file must not hold a worker for a
+        // caller who is gone.
+        auto described = m_workers.describe(*resolved, m_limits.describe,
+                                            [context] { return context->IsCancelled(); });
+        if (!described) {
+          return described.status();
+        }
+        if (v1::DescribeResponse check; !check.ParseFromString(*described)) {
+          return internalError(fmt::format(
+              "Describe of {}: an HDF5 worker sent an unreadable answer", echoed(parsed.file())));
+        }
+        if (stamp) {
+          m_descriptions.store(key, *stamp, *described);
+        }
+        return std::move(*described);
+      });
 }
 
 grpc::ServerUnaryReactor* DataServiceImpl::Resolve(grpc::CallbackServerContext* context,

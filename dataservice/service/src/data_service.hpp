@@ -71,10 +71,13 @@ class StreamRegistry {
 
 // Read and Fetch are raw methods: their chunks are written as a small
 // serialized header followed by the data in a slice gRPC takes over, so the
-// bulk bytes are not copied once more by protobuf serialization.
+// bulk bytes are not copied once more by protobuf serialization. Describe
+// is raw too: a held answer goes out as the bytes it is held as, not parsed
+// and serialized again on every call.
 using DataServiceBase = crackvis::v1::DataService::WithRawCallbackMethod_Read<
     crackvis::v1::DataService::WithRawCallbackMethod_Fetch<
-        crackvis::v1::DataService::CallbackService>>;
+        crackvis::v1::DataService::WithRawCallbackMethod_Describe<
+            crackvis::v1::DataService::CallbackService>>>;
 
 class DataServiceImpl final : public DataServiceBase {
  public:
@@ -93,9 +96,10 @@ class DataServiceImpl final : public DataServiceBase {
   grpc::ServerUnaryReactor* ListFiles(grpc::CallbackServerContext* context,
                                       const crackvis::v1::ListFilesRequest* request,
                                       crackvis::v1::ListFilesResponse* response) override;
+  using DataServiceBase::Describe;
   grpc::ServerUnaryReactor* Describe(grpc::CallbackServerContext* context,
-                                     const crackvis::v1::DescribeRequest* request,
-                                     crackvis::v1::DescribeResponse* response) override;
+                                     const grpc::ByteBuffer* request,
+                                     grpc::ByteBuffer* response) override;
   grpc::ServerUnaryReactor* Resolve(grpc::CallbackServerContext* context,
                                     const crackvis::v1::ResolveRequest* request,
                                     crackvis::v1::ResolveResponse* response) override;
@@ -118,11 +122,21 @@ class DataServiceImpl final : public DataServiceBase {
   Result<ResolvedPath> resolveFor(const Caller& caller, const std::string& path) const;
 
  private:
-  // A unary call: its access-log line, the handler boundary, the status.
+  // A unary call: its access-log line, the handler boundary, the status;
+  // `body(caller, record)` handles it.
+  template <typename Body>
+  grpc::ServerUnaryReactor* unaryCall(grpc::CallbackServerContext* context, const char* method,
+                                      const std::string& file, Body&& body);
+  // The same with a typed response, whose size the record gets.
   template <typename Body>
   grpc::ServerUnaryReactor* unary(grpc::CallbackServerContext* context, const char* method,
                                   const std::string& file,
                                   const google::protobuf::Message& response, Body&& body);
+  // The same for a raw answer: `body` returns the serialized response.
+  template <typename Body>
+  grpc::ServerUnaryReactor* unaryRaw(grpc::CallbackServerContext* context, const char* method,
+                                     const std::string& file, grpc::ByteBuffer* response,
+                                     Body&& body);
 
   Catalogue m_catalogue;
   Hdf5Workers& m_workers;

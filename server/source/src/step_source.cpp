@@ -242,7 +242,8 @@ class LocalSource final : public StepSource {
 Result<std::unique_ptr<StepSource>> openRemoteSource(const dataservice::DataClient& client,
                                                      const std::string& file,
                                                      const dem::SizeLimits& limits) {
-  auto remote = dataservice::RemoteDemFile::open(client, file);
+  // A view shows a step next: its bond list streams while the file is described.
+  auto remote = dataservice::RemoteDemFile::open(client, file, {.prefetchBondList = true});
   if (!remote) {
     return remote.status();
   }

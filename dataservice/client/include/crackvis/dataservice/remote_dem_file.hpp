@@ -3,7 +3,8 @@
 //
 // open() describes the file once (one round trip) and checks that it is
 // crackvis-dem v1 with the expected dtypes and shapes. The bond list is read
-// once, with the first step asked for, and kept; each further step is one
+// once, with the first step asked for (or, with OpenOptions, alongside the
+// description), and kept; each further step is one
 // Read of its positions and bond states, plus the optional arrays a view
 // colours by (velocities, bond forces) when asked for. Not thread-safe: one
 // per session.
@@ -51,9 +52,19 @@ struct StepExtras {
   friend bool operator==(const StepExtras&, const StepExtras&) = default;
 };
 
+struct OpenOptions {
+  // Ask for the bond list together with the description, for a view that
+  // will show a step: the list (most of a first view's bytes) streams while
+  // the description is answered and checked, instead of after it. It is
+  // taken on first use (readStep, bonds()); dropping the file before cancels
+  // it, with at most the stream's window (16 MiB) received.
+  bool prefetchBondList = false;
+};
+
 class RemoteDemFile {
  public:
-  static Result<RemoteDemFile> open(const DataClient& client, const std::string& file);
+  static Result<RemoteDemFile> open(const DataClient& client, const std::string& file,
+                                    const OpenOptions& options = {});
 
   const std::string& file() const { return m_file; }
   const FileDescription& description() const { return *m_description; }
@@ -88,6 +99,8 @@ class RemoteDemFile {
   Result<std::vector<dem::Bond>> toBonds(const TypedArray& array) const;
   Result<std::vector<dem::Vec3>> toPositions(const TypedArray& array, std::uint64_t expected) const;
   Result<std::vector<std::uint8_t>> toBondState(const TypedArray& array) const;
+  // Receives the prefetched bond list, if one is on its way.
+  Status takePrefetchedBonds();
 
   std::optional<DataClient> m_client;
   std::string m_file;
@@ -96,6 +109,7 @@ class RemoteDemFile {
   std::int64_t m_particles = 0;
   std::int64_t m_bonds = 0;
   std::shared_ptr<const std::vector<dem::Bond>> m_bondList;
+  std::shared_ptr<DataClient::PendingRead> m_prefetchedBonds;  // OpenOptions::prefetchBondList
 };
 
 }  // namespace crackvis::dataservice
