@@ -100,13 +100,15 @@ class ChunkPool {
 
  private:
   static constexpr std::size_t kKept = 16;
+  // Never destroyed: gRPC may hand a buffer back while the process exits,
+  // and the held buffers stay reachable rather than leaked.
   static std::mutex& mutex() {
-    static std::mutex instance;
-    return instance;
+    static auto* instance = new std::mutex;
+    return *instance;
   }
   static std::vector<char*>& idle() {
-    static std::vector<char*> instance;
-    return instance;
+    static auto* instance = new std::vector<char*>;
+    return *instance;
   }
 };
 
