@@ -243,8 +243,8 @@ TEST_CASE("16 concurrent clients reading different steps get correct data",
     CHECK(failures[c].empty());
   }
   CHECK(reads == kClients * kRounds);
-  // A stream's slot is released once gRPC is done with the call, a moment
-  // after the client has its status.
+  // A stream's slot is released when the server finishes it; a failed one
+  // when gRPC is done with it, a moment after the client has its status.
   CHECK(waitUntil([&] { return server->activeStreams() == 0; }));
   requireServerHealthy(*server);
 }

@@ -323,6 +323,50 @@ TEST_CASE("A bond list asked for with the description is the one read with a ste
   requireServerHealthy(*server);
 }
 
+TEST_CASE("A prefetched bond list needs one stream at a time, and a refused one is read again",
+          "[dataservice][integration]") {
+  const SampleRoot& sample = sampleRoot();
+  auto config = baseConfig();
+  config.limits.maxConcurrentStreams = 1;
+  auto server = startServer(config);
+  auto client = connect(clientOptions(*server));
+  auto view = dataservice::RemoteDemFile::open(client, "run.h5", {.prefetchBondList = true});
+  REQUIRE(view.isOk());
+  // The step's Read, sent while the list streams, is refused and asked for
+  // again once the list is in (its slot free before the client has its
+  // status).
+  auto step = view->readStep(1);
+  INFO(step.status().message());
+  REQUIRE(step.isOk());
+  CHECK(step->positions == sample.sample3d.steps[1].positions);
+
+  // Another stream holds the only slot while the file is opened: the
+  // prefetch is refused, the step still reads, and the list comes when
+  // asked for.
+  auto stub = rawStub(*server);
+  grpc::ClientContext held;
+  v1::FetchRequest fetch;
+  fetch.set_file("big.h5");
+  auto holder = stub->Fetch(&held, fetch);
+  v1::FetchChunk chunk;
+  REQUIRE(holder->Read(&chunk));
+  auto refused = dataservice::RemoteDemFile::open(client, "run.h5", {.prefetchBondList = true});
+  REQUIRE(refused.isOk());  // the Describe is no stream
+  held.TryCancel();
+  while (holder->Read(&chunk)) {
+  }
+  holder->Finish();
+  REQUIRE(waitUntil([&] { return server->activeStreams() == 0; }));
+  auto again = refused->readStep(2);
+  REQUIRE(again.isOk());
+  CHECK(again->bondState == sample.sample3d.steps[2].bondState);
+  // The refused list is read when asked for.
+  auto list = refused->bonds();
+  REQUIRE(list.isOk());
+  CHECK(**list == sample.sample3d.lattice.bonds);
+  requireServerHealthy(*server);
+}
+
 // Whether this process holds `path` open (the catalogue's kept files).
 bool heldOpen(const fs::path& path) {
   for (const auto& entry : fs::directory_iterator("/proc/self/fd")) {

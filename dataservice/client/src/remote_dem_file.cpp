@@ -111,9 +111,9 @@ Status checkBonds(std::span<const dem::Bond> bonds, std::int64_t particles, cons
 Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::string& file,
                                           const OpenOptions& options) {
   // Sent before the Describe: its chunks arrive while the answer is checked.
-  std::shared_ptr<DataClient::PendingRead> bonds;
+  std::unique_ptr<DataClient::PendingRead> bonds;
   if (options.prefetchBondList) {
-    bonds = std::make_shared<DataClient::PendingRead>(
+    bonds = std::make_unique<DataClient::PendingRead>(
         client.startRead(file, {Hyperslab::whole("/bonds/pairs")}));
   }
   auto description = client.describe(file);
@@ -157,13 +157,12 @@ Status RemoteDemFile::takePrefetchedBonds() {
   if (!m_prefetchedBonds) {
     return Status::ok();
   }
-  const std::shared_ptr<DataClient::PendingRead> pending = std::move(m_prefetchedBonds);
-  m_prefetchedBonds.reset();
+  const std::unique_ptr<DataClient::PendingRead> pending = std::move(m_prefetchedBonds);
   const auto m = static_cast<std::uint64_t>(m_bonds);
   std::vector<dem::Bond> bonds(static_cast<std::size_t>(m));
   bool arrived = false;
   std::size_t checked = 0;
-  CRACKVIS_RETURN_IF_ERROR(pending->receive(
+  const Status received = pending->receive(
       [&](const DataClient::SlabHeader& slab) -> Result<std::byte*> {
         if (slab.dtype != DataType::kInt32 || slab.shape != std::vector<std::uint64_t>{m, 2}) {
           return failedPrecondition(
@@ -179,7 +178,20 @@ Status RemoteDemFile::takePrefetchedBonds() {
         const std::size_t first = checked;
         checked = complete;
         return checkBonds({bonds.data() + first, complete - first}, m_particles, m_file, first);
-      }));
+      });
+  switch (received.code()) {
+    case StatusCode::kOk:
+      break;
+    case StatusCode::kResourceExhausted:  // a stream limit refused it
+    case StatusCode::kDeadlineExceeded:   // the call time limit cut it
+    case StatusCode::kCancelled:
+    case StatusCode::kUnavailable:
+      // Read again when needed (with the step, or alone); a list that is
+      // wrong is an error.
+      return Status::ok();
+    default:
+      return received;
+  }
   if ((!arrived && m != 0) || checked != bonds.size()) {
     return internalError(fmt::format("{}: /bonds/pairs arrived incomplete", m_file));
   }
@@ -271,6 +283,18 @@ Result<std::vector<double>> RemoteDemFile::radii() const {
 }
 
 Result<RemoteStep> RemoteDemFile::readStep(int step, StepExtras extras) {
+  const bool prefetched = m_prefetchedBonds != nullptr;
+  auto result = readStepOnce(step, extras);
+  // A server that allows one stream refuses the step's Read while the
+  // prefetched list's is open; the list is taken by then (and its slot free
+  // once the client has it), so the step is asked for once more.
+  if (!result && prefetched && result.status().code() == StatusCode::kResourceExhausted) {
+    return readStepOnce(step, std::move(extras));
+  }
+  return result;
+}
+
+Result<RemoteStep> RemoteDemFile::readStepOnce(int step, StepExtras extras) {
   CRACKVIS_RETURN_IF_ERROR(checkStep(step));
   const auto n = static_cast<std::uint64_t>(m_particles);
   const auto m = static_cast<std::uint64_t>(m_bonds);

@@ -194,9 +194,7 @@ class StreamReactor : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
   void OnCancel() override { m_cancelled = true; }
 
   void OnDone() override {
-    if (m_slot != 0) {
-      m_service.streams().release(m_slot);
-    }
+    releaseSlot();
     delete this;
   }
 
@@ -249,11 +247,23 @@ class StreamReactor : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
   }
 
   void finish(const Status& status) {
+    releaseSlot();
     this->Finish(rpc::finishCall(m_service.log(), m_record, m_start, status));
   }
   void finish(const Status& logged, const grpc::Status& sent) {
+    releaseSlot();
     rpc::finishCall(m_service.log(), m_record, m_start, logged);
     this->Finish(sent);
+  }
+  // At Finish, not when gRPC is done with the call (OnDone): the client has
+  // its status by then and may start its next Read at once (a view's bond
+  // list, then its step), which a server with one stream per user would
+  // otherwise refuse. Every write has completed: nothing is buffered.
+  void releaseSlot() {
+    if (m_slot != 0) {
+      m_service.streams().release(m_slot);
+      m_slot = 0;
+    }
   }
 
   virtual Status open(const v1::ReadRequest& /*request*/) { return internalError("not a Read"); }

@@ -305,15 +305,17 @@ void SphereCells::build(std::span<const double> xyz, std::span<const float> radi
   }
   const double widest = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
   std::array<double, 3> extent{};
-  double volume = 1.0;
   for (int a = 0; a < 3; ++a) {
     extent[a] = std::max(hi[a] - lo[a], 1e-3 * widest);
-    volume *= extent[a];
   }
-  const double side = std::cbrt(volume / std::max(1.0, static_cast<double>(n) / 64.0));
+  // The side of a cube of the box's volume over the cells, by cube roots of
+  // each factor: the volume itself underflows for coinciding centres.
+  const double side = std::cbrt(extent[0]) * std::cbrt(extent[1]) * std::cbrt(extent[2]) /
+                      std::cbrt(std::max(1.0, static_cast<double>(n) / 64.0));
   std::array<int, 3> count{};
   for (int a = 0; a < 3; ++a) {
-    count[a] = std::clamp(static_cast<int>(extent[a] / side) + 1, 1, 1024);
+    const double cells = side > 0.0 ? extent[a] / side : 1.0;
+    count[a] = std::clamp(static_cast<int>(std::min(cells, 1024.0)) + 1, 1, 1024);
   }
   std::vector<std::int32_t> cellOf(n);
   std::vector<std::int32_t> start(static_cast<std::size_t>(count[0]) * count[1] * count[2] + 1, 0);

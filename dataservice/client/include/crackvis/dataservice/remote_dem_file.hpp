@@ -56,8 +56,12 @@ struct OpenOptions {
   // Ask for the bond list together with the description, for a view that
   // will show a step: the list (most of a first view's bytes) streams while
   // the description is answered and checked, instead of after it. It is
-  // taken on first use (readStep, bonds()); dropping the file before cancels
-  // it, with at most the stream's window (16 MiB) received.
+  // taken on first use (readStep, bonds()) while the step's Read starts; a
+  // server that allows one stream refuses that Read, which is then asked for
+  // again once the list is in. If the server refused or cut the list's
+  // stream, the list is read again when needed (bonds(), the next
+  // readStep). Dropping the file before cancels it, with at most the
+  // stream's window (16 MiB) received.
   bool prefetchBondList = false;
 };
 
@@ -99,8 +103,10 @@ class RemoteDemFile {
   Result<std::vector<dem::Bond>> toBonds(const TypedArray& array) const;
   Result<std::vector<dem::Vec3>> toPositions(const TypedArray& array, std::uint64_t expected) const;
   Result<std::vector<std::uint8_t>> toBondState(const TypedArray& array) const;
-  // Receives the prefetched bond list, if one is on its way.
+  // Receives the prefetched bond list, if one is on its way; a refused or
+  // cut stream leaves the list to be read again.
   Status takePrefetchedBonds();
+  Result<RemoteStep> readStepOnce(int step, StepExtras extras);
 
   std::optional<DataClient> m_client;
   std::string m_file;
@@ -109,7 +115,8 @@ class RemoteDemFile {
   std::int64_t m_particles = 0;
   std::int64_t m_bonds = 0;
   std::shared_ptr<const std::vector<dem::Bond>> m_bondList;
-  std::shared_ptr<DataClient::PendingRead> m_prefetchedBonds;  // OpenOptions::prefetchBondList
+  // OpenOptions::prefetchBondList; it makes the file move-only (one reader).
+  std::unique_ptr<DataClient::PendingRead> m_prefetchedBonds;
 };
 
 }  // namespace crackvis::dataservice

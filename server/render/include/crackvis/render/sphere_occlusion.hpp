@@ -117,8 +117,10 @@ struct ModelToView {
 //    already is left out whole, unprojected; the spheres of the others go
 //    front to back within their cell. The interior of a block then costs a
 //    test per cell instead of a projection, a sort and a test per sphere.
-//    It may keep a few spheres the sorted order would leave out (one farther
-//    away drawn before what hides it), never fewer: the picture is the same.
+//    The two may keep slightly different spheres (cells go by their
+//    silhouettes, spheres by their points; a farther sphere may be drawn
+//    before what hides it), but each leaves out only spheres that change no
+//    pixel: the picture is the same.
 class SphereOcclusion {
  public:
   // Projects a frame's spheres (viewed, not copied: they must outlive
