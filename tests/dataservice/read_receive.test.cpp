@@ -271,6 +271,7 @@ TEST_CASE("A bond list with an index out of range is refused, naming the bond",
   const bool prefetch = GENERATE(false, true);
   INFO("bond list prefetched: " << prefetch);
   auto file = dataservice::RemoteDemFile::open(client, "run.h5", {.prefetchBondList = prefetch});
+  INFO(file.status().message());
   REQUIRE(file.isOk());
   auto step = file->readStep(1);
   CHECK(step.status().code() == StatusCode::kFailedPrecondition);
