@@ -106,6 +106,29 @@ Status checkBonds(std::span<const dem::Bond> bonds, std::int64_t particles, cons
   return Status::ok();
 }
 
+// A bond list checked chunk by chunk as its bytes land in `bonds`, while
+// they are still in the cache, rather than in one pass over megabytes after
+// the last chunk. Chunks come in byte order; a bond split across two chunks
+// is checked with the second.
+class BondListCheck {
+ public:
+  BondListCheck(std::span<const dem::Bond> bonds, std::int64_t particles, const std::string& file)
+      : m_bonds(bonds), m_particles(particles), m_file(file) {}
+  Status arrived(std::uint64_t offset, std::uint64_t bytes) {
+    const auto complete = static_cast<std::size_t>((offset + bytes) / sizeof(dem::Bond));
+    const std::size_t first = m_checked;
+    m_checked = complete;
+    return checkBonds(m_bonds.subspan(first, complete - first), m_particles, m_file, first);
+  }
+  bool complete() const { return m_checked == m_bonds.size(); }
+
+ private:
+  std::span<const dem::Bond> m_bonds;
+  std::int64_t m_particles;
+  const std::string& m_file;
+  std::size_t m_checked = 0;
+};
+
 }  // namespace
 
 Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::string& file,
@@ -161,7 +184,7 @@ Status RemoteDemFile::takePrefetchedBonds() {
   const auto m = static_cast<std::uint64_t>(m_bonds);
   std::vector<dem::Bond> bonds(static_cast<std::size_t>(m));
   bool arrived = false;
-  std::size_t checked = 0;
+  BondListCheck check(bonds, m_particles, m_file);
   const Status received = pending->receive(
       [&](const DataClient::SlabHeader& slab) -> Result<std::byte*> {
         if (slab.dtype != DataType::kInt32 || slab.shape != std::vector<std::uint64_t>{m, 2}) {
@@ -172,12 +195,8 @@ Status RemoteDemFile::takePrefetchedBonds() {
         arrived = true;
         return reinterpret_cast<std::byte*>(bonds.data());
       },
-      [&](std::size_t /*slab*/, std::uint64_t offset, std::uint64_t bytes) -> Status {
-        // As readStep: each chunk checked while it is in the cache.
-        const auto complete = static_cast<std::size_t>((offset + bytes) / sizeof(dem::Bond));
-        const std::size_t first = checked;
-        checked = complete;
-        return checkBonds({bonds.data() + first, complete - first}, m_particles, m_file, first);
+      [&](std::size_t /*slab*/, std::uint64_t offset, std::uint64_t bytes) {
+        return check.arrived(offset, bytes);
       });
   switch (received.code()) {
     case StatusCode::kOk:
@@ -192,7 +211,7 @@ Status RemoteDemFile::takePrefetchedBonds() {
     default:
       return received;
   }
-  if ((!arrived && m != 0) || checked != bonds.size()) {
+  if ((!arrived && m != 0) || !check.complete()) {
     return internalError(fmt::format("{}: /bonds/pairs arrived incomplete", m_file));
   }
   m_bondList = std::make_shared<const std::vector<dem::Bond>>(std::move(bonds));
@@ -400,9 +419,7 @@ Result<RemoteStep> RemoteDemFile::readStepOnce(int step, StepExtras extras) {
         {DataType::kFloat64, shape, reinterpret_cast<std::byte*>(read.values->data())});
   }
   std::vector<bool> arrived(slabs.size(), false);
-  // The bonds are checked as their chunks arrive, while the bytes are still
-  // in the cache, rather than in one pass over 2 MB after the last chunk.
-  std::size_t bondsChecked = 0;
+  BondListCheck bondCheck(bonds, m_particles, m_file);
   CRACKVIS_RETURN_IF_ERROR(pending.receive(
       [&](const DataClient::SlabHeader& slab) -> Result<std::byte*> {
         const Expected& want = expected.at(slab.index);
@@ -416,17 +433,7 @@ Result<RemoteStep> RemoteDemFile::readStepOnce(int step, StepExtras extras) {
         return want.data;
       },
       [&](std::size_t slab, std::uint64_t offset, std::uint64_t bytes) -> Status {
-        if (slab != bondsSlab) {
-          return Status::ok();
-        }
-        // Chunks come in byte order; a bond split across two chunks is
-        // checked with the second.
-        const auto complete = static_cast<std::size_t>((offset + bytes) / sizeof(dem::Bond));
-        const std::span<const dem::Bond> fresh(bonds.data() + bondsChecked,
-                                               complete - bondsChecked);
-        const std::size_t first = bondsChecked;
-        bondsChecked = complete;
-        return checkBonds(fresh, m_particles, m_file, first);
+        return slab == bondsSlab ? bondCheck.arrived(offset, bytes) : Status::ok();
       }));
   for (size_t i = 0; i < slabs.size(); ++i) {
     if (!arrived[i] && expected[i].elements() != 0) {
@@ -434,7 +441,7 @@ Result<RemoteStep> RemoteDemFile::readStepOnce(int step, StepExtras extras) {
     }
   }
   if (withBonds) {
-    if (bondsChecked != bonds.size()) {
+    if (!bondCheck.complete()) {
       return internalError(fmt::format("{}: /bonds/pairs arrived incomplete", m_file));
     }
     m_bondList = std::make_shared<const std::vector<dem::Bond>>(std::move(bonds));

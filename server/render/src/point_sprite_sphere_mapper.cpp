@@ -314,7 +314,6 @@ void vtkPointSpriteSphereMapper::SelectSpheres(vtkRenderer* ren, vtkActor* act,
   this->MayHide.clear();
   auto* doubles = vtkDoubleArray::FastDownCast(positions);
   auto* floatRadii = vtkFloatArray::FastDownCast(radii);
-  const auto& m = transform.rows;
   for (vtkIdType i = 0; i < n; ++i) {
     std::array<double, 3> p;
     if (doubles != nullptr) {
@@ -327,9 +326,10 @@ void vtkPointSpriteSphereMapper::SelectSpheres(vtkRenderer* ren, vtkActor* act,
       continue;
     }
     this->Candidates.push_back(static_cast<std::uint32_t>(i));
-    this->X.push_back(m[0][0] * p[0] + m[0][1] * p[1] + m[0][2] * p[2] + m[0][3]);
-    this->Y.push_back(m[1][0] * p[0] + m[1][1] * p[1] + m[1][2] * p[2] + m[1][3]);
-    this->Z.push_back(m[2][0] * p[0] + m[2][1] * p[1] + m[2][2] * p[2] + m[2][3]);
+    const std::array<double, 3> q = transform.apply(p);
+    this->X.push_back(q[0]);
+    this->Y.push_back(q[1]);
+    this->Z.push_back(q[2]);
     this->Radii.push_back(floatRadii != nullptr ? floatRadii->GetValue(i)
                           : radii != nullptr    ? static_cast<float>(radii->GetComponent(i, 0))
                                                 : this->Radius);

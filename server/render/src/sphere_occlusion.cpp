@@ -406,15 +406,6 @@ double stretchBound(const ModelToView& transform) {
   return std::sqrt(largest) * (orthogonal ? 1.0 + 1e-9 : std::sqrt(3.0));
 }
 
-std::array<double, 3> toView(const ModelToView& transform, const std::array<double, 3>& p) {
-  std::array<double, 3> out{};
-  for (int row = 0; row < 3; ++row) {
-    const auto& m = transform.rows[row];
-    out[row] = m[0] * p[0] + m[1] * p[1] + m[2] * p[2] + m[3];
-  }
-  return out;
-}
-
 }  // namespace
 
 double SphereOcclusion::projectCells(const OcclusionView& view, const SphereCells& cells,
@@ -458,7 +449,7 @@ double SphereOcclusion::projectCells(const OcclusionView& view, const SphereCell
       continue;
     }
     // The bounding sphere in view coordinates holds every sphere of the cell.
-    const std::array<double, 3> centre = toView(transform, cell.centre);
+    const std::array<double, 3> centre = transform.apply(cell.centre);
     const double reach = stretch * cell.spread + cell.largestRadius;
     const double depth = -centre[2];
     if (!view.parallel && depth + reach <= 0.0) {
@@ -518,7 +509,7 @@ double SphereOcclusion::appendCell(const CellInView& cell, double largest) {
       }
       mayHide = test.nearPlane ? 0 : 1;
     }
-    const std::array<double, 3> q = toView(m_transform, p);
+    const std::array<double, 3> q = m_transform.apply(p);
     m_x.push_back(q[0]);
     m_y.push_back(q[1]);
     m_z.push_back(q[2]);

@@ -104,6 +104,15 @@ class SphereCells {
 struct ModelToView {
   std::array<std::array<double, 4>, 3> rows{};
   std::span<const ClipPlane> planes;
+
+  std::array<double, 3> apply(const std::array<double, 3>& p) const {
+    std::array<double, 3> out{};
+    for (int row = 0; row < 3; ++row) {
+      const auto& m = rows[static_cast<std::size_t>(row)];
+      out[static_cast<std::size_t>(row)] = m[0] * p[0] + m[1] * p[1] + m[2] * p[2] + m[3];
+    }
+    return out;
+  }
 };
 
 // Keeps its buffers from frame to frame. Not thread-safe.
