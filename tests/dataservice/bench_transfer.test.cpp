@@ -63,7 +63,14 @@ TEST_CASE("crackvis bench transfer measures Fetch, a first and a warm view, and 
         std::filesystem::file_size(sampleRoot().file("run.h5")));
   CHECK(report.at("raw_tls_full").at("bytes") == report.at("grpc_fetch_full").at("bytes"));
   CHECK(report.at("grpc_first_view").at("bytes") == viewBytes);
-  CHECK(report.at("raw_tls_view").at("bytes") == viewBytes);
+  // The bond list and bond states travel packed; raw TLS moves as many bytes.
+  const auto wireBytes = report.at("grpc_first_view").at("wire_bytes").get<std::uint64_t>();
+  CHECK(wireBytes < viewBytes - sample.lattice.bondCount() * 4);
+  CHECK(wireBytes > sample.lattice.particleCount() * 24);
+  CHECK(report.at("raw_tls_view").at("bytes") == wireBytes);
+  // The same view with every chunk raw moves every byte.
+  CHECK(report.at("grpc_first_view_raw_chunks").at("bytes") == viewBytes);
+  CHECK(report.at("grpc_first_view_raw_chunks").at("wire_bytes") == viewBytes);
   // A step change moves the step's positions and bond states only.
   CHECK(report.at("warm_step") == 0);
   CHECK(report.at("grpc_warm_view").at("bytes") ==
@@ -75,6 +82,7 @@ TEST_CASE("crackvis bench transfer measures Fetch, a first and a warm view, and 
   CHECK(report.at("settled").is_boolean());
   CHECK(report.at("grpc_first_view").at("seconds_all").size() == runs);
   CHECK(report.at("grpc_warm_view").at("seconds_all").size() == runs);
+  CHECK(report.at("grpc_first_view_raw_chunks").at("seconds_all").size() == runs);
   CHECK(report.at("describe").at("seconds_all").size() == runs);
   CHECK(report.at("describe").at("round_trips") == 1);
   // The first view includes its Describe and so takes longer than a step change.
@@ -83,6 +91,10 @@ TEST_CASE("crackvis bench transfer measures Fetch, a first and a warm view, and 
   const auto& ratios = report.at("ratios");
   CHECK(ratios.at("time_full_fetch_over_first_view").get<double>() > 0.0);
   CHECK(ratios.at("time_full_fetch_over_warm_view").get<double>() > 0.0);
+  CHECK(ratios.at("time_full_fetch_over_first_view_raw_chunks").get<double>() > 0.0);
+  CHECK(ratios.at("grpc_over_raw_tls_throughput_first_view").get<double>() > 0.0);
+  CHECK(ratios.at("bytes_full_over_first_view_wire").get<double>() >
+        ratios.at("bytes_full_over_first_view").get<double>());
   CHECK(ratios.at("grpc_over_raw_tls_throughput_full").get<double>() > 0.0);
   CHECK(report.at("load_before").size() == 3);
   CHECK(report.at("goals").at("met").is_boolean());

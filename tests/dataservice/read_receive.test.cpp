@@ -6,6 +6,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <thread>
 
 #include <catch2/catch.hpp>
@@ -18,6 +19,7 @@
 #include "support/h5_tamper.hpp"
 #include "support/process.hpp"
 #include <crackvis/dataservice/catalogue.hpp>
+#include <crackvis/dataservice/packed_chunk.hpp>
 #include <crackvis/dataservice/remote_dem_file.hpp>
 
 namespace crackvis::testing {
@@ -188,6 +190,142 @@ TEST_CASE("Read chunks are taken off the wire as protobuf defines them",
       CHECK_THAT(arrays.status().message(), Catch::Contains(expected));
     }
   }
+}
+
+// A packed chunk of int32 pairs, as the server sends it: the fields, then
+// the data (or, with `dataFirst`, the data before them).
+std::string packedPairs(const std::vector<std::int32_t>& values, std::uint64_t slabBytes,
+                        std::uint64_t offset, bool dataFirst = false) {
+  const std::size_t rawBytes = values.size() * sizeof(std::int32_t);
+  std::vector<std::byte> packed(dataservice::kMaxChunkBytes);
+  const std::size_t size = dataservice::packChunk(dataservice::DataType::kInt32, 2,
+                                                  reinterpret_cast<const std::byte*>(values.data()),
+                                                  rawBytes, packed.data(), packed.size());
+  REQUIRE(size > 0);
+  v1::ReadChunk fields;
+  fields.set_slab_index(0);
+  fields.set_dtype(v1::INT32);
+  fields.add_shape(slabBytes / 8);
+  fields.add_shape(2);
+  fields.set_slab_bytes(slabBytes);
+  fields.set_offset(offset);
+  fields.set_encoding(v1::CHUNK_ENCODING_PACKED);
+  fields.set_decoded_bytes(rawBytes);
+  v1::ReadChunk data;
+  data.set_data(std::string(reinterpret_cast<const char*>(packed.data()), size));
+  return dataFirst ? data.SerializeAsString() + fields.SerializeAsString()
+                   : fields.SerializeAsString() + data.SerializeAsString();
+}
+
+// Sorted pairs of nearby particles, as a lattice's bond list.
+std::vector<std::int32_t> nearbyPairs(std::size_t bonds) {
+  std::vector<std::int32_t> values;
+  for (std::size_t b = 0; b < bonds; ++b) {
+    values.push_back(static_cast<std::int32_t>(b / 3));
+    values.push_back(static_cast<std::int32_t>(b / 3 + 1 + (b % 3) * 40));
+  }
+  return values;
+}
+
+TEST_CASE("Packed chunks are unpacked in place, and a malformed one ends the call",
+          "[dataservice][integration]") {
+  // 1 MiB of pairs packed (about 200 KiB, more than one receive buffer),
+  // then a small packed chunk with its data first, then a raw one.
+  const std::size_t bonds = (dataservice::kMaxChunkBytes / 8) + 1000 + 10;
+  const auto values = nearbyPairs(bonds);
+  const std::uint64_t slabBytes = bonds * 8;
+  const std::vector<std::int32_t> first(values.begin(),
+                                        values.begin() + dataservice::kMaxChunkBytes / 4);
+  const std::vector<std::int32_t> second(values.begin() + dataservice::kMaxChunkBytes / 4,
+                                         values.end() - 20);
+  const std::vector<std::int32_t> third(values.end() - 20, values.end());
+  v1::ReadChunk rawThird;
+  rawThird.set_slab_index(0);
+  rawThird.set_dtype(v1::INT32);
+  rawThird.add_shape(bonds);
+  rawThird.add_shape(2);
+  rawThird.set_slab_bytes(slabBytes);
+  rawThird.set_offset(slabBytes - 80);
+  rawThird.set_decoded_bytes(80);
+  rawThird.set_data(std::string(reinterpret_cast<const char*>(third.data()), 80));
+
+  SECTION("packed and raw chunks of one slab, in either field order") {
+    ScriptedServer server({packedPairs(first, slabBytes, 0),
+                           packedPairs(second, slabBytes, dataservice::kMaxChunkBytes, true),
+                           rawThird.SerializeAsString()});
+    DataClient client = server.connect();
+    auto arrays = client.read("any.h5", {Hyperslab::whole("/bonds/pairs")});
+    INFO(arrays.status().message());
+    REQUIRE(arrays.isOk());
+    auto received = (*arrays)[0].values<std::int32_t>();
+    REQUIRE(received.isOk());
+    CHECK(*received == values);
+    CHECK((*arrays)[0].shape == std::vector<std::uint64_t>{bonds, 2});
+    CHECK(client.readWireBytes() < slabBytes / 4);
+  }
+
+  SECTION("a packed chunk that does not say what it holds, or lies, ends the call") {
+    const auto withFields = [&](const std::function<void(v1::ReadChunk&)>& change) {
+      v1::ReadChunk message;
+      message.ParseFromString(packedPairs(first, slabBytes, 0));
+      change(message);
+      return message.SerializeAsString();
+    };
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {withFields([](v1::ReadChunk& m) { m.set_encoding(static_cast<v1::ChunkEncoding>(9)); }),
+         "unknown encoding 9"},
+        {withFields([](v1::ReadChunk& m) { m.clear_decoded_bytes(); }), "says it holds 0"},
+        {withFields([](v1::ReadChunk& m) { m.set_decoded_bytes(2 * dataservice::kMaxChunkBytes); }),
+         "at most 1048576"},
+        {withFields([](v1::ReadChunk& m) { m.set_decoded_bytes(m.data().size()); }),
+         "more than it takes"},
+        {withFields([](v1::ReadChunk& m) { (*m.mutable_data())[0] = 0; }), "0 columns"},
+        {withFields([](v1::ReadChunk& m) { m.mutable_data()->pop_back(); }), "where its header"},
+        {withFields([](v1::ReadChunk& m) {
+           m.set_encoding(v1::CHUNK_ENCODING_RAW);
+           m.set_decoded_bytes(m.data().size() + 1);
+         }),
+         "says it holds"},
+    };
+    for (const auto& [message, expected] : cases) {
+      ScriptedServer server({message});
+      auto arrays = server.connect().read("any.h5", {Hyperslab::whole("/bonds/pairs")});
+      CHECK(arrays.status().code() == StatusCode::kInternal);
+      CHECK_THAT(arrays.status().message(), Catch::Contains(expected));
+    }
+  }
+}
+
+TEST_CASE("Integer slabs travel packed and arrive as they were; reals travel as they are",
+          "[dataservice][integration]") {
+  auto server = startServer(baseConfig());
+  auto packedOptions = clientOptions(*server);
+  auto rawOptions = packedOptions;
+  rawOptions.packedReads = false;
+  auto packed = connect(packedOptions);
+  auto raw = connect(rawOptions);
+  const std::vector<Hyperslab> slabs = {Hyperslab::whole("/bonds/pairs"),
+                                        Hyperslab::whole("/steps/000002/bond_state"),
+                                        Hyperslab::whole("/steps/000002/positions"),
+                                        {"/bonds/pairs", {5, 0}, {40, 2}}};
+  auto a = packed.read("run.h5", slabs);
+  auto b = raw.read("run.h5", slabs);
+  INFO(a.status().message() << " / " << b.status().message());
+  REQUIRE(a.isOk());
+  REQUIRE(b.isOk());
+  std::uint64_t bytes = 0;
+  for (std::size_t i = 0; i < slabs.size(); ++i) {
+    CHECK((*a)[i].dtype == (*b)[i].dtype);
+    CHECK((*a)[i].shape == (*b)[i].shape);
+    CHECK((*a)[i].bytes == (*b)[i].bytes);
+    bytes += (*b)[i].bytes.size();
+  }
+  CHECK(raw.readWireBytes() == bytes);
+  const std::uint64_t positions = (*b)[2].bytes.size();
+  // The pairs and states packed to a fraction; the positions as they are.
+  CHECK(packed.readWireBytes() < positions + (bytes - positions) / 3);
+  CHECK(packed.readWireBytes() > positions);
+  requireServerHealthy(*server);
 }
 
 TEST_CASE("A Read can be started before its buffers exist and checked chunk by chunk",

@@ -1,10 +1,11 @@
 // crackvis bench transfer: what partial reads save, measured in one run
 // against a running crackvis-data. Times (a) the whole file through Fetch,
 // (b) a view's first step from nothing (Describe, then the Read of the
-// step's positions and bond states with the bond list), (c) a step change
-// on that view (one Read), and (d) the same byte counts over a raw TLS
-// socket with the same certificates (crackvis-data --raw-tls-listen), the
-// physical baseline of the link. Rounds alternate their order and go on
+// step's positions and bond states with the bond list), also with every
+// chunk raw (no packed integers), (c) a step change on that view (one
+// Read), and (d) the whole file and the first view's wire bytes over a raw
+// TLS socket with the same certificates (crackvis-data --raw-tls-listen),
+// the physical baseline of the link. Rounds alternate their order and go on
 // until the median ratios settle; prints bytes, seconds, MB/s, the ratios
 // and the load as a table and as JSON.
 #include <algorithm>
@@ -44,7 +45,8 @@ struct TransferOptions {
 };
 
 struct Timing {
-  std::uint64_t bytes = 0;
+  std::uint64_t bytes = 0;      // the arrays as the caller has them
+  std::uint64_t wireBytes = 0;  // the data bytes that travelled (fewer when packed)
   std::vector<double> seconds;
 
   double median() const { return cli::median(seconds); }
@@ -67,6 +69,8 @@ struct RoundRatios {
   double fullOverColdFirstView = 0.0;
   double fullOverWarmView = 0.0;
   double grpcOverRawFull = 0.0;  // throughput of the whole file
+  double fullOverRawChunksFirstView = 0.0;
+  double grpcOverRawFirstView = 0.0;  // the same wire bytes: raw TLS time / gRPC time
 };
 
 struct Report {
@@ -76,14 +80,15 @@ struct Report {
   std::string server;
   std::string raw;
   std::string tls;
-  Timing describe;       // part of the first view: the server's held answer
-  Timing coldDescribe;   // the server walks the file (its first Describe since it changed)
-  Timing coldFirstView;  // the cold Describe + the first view's Read
-  Timing firstView;      // Describe + the step's Read with the bond list
-  Timing warmView;       // another step's Read on the open file: a time step change
+  Timing describe;            // part of the first view: the server's held answer
+  Timing coldDescribe;        // the server walks the file (its first Describe since it changed)
+  Timing coldFirstView;       // the cold Describe + the first view's Read
+  Timing firstView;           // Describe + the step's Read with the bond list
+  Timing rawChunksFirstView;  // the same with every chunk raw (packing off)
+  Timing warmView;            // another step's Read on the open file: a time step change
   Timing fetch;
   Timing rawFull;
-  Timing rawView;  // the first view's bytes
+  Timing rawView;  // the first view's wire bytes
   std::vector<RoundRatios> rounds;
   bool settled = false;
   LoadAverage loadBefore;
@@ -92,6 +97,7 @@ struct Report {
 
 struct Connections {
   ds::DataClient client;
+  ds::DataClient rawChunks;  // asks for every chunk raw: what packing saves
   ds::RawTlsOptions raw;
 };
 
@@ -116,6 +122,12 @@ Result<Connections> connect(const TransferOptions& options, Report& report) {
     return client.status();
   }
   CRACKVIS_RETURN_IF_ERROR(client->checkHealth());  // connects: no handshake in the timings
+  clientOptions.packedReads = false;
+  auto rawChunks = ds::DataClient::connect(clientOptions);
+  if (!rawChunks) {
+    return rawChunks.status();
+  }
+  CRACKVIS_RETURN_IF_ERROR(rawChunks->checkHealth());
   auto file = ds::RemoteDemFile::open(*client, options.file);
   if (!file) {
     return file.status();
@@ -136,13 +148,14 @@ Result<Connections> connect(const TransferOptions& options, Report& report) {
   if (!options.token.empty()) {
     raw.authorization = "Bearer " + options.token;
   }
-  return Connections{std::move(*client), std::move(raw)};
+  return Connections{std::move(*client), std::move(*rawChunks), std::move(raw)};
 }
 
 // A view's first step from nothing: Describe (open) and the Read of the
 // step with the bond list; then a step change: one more Read. Before them,
 // the Describe of a file the server has not walked since it changed.
 Status timeViews(const Connections& c, Report& report, bool timed) {
+  const std::uint64_t wireBefore = c.client.readWireBytes();
   auto start = Clock::now();
   auto cold = c.client.describe(report.file, true);
   if (!cold) {
@@ -162,12 +175,16 @@ Status timeViews(const Connections& c, Report& report, bool timed) {
     return step.status();
   }
   const double firstSeconds = since(start);
+  const std::uint64_t wireFirst = c.client.readWireBytes();
   start = Clock::now();
   auto next = view->readStep(report.warmStep);
   if (!next) {
     return next.status();
   }
   const double warmSeconds = since(start);
+  report.firstView.wireBytes = wireFirst - wireBefore;
+  report.coldFirstView.wireBytes = report.firstView.wireBytes;
+  report.warmView.wireBytes = c.client.readWireBytes() - wireFirst;
   if (timed) {
     report.describe.seconds.push_back(describeSeconds);
     report.coldDescribe.seconds.push_back(coldSeconds);
@@ -182,6 +199,26 @@ Status timeViews(const Connections& c, Report& report, bool timed) {
   return Status::ok();
 }
 
+// The first view again, every chunk raw: what packed chunks save.
+Status timeRawChunksView(const Connections& c, Report& report, bool timed) {
+  const std::uint64_t wireBefore = c.rawChunks.readWireBytes();
+  const auto start = Clock::now();
+  auto view = ds::RemoteDemFile::open(c.rawChunks, report.file, {.prefetchBondList = true});
+  if (!view) {
+    return view.status();
+  }
+  auto step = view->readStep(report.step);
+  if (!step) {
+    return step.status();
+  }
+  if (timed) {
+    report.rawChunksFirstView.seconds.push_back(since(start));
+  }
+  report.rawChunksFirstView.bytes = report.firstView.bytes;
+  report.rawChunksFirstView.wireBytes = c.rawChunks.readWireBytes() - wireBefore;
+  return Status::ok();
+}
+
 Status timeFetch(const Connections& c, Report& report, bool timed) {
   const auto start = Clock::now();
   auto fetched = c.client.fetch(report.file, {});
@@ -192,6 +229,7 @@ Status timeFetch(const Connections& c, Report& report, bool timed) {
     report.fetch.seconds.push_back(since(start));
   }
   report.fetch.bytes = *fetched;
+  report.fetch.wireBytes = *fetched;
   return Status::ok();
 }
 
@@ -203,7 +241,7 @@ Status timeRaw(const Connections& c, Report& report, bool timed) {
                               "--raw-tls-listen, or give --raw): {}",
                               report.raw, rawFull.status().message()));
   }
-  auto rawView = ds::rawTlsRead(c.raw, report.file, 0, report.firstView.bytes);
+  auto rawView = ds::rawTlsRead(c.raw, report.file, 0, report.firstView.wireBytes);
   if (!rawView) {
     return rawView.status();
   }
@@ -212,7 +250,9 @@ Status timeRaw(const Connections& c, Report& report, bool timed) {
     report.rawView.seconds.push_back(rawView->transferSeconds);
   }
   report.rawFull.bytes = rawFull->bytes;
+  report.rawFull.wireBytes = rawFull->bytes;
   report.rawView.bytes = rawView->bytes;
+  report.rawView.wireBytes = rawView->bytes;
   report.tls = rawFull->protocol + " " + rawFull->cipher;
   return Status::ok();
 }
@@ -220,22 +260,33 @@ Status timeRaw(const Connections& c, Report& report, bool timed) {
 RoundRatios lastRound(const Report& r) {
   const double fetch = r.fetch.seconds.back();
   const double raw = r.rawFull.seconds.back();
-  return {fetch / r.firstView.seconds.back(), fetch / r.coldFirstView.seconds.back(),
+  // Same bytes: a throughput ratio is raw time / gRPC time.
+  return {fetch / r.firstView.seconds.back(),
+          fetch / r.coldFirstView.seconds.back(),
           fetch / r.warmView.seconds.back(),
-          fetch > 0.0 ? raw / fetch : 0.0};  // same bytes: the throughput ratio is raw / gRPC time
+          fetch > 0.0 ? raw / fetch : 0.0,
+          fetch / r.rawChunksFirstView.seconds.back(),
+          r.rawView.seconds.back() / r.firstView.seconds.back()};
 }
 
-// The medians of the first `count` rounds' ratios: first view, cold first
-// view, warm view, gRPC over raw TLS.
-std::array<double, 4> medianRatios(const std::vector<RoundRatios>& rounds, std::size_t count) {
-  std::array<std::vector<double>, 4> values;
+// The medians of the first `count` rounds' ratios, in RoundRatios' order:
+// first view, cold first view, warm view, gRPC over raw TLS (whole file),
+// first view with raw chunks, gRPC over raw TLS (first view).
+std::array<double, 6> medianRatios(const std::vector<RoundRatios>& rounds, std::size_t count) {
+  std::array<std::vector<double>, 6> values;
   for (std::size_t k = 0; k < count; ++k) {
     values[0].push_back(rounds[k].fullOverFirstView);
     values[1].push_back(rounds[k].fullOverColdFirstView);
     values[2].push_back(rounds[k].fullOverWarmView);
     values[3].push_back(rounds[k].grpcOverRawFull);
+    values[4].push_back(rounds[k].fullOverRawChunksFirstView);
+    values[5].push_back(rounds[k].grpcOverRawFirstView);
   }
-  return {median(values[0]), median(values[1]), median(values[2]), median(values[3])};
+  std::array<double, 6> medians{};
+  for (std::size_t i = 0; i < medians.size(); ++i) {
+    medians[i] = median(values[i]);
+  }
+  return medians;
 }
 
 // Settled: adding each of the last two rounds moved no median ratio by
@@ -279,8 +330,15 @@ Result<Report> measure(const TransferOptions& options) {
   for (int round = -1; round < options.maxRepeat; ++round) {
     const bool timed = round >= 0;
     const bool forward = round % 2 == 0;
-    // The views first either way: the raw view's length is the first view's bytes.
-    CRACKVIS_RETURN_IF_ERROR(timeViews(*connections, report, timed));
+    // The views first either way: the raw view's length is the first view's
+    // wire bytes. The view with raw chunks before or after it.
+    if (forward) {
+      CRACKVIS_RETURN_IF_ERROR(timeViews(*connections, report, timed));
+      CRACKVIS_RETURN_IF_ERROR(timeRawChunksView(*connections, report, timed));
+    } else {
+      CRACKVIS_RETURN_IF_ERROR(timeRawChunksView(*connections, report, timed));
+      CRACKVIS_RETURN_IF_ERROR(timeViews(*connections, report, timed));
+    }
     if (forward) {
       CRACKVIS_RETURN_IF_ERROR(timeFetch(*connections, report, timed));
       CRACKVIS_RETURN_IF_ERROR(timeRaw(*connections, report, timed));
@@ -304,6 +362,7 @@ Result<Report> measure(const TransferOptions& options) {
 nlohmann::json toJson(const Report& report, const TransferOptions& options) {
   auto timing = [](const Timing& t) {
     return nlohmann::json{{"bytes", t.bytes},
+                          {"wire_bytes", t.wireBytes},
                           {"seconds_median", t.median()},
                           {"seconds_best", t.best()},
                           {"seconds_all", t.seconds},
@@ -353,6 +412,7 @@ nlohmann::json toJson(const Report& report, const TransferOptions& options) {
       {"grpc_cold_first_view", timing(report.coldFirstView)},
       {"grpc_fetch_full", timing(report.fetch)},
       {"grpc_first_view", timing(report.firstView)},
+      {"grpc_first_view_raw_chunks", timing(report.rawChunksFirstView)},
       {"grpc_warm_view", timing(report.warmView)},
       {"raw_tls_full", timing(report.rawFull)},
       {"raw_tls_view", timing(report.rawView)},
@@ -361,14 +421,16 @@ nlohmann::json toJson(const Report& report, const TransferOptions& options) {
          report.firstView.bytes > 0
              ? static_cast<double>(report.fetch.bytes) / static_cast<double>(report.firstView.bytes)
              : 0.0},
+        {"bytes_full_over_first_view_wire",
+         report.firstView.wireBytes > 0 ? static_cast<double>(report.fetch.bytes) /
+                                              static_cast<double>(report.firstView.wireBytes)
+                                        : 0.0},
         {"time_full_fetch_over_first_view", ratios[0]},
         {"time_full_fetch_over_cold_first_view", ratios[1]},
         {"time_full_fetch_over_warm_view", ratios[2]},
+        {"time_full_fetch_over_first_view_raw_chunks", ratios[4]},
         {"grpc_over_raw_tls_throughput_full", ratios[3]},
-        {"grpc_over_raw_tls_throughput_first_view",
-         report.rawView.megabytesPerSecond() > 0
-             ? report.firstView.megabytesPerSecond() / report.rawView.megabytesPerSecond()
-             : 0.0}}},
+        {"grpc_over_raw_tls_throughput_first_view", ratios[5]}}},
       {"goals",
        {{"time_full_fetch_over_first_view", 100.0},
         {"time_full_fetch_over_warm_view", 150.0},
@@ -384,9 +446,10 @@ void printViews(const Report& report, const nlohmann::json& json) {
              loadText(json.at("load_before")), loadText(json.at("load_after")));
   fmt::print("medians of {} rounds after one warm-up; MB = 10^6 bytes\n\n",
              report.firstView.seconds.size());
-  fmt::print("{:<44} {:>14} {:>11} {:>10}\n", "transfer", "bytes", "seconds", "MB/s");
+  fmt::print("{:<44} {:>11} {:>11} {:>10} {:>8}\n", "transfer", "bytes", "wire bytes", "seconds",
+             "MB/s");
   auto row = [](const std::string& name, const Timing& t) {
-    fmt::print("{:<44} {:>14} {:>11.6f} {:>10.1f}\n", name, t.bytes, t.median(),
+    fmt::print("{:<44} {:>11} {:>11} {:>10.6f} {:>8.1f}\n", name, t.bytes, t.wireBytes, t.median(),
                t.megabytesPerSecond());
   };
   row(fmt::format("(b) first view of step {}: Describe + Read", report.step), report.firstView);
@@ -412,34 +475,40 @@ void printTable(const Report& report, const nlohmann::json& json) {
           ? "settled: the last two rounds moved no median ratio by more than " +
                 fmt::format("{:.0f} %", 100.0 * json.at("settle_tolerance").get<double>())
           : "NOT settled within --max-repeat");
-  fmt::print("{:<44} {:>14} {:>11} {:>10}\n", "transfer", "bytes", "seconds", "MB/s");
+  fmt::print("{:<44} {:>11} {:>11} {:>10} {:>8}\n", "transfer", "bytes", "wire bytes", "seconds",
+             "MB/s");
   auto row = [](const std::string& name, const Timing& t) {
-    fmt::print("{:<44} {:>14} {:>11.6f} {:>10.1f}\n", name, t.bytes, t.median(),
+    fmt::print("{:<44} {:>11} {:>11} {:>10.6f} {:>8.1f}\n", name, t.bytes, t.wireBytes, t.median(),
                t.megabytesPerSecond());
   };
   row("(a) full file, gRPC Fetch", report.fetch);
   row(fmt::format("(b) first view of step {}: Describe + Read", report.step), report.firstView);
-  fmt::print("{:<44} {:>14} {:>11.6f} {:>10}\n", "    of which Describe (held answer)", "-",
-             report.describe.median(), "-");
+  fmt::print("{:<44} {:>11} {:>11} {:>10.6f} {:>8}\n", "    of which Describe (held answer)", "-",
+             "-", report.describe.median(), "-");
+  row("(b) the same, every chunk raw (not packed)", report.rawChunksFirstView);
   row("(b') cold first view: walked Describe + Read", report.coldFirstView);
-  fmt::print("{:<44} {:>14} {:>11.6f} {:>10}\n", "    of which Describe (file walked)", "-",
-             report.coldDescribe.median(), "-");
+  fmt::print("{:<44} {:>11} {:>11} {:>10.6f} {:>8}\n", "    of which Describe (file walked)", "-",
+             "-", report.coldDescribe.median(), "-");
   row(fmt::format("(c) warm view: step {}, one Read", report.warmStep), report.warmView);
   row("(d) full file bytes, raw TLS", report.rawFull);
-  row("(d) first view bytes, raw TLS", report.rawView);
+  row("(d) first view's wire bytes, raw TLS", report.rawView);
   const auto& ratios = json.at("ratios");
   fmt::print("\nratios\n");
   fmt::print("  bytes, full file / first view             {:>9.1f}\n",
              ratios.at("bytes_full_over_first_view").get<double>());
+  fmt::print("  bytes, full file / first view's wire bytes {:>8.1f}\n",
+             ratios.at("bytes_full_over_first_view_wire").get<double>());
   fmt::print("  time, full Fetch / first view             {:>9.1f}x  (goal >= 100x)\n",
              ratios.at("time_full_fetch_over_first_view").get<double>());
+  fmt::print("  time, full Fetch / first view, raw chunks  {:>9.1f}x\n",
+             ratios.at("time_full_fetch_over_first_view_raw_chunks").get<double>());
   fmt::print("  time, full Fetch / cold first view        {:>9.1f}x\n",
              ratios.at("time_full_fetch_over_cold_first_view").get<double>());
   fmt::print("  time, full Fetch / warm view              {:>9.1f}x  (goal >= 150x)\n",
              ratios.at("time_full_fetch_over_warm_view").get<double>());
   fmt::print("  throughput, gRPC / raw TLS, full file     {:>9.2f}   (goal >= 0.70)\n",
              ratios.at("grpc_over_raw_tls_throughput_full").get<double>());
-  fmt::print("  throughput, gRPC / raw TLS, first view    {:>9.2f}\n",
+  fmt::print("  throughput, gRPC / raw TLS, first view    {:>9.2f}   (its wire bytes)\n",
              ratios.at("grpc_over_raw_tls_throughput_first_view").get<double>());
   fmt::print("goals: {}\n\n", json.at("goals").at("met").get<bool>() ? "met" : "NOT met");
 }
@@ -471,8 +540,10 @@ Command addBenchTransferCommand(CLI::App& bench) {
       "transfer",
       "Time, in one run against a running crackvis-data: (a) the whole file through Fetch, "
       "(b) a view's first step from nothing: Describe, then the Read of step K's positions and "
-      "bond states with the bond list, (c) a step change on that view (one Read of the step "
-      "before), (d) the same byte counts over a raw TLS socket with the same certificates "
+      "bond states with the bond list, also with every chunk raw (integer arrays not packed), (c) "
+      "a step change on that view (one Read of the step "
+      "before), (d) the whole file and the first view's wire bytes over a raw TLS socket with the "
+      "same certificates "
       "(crackvis-data --raw-tls-listen). Rounds alternate their order and repeat until the "
       "median ratios settle. Prints bytes, seconds, MB/s, ratios and the load as a table and as "
       "JSON. Certificates come from certs/make-dev-certs.sh; --ca, --cert and --key name them "

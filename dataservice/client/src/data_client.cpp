@@ -1,5 +1,7 @@
+#include <atomic>
 #include <chrono>
 #include <climits>
+#include <optional>
 
 #include <fmt/format.h>
 #include <google/protobuf/io/coded_stream.h>
@@ -11,6 +13,7 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "grpc_convert.hpp"
 #include <crackvis/dataservice/data_client.hpp>
+#include <crackvis/dataservice/packed_chunk.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
 
@@ -57,6 +60,8 @@ class SlabReceiver {
     std::vector<std::uint64_t> shape;
     std::uint64_t slabBytes = 0;
     std::uint64_t offset = 0;
+    int encoding = 0;  // v1::ChunkEncoding
+    std::optional<std::uint64_t> decodedBytes;
   };
 
   SlabReceiver(const DataClient::SlabSink& sink, std::size_t slabs)
@@ -123,7 +128,8 @@ class SlabReceiver {
 struct PlacedChunk {
   std::size_t slab = 0;
   std::uint64_t offset = 0;
-  std::uint64_t bytes = 0;
+  std::uint64_t bytes = 0;      // in the slab
+  std::uint64_t wireBytes = 0;  // as it came (fewer when packed)
 };
 
 // Parses one serialized ReadChunk and copies its data from gRPC's receive
@@ -161,6 +167,71 @@ bool skipField(google::protobuf::io::CodedInputStream& input, std::uint32_t wire
   }
 }
 
+// The data of one chunk in its place: RAW bytes copied straight from
+// gRPC's buffers, PACKED ones unpacked from them (or, when they span
+// buffers, from a copy).
+Result<PlacedChunk> placeData(const SlabReceiver::ChunkHeader& header, std::uint32_t wireBytes,
+                              google::protobuf::io::CodedInputStream& input,
+                              SlabReceiver& receiver) {
+  if (header.encoding == v1::CHUNK_ENCODING_RAW) {
+    if (header.decodedBytes && *header.decodedBytes != wireBytes) {
+      return internalError(fmt::format("Read: slab {}: a raw chunk of {} bytes says it holds {}",
+                                       header.slabIndex, wireBytes, *header.decodedBytes));
+    }
+    auto place = receiver.place(header, wireBytes);
+    if (!place) {
+      return place.status();
+    }
+    if (!input.ReadRaw(*place, static_cast<int>(wireBytes))) {
+      return internalError(fmt::format("Read: slab {}: chunk cut short", header.slabIndex));
+    }
+    return PlacedChunk{header.slabIndex, header.offset, wireBytes, wireBytes};
+  }
+  if (header.encoding != v1::CHUNK_ENCODING_PACKED) {
+    return internalError(fmt::format("Read: slab {}: chunk in an unknown encoding {}",
+                                     header.slabIndex, header.encoding));
+  }
+  // A packed chunk is smaller than the at most 1 MiB it decodes to, so
+  // neither a copy nor the slab grows beyond what a raw chunk could ask.
+  if (!header.decodedBytes || *header.decodedBytes > kMaxChunkBytes ||
+      wireBytes >= *header.decodedBytes) {
+    return internalError(fmt::format(
+        "Read: slab {}: a packed chunk of {} bytes says it holds {} (at most {}, and more than "
+        "it takes)",
+        header.slabIndex, wireBytes, header.decodedBytes.value_or(0), kMaxChunkBytes));
+  }
+  const std::uint64_t decoded = *header.decodedBytes;
+  auto place = receiver.place(header, decoded);
+  if (!place) {
+    return place.status();
+  }
+  const void* direct = nullptr;
+  int available = 0;
+  const std::byte* packed = nullptr;
+  thread_local std::vector<std::byte> copy;
+  if (input.GetDirectBufferPointer(&direct, &available) &&
+      static_cast<std::uint32_t>(available) >= wireBytes) {
+    packed = static_cast<const std::byte*>(direct);
+  } else {
+    copy.resize(wireBytes);
+    if (!input.ReadRaw(copy.data(), static_cast<int>(wireBytes))) {
+      return internalError(fmt::format("Read: slab {}: chunk cut short", header.slabIndex));
+    }
+    packed = copy.data();
+    direct = nullptr;
+  }
+  if (Status unpacked =
+          unpackChunk(dataTypeFromInt(header.dtype), packed, wireBytes, *place, decoded);
+      !unpacked) {
+    return internalError(fmt::format("Read: slab {}: chunk at offset {}: {}", header.slabIndex,
+                                     header.offset, unpacked.message()));
+  }
+  if (direct != nullptr) {
+    input.Skip(static_cast<int>(wireBytes));
+  }
+  return PlacedChunk{header.slabIndex, header.offset, decoded, wireBytes};
+}
+
 Result<PlacedChunk> receiveChunk(grpc::ByteBuffer& message, SlabReceiver& receiver) {
   const std::size_t total = message.Length();
   grpc::ProtoBufferReader stream(&message);
@@ -177,7 +248,7 @@ Result<PlacedChunk> receiveChunk(grpc::ByteBuffer& message, SlabReceiver& receiv
     }
     const std::uint32_t field = tag >> 3;
     const std::uint32_t wire = tag & 7;
-    if (wire == kVarint && field >= 1 && field <= 5) {
+    if (wire == kVarint && ((field >= 1 && field <= 5) || field == 7 || field == 8)) {
       std::uint64_t value = 0;
       ok = input.ReadVarint64(&value);
       switch (field) {
@@ -195,6 +266,12 @@ Result<PlacedChunk> receiveChunk(grpc::ByteBuffer& message, SlabReceiver& receiv
           break;
         case 5:
           header.offset = value;
+          break;
+        case 7:  // encoding, an enum (int32)
+          header.encoding = static_cast<int>(static_cast<std::int32_t>(value));
+          break;
+        case 8:
+          header.decodedBytes = value;
           break;
       }
     } else if (wire == kLengthDelimited && field == 3) {
@@ -214,15 +291,9 @@ Result<PlacedChunk> receiveChunk(grpc::ByteBuffer& message, SlabReceiver& receiv
       hasData = ok;
       heldData.clear();
       if (ok && static_cast<std::size_t>(input.CurrentPosition()) + dataSize == total) {
-        auto place = receiver.place(header, dataSize);
-        if (!place) {
-          return place.status();
-        }
-        ok = input.ReadRaw(*place, static_cast<int>(dataSize));
-        if (ok) {
-          return PlacedChunk{header.slabIndex, header.offset, dataSize};  // data came last
-        }
-      } else if (ok) {
+        return placeData(header, dataSize, input, receiver);  // data came last
+      }
+      if (ok) {
         heldData.resize(dataSize);
         ok = input.ReadRaw(heldData.data(), static_cast<int>(dataSize));
       }
@@ -233,15 +304,11 @@ Result<PlacedChunk> receiveChunk(grpc::ByteBuffer& message, SlabReceiver& receiv
   if (!ok || static_cast<std::size_t>(input.CurrentPosition()) != total) {
     return internalError(fmt::format("Read: malformed chunk of {} bytes", total));
   }
-  // A chunk without data, or with its data before other fields.
-  auto place = receiver.place(header, hasData ? dataSize : 0);
-  if (!place) {
-    return place.status();
-  }
-  if (hasData && dataSize > 0) {
-    std::memcpy(*place, heldData.data(), dataSize);
-  }
-  return PlacedChunk{header.slabIndex, header.offset, hasData ? dataSize : 0};
+  // A chunk without data, or with its data before other fields: placed from
+  // the held copy once every field is known.
+  google::protobuf::io::CodedInputStream held(
+      reinterpret_cast<const std::uint8_t*>(heldData.data()), static_cast<int>(heldData.size()));
+  return placeData(header, hasData ? dataSize : 0, held, receiver);
 }
 
 }  // namespace
@@ -287,6 +354,8 @@ struct DataClient::Impl {
   // the byte buffers it arrived in (see receiveChunk).
   std::unique_ptr<grpc::TemplatedGenericStub<v1::ReadRequest, grpc::ByteBuffer>> readStub;
   std::string authorization;
+  // The data bytes of every Read's chunks as they came (packed or not).
+  std::atomic<std::uint64_t> readWireBytes{0};
 
   // crackvis-data as the user named it, for connection_advice's messages.
   rpc::Peer peer(rpc::ServerKind kind = rpc::ServerKind::kData) const {
@@ -369,6 +438,10 @@ const ClientOptions& DataClient::options() const {
   return m_impl->options;
 }
 
+std::uint64_t DataClient::readWireBytes() const {
+  return m_impl->readWireBytes.load();
+}
+
 Status DataClient::checkHealth(const std::string& service) const {
   grpc::ClientContext context;
   m_impl->prepare(context);
@@ -445,7 +518,7 @@ struct DataClient::PendingRead::Call {
   grpc::ClientContext context;
   std::unique_ptr<grpc::ClientAsyncReaderWriter<v1::ReadRequest, grpc::ByteBuffer>> stream;
   std::size_t slabs = 0;
-  std::shared_ptr<const DataClient::Impl> client;  // for the advice on a failure
+  std::shared_ptr<DataClient::Impl> client;  // for the advice on a failure, the byte count
   bool requestSent = false;
   bool finished = false;
 
@@ -496,6 +569,9 @@ DataClient::PendingRead DataClient::startRead(const std::string& file,
     out->mutable_start()->Add(slab.start.begin(), slab.start.end());
     out->mutable_count()->Add(slab.count.begin(), slab.count.end());
   }
+  if (m_impl->options.packedReads) {
+    request.add_accept_encodings(v1::CHUNK_ENCODING_PACKED);
+  }
   auto call = std::make_unique<PendingRead::Call>();
   call->slabs = slabs.size();
   call->client = m_impl;
@@ -529,7 +605,10 @@ Status DataClient::PendingRead::receive(const SlabSink& sink, const ChunkCallbac
     message.Clear();
     if (!placed) {
       error = placed.status();
-    } else if (arrived) {
+      break;
+    }
+    call.client->readWireBytes += placed->wireBytes;
+    if (arrived) {
       error = arrived(placed->slab, placed->offset, placed->bytes);
     }
   }

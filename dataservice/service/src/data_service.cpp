@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "describe_proto.hpp"
+#include <crackvis/dataservice/packed_chunk.hpp>
 
 namespace crackvis::dataservice {
 namespace v1 = crackvis::v1;
@@ -332,11 +333,14 @@ class ReadReactor final : public StreamReactor {
     }
     m_file = std::move(*resolved);
     m_plan = std::move(*plan);
+    for (int encoding : request.accept_encodings()) {
+      m_acceptsPacked = m_acceptsPacked || encoding == v1::CHUNK_ENCODING_PACKED;
+    }
     return Status::ok();
   }
 
   // The chunk's fields but its data (field 6).
-  std::string header(std::uint64_t offset) {
+  std::string header(std::uint64_t offset, std::uint64_t decodedBytes, bool packed) {
     const SlabPlan& slab = m_plan.slabs[m_piece.slab];
     v1::ReadChunk chunk;
     chunk.set_slab_index(static_cast<std::uint32_t>(m_piece.slab));
@@ -344,7 +348,39 @@ class ReadReactor final : public StreamReactor {
     chunk.mutable_shape()->Add(slab.count.begin(), slab.count.end());
     chunk.set_slab_bytes(slab.bytes);
     chunk.set_offset(offset);
+    if (packed) {
+      chunk.set_encoding(v1::CHUNK_ENCODING_PACKED);
+    }
+    chunk.set_decoded_bytes(decodedBytes);
     return chunk.SerializeAsString();
+  }
+
+  // Packs the piece in `data` in place when the client accepts packed
+  // chunks and that makes it smaller; true when it did.
+  bool pack(ChunkData& data) const {
+    const DataType dtype = m_plan.slabs[m_piece.slab].dtype;
+    if (!m_acceptsPacked || !packableType(dtype)) {
+      return false;
+    }
+    // Rows of the last dimension are the columns ([M,2] bond pairs: two);
+    // a piece always holds whole rows of it.
+    const std::size_t columns = m_piece.count.size() >= 2 && m_piece.count.back() >= 1 &&
+                                        m_piece.count.back() <= kMaxPackedColumns
+                                    ? static_cast<std::size_t>(m_piece.count.back())
+                                    : 1;
+    // Packed into a scratch buffer of the thread and copied back (a few
+    // hundred KiB): a stream holds one chunk buffer, as its memory
+    // reservation counts.
+    thread_local std::vector<std::byte> scratch(kMaxChunkBytes);
+    const std::size_t packed =
+        packChunk(dtype, columns, reinterpret_cast<const std::byte*>(data.data()), data.size(),
+                  scratch.data(), scratch.size());
+    if (packed == 0) {
+      return false;
+    }
+    std::memcpy(data.data(), scratch.data(), packed);
+    data.shrink(packed);
+    return true;
   }
 
   // Every piece is at most one chunk (rows larger than a chunk are split),
@@ -375,13 +411,15 @@ class ReadReactor final : public StreamReactor {
       finish(status);
       return;
     }
-    write(header(m_piece.offset), 6, std::move(data));
+    const bool packed = pack(data);
+    write(header(m_piece.offset, m_piece.bytes, packed), 6, std::move(data));
   }
 
   DataServiceImpl& m_service;
   ResolvedPath m_file;
   ReadPlan m_plan;
   PieceCursor m_pieces;
+  bool m_acceptsPacked = false;
   bool m_first = true;
   Piece m_piece;
 };

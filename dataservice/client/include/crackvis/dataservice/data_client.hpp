@@ -33,6 +33,10 @@ struct ClientOptions {
   std::string password;
   std::string serverName;         // name the server certificate must carry; default: target's host
   double timeoutSeconds = 120.0;  // deadline of each call
+  // Accept Read chunks of integers packed to a few bits a value (lossless;
+  // docs/protocol.md "Packed chunks"). Off: every chunk comes as raw bytes,
+  // for comparison.
+  bool packedReads = true;
 };
 
 // One hyperslab as received: its elements in C order, little-endian.
@@ -74,6 +78,9 @@ class DataClient {
   static Result<DataClient> connect(const ClientOptions& options);
 
   const ClientOptions& options() const;
+  // The data bytes all Reads of this client (and its copies) have received
+  // so far as they travelled, packed or not: for benchmarks.
+  std::uint64_t readWireBytes() const;
 
   // grpc.health.v1 Check: OK when the server reports SERVING. Health is
   // served by crackvis-render too: a failure's message names neither.
