@@ -111,6 +111,8 @@ TEST_CASE("crackvis bench transfer measures Fetch, a first and a warm view, and 
     CHECK(only.at("runs") == 3);
     CHECK(only.at("grpc_first_view").at("bytes") == viewBytes);
     CHECK(only.at("grpc_warm_view").at("seconds_all").size() == 3);
+    CHECK(only.at("grpc_first_view_raw_chunks").at("seconds_all").size() == 3);
+    CHECK(only.at("grpc_first_view_raw_chunks").at("wire_bytes") == viewBytes);
     CHECK(only.at("grpc_warm_view").at("seconds_median").get<double>() > 0.0);
     CHECK_FALSE(only.contains("grpc_fetch_full"));
     CHECK_FALSE(only.contains("ratios"));

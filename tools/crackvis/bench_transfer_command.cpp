@@ -322,7 +322,14 @@ Result<Report> measure(const TransferOptions& options) {
   report.loadBefore = loadAverage();
   if (options.viewsOnly) {
     for (int round = -1; round < options.repeat; ++round) {
-      CRACKVIS_RETURN_IF_ERROR(timeViews(*connections, report, round >= 0));
+      const bool timed = round >= 0;
+      if (round % 2 == 0) {
+        CRACKVIS_RETURN_IF_ERROR(timeViews(*connections, report, timed));
+        CRACKVIS_RETURN_IF_ERROR(timeRawChunksView(*connections, report, timed));
+      } else {
+        CRACKVIS_RETURN_IF_ERROR(timeRawChunksView(*connections, report, timed));
+        CRACKVIS_RETURN_IF_ERROR(timeViews(*connections, report, timed));
+      }
     }
     report.loadAfter = loadAverage();
     return report;
@@ -384,6 +391,7 @@ nlohmann::json toJson(const Report& report, const TransferOptions& options) {
               {"seconds_all", report.describe.seconds}}},
             {"grpc_cold_first_view", timing(report.coldFirstView)},
             {"grpc_first_view", timing(report.firstView)},
+            {"grpc_first_view_raw_chunks", timing(report.rawChunksFirstView)},
             {"grpc_warm_view", timing(report.warmView)}};
   }
   const auto ratios = medianRatios(report.rounds, report.rounds.size());
@@ -453,6 +461,7 @@ void printViews(const Report& report, const nlohmann::json& json) {
                t.megabytesPerSecond());
   };
   row(fmt::format("(b) first view of step {}: Describe + Read", report.step), report.firstView);
+  row("(b) the same, every chunk raw (not packed)", report.rawChunksFirstView);
   row("(b') cold first view: walked Describe + Read", report.coldFirstView);
   row(fmt::format("(c) warm view: step {}, one Read", report.warmStep), report.warmView);
   fmt::print("\n");
@@ -578,7 +587,7 @@ Command addBenchTransferCommand(CLI::App& bench) {
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   command->add_flag("--views-only", options->viewsOnly,
-                    "time only the first and the warm view (b, c), --repeat rounds: no Fetch, no "
+                    "time only the views (b, c), --repeat alternating rounds: no Fetch, no "
                     "raw TLS, no ratios; for files too large to fetch whole in a benchmark");
   command->add_flag("--json", options->jsonOnly, "print only the JSON");
   return {command, [options] { return runTransfer(*options); }};
