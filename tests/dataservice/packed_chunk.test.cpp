@@ -37,9 +37,14 @@ std::size_t roundTrip(DataType dtype, std::size_t columns, const std::vector<std
     return 0;
   }
   CHECK(size < raw.size());
+  // Again into a buffer of exactly that size: nothing written beyond it
+  // (ASan would say), and the same bytes.
+  std::vector<std::byte> exact(size);
+  CHECK(packChunk(dtype, columns, raw.data(), raw.size(), exact.data(), exact.size()) == size);
+  packed.resize(size);
+  CHECK(exact == packed);
+  packed.shrink_to_fit();  // an exact fit: nothing read beyond it either
   std::vector<std::byte> back(raw.size(), std::byte{0x5a});
-  packed.resize(size);  // an exact fit: nothing read beyond (ASan would say)
-  packed.shrink_to_fit();
   const Status status = unpackChunk(dtype, packed.data(), size, back.data(), back.size());
   INFO(status.message());
   REQUIRE(status.isOk());
@@ -113,6 +118,29 @@ TEST_CASE("Packed chunks come back exactly, for every packable type and row leng
         roundTrip(DataType::kUInt32, columns, bytesOf(u32));
       }
     }
+  }
+
+  SECTION("signed 16-bit values either side of zero, as differences") {
+    // Column 1 a little below column 0, crossing zero: stored from column 0
+    // in 4 bits (an int16 -1 once widened as 0xffff made these wrong); and a
+    // column rising through zero, stored from the previous row.
+    std::vector<std::int16_t> nearby;
+    std::vector<std::int16_t> rising;
+    for (int r = 0; r < 100; ++r) {  // column 0 positive, column 1 negative
+      nearby.push_back(static_cast<std::int16_t>(100 + 37 * r));
+      nearby.push_back(static_cast<std::int16_t>(100 + 37 * r - 6000 + r % 16));
+    }
+    for (int r = 0; r < 200; ++r) {
+      rising.push_back(static_cast<std::int16_t>(-500 + 5 * r + r % 3));
+    }
+    CHECK(roundTrip(DataType::kInt16, 2, bytesOf(nearby)) > 0);
+    CHECK(roundTrip(DataType::kInt16, 1, bytesOf(rising)) > 0);
+    std::vector<std::int32_t> crossing;
+    for (int r = 0; r < 300; ++r) {
+      crossing.push_back(r * 3 - 450);
+      crossing.push_back(r * 3 - 450 - (r % 7));
+    }
+    CHECK(roundTrip(DataType::kInt32, 2, bytesOf(crossing)) > 0);
   }
 
   SECTION("values spanning 2^31 and more (64-bit differences), and the extremes") {

@@ -307,7 +307,8 @@ TEST_CASE("Integer slabs travel packed and arrive as they were; reals travel as 
   const std::vector<Hyperslab> slabs = {Hyperslab::whole("/bonds/pairs"),
                                         Hyperslab::whole("/steps/000002/bond_state"),
                                         Hyperslab::whole("/steps/000002/positions"),
-                                        {"/bonds/pairs", {5, 0}, {40, 2}}};
+                                        {"/bonds/pairs", {5, 0}, {40, 2}},
+                                        {"/bonds/pairs", {0, 1}, {60, 1}}};
   auto a = packed.read("run.h5", slabs);
   auto b = raw.read("run.h5", slabs);
   INFO(a.status().message() << " / " << b.status().message());

@@ -152,13 +152,12 @@ template <typename T, std::size_t kColumns>
 CRACKVIS_VECTOR_CLONES void differenceRanges(const std::byte* raw, std::size_t columns,
                                              std::size_t rows, std::size_t column,
                                              Range& fromPrevious, Range& fromColumn0) {
-  using Unsigned = std::make_unsigned_t<T>;
   const std::size_t stride = (kColumns != 0 ? kColumns : columns) * sizeof(T);
   const std::byte* at = raw + column * sizeof(T);
+  // Each value widened with its sign (int16 -1 is 0xffffffff, not 0xffff),
+  // subtracted modulo 2^32: the true difference whenever it fits 32 bits.
   const auto difference = [](T a, T b) {
-    return static_cast<std::int32_t>(
-        static_cast<std::uint32_t>(static_cast<std::uint32_t>(static_cast<Unsigned>(a)) -
-                                   static_cast<std::uint32_t>(static_cast<Unsigned>(b))));
+    return static_cast<std::int32_t>(static_cast<std::uint32_t>(a) - static_cast<std::uint32_t>(b));
   };
   std::int32_t low = 0;  // row 0 differs from `first`, itself, by 0
   std::int32_t high = 0;

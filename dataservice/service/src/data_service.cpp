@@ -358,15 +358,18 @@ class ReadReactor final : public StreamReactor {
   // Packs the piece in `data` in place when the client accepts packed
   // chunks and that makes it smaller; true when it did.
   bool pack(ChunkData& data) const {
-    const DataType dtype = m_plan.slabs[m_piece.slab].dtype;
+    const SlabPlan& slab = m_plan.slabs[m_piece.slab];
+    const DataType dtype = slab.dtype;
     if (!m_acceptsPacked || !packableType(dtype)) {
       return false;
     }
-    // Rows of the last dimension are the columns ([M,2] bond pairs: two);
-    // a piece always holds whole rows of it.
-    const std::size_t columns = m_piece.count.size() >= 2 && m_piece.count.back() >= 1 &&
-                                        m_piece.count.back() <= kMaxPackedColumns
-                                    ? static_cast<std::size_t>(m_piece.count.back())
+    // The slab's last dimension gives the columns ([M,2] bond pairs: two)
+    // when the piece holds whole rows of it; a row split across pieces
+    // goes as one column.
+    const bool wholeRows = slab.count.size() >= 2 && m_piece.count.size() == slab.count.size() &&
+                           m_piece.count.back() == slab.count.back();
+    const std::size_t columns = wholeRows && slab.count.back() <= kMaxPackedColumns
+                                    ? static_cast<std::size_t>(slab.count.back())
                                     : 1;
     // Packed into a scratch buffer of the thread and copied back (a few
     // hundred KiB): a stream holds one chunk buffer, as its memory
