@@ -364,7 +364,7 @@ QImage settledFrame(FrameLog& log, quint64 event) {
 
 }  // namespace
 
-TEST_CASE("a saved view opens again as it was: file, step, camera; another file is fitted",
+TEST_CASE("a saved view opens again as it was: file, step, camera, another file is fitted",
           "[client][ui][integration]") {
   application();
   auto services = startServices();

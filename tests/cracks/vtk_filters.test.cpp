@@ -199,7 +199,7 @@ TEST_CASE("a VTK filter refuses input without bond states, with an error", "[cra
   CHECK(filter->GetOutput()->GetNumberOfCells() == 0);
 }
 
-TEST_CASE("writers: VTK reads back .vtp and .vtu; STL and OBJ have every face", "[cracks][io]") {
+TEST_CASE("writers: VTK reads back .vtp and .vtu, STL and OBJ have every face", "[cracks][io]") {
   const auto crack = sampleCrack();
   testing::TempDir dir;
   SECTION("vtp") {

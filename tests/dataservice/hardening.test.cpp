@@ -41,7 +41,7 @@ double secondsOf(const std::function<void()>& work) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-TEST_CASE("Tokens are checked with one SHA-256; old PBKDF2 token hashes still work",
+TEST_CASE("Tokens are checked with one SHA-256, old PBKDF2 token hashes still work",
           "[dataservice][rpc]") {
   const std::string hash = rpc::hashToken("random-token").value();
   CHECK(hash.rfind("sha256$", 0) == 0);
@@ -156,7 +156,7 @@ TEST_CASE("CANCELLED and DEADLINE_EXCEEDED stay distinct", "[dataservice][rpc]")
   CHECK(late.code() == StatusCode::kDeadlineExceeded);
 }
 
-TEST_CASE("Another user's folder answers as a missing one; no listing names a foreign file",
+TEST_CASE("Another user's folder answers as a missing one, no listing names a foreign file",
           "[dataservice][integration]") {
   auto config = baseConfig();
   config.users = {{"alice", rpc::hashToken("alice-token").value(), "", "", {"alice"}}};

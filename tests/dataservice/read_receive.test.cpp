@@ -296,7 +296,7 @@ TEST_CASE("Packed chunks are unpacked in place, and a malformed one ends the cal
   }
 }
 
-TEST_CASE("Integer slabs travel packed and arrive as they were; reals travel as they are",
+TEST_CASE("Integer slabs travel packed and arrive as they were, reals as they are",
           "[dataservice][integration]") {
   auto server = startServer(baseConfig());
   auto packedOptions = clientOptions(*server);

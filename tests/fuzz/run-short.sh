@@ -15,7 +15,7 @@ cd "$(dirname "$0")/../.."
 seconds="${FUZZ_SECONDS:-60}"
 build="${FUZZ_BUILD_DIR:-build/fuzz}"
 jobs="${FUZZ_JOBS:-2}"
-all_targets=(pipeline dem_reader read_request render_events)
+all_targets=(pipeline dem_reader read_request render_events packed_chunk)
 targets=("$@")
 ((${#targets[@]} > 0)) || targets=("${all_targets[@]}")
 

@@ -131,7 +131,7 @@ TEST_CASE("colour ranges, clips, thresholds and annotations survive toXml and pa
   CHECK(plain->annotations.scaleBar);
 }
 
-TEST_CASE("a saved view's client layout survives toXml and parse; a bad one is refused",
+TEST_CASE("a saved view's client layout survives toXml and parse, a bad one is refused",
           "[pipeline]") {
   PipelineDescription d;
   d.file = "a.h5";

@@ -298,7 +298,7 @@ TEST_CASE("annotations name the step, its time and the crack method", "[scene][l
   CHECK(scene::methodAnnotation(cracks).empty());
 }
 
-TEST_CASE("legend titles carry units; cell attribute has its own quantities", "[scene][legend]") {
+TEST_CASE("legend titles carry units, cell attribute has its own quantities", "[scene][legend]") {
   pipeline::ParticlesDescription particles;
   particles.colourBy = pipeline::ParticleColourBy::kVelocity;
   CHECK(scene::particleQuantity(particles).title == "velocity [m/s]");

@@ -437,6 +437,9 @@ Status unpackTyped(const std::byte* packed, std::size_t packedBytes, std::byte* 
     return invalidArgument(fmt::format(
         "packed chunk: {} bytes where its header and {} rows make {}", packedBytes, rows, size));
   }
+  if (rows == 0) {
+    return Status::ok();  // nothing to write (and `out` may be null)
+  }
   for (std::size_t c = 0; c < columns; ++c) {
     unpackColumn<T>(at, columns, rows, c, plans[c], out);
     at += packedColumnBytes(rows, plans[c].bits);
