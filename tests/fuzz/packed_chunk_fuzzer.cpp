@@ -14,19 +14,15 @@
 
 #include <fuzzer/FuzzedDataProvider.h>
 
+#include "fuzz_require.hpp"
 #include <crackvis/dataservice/packed_chunk.hpp>
+
+const char* const kFuzzTargetName = "packed chunk fuzzer";
 
 namespace {
 
 using namespace crackvis;
 using namespace crackvis::dataservice;
-
-void require(bool condition, const char* what) {
-  if (!condition) {
-    std::fprintf(stderr, "packed chunk fuzzer: %s\n", what);
-    __builtin_trap();
-  }
-}
 
 constexpr DataType kTypes[] = {DataType::kInt8,   DataType::kUInt8, DataType::kInt16,
                                DataType::kUInt16, DataType::kInt32, DataType::kUInt32,

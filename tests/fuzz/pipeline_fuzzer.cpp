@@ -8,18 +8,10 @@
 #include <cstdio>
 #include <string_view>
 
+#include "fuzz_require.hpp"
 #include <crackvis/pipeline/pipeline_description.hpp>
 
-namespace {
-
-void require(bool condition, const char* what) {
-  if (!condition) {
-    std::fprintf(stderr, "pipeline fuzzer: %s\n", what);
-    __builtin_trap();
-  }
-}
-
-}  // namespace
+const char* const kFuzzTargetName = "pipeline fuzzer";
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace crackvis;

@@ -18,21 +18,17 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "fuzz_require.hpp"
 #include <crackvis/dataservice/catalogue.hpp>
 #include <crackvis/dem/h5.hpp>
+
+const char* const kFuzzTargetName = "read request fuzzer";
 
 namespace {
 
 using namespace crackvis;
 using namespace crackvis::dataservice;
 namespace h5 = crackvis::dem::h5;
-
-void require(bool condition, const char* what) {
-  if (!condition) {
-    std::fprintf(stderr, "read request fuzzer: %s\n", what);
-    __builtin_trap();
-  }
-}
 
 // What one execution may read at most, so that the fuzzer stays fast.
 constexpr std::uint64_t kMaxReadBytes = std::uint64_t{8} << 20;

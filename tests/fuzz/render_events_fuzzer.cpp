@@ -15,19 +15,15 @@
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include "client_events.hpp"
+#include "fuzz_require.hpp"
 #include <crackvis/pipeline/pipeline_description.hpp>
+
+const char* const kFuzzTargetName = "render events fuzzer";
 
 namespace {
 
 using namespace crackvis;
 using namespace crackvis::service;
-
-void require(bool condition, const char* what) {
-  if (!condition) {
-    std::fprintf(stderr, "render events fuzzer: %s\n", what);
-    __builtin_trap();
-  }
-}
 
 struct AcceptedCheck {
   const SessionLimits& limits;
