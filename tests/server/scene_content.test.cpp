@@ -14,7 +14,10 @@ using namespace crackvis;
 namespace {
 
 scene::SceneInput inputOf(const testing::PlantedCrack& crack) {
-  return {&crack.block.lattice, crack.input(), {}, {}, nullptr};
+  scene::SceneInput input;
+  input.lattice = &crack.block.lattice;
+  input.step = crack.input();
+  return input;
 }
 
 // Bond hops from each particle to the nearest one on the boundary (fewer
@@ -213,7 +216,10 @@ TEST_CASE("a triangulated packing's decomposition edges include its never-bonded
   const cracks::StepInput step{
       packing->positions, state, packing->lattice.radius, {}, {}, {}, {}, {}};
   REQUIRE(extractor->extract(step, mesh));
-  scene::SceneInput input{&packing->lattice, step, {}, {}, nullptr, extractor->decomposition()};
+  scene::SceneInput input;
+  input.lattice = &packing->lattice;
+  input.step = step;
+  input.decomposition = extractor->decomposition();
   REQUIRE(input.decomposition != nullptr);
   const auto edges = scene::decompositionBonds(input);
   REQUIRE(!edges.empty());
