@@ -43,11 +43,12 @@ class ScriptedServer {
   }
   ~ScriptedServer() { m_server->Shutdown(); }
 
-  DataClient connect() const {
+  DataClient connect(bool packedReads = true) const {
     dataservice::ClientOptions options;
     options.target = fmt::format("127.0.0.1:{}", m_port);
     options.insecure = true;
     options.timeoutSeconds = 10.0;
+    options.packedReads = packedReads;
     return DataClient::connect(options).value();
   }
 
@@ -293,6 +294,12 @@ TEST_CASE("Packed chunks are unpacked in place, and a malformed one ends the cal
       CHECK(arrays.status().code() == StatusCode::kInternal);
       CHECK_THAT(arrays.status().message(), Catch::Contains(expected));
     }
+    // A packed chunk to a client that asked for raw ones.
+    ScriptedServer server({packedPairs(first, slabBytes, 0)});
+    auto unasked =
+        server.connect(/*packedReads=*/false).read("any.h5", {Hyperslab::whole("/bonds/pairs")});
+    CHECK(unasked.status().code() == StatusCode::kInternal);
+    CHECK_THAT(unasked.status().message(), Catch::Contains("did not accept"));
   }
 }
 

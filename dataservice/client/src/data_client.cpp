@@ -64,8 +64,11 @@ class SlabReceiver {
     std::optional<std::uint64_t> decodedBytes;
   };
 
-  SlabReceiver(const DataClient::SlabSink& sink, std::size_t slabs)
-      : m_sink(sink), m_destinations(slabs) {}
+  SlabReceiver(const DataClient::SlabSink& sink, std::size_t slabs, bool acceptsPacked)
+      : m_sink(sink), m_destinations(slabs), m_acceptsPacked(acceptsPacked) {}
+
+  // Whether the request listed CHUNK_ENCODING_PACKED.
+  bool acceptsPacked() const { return m_acceptsPacked; }
 
   // Where the `size` data bytes of the chunk `header` describes go.
   Result<std::byte*> place(const ChunkHeader& header, std::uint64_t size) {
@@ -122,6 +125,7 @@ class SlabReceiver {
   };
   const DataClient::SlabSink& m_sink;
   std::vector<Destination> m_destinations;
+  bool m_acceptsPacked;
 };
 
 // Where one chunk's data went.
@@ -190,6 +194,10 @@ Result<PlacedChunk> placeData(const SlabReceiver::ChunkHeader& header, std::uint
   if (header.encoding != v1::CHUNK_ENCODING_PACKED) {
     return internalError(fmt::format("Read: slab {}: chunk in an unknown encoding {}",
                                      header.slabIndex, header.encoding));
+  }
+  if (!receiver.acceptsPacked()) {
+    return internalError(fmt::format(
+        "Read: slab {}: a packed chunk, which the request did not accept", header.slabIndex));
   }
   // A packed chunk is smaller than the at most 1 MiB it decodes to, so
   // neither a copy nor the slab grows beyond what a raw chunk could ask.
@@ -518,6 +526,7 @@ struct DataClient::PendingRead::Call {
   grpc::ClientContext context;
   std::unique_ptr<grpc::ClientAsyncReaderWriter<v1::ReadRequest, grpc::ByteBuffer>> stream;
   std::size_t slabs = 0;
+  bool acceptsPacked = false;
   std::shared_ptr<DataClient::Impl> client;  // for the advice on a failure, the byte count
   bool requestSent = false;
   bool finished = false;
@@ -574,6 +583,7 @@ DataClient::PendingRead DataClient::startRead(const std::string& file,
   }
   auto call = std::make_unique<PendingRead::Call>();
   call->slabs = slabs.size();
+  call->acceptsPacked = m_impl->options.packedReads;
   call->client = m_impl;
   m_impl->prepare(call->context);
   // The initial metadata leaves with the request in one batch, and only
@@ -593,7 +603,7 @@ Status DataClient::PendingRead::receive(const SlabSink& sink, const ChunkCallbac
   Call& call = *m_call;
   call.await();  // the request's write; a failure shows in Finish's status
   call.requestSent = true;
-  SlabReceiver receiver(sink, call.slabs);
+  SlabReceiver receiver(sink, call.slabs, call.acceptsPacked);
   Status error;
   grpc::ByteBuffer message;
   while (error.isOk()) {
