@@ -491,18 +491,11 @@ TEST_CASE("A prefetched bond list needs one stream at a time, and a refused one 
   // prefetch is refused, the step still reads, and the list comes when
   // asked for.
   auto stub = rawStub(*server);
-  grpc::ClientContext held;
-  v1::FetchRequest fetch;
-  fetch.set_file("big.h5");
-  auto holder = stub->Fetch(&held, fetch);
-  v1::FetchChunk chunk;
-  REQUIRE(holder->Read(&chunk));
+  HeldFetch holder(*stub);
   auto refused = dataservice::RemoteDemFile::open(client, "run.h5", {.prefetchBondList = true});
   REQUIRE(refused.isOk());  // the Describe is no stream
-  held.TryCancel();
-  while (holder->Read(&chunk)) {
-  }
-  holder->Finish();
+  holder.cancel();
+  holder.finish();
   REQUIRE(waitUntil([&] { return server->activeStreams() == 0; }));
   auto again = refused->readStep(2);
   REQUIRE(again.isOk());

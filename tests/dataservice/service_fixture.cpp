@@ -145,6 +145,13 @@ std::unique_ptr<crackvis::v1::DataService::Stub> rawStub(const dataservice::Data
   return crackvis::v1::DataService::NewStub(rawChannel(server));
 }
 
+HeldFetch::HeldFetch(crackvis::v1::DataService::Stub& stub) {
+  crackvis::v1::FetchRequest request;
+  request.set_file("big.h5");
+  m_reader = stub.Fetch(&m_context, request);
+  REQUIRE(readMore());
+}
+
 std::unique_ptr<dataservice::DataServer> startServer(const dataservice::ServerConfig& config) {
   auto server = dataservice::DataServer::start(config);
   if (!server) {

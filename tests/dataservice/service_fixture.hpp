@@ -59,6 +59,30 @@ dataservice::DataClient connect(const dataservice::ClientOptions& options);
 std::shared_ptr<grpc::Channel> rawChannel(const dataservice::DataServer& server);
 std::unique_ptr<crackvis::v1::DataService::Stub> rawStub(const dataservice::DataServer& server);
 
+// A Fetch of big.h5 that has read its first chunk: it holds one of the
+// server's stream slots until it is cancelled, at the latest when it goes
+// (without Finish).
+class HeldFetch {
+ public:
+  explicit HeldFetch(crackvis::v1::DataService::Stub& stub);
+  HeldFetch(const HeldFetch&) = delete;
+  HeldFetch& operator=(const HeldFetch&) = delete;
+  ~HeldFetch() { cancel(); }
+  bool readMore() { return m_reader->Read(&m_chunk); }
+  void cancel() { m_context.TryCancel(); }
+  // Reads what is left and ends the call.
+  grpc::Status finish() {
+    while (readMore()) {
+    }
+    return m_reader->Finish();
+  }
+
+ private:
+  grpc::ClientContext m_context;
+  std::unique_ptr<grpc::ClientReader<crackvis::v1::FetchChunk>> m_reader;
+  crackvis::v1::FetchChunk m_chunk;
+};
+
 // The server still answers: a health check and a valid read with a good
 // client, bit-identical to the file. Fails the test otherwise.
 void requireServerHealthy(const dataservice::DataServer& server);

@@ -151,21 +151,21 @@ Result<Connections> connect(const TransferOptions& options, Report& report) {
   return Connections{std::move(*client), std::move(*rawChunks), std::move(raw)};
 }
 
-// A view's first step from nothing: Describe (open) and the Read of the
-// step with the bond list; then a step change: one more Read. Before them,
-// the Describe of a file the server has not walked since it changed.
-Status timeViews(const Connections& c, Report& report, bool timed) {
-  const std::uint64_t wireBefore = c.client.readWireBytes();
-  auto start = Clock::now();
-  auto cold = c.client.describe(report.file, true);
-  if (!cold) {
-    return cold.status();
-  }
-  const double coldSeconds = since(start);
-  start = Clock::now();
-  // As crackvis-render's step source opens a view: the bond list asked for
-  // with the description.
-  auto view = ds::RemoteDemFile::open(c.client, report.file, {.prefetchBondList = true});
+// A view's first step from nothing, as crackvis-render's step source opens
+// one: Describe (open) with the bond list asked for with it, then the Read
+// of the step.
+struct FirstView {
+  ds::RemoteDemFile file;
+  double describeSeconds = 0.0;
+  double seconds = 0.0;         // Describe and Read
+  std::uint64_t bytes = 0;      // positions, bond states and bond list as read
+  std::uint64_t wireBytes = 0;  // as they travelled
+};
+
+Result<FirstView> openFirstView(const ds::DataClient& client, const Report& report) {
+  const std::uint64_t wireBefore = client.readWireBytes();
+  const auto start = Clock::now();
+  auto view = ds::RemoteDemFile::open(client, report.file, {.prefetchBondList = true});
   if (!view) {
     return view.status();
   }
@@ -174,48 +174,60 @@ Status timeViews(const Connections& c, Report& report, bool timed) {
   if (!step) {
     return step.status();
   }
-  const double firstSeconds = since(start);
+  const double seconds = since(start);
+  const std::uint64_t bytes = step->positions.size() * sizeof(dem::Vec3) + step->bondState.size() +
+                              (*view->bonds())->size() * sizeof(dem::Bond);
+  return FirstView{std::move(*view), describeSeconds, seconds, bytes,
+                   client.readWireBytes() - wireBefore};
+}
+
+// The first view, then a step change on it: one more Read. Before them,
+// the Describe of a file the server has not walked since it changed.
+Status timeViews(const Connections& c, Report& report, bool timed) {
+  auto start = Clock::now();
+  auto cold = c.client.describe(report.file, true);
+  if (!cold) {
+    return cold.status();
+  }
+  const double coldSeconds = since(start);
+  auto first = openFirstView(c.client, report);
+  if (!first) {
+    return first.status();
+  }
   const std::uint64_t wireFirst = c.client.readWireBytes();
   start = Clock::now();
-  auto next = view->readStep(report.warmStep);
+  auto next = first->file.readStep(report.warmStep);
   if (!next) {
     return next.status();
   }
   const double warmSeconds = since(start);
-  report.firstView.wireBytes = wireFirst - wireBefore;
-  report.coldFirstView.wireBytes = report.firstView.wireBytes;
-  report.warmView.wireBytes = c.client.readWireBytes() - wireFirst;
   if (timed) {
-    report.describe.seconds.push_back(describeSeconds);
+    report.describe.seconds.push_back(first->describeSeconds);
     report.coldDescribe.seconds.push_back(coldSeconds);
-    report.firstView.seconds.push_back(firstSeconds);
-    report.coldFirstView.seconds.push_back(coldSeconds + firstSeconds - describeSeconds);
+    report.firstView.seconds.push_back(first->seconds);
+    report.coldFirstView.seconds.push_back(coldSeconds + first->seconds - first->describeSeconds);
     report.warmView.seconds.push_back(warmSeconds);
   }
-  report.firstView.bytes = step->positions.size() * sizeof(dem::Vec3) + step->bondState.size() +
-                           (*view->bonds())->size() * sizeof(dem::Bond);
-  report.coldFirstView.bytes = report.firstView.bytes;
+  report.firstView.bytes = first->bytes;
+  report.firstView.wireBytes = first->wireBytes;
+  report.coldFirstView.bytes = first->bytes;
+  report.coldFirstView.wireBytes = first->wireBytes;
   report.warmView.bytes = next->positions.size() * sizeof(dem::Vec3) + next->bondState.size();
+  report.warmView.wireBytes = c.client.readWireBytes() - wireFirst;
   return Status::ok();
 }
 
 // The first view again, every chunk raw: what packed chunks save.
 Status timeRawChunksView(const Connections& c, Report& report, bool timed) {
-  const std::uint64_t wireBefore = c.rawChunks.readWireBytes();
-  const auto start = Clock::now();
-  auto view = ds::RemoteDemFile::open(c.rawChunks, report.file, {.prefetchBondList = true});
-  if (!view) {
-    return view.status();
-  }
-  auto step = view->readStep(report.step);
-  if (!step) {
-    return step.status();
+  auto first = openFirstView(c.rawChunks, report);
+  if (!first) {
+    return first.status();
   }
   if (timed) {
-    report.rawChunksFirstView.seconds.push_back(since(start));
+    report.rawChunksFirstView.seconds.push_back(first->seconds);
   }
-  report.rawChunksFirstView.bytes = report.firstView.bytes;
-  report.rawChunksFirstView.wireBytes = c.rawChunks.readWireBytes() - wireBefore;
+  report.rawChunksFirstView.bytes = first->bytes;
+  report.rawChunksFirstView.wireBytes = first->wireBytes;
   return Status::ok();
 }
 

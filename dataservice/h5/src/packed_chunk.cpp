@@ -66,11 +66,17 @@ constexpr unsigned kMaxBits = 33;
 constexpr std::size_t kColumnHeaderBytes = 1 + 1 + 8 + 8;
 constexpr std::size_t kPaddingBytes = 8;
 
+// A value of type T at `at` (any alignment), and the same widened.
 template <typename T>
-std::int64_t load(const std::byte* at) {
+T loadAs(const std::byte* at) {
   T value;
   std::memcpy(&value, at, sizeof(T));
-  return static_cast<std::int64_t>(value);
+  return value;
+}
+
+template <typename T>
+std::int64_t load(const std::byte* at) {
+  return static_cast<std::int64_t>(loadAs<T>(at));
 }
 
 template <typename T>
@@ -120,13 +126,6 @@ struct ColumnPlan {
 #else
 #define CRACKVIS_VECTOR_CLONES
 #endif
-
-template <typename T>
-T loadAs(const std::byte* at) {
-  T value;
-  std::memcpy(&value, at, sizeof(T));
-  return value;
-}
 
 // A column's values as they are. kColumns: the row length when known at
 // compile time, else 0 and `columns` gives it.
