@@ -7,7 +7,7 @@
 namespace crackvis::cracks {
 
 Result<std::unique_ptr<DemSeries>> DemSeries::open(const std::string& path) {
-  auto reader = dem::DemFileReader::open(path);
+  auto reader = dem::DemFileReader::openGuarded(path);
   if (!reader) {
     return reader.status();
   }

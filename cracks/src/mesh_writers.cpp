@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <crackvis/common/pending_file.hpp>
 #include <crackvis/cracks/lattice_cells.hpp>
 #include <crackvis/cracks/mesh_writers.hpp>
 
@@ -82,17 +83,10 @@ std::vector<std::int32_t> endOffsets(const PrimitiveList& list) {
   return {list.offsets.begin() + 1, list.offsets.end()};
 }
 
+// Written beside its name and renamed over it when complete: a full disk
+// leaves an existing file as it was.
 Status writeFile(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) {
-    return failedPrecondition(fmt::format("{}: cannot open for writing", path));
-  }
-  out.write(text.data(), static_cast<std::streamsize>(text.size()));
-  out.close();
-  if (!out) {
-    return failedPrecondition(fmt::format("{}: write failed (disk full?)", path));
-  }
-  return Status::ok();
+  return replaceFile(path, text);
 }
 
 std::string finish(const std::string& type, const std::string& piece, const AppendedData& data) {
@@ -213,8 +207,15 @@ std::string vtkExtensionFor(const CrackMesh& mesh) {
 }
 
 Status writeVtkXml(const CrackMesh& mesh, const std::string& path) {
-  return writeFile(path, endsWith(path, ".vtu") || mesh.hasVolumeCells() ? unstructuredGridXml(mesh)
-                                                                         : polyDataXml(mesh));
+  // ParaView picks the reader by the extension: an UnstructuredGrid in a
+  // .vtp name is a file it cannot open.
+  if (mesh.hasVolumeCells() && !endsWith(path, ".vtu")) {
+    return invalidArgument(fmt::format(
+        "{}: these cracks have volume cells (the cell attribute method in 3D), which only an "
+        "UnstructuredGrid holds: name the output .vtu",
+        path));
+  }
+  return writeFile(path, endsWith(path, ".vtu") ? unstructuredGridXml(mesh) : polyDataXml(mesh));
 }
 
 Status writeStl(const CrackMesh& mesh, const std::string& path) {

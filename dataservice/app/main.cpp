@@ -46,6 +46,7 @@ struct Flags {
   std::optional<int> maxStreams;
   std::optional<int> maxStreamsPerUser;
   std::optional<double> handshakeSeconds;
+  std::optional<double> idleConnectionSeconds;
   std::optional<double> maxCallSeconds;
   std::optional<int> maxSlabsPerRead;
   std::optional<int> describeMaxDepth;
@@ -107,6 +108,9 @@ crackvis::Result<ServerConfig> configure(const Flags& flags, const CLI::App& app
   }
   if (flags.maxStreamsPerUser) {
     config.limits.maxStreamsPerUser = *flags.maxStreamsPerUser;
+  }
+  if (flags.idleConnectionSeconds) {
+    config.limits.idleConnectionSeconds = *flags.idleConnectionSeconds;
   }
   if (flags.handshakeSeconds) {
     config.limits.handshakeSeconds = *flags.handshakeSeconds;
@@ -233,7 +237,11 @@ int main(int argc, char** argv) {
   app.add_option("--max-streams-per-user", flags.maxStreamsPerUser,
                  "limit on one configured user's Read/Fetch calls at once (default 16)");
   app.add_option("--handshake-seconds", flags.handshakeSeconds,
-                 "time a raw TLS connection has for its handshake and request (default 10)");
+                 "time a connection has for its TLS handshake (and a raw TLS one for its "
+                 "request); an idle TCP connection is closed then (default 10)");
+  app.add_option("--idle-connection-seconds", flags.idleConnectionSeconds,
+                 "a gRPC connection without a call for this long is closed; clients reconnect "
+                 "when they next call (default 300)");
   app.add_option("--max-call-seconds", flags.maxCallSeconds,
                  "a Read or Fetch running longer is cancelled");
   app.add_option("--max-slabs-per-read", flags.maxSlabsPerRead,

@@ -563,6 +563,28 @@ Result<std::vector<std::uint8_t>> DemFileReader::readBondState(int step) const {
   return state;
 }
 
+Status DemFileReader::checkStepHeaders(int step) const {
+  CRACKVIS_RETURN_IF_ERROR(checkStepInRange(m_path, step, stepCount()));
+  for (DemDataset id : {DemDataset::kPositions, DemDataset::kBondState, DemDataset::kVelocities,
+                        DemDataset::kBondForce}) {
+    const bool optional = id == DemDataset::kVelocities || id == DemDataset::kBondForce;
+    if (optional && !h5::linkExists(m_file.get(), datasetPath(id, step))) {
+      continue;
+    }
+    if (auto opened = openChecked(id, step); !opened) {
+      return opened.status();
+    }
+  }
+  for (const ExtraInfo& extra : m_info.extras) {
+    if (extra.perStep) {
+      if (auto opened = openExtra(extra, step); !opened) {
+        return opened.status();
+      }
+    }
+  }
+  return Status::ok();
+}
+
 // ---------------------------------------------------------------- writer --
 
 Result<DemFileWriter> DemFileWriter::create(const std::string& path, const Lattice& lattice,
@@ -582,8 +604,20 @@ Result<DemFileWriter> DemFileWriter::create(const std::string& path, const Latti
   }
   writer.m_lattice = lattice;
   writer.m_breakStep.assign(lattice.bondCount(), -1);
+  writer.m_storage = metadata.storage;
+  if (Status written = writer.writeTimeIndependent(metadata); !written) {
+    // Every message names the file (a full disk fails any of the writes).
+    return written.message().starts_with(path)
+               ? written
+               : Status(written.code(), fmt::format("{}: {}", path, written.message()));
+  }
+  return writer;
+}
 
-  const hid_t root = writer.m_file.get();
+Status DemFileWriter::writeTimeIndependent(const DemMetadata& metadata) {
+  const std::string& path = m_path;
+  const Lattice& lattice = m_lattice;
+  const hid_t root = m_file.get();
   CRACKVIS_RETURN_IF_ERROR(h5::writeStringAttribute(root, "format", std::string(kFormatName)));
   CRACKVIS_RETURN_IF_ERROR(h5::writeIntAttribute(root, "version", kFormatVersion));
   CRACKVIS_RETURN_IF_ERROR(h5::writeIntAttribute(root, "dimension", lattice.dimension));
@@ -601,7 +635,6 @@ Result<DemFileWriter> DemFileWriter::create(const std::string& path, const Latti
     CRACKVIS_RETURN_IF_ERROR(
         h5::writeStringAttribute(root, "source_files", joinLines(metadata.sourceFiles)));
   }
-  writer.m_storage = metadata.storage;
 
   const auto n = static_cast<std::uint64_t>(lattice.particleCount());
   const auto m = static_cast<std::uint64_t>(lattice.bondCount());
@@ -634,10 +667,10 @@ Result<DemFileWriter> DemFileWriter::create(const std::string& path, const Latti
         h5::writeDataset(root, "/bonds/flags", ElementType::kUInt8, {m}, lattice.bondFlags.data()));
   }
   if (!lattice.extras.empty()) {
-    CRACKVIS_RETURN_IF_ERROR(writer.writeExtras(root, lattice.extras));
+    CRACKVIS_RETURN_IF_ERROR(writeExtras(root, lattice.extras));
   }
-  CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(root, "/bonds/break_step", ElementType::kInt32, {m},
-                                            writer.m_breakStep.data()));
+  CRACKVIS_RETURN_IF_ERROR(
+      h5::writeDataset(root, "/bonds/break_step", ElementType::kInt32, {m}, m_breakStep.data()));
   Handle steps = h5::groupHandle(H5Gopen2(root, "/steps", H5P_DEFAULT));
   CRACKVIS_RETURN_IF_ERROR(h5::writeIntAttribute(steps.get(), "count", 0));
   if (metadata.plannedSteps > 0) {
@@ -647,7 +680,7 @@ Result<DemFileWriter> DemFileWriter::create(const std::string& path, const Latti
   if (H5Fflush(root, H5F_SCOPE_GLOBAL) < 0) {
     return internalError(fmt::format("{}: flush failed ({})", path, h5::lastHdf5Error()));
   }
-  return writer;
+  return Status::ok();
 }
 
 Status DemFileWriter::recordBreaks(const StepState& step, bool& changed) {

@@ -59,6 +59,16 @@ Result<Handle> scalarAttribute(hid_t object, const std::string& name, H5T_class_
 }  // namespace
 
 void quietHdf5() {
+  // libhdf5's own clean-up at exit closes what is still open, and faults
+  // (SIGSEGV in H5F__close_cb) on a file whose close failed on a full disk:
+  // the writer had reported the error, then the process died of a signal.
+  // Every file crackvis opens is closed by its owner, so the clean-up is
+  // not needed. Only takes effect before the library's first call.
+  static const bool noExitCleanUp = [] {
+    (void)H5dont_atexit();
+    return true;
+  }();
+  (void)noExitCleanUp;
   // Debian's HDF5 is built thread-safe, and then its error printing is set
   // per thread: every thread that touches HDF5 silences its own.
   thread_local bool quiet = false;

@@ -302,6 +302,19 @@ Status CsvSource::readNpyParticles(const std::string& path, SourceStep& out) con
         fmt::format("{}: expected shape (n, 5) or (n, 6): id, x, y, z, radius[, group]", path));
   }
   const std::size_t bytes = f8 ? 8 : 4;
+  // The header's shape is believed only as far as the file's length backs
+  // it: a 215-byte file declaring 400 million rows must not allocate 16 GB.
+  std::error_code error;
+  const std::uintmax_t fileBytes = std::filesystem::file_size(path, error);
+  const std::uintmax_t dataStart = static_cast<std::uintmax_t>(in.tellg());
+  const std::uintmax_t stored = !error && fileBytes > dataStart ? fileBytes - dataStart : 0;
+  if (rows > stored / (columns * bytes)) {
+    return failedPrecondition(fmt::format(
+        "{}: truncated: the header declares {} x {} values ({} bytes), the file holds {} bytes "
+        "of data",
+        path, rows, columns, static_cast<double>(rows) * static_cast<double>(columns * bytes),
+        stored));
+  }
   std::vector<char> data(rows * columns * bytes);
   in.read(data.data(), static_cast<std::streamsize>(data.size()));
   if (!in) {

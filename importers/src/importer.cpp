@@ -315,14 +315,17 @@ std::vector<dem::StepScalar> SeriesConverter::scalarsOf(const SourceStep& step) 
 }
 
 std::optional<double> SeriesConverter::timeFromTable(std::int64_t sourceStep) const {
-  if (m_table != nullptr) {
-    for (const dem::StepScalar& scalar : m_table->at(sourceStep)) {
-      if (scalar.name == "time") {
-        return scalar.value;
-      }
+  if (m_table == nullptr) {
+    return std::nullopt;
+  }
+  for (const dem::StepScalar& scalar : m_table->at(sourceStep)) {
+    if (scalar.name == "time") {
+      return scalar.value;
     }
   }
-  return std::nullopt;
+  // A step without a row (--partial-scalars): its time on the table's line,
+  // so that one file never mixes seconds and step numbers.
+  return m_table->has(sourceStep) ? std::nullopt : m_table->fittedTime(sourceStep);
 }
 
 Result<dem::StepState> SeriesConverter::convert(const SourceStep& step) {
@@ -398,6 +401,59 @@ Status writeSeries(StepSource& source, SeriesConverter& converter, SourceStep fi
 
 }  // namespace
 
+namespace {
+
+// How many imported steps the --scalars table has a row for: none is a
+// table of another run (or another step numbering) and is refused; some is
+// refused unless asked for, since those steps would lack the scalars and,
+// with a time column, fall back to another unit of time.
+Status matchScalarRows(StepSource& source, const ScalarTable& table, const ImportOptions& options,
+                       ImportSummary& summary) {
+  std::vector<std::int64_t> missing;
+  for (int index : summary.selected) {
+    const std::int64_t step = source.sourceStepNumber(index);
+    if (table.has(step)) {
+      ++summary.scalarRowsMatched;
+    } else {
+      missing.push_back(step);
+    }
+  }
+  const std::string& path = options.scalarsTable;
+  if (summary.scalarRowsMatched == 0) {
+    return failedPrecondition(fmt::format(
+        "{}: no row matches an imported step (the table's {} rows are for code steps {} .. {}; "
+        "the imported steps are {} .. {}): is it the table of this run?",
+        path, table.rowCount(), table.firstStep(), table.lastStep(), summary.firstSourceStep,
+        summary.lastSourceStep));
+  }
+  std::vector<std::string> shown;
+  for (std::size_t i = 0; i < std::min<std::size_t>(missing.size(), 5); ++i) {
+    shown.push_back(std::to_string(missing[i]));
+  }
+  const std::string missingText =
+      fmt::format("{}{}", fmt::join(shown, ", "), missing.size() > shown.size() ? ", ..." : "");
+  if (!missing.empty() && !options.partialScalars) {
+    return failedPrecondition(fmt::format(
+        "{}: rows for {} of the {} imported steps (none for code steps {}); those steps would get "
+        "no scalars{}: pass --partial-scalars to import anyway",
+        path, summary.scalarRowsMatched, summary.selected.size(), missingText,
+        table.fittedTime(0) ? " and a time from a straight line through the table's times" : ""));
+  }
+  if (!missing.empty()) {
+    summary.notes.push_back(fmt::format(
+        "{} has no row for {} imported steps (code steps {}): they have no table scalars{}", path,
+        missing.size(), missingText,
+        table.fittedTime(0) ? ", and their time lies on a straight line through the table's" : ""));
+  }
+  if (!table.textColumns().empty()) {
+    summary.notes.push_back(fmt::format("{}: skipped the columns that hold text: {}", path,
+                                        fmt::join(table.textColumns(), ", ")));
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
 Result<ImportSummary> importSeries(StepSource& source, const ImportOptions& options) {
   ImportSummary summary;
   summary.source = source.description();
@@ -420,6 +476,7 @@ Result<ImportSummary> importSeries(StepSource& source, const ImportOptions& opti
       return read.status();
     }
     table = std::move(*read);
+    CRACKVIS_RETURN_IF_ERROR(matchScalarRows(source, *table, options, summary));
   }
   SeriesConverter converter(summary.source, options.timestep, table ? &*table : nullptr);
 
@@ -559,7 +616,12 @@ std::string formatSummary(const ImportSummary& s, const ImportOptions& options) 
                  ? fmt::format("the code's step number x {} s (--timestep)", options.timestep)
                  : std::string("the code's step number (the source writes no time; give "
                                "--timestep to convert)")));
-  out += fmt::format("step scalars  {}\n", fmt::join(s.scalarNames, ", "));
+  out +=
+      fmt::format("step scalars  {}{}\n", fmt::join(s.scalarNames, ", "),
+                  options.scalarsTable.empty()
+                      ? std::string()
+                      : fmt::format(" ({} matched rows for {} of {} imported steps)",
+                                    options.scalarsTable, s.scalarRowsMatched, s.selected.size()));
   std::vector<std::string> arrays{"positions", "radius", "id"};
   if (s.withGroups) {
     arrays.emplace_back("group");
@@ -569,6 +631,11 @@ std::string formatSummary(const ImportSummary& s, const ImportOptions& options) 
   }
   arrays.insert(arrays.end(), s.extraNames.begin(), s.extraNames.end());
   out += fmt::format("arrays        {}\n", fmt::join(arrays, ", "));
+  for (const auto* notes : {&s.source.notes, &s.notes}) {
+    for (const std::string& note : *notes) {
+      out += fmt::format("note          {}\n", note);
+    }
+  }
   if (s.reappeared > 0) {
     out += fmt::format(
         "note          {} listings of broken bonds reappeared later; they stay broken (bonds "

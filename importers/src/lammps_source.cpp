@@ -143,6 +143,14 @@ Result<BlockHeader> readBlockHeader(TextInput& input, std::string first) {
         return value ? input.error(fmt::format("row count '{}' is not a count", *value))
                      : value.status();
       }
+      // A count is believed only as far as the file could hold its rows
+      // (two bytes each at least): readers allocate by it.
+      if (const std::uint64_t left = input.bytesLeft();
+          static_cast<std::uint64_t>(header.rows) > left / 2) {
+        return input.error(fmt::format(
+            "the header declares {} rows, but only {} bytes follow (truncated or corrupt?)",
+            header.rows, left));
+      }
     } else if (line.rfind("ITEM: BOX BOUNDS", 0) == 0) {
       for (auto& axis : header.box) {
         auto bounds = input.expect("a box bounds line");

@@ -56,12 +56,7 @@ Result<ScalarTable> ScalarTable::read(const std::string& path) {
         headerLine));
   }
   ScalarTable table;
-  for (std::size_t c = 0; c < header.size(); ++c) {
-    if (static_cast<int>(c) != stepColumn) {
-      const std::string name = safeName(header[c]);
-      table.m_names.push_back(name);
-    }
-  }
+  std::vector<bool> numeric;  // decided by the first data row
   while (input->next(line)) {
     if (line.empty() || line.front() == '#') {
       continue;
@@ -78,20 +73,61 @@ Result<ScalarTable> ScalarTable::read(const std::string& path) {
       return input->error(
           fmt::format("step '{}' is not an integer", fields[static_cast<std::size_t>(stepColumn)]));
     }
+    if (numeric.empty()) {
+      for (std::size_t c = 0; c < fields.size(); ++c) {
+        double value = 0.0;
+        numeric.push_back(static_cast<int>(c) == stepColumn || parseNumber(fields[c], value));
+        if (static_cast<int>(c) == stepColumn) {
+          continue;
+        }
+        (numeric.back() ? table.m_names : table.m_textColumns).push_back(safeName(header[c]));
+      }
+    }
     std::vector<double> values;
     for (std::size_t c = 0; c < fields.size(); ++c) {
-      if (static_cast<int>(c) == stepColumn) {
+      if (static_cast<int>(c) == stepColumn || !numeric[c]) {
         continue;
       }
       double value = 0.0;
       if (!parseNumber(fields[c], value)) {
-        return input->error(fmt::format("column {}: '{}' is not a number", c + 1, fields[c]));
+        return input->error(fmt::format("column {} ({}): '{}' is not a number", c + 1,
+                                        safeName(header[c]), fields[c]));
       }
       values.push_back(value);
     }
     table.m_rows[step] = std::move(values);
   }
   return table;
+}
+
+std::optional<double> ScalarTable::fittedTime(std::int64_t sourceStep) const {
+  const auto column = std::find(m_names.begin(), m_names.end(), "time");
+  if (column == m_names.end()) {
+    return std::nullopt;
+  }
+  const auto c = static_cast<std::size_t>(column - m_names.begin());
+  double n = 0;
+  double sx = 0;
+  double sy = 0;
+  double sxx = 0;
+  double sxy = 0;
+  for (const auto& [step, values] : m_rows) {
+    if (!std::isfinite(values[c])) {
+      continue;
+    }
+    const auto x = static_cast<double>(step);
+    n += 1;
+    sx += x;
+    sy += values[c];
+    sxx += x * x;
+    sxy += x * values[c];
+  }
+  const double spread = n * sxx - sx * sx;
+  if (n < 2 || !(spread > 0.0)) {
+    return std::nullopt;
+  }
+  const double slope = (n * sxy - sx * sy) / spread;
+  return (sy - slope * sx) / n + slope * static_cast<double>(sourceStep);
 }
 
 std::vector<dem::StepScalar> ScalarTable::at(std::int64_t sourceStep) const {

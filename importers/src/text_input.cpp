@@ -57,6 +57,15 @@ std::streamoff TextInput::offset() {
   return m_in.tellg();
 }
 
+std::uint64_t TextInput::bytesLeft() {
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(m_path, error);
+  const std::streamoff at = m_in.tellg();
+  return error || at < 0 || static_cast<std::uintmax_t>(at) >= size
+             ? 0
+             : static_cast<std::uint64_t>(size - static_cast<std::uintmax_t>(at));
+}
+
 std::vector<std::string_view> splitTokens(std::string_view line) {
   std::vector<std::string_view> tokens;
   std::size_t i = 0;

@@ -28,6 +28,10 @@ class TextInput {
   // Seeks to a byte offset recorded by offset() (line numbers restart at `line`).
   void seek(std::streamoff offset, int line);
   std::streamoff offset();
+  // Bytes between the read position and the end of the file: the most rows
+  // a count in a header can be believed for (each row is a value and a line
+  // end at least).
+  std::uint64_t bytesLeft();
 
  private:
   std::string m_path;

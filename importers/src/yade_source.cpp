@@ -8,7 +8,10 @@
 // positions. They are matched to the spheres' points, which VTKRecorder
 // writes from the same state, so the coordinates agree exactly.
 #include <algorithm>
+#include <charconv>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <optional>
 #include <unordered_map>
@@ -56,6 +59,61 @@ std::optional<RecordName> parseRecordName(const std::string& path, std::string_v
   }
   record.prefix = path.substr(0, path.size() - name.size() + at);
   return record;
+}
+
+// VTKRecorder's other recorders ('cracks', 'facets', ...): "<prefix>cracks.<iter>.vtu". They
+// hold nothing crackvis imports (it extracts its own crack surfaces), so
+// they are skipped with a note, whether found in a folder or named.
+std::optional<std::string> otherRecorder(const std::string& path) {
+  for (const char* kind : {"cracks", "facets", "boxes", "pericell", "moments", "polyhedra",
+                           "pFacets", "polyhedralIntr", "liqcontrol"}) {
+    for (const char* extension : {".vtu", ".vtp"}) {
+      if (parseRecordName(path, std::string(kind) + ".", extension)) {
+        return kind;
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+// VTK's XML readers allocate every array by the counts in the file's
+// header (NumberOfPoints="...") before they read a byte of data, so a
+// corrupt or hostile header of 400 million points in a 12 KB file cost
+// gigabytes. A count is believed only as far as the file could hold its
+// data: a point is 12 bytes at least (three float32), any other element 4,
+// and zlib never compresses more than about 1032:1.
+Status checkDeclaredCounts(const std::string& path) {
+  constexpr std::uint64_t kMaxExpansion = 1100;
+  std::ifstream in(path, std::ios::binary);
+  std::string head(64 * 1024, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  std::error_code error;
+  const std::uintmax_t fileBytes = std::filesystem::file_size(path, error);
+  if (error) {
+    return failedPrecondition(fmt::format("{}: cannot read its size", path));
+  }
+  for (const char* name : {"NumberOfPoints", "NumberOfCells", "NumberOfVerts", "NumberOfLines",
+                           "NumberOfStrips", "NumberOfPolys"}) {
+    const std::string key = std::string(name) + "=\"";
+    for (std::size_t at = head.find(key); at != std::string::npos; at = head.find(key, at + 1)) {
+      const char* first = head.data() + at + key.size();
+      std::uint64_t count = 0;
+      const auto [end, parsed] = std::from_chars(first, head.data() + head.size(), count);
+      const std::uint64_t bytesEach = std::string_view(name) == "NumberOfPoints" ? 12 : 4;
+      const bool beyond = parsed == std::errc::result_out_of_range ||
+                          (parsed == std::errc() && count / kMaxExpansion > fileBytes / bytesEach);
+      if (beyond) {
+        return failedPrecondition(fmt::format(
+            "{}: the header declares {}=\"{}\", more than a file of {} bytes can hold "
+            "(truncated or corrupt?)",
+            path, name,
+            std::string(first, static_cast<std::size_t>(std::min<std::ptrdiff_t>(end - first, 24))),
+            fileBytes));
+      }
+    }
+  }
+  return Status::ok();
 }
 
 // One break the JCFpm crack recorder logged: its iteration and type
@@ -133,12 +191,17 @@ class YadeSource final : public StepSource {
   };
   SourceDescription m_description;
   std::map<std::int64_t, Record> m_records;
+  std::map<std::string, int> m_skipped;  // files of other VTKRecorder recorders, by recorder
   std::vector<CrackRecord> m_cracks;
   bool m_withCracks = false;
 };
 
 Status YadeSource::add(const std::string& path) {
   const std::string name = baseName(path);
+  if (auto recorder = otherRecorder(path)) {
+    ++m_skipped[*recorder];
+    return Status::ok();
+  }
   if (auto spheres = parseRecordName(path, "spheres.", ".vtu")) {
     Record& record = m_records[spheres->iteration];
     if (!record.spheres.empty()) {
@@ -174,6 +237,12 @@ Status YadeSource::add(const std::string& path) {
 }
 
 Status YadeSource::finish() {
+  for (const auto& [recorder, files] : m_skipped) {
+    m_description.notes.push_back(fmt::format(
+        "skipped {} file{} of VTKRecorder's '{}' recorder ({}.<iter>.vt?): crackvis reads spheres "
+        "and intrs, and makes its own crack surfaces",
+        files, files == 1 ? "" : "s", recorder, recorder));
+  }
   if (m_records.empty()) {
     return notFound(
         "no Yade VTKRecorder output among the inputs (recorders=['spheres','id','intr','jcfpm'] "
@@ -198,6 +267,7 @@ Status YadeSource::readSpheres(const std::string& path, SourceStep& out) const {
   if (reader->CanReadFile(path.c_str()) == 0) {
     return failedPrecondition(fmt::format("{}: not a readable VTK unstructured grid (.vtu)", path));
   }
+  CRACKVIS_RETURN_IF_ERROR(checkDeclaredCounts(path));
   reader->SetFileName(path.c_str());
   reader->Update();
   vtkUnstructuredGrid* grid = reader->GetOutput();
@@ -275,6 +345,7 @@ Status YadeSource::readInteractions(const std::string& path, SourceStep& out) co
   if (reader->CanReadFile(path.c_str()) == 0) {
     return failedPrecondition(fmt::format("{}: not a readable VTK poly data file (.vtp)", path));
   }
+  CRACKVIS_RETURN_IF_ERROR(checkDeclaredCounts(path));
   reader->SetFileName(path.c_str());
   reader->Update();
   vtkPolyData* poly = reader->GetOutput();
@@ -375,7 +446,7 @@ Result<std::unique_ptr<StepSource>> openYade(const std::vector<std::string>& inp
   auto recorded = [](const std::string& file) {
     const std::string name = baseName(file);
     return parseRecordName(file, "spheres.", ".vtu") || parseRecordName(file, "intrs.", ".vtp") ||
-           (name.rfind("cracks_", 0) == 0 && name.ends_with(".txt"));
+           (name.rfind("cracks_", 0) == 0 && name.ends_with(".txt")) || otherRecorder(file);
   };
   CRACKVIS_RETURN_IF_ERROR(
       addInputs(inputs, recorded, [&](const std::string& file) { return source->add(file); }));

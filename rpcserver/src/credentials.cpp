@@ -225,45 +225,88 @@ Authenticator::Authenticator(std::vector<UserEntry> users) : m_users(std::move(u
   }
 }
 
-Status Authenticator::checkThrottle(const std::string& address) const {
+Authenticator::ThrottleKeys Authenticator::throttleKeys(std::string_view authorization,
+                                                        std::string_view peer) {
+  const std::string address = peerAddress(peer);
+  std::string claimed = "a bearer token";
+  if (startsWith(authorization, "Basic ")) {
+    std::string decoded;
+    const bool readable = unbase64(authorization.substr(6), decoded);
+    const std::size_t colon = readable ? decoded.find(':') : std::string::npos;
+    // The name as claimed, capped: a key is never longer than a name may be.
+    claimed = colon == std::string::npos
+                  ? std::string("a malformed name")
+                  : fmt::format("user '{}'", echoed(decoded.substr(0, colon)));
+  } else if (!startsWith(authorization, "Bearer ")) {
+    claimed = "another scheme";
+  }
+  // Only password failures count against the address as a whole: they are
+  // what costs a PBKDF2 each; a wrong token costs one SHA-256.
+  const bool password = startsWith(authorization, "Basic ");
+  return {address + " " + claimed, password ? address : std::string(), claimed, address};
+}
+
+Status Authenticator::checkThrottle(const ThrottleKeys& keys) const {
   std::lock_guard lock(m_mutex);
-  auto it = m_failures.find(address);
-  if (it == m_failures.end()) {
-    return Status::ok();
-  }
-  const double age = std::chrono::duration<double>(Clock::now() - it->second.windowStart).count();
-  if (age > kFailureWindowSeconds) {
-    m_failures.erase(it);
-    return Status::ok();
-  }
-  if (it->second.count >= kMaxFailuresPerPeer) {
+  const auto now = Clock::now();
+  auto exceeded = [&](const std::string& key, int limit) -> std::optional<double> {
+    auto it = m_failures.find(key);
+    if (it == m_failures.end()) {
+      return std::nullopt;
+    }
+    const double age = std::chrono::duration<double>(now - it->second.windowStart).count();
+    if (age > kFailureWindowSeconds) {
+      m_failures.erase(it);
+      return std::nullopt;
+    }
+    return it->second.count >= limit ? std::optional<double>(age) : std::nullopt;
+  };
+  auto refuse = [&](const std::string& who, int limit, double age) {
     return resourceExhausted(
-        fmt::format("too many failed sign-ins from {} ({} in {:.0f} s); retry in {:.0f} s", address,
-                    it->second.count, kFailureWindowSeconds, kFailureWindowSeconds - age));
+        fmt::format("too many failed sign-ins {} ({} in {:.0f} s); retry in {:.0f} s", who, limit,
+                    kFailureWindowSeconds, kFailureWindowSeconds - age));
+  };
+  if (auto age = exceeded(keys.identity, kMaxFailuresPerIdentity)) {
+    return refuse(fmt::format("with {} from {}", keys.claimed, keys.peer), kMaxFailuresPerIdentity,
+                  *age);
+  }
+  if (auto age =
+          keys.address.empty() ? std::nullopt : exceeded(keys.address, kMaxFailuresPerAddress)) {
+    return refuse("from " + keys.peer, kMaxFailuresPerAddress, *age);
   }
   return Status::ok();
 }
 
-void Authenticator::recordFailure(const std::string& address) const {
+void Authenticator::recordFailure(const ThrottleKeys& keys) const {
   std::lock_guard lock(m_mutex);
   if (m_failures.size() >= kMaxCachedCredentials) {
     m_failures.clear();  // bounded memory; a flood of addresses only resets the counts
   }
-  Failures& failures = m_failures[address];
-  if (failures.count == 0) {
-    failures.windowStart = Clock::now();
+  for (const std::string* key : {&keys.identity, &keys.address}) {
+    if (key->empty()) {
+      continue;
+    }
+    Failures& failures = m_failures[*key];
+    if (failures.count == 0) {
+      failures.windowStart = Clock::now();
+    }
+    ++failures.count;
   }
-  ++failures.count;
+}
+
+std::optional<std::size_t> Authenticator::verifiedUser(std::string_view authorization) const {
+  std::lock_guard lock(m_mutex);
+  if (auto it = m_verified.find(sha256Hex(authorization)); it != m_verified.end()) {
+    return it->second;
+  }
+  return std::nullopt;
 }
 
 Result<std::size_t> Authenticator::findUser(std::string_view authorization) const {
-  const std::string key = sha256Hex(authorization);
-  {
-    std::lock_guard lock(m_mutex);
-    if (auto it = m_verified.find(key); it != m_verified.end()) {
-      return it->second;
-    }
+  if (auto known = verifiedUser(authorization)) {
+    return *known;
   }
+  const std::string key = sha256Hex(authorization);
   std::optional<std::size_t> match;
   if (startsWith(authorization, "Bearer ")) {
     const std::string_view token = authorization.substr(7);
@@ -322,11 +365,19 @@ Result<Caller> Authenticator::authenticate(std::string_view authorization,
   }
   std::optional<std::size_t> index;
   if (!authorization.empty()) {
-    const std::string address = peerAddress(peer);
-    CRACKVIS_RETURN_IF_ERROR(checkThrottle(address));
+    const ThrottleKeys keys = throttleKeys(authorization, peer);
+    // Passwords are guessable and slow to check: a throttled name is
+    // refused before hashing, unless this very credential was verified
+    // before. Tokens are neither, so a valid one always gets through.
+    const bool token = startsWith(authorization, "Bearer ");
+    if (!token && !verifiedUser(authorization)) {
+      CRACKVIS_RETURN_IF_ERROR(checkThrottle(keys));
+    }
     auto found = findUser(authorization);
     if (!found) {
-      recordFailure(address);
+      const Status throttled = token ? checkThrottle(keys) : Status::ok();
+      recordFailure(keys);
+      CRACKVIS_RETURN_IF_ERROR(throttled);
       return found.status();
     }
     index = *found;

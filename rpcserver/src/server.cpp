@@ -78,6 +78,10 @@ Result<std::unique_ptr<ServerHost>> ServerHost::start(const Listener& listener,
     quota.SetMaxThreads(host->m_settings.maxThreads);
     builder.SetResourceQuota(quota);
   }
+  builder.AddChannelArgument(GRPC_ARG_SERVER_HANDSHAKE_TIMEOUT_MS,
+                             static_cast<int>(host->m_settings.handshake.count()));
+  builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_IDLE_MS,
+                             static_cast<int>(host->m_settings.idleConnection.count()));
   // With SO_REUSEPORT a second server on a busy port would bind silently
   // and take half the new connections.
   builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);

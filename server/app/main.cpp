@@ -93,7 +93,8 @@ int snapshot(const Flags& flags, const RenderServerConfig& config) {
       if (!resolved) {
         return resolved.status();
       }
-      return source::openLocalSource(resolved->absolute, sizes);
+      return source::openLocalSource(resolved->absolute, sizes,
+                                     source::LocalOpen::kStructureInChild);
     };
   } else {
     auto connected = dataservice::DataClient::connect(config.data);

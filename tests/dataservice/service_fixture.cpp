@@ -233,6 +233,19 @@ void writeNestedGroups(const std::string& path, int levels) {
   REQUIRE(h5::writeDataset(parent, "bottom", h5::ElementType::kFloat64, {1}, &value).isOk());
 }
 
+void writeWideGroups(const std::string& path, int count) {
+  std::lock_guard lock(dataservice::hdf5Mutex());
+  namespace h5 = dem::h5;
+  h5::Handle file =
+      h5::fileHandle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  REQUIRE(file.valid());
+  for (int i = 0; i < count; ++i) {
+    h5::Handle group = h5::groupHandle(H5Gcreate2(file.get(), fmt::format("g{}", i).c_str(),
+                                                  H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    REQUIRE(group.valid());
+  }
+}
+
 void requireServerHealthy(const dataservice::DataServer& server) {
   auto client = connect(clientOptions(server));
   const Status health = client.checkHealth();

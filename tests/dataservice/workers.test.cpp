@@ -56,8 +56,47 @@ TEST_CASE("A worker that dies with SIGSEGV fails only its call and is replaced",
   const int replacement = server->hdf5WorkerPids().at(0);
   CHECK(replacement > 0);
   CHECK(replacement != pid);
-  // The next calls are served by the new worker.
-  CHECK(client.describe("run.h5").isOk());
+  // The next calls are served by the new worker, which outlives the thread
+  // that replaced it (a worker dies with the thread that forked it: forked
+  // on the call's thread, it died when that ended, and was replaced again).
+  CHECK(client.describe("run.h5", /*uncached=*/true).isOk());
+  CHECK(server->hdf5WorkersReplaced() == 1);
+  CHECK(server->hdf5WorkerPids().at(0) == replacement);
+  requireServerHealthy(*server);
+}
+
+namespace {
+
+// Whether a child process has died (a zombie, not yet reaped by the server).
+bool isZombie(int pid) {
+  std::ifstream stat(fmt::format("/proc/{}/stat", pid));
+  std::string line;
+  std::getline(stat, line);
+  const std::size_t close = line.rfind(')');
+  return close != std::string::npos && close + 2 < line.size() && line[close + 2] == 'Z';
+}
+
+}  // namespace
+
+TEST_CASE("A worker that died while idle is not blamed on the next caller's file",
+          "[dataservice][integration]") {
+  auto server = startServer(oneWorker());
+  auto client = connect(clientOptions(*server));
+  REQUIRE(client.describe("run.h5").isOk());
+  // Killed between calls (by an operator, the OOM killer, a fault in the
+  // previous call's clean-up): the next caller's good file must read.
+  for (int round = 0; round < 2; ++round) {
+    const int pid = server->hdf5WorkerPids().at(0);
+    REQUIRE(::kill(pid, SIGKILL) == 0);
+    REQUIRE(waitUntil([&] { return isZombie(pid); }, 2.0));
+    const auto result = round == 0
+                            ? client.describe("run.h5", /*uncached=*/true).status()
+                            : client.read("run.h5", {Hyperslab::whole("/bonds/pairs")}).status();
+    INFO(result.message());
+    CHECK(result.isOk());
+    CHECK(server->hdf5WorkersReplaced() == round + 1);
+    CHECK(server->hdf5WorkerPids().at(0) != pid);
+  }
   requireServerHealthy(*server);
 }
 

@@ -19,10 +19,13 @@ void write(const std::string& path, const std::string& text) {
   std::ofstream(path, std::ios::trunc) << text;
 }
 
-// A float64 (n, 5) .npy: id, x, y, z, radius.
-void writeNpy(const std::string& path, const std::vector<std::array<double, 5>>& rows) {
-  std::string header = "{'descr': '<f8', 'fortran_order': False, 'shape': (" +
-                       std::to_string(rows.size()) + ", 5), }";
+// A float64 (n, 5) .npy: id, x, y, z, radius; its header may declare
+// another row count than it holds.
+void writeNpy(const std::string& path, const std::vector<std::array<double, 5>>& rows,
+              std::uint64_t declaredRows = ~std::uint64_t{0}) {
+  const std::uint64_t declared = declaredRows == ~std::uint64_t{0} ? rows.size() : declaredRows;
+  std::string header =
+      "{'descr': '<f8', 'fortran_order': False, 'shape': (" + std::to_string(declared) + ", 5), }";
   while ((10 + header.size() + 1) % 64 != 0) {
     header += ' ';
   }
@@ -168,14 +171,31 @@ TEST_CASE("a malformed CSV folder is refused naming the file and line", "[import
     CHECK_THAT(result.status().message(),
                Catch::Contains("bond 10-99 joins particle id 99, which the step does not list"));
   }
-  SECTION("a truncated .npy") {
-    writeNpy(dir.file("particles_30.npy"), {{{10, 0, 0, 0, 0.5}}});
-    std::filesystem::resize_file(dir.file("particles_30.npy"), 140);  // 128-byte header
+  // The folder's third step (particles_30.npy, written by the section).
+  auto importStepTwo = [&] {
     auto source = importers::openCsv({dir.path().string()});
     REQUIRE(source);
     auto options = testing::quietImport(dir.file("o.h5"));
     options.steps = "2";
-    auto result = importers::importSeries(**source, options);
+    return importers::importSeries(**source, options);
+  };
+  for (const std::uint64_t declared :
+       {std::uint64_t{400'000'000}, std::uint64_t{100'000'000'000}}) {
+    SECTION("a .npy header declaring " + std::to_string(declared) + " rows in a small file") {
+      // Believed, it allocated 15.7 GB (4e8 rows) or ended in std::bad_alloc.
+      writeNpy(dir.file("particles_30.npy"), {{{10, 0, 0, 0, 0.5}}}, declared);
+      auto result = importStepTwo();
+      REQUIRE_FALSE(result);
+      CHECK_THAT(result.status().message(),
+                 Catch::Contains("particles_30.npy: truncated: the header declares " +
+                                 std::to_string(declared) + " x 5 values") &&
+                     Catch::Contains("the file holds 40 bytes of data"));
+    }
+  }
+  SECTION("a truncated .npy") {
+    writeNpy(dir.file("particles_30.npy"), {{{10, 0, 0, 0, 0.5}}});
+    std::filesystem::resize_file(dir.file("particles_30.npy"), 140);  // 128-byte header
+    auto result = importStepTwo();
     REQUIRE_FALSE(result);
     CHECK_THAT(result.status().message(), Catch::Contains("particles_30.npy: truncated"));
   }

@@ -192,6 +192,18 @@ TEST_CASE("malformed LAMMPS dumps are refused naming the file and line", "[impor
     CHECK_THAT(result.status().message(),
                Catch::Contains("step 1500: bond 1-468 appears") && Catch::Contains("--steps"));
   }
+  SECTION("a row count beyond what the file holds") {
+    // Readers size their arrays by the count: it must not be believed.
+    auto lines = readLines(dir.file("atoms.3000.txt"));
+    REQUIRE(lines[2] == "ITEM: NUMBER OF ATOMS");
+    lines[3] = "400000000";
+    writeLines(dir.file("atoms.3000.txt"), lines);
+    auto result = importFolder(folder, out);
+    REQUIRE_FALSE(result);
+    CHECK_THAT(result.status().message(),
+               Catch::Contains("atoms.3000.txt:4: the header declares 400000000 rows, but only") &&
+                   Catch::Contains("bytes follow"));
+  }
   SECTION("a garbled number") {
     auto lines = readLines(dir.file("atoms.3000.txt"));
     lines[12] = "3 2 0.0007 x 0.0007 0.0005 0 0 0";

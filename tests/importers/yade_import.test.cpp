@@ -4,9 +4,14 @@
 // by position, and the history checked two ways: against the pairs a
 // PyRunner dumped from O.interactions (bonds.<iter>.txt, id1 id2 isCohesive)
 // and against JCFpm's own crack record (cracks_notched_bar.txt).
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <iterator>
 #include <set>
+#include <sstream>
 
 #include <catch2/catch.hpp>
 #include <vtkDataArray.h>
@@ -149,6 +154,28 @@ TEST_CASE("damaged Yade records are refused naming the file", "[importers][yade]
     REQUIRE_FALSE(result);
     CHECK_THAT(result.status().message(), Catch::Contains("spheres.2000.vtu"));
   }
+  SECTION("a header declaring more points than the file holds") {
+    // VTK's reader allocates by the header's counts before reading data.
+    const std::string path = dir.file("spheres.2000.vtu");
+    std::string text;
+    {
+      std::ifstream in(path, std::ios::binary);
+      text.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    const std::string was = "NumberOfPoints=\"327\"      ";
+    const std::size_t at = text.find(was);
+    REQUIRE(at != std::string::npos);
+    text.replace(at, was.size(), "NumberOfPoints=\"400000000\"");
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << text;
+    auto source = importers::openYade({dir.path().string()});
+    REQUIRE(source);
+    auto result = importers::importSeries(**source, testing::quietImport(dir.file("out.h5")));
+    REQUIRE_FALSE(result);
+    CHECK_THAT(
+        result.status().message(),
+        Catch::Contains("spheres.2000.vtu: the header declares NumberOfPoints=\"400000000\"") &&
+            Catch::Contains("more than a file of"));
+  }
   SECTION("a file that is not VTK") {
     std::ofstream(dir.file("intrs.800.vtp"), std::ios::trunc) << "not xml";
     auto source = importers::openYade({dir.path().string()});
@@ -156,5 +183,114 @@ TEST_CASE("damaged Yade records are refused naming the file", "[importers][yade]
     auto result = importers::importSeries(**source, testing::quietImport(dir.file("out.h5")));
     REQUIRE_FALSE(result);
     CHECK_THAT(result.status().message(), Catch::Contains("intrs.800.vtp"));
+  }
+}
+
+namespace {
+
+// history.txt with only the rows whose iteration `keep` accepts, and an
+// extra text column (Yade's phase label) when asked.
+std::string historyWith(const TempDir& dir, const std::function<bool(std::int64_t)>& keep,
+                        bool phase = false) {
+  std::ifstream in(kBar + "/history.txt");
+  const std::string path = dir.file(phase ? "phased.txt" : "partial.txt");
+  std::ofstream out(path);
+  std::string line;
+  std::getline(in, line);
+  out << line << (phase ? "\tphase" : "") << "\n";
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string cracks;
+    std::string force;
+    std::int64_t iter = 0;
+    fields >> cracks >> force >> iter;
+    if (keep(iter)) {
+      out << line << (phase ? "\tloading" : "") << "\n";
+    }
+  }
+  return path;
+}
+
+}  // namespace
+
+TEST_CASE("a scalar table that matches no step, or only some, is refused unless asked",
+          "[importers][yade]") {
+  TempDir dir;
+  auto import = [&](const std::string& table, bool partial) {
+    auto source = importers::openYade({kBar});
+    REQUIRE(source);
+    auto options = testing::quietImport(dir.file("out.h5"));
+    options.scalarsTable = table;
+    options.partialScalars = partial;
+    return importers::importSeries(**source, options);
+  };
+  SECTION("no row matches") {
+    const std::string table = historyWith(dir, [](std::int64_t iter) { return iter % 400 == 7; });
+    std::ofstream(table, std::ios::app) << "0\t0\t7\t0\t0\t0\t0\t0\t0\t0\n";
+    auto result = import(table, true);
+    REQUIRE_FALSE(result);
+    CHECK_THAT(result.status().message(),
+               Catch::Contains("partial.txt: no row matches an imported step") &&
+                   Catch::Contains("code steps 7 .. 7"));
+  }
+  SECTION("some rows match") {
+    // Iteration 0 has no row: it used to keep the iteration number as its
+    // time, beside seconds for the other steps.
+    const std::string table = historyWith(dir, [](std::int64_t iter) { return iter != 0; });
+    auto refused = import(table, false);
+    REQUIRE_FALSE(refused);
+    CHECK_THAT(refused.status().message(),
+               Catch::Contains("rows for 10 of the 11 imported steps (none for code steps 0)") &&
+                   Catch::Contains("--partial-scalars"));
+    auto summary = import(table, true);
+    REQUIRE(summary);
+    CHECK(summary->scalarRowsMatched == 10);
+    const std::string text = importers::formatSummary(*summary, testing::quietImport("out.h5"));
+    CHECK_THAT(text, Catch::Contains("note          ") &&
+                         Catch::Contains("has no row for 1 imported steps (code steps 0)"));
+    auto reader = dem::DemFileReader::open(dir.file("out.h5"));
+    REQUIRE(reader);
+    // Step 0's time lies on the table's line through (400, 1.72e-4 s), ...:
+    // about 0 s, not 0 iterations read as seconds or 1.
+    const auto& steps = reader->info().steps;
+    CHECK(std::abs(steps[0].time) < 1e-5);
+    CHECK(steps[1].time == Approx(0.00017225728815021166));
+  }
+  SECTION("a text column is skipped with a note") {
+    const std::string table = historyWith(
+        dir, [](std::int64_t) { return true; }, true);
+    auto summary = import(table, false);
+    REQUIRE(summary);
+    const std::string text = importers::formatSummary(*summary, testing::quietImport("out.h5"));
+    CHECK_THAT(text, Catch::Contains("skipped the columns that hold text: phase"));
+    CHECK(std::find(summary->scalarNames.begin(), summary->scalarNames.end(), "phase") ==
+          summary->scalarNames.end());
+  }
+}
+
+TEST_CASE("files of VTKRecorder's other recorders are skipped with a note, named or found",
+          "[importers][yade]") {
+  TempDir dir;
+  std::vector<std::string> named;
+  for (const auto& entry : std::filesystem::directory_iterator(kBar)) {
+    std::filesystem::copy_file(entry.path(), dir.path() / entry.path().filename());
+    const std::string name = entry.path().filename().string();
+    if (name.ends_with(".vtu") || name.ends_with(".vtp")) {
+      named.push_back(dir.file(name));
+    }
+  }
+  // What the 'cracks' recorder writes beside the others (its content is not read).
+  for (const char* name : {"cracks.400.vtu", "cracks.800.vtu"}) {
+    std::ofstream(dir.file(name)) << "<VTKFile/>";
+    named.push_back(dir.file(name));
+  }
+  for (const auto& inputs : {std::vector<std::string>{dir.path().string()}, named}) {
+    auto source = importers::openYade(inputs);
+    INFO((source ? std::string() : source.status().message()));
+    REQUIRE(source);
+    const auto& notes = (*source)->description().notes;
+    REQUIRE(notes.size() == 1);
+    CHECK_THAT(notes[0], Catch::StartsWith("skipped 2 files of VTKRecorder's 'cracks' recorder"));
+    CHECK((*source)->stepCount() == 11);
   }
 }

@@ -1,8 +1,14 @@
+#include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
@@ -245,6 +251,81 @@ TEST_CASE("an oversized document is refused before parsing", "[pipeline][validat
   auto parsed = parsePipeline(huge);
   REQUIRE_FALSE(parsed.isOk());
   CHECK_THAT(parsed.status().message(), Catch::Contains("the limit is 1048576"));
+}
+
+namespace {
+
+// Documents under the size limit built to make a parser or validator work
+// harder than their size: many attributes on one element (80,000 took 93 s
+// of CPU before the schema refused it), many elements, deep nesting, many
+// comments, namespace declarations, character references.
+std::vector<std::pair<std::string, std::string>> costlyDocuments() {
+  auto attributes = [](int count, const char* prefix) {
+    std::string out;
+    for (int i = 0; i < count; ++i) {
+      out += fmt::format(" {}{}=\"1\"", prefix, i);
+    }
+    return out;
+  };
+  auto repeated = [](int count, const std::string& piece) {
+    std::string out;
+    for (int i = 0; i < count; ++i) {
+      out += piece;
+    }
+    return out;
+  };
+  return {
+      {"80,000 attributes", document("  <data file=\"a.h5\"" + attributes(80'000, "a") + "/>\n")},
+      {"20,000 attributes", document("  <data file=\"a.h5\"" + attributes(20'000, "x") + "/>\n")},
+      {"namespace declarations",
+       document("  <data file=\"a.h5\"" + attributes(40'000, "xmlns:n") + "/>\n")},
+      {"100,000 elements", document("  <data file=\"a.h5\"/>\n" + repeated(100'000, "<x/>"))},
+      {"deep nesting",
+       document("  <data file=\"a.h5\"/>\n" + repeated(60'000, "<x>") + repeated(60'000, "</x>"))},
+      {"50,000 comments",
+       document("  <data file=\"a.h5\"/>\n" + repeated(50'000, "<!-- <x a='1'> -->"))},
+      {"character references",
+       document("  <data file=\"" + repeated(100'000, "&#x41;") + "\"/>\n")},
+      {"a long valid name", document("  <data file=\"" + std::string(1'000'000, 'a') + "\"/>\n")},
+  };
+}
+
+}  // namespace
+
+TEST_CASE("a document under the size limit is refused or accepted within 100 ms",
+          "[pipeline][validation]") {
+  for (const auto& [what, xml] : costlyDocuments()) {
+    INFO(what << " (" << xml.size() << " bytes)");
+    REQUIRE(xml.size() <= kMaxPipelineBytes);
+    double fastest = 1e9;
+    Status status;
+    for (int run = 0; run < 3; ++run) {  // the fastest of three: a busy machine is not the parser
+      const auto start = std::chrono::steady_clock::now();
+      status = parsePipeline(xml).status();
+      fastest = std::min(
+          fastest, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    }
+    INFO(status.message() << ", fastest of 3: " << fastest * 1e3 << " ms");
+    CHECK(fastest < 0.1);
+    if (!status.isOk()) {
+      CHECK(status.code() == StatusCode::kInvalidArgument);
+      CHECK(status.message().find('\n') == std::string::npos);
+    }
+  }
+}
+
+TEST_CASE("a document with more attributes or elements than a pipeline holds names the count",
+          "[pipeline][validation]") {
+  const auto documents = costlyDocuments();
+  const Status attributes = parsePipeline(documents[1].second).status();
+  CHECK_THAT(attributes.message(),
+             Catch::StartsWith("pipeline line 3: an element with 20001 attributes"));
+  const Status elements = parsePipeline(documents[3].second).status();
+  CHECK_THAT(elements.message(), Catch::Contains("100002 elements"));
+  // '<' and '=' inside quoted values and comments count for nothing.
+  std::string quoted = document("  <!-- " + std::string(200, '<') + "a=1 -->\n" +
+                                "  <data file=\"a" + std::string(100, '=') + ".h5\"/>\n");
+  CHECK(parsePipeline(quoted).isOk());
 }
 
 namespace {

@@ -646,6 +646,15 @@ TEST_CASE("snapshots, several sessions, close, and the data service passed throu
   REQUIRE(snapshot.ok());
   CHECK(png.width() == 640);
   CHECK(png.png().substr(0, 8) == std::string("\x89PNG\r\n\x1a\n", 8));
+  // Only 0 means the view's size: a negative one is refused, not replaced.
+  for (const auto& [width, height] : {std::pair{-5, -5}, std::pair{640, -2}, std::pair{-640, 0}}) {
+    grpc::ClientContext badContext;
+    request.set_width(width);
+    request.set_height(height);
+    const grpc::Status bad = stub->Snapshot(&badContext, request, &png);
+    INFO(width << "x" << height << ": " << bad.error_message());
+    CHECK(bad.error_code() == grpc::StatusCode::INVALID_ARGUMENT);
+  }
 
   grpc::ClientContext listContext;
   v1::ListFilesRequest list;
@@ -876,6 +885,38 @@ TEST_CASE("the render server applies crackvis-data's users: tokens and folders",
     CHECK(fifth.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED);
     CHECK_THAT(fifth.error_message(), Catch::Contains("per user"));
     CHECK(asCarol.open(crackView()).ok());  // another user still opens one
+  }
+  SECTION(
+      "a full server lets a new user in by reclaiming from the user furthest above a fair "
+      "share, sessions without a stream first") {
+    std::vector<v1::OpenSessionResponse> bobs(4);
+    std::vector<v1::OpenSessionResponse> carols(4);
+    for (int i = 0; i < 4; ++i) {
+      REQUIRE(asBob.open(viewOf("bob/b.h5"), &bobs[i]).ok());
+      REQUIRE(asCarol.open(viewOf("bob/b.h5"), &carols[i]).ok());
+    }
+    REQUIRE(services.render->sessionCount() == 8);
+    // bob watches his first session; the other seven have no stream.
+    StreamClient watched(*stub, bobs[0].session_id(), "bob-token");
+    REQUIRE(watched.waitFor([](const auto& frames, const auto&) { return !frames.empty(); }));
+    // Two users hold all 8; alice gets in twice (a fair share of 8 among 3 is 2), taking
+    // sessions nobody watches, and is refused a third.
+    CHECK(asAlice.open(viewOf("alice/a.h5")).ok());
+    CHECK(asAlice.open(viewOf("alice/a.h5")).ok());
+    const grpc::Status third = asAlice.open(viewOf("alice/a.h5"));
+    CHECK(third.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED);
+    CHECK_THAT(third.error_message(), Catch::Contains("a fair share is 2"));
+    CHECK(services.render->sessionCount() == 8);
+    // bob's watched session survived; each of bob and carol gave one.
+    CHECK(asBob.snapshot(bobs[0].session_id()).ok());
+    int bobsLeft = 0;
+    int carolsLeft = 0;
+    for (int i = 0; i < 4; ++i) {
+      bobsLeft += asBob.snapshot(bobs[i].session_id()).ok() ? 1 : 0;
+      carolsLeft += asCarol.snapshot(carols[i].session_id()).ok() ? 1 : 0;
+    }
+    CHECK(bobsLeft == 3);
+    CHECK(carolsLeft == 3);
   }
 }
 

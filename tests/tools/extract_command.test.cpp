@@ -52,6 +52,29 @@ TEST_CASE("crackvis extract writes a ParaView time series", "[cli][extract]") {
              Catch::Contains(fmt::format(R"(timestep="{:.17g}")", sample.steps[2].time)));
 }
 
+TEST_CASE("crackvis extract refuses volume cells in a .vtp name and keeps the old file",
+          "[cli][extract]") {
+  // ParaView picks its reader by the extension: an UnstructuredGrid in a
+  // .vtp is a file it cannot open.
+  TempDir dir;
+  const std::string data = dir.file("run.h5");
+  crackvis::testing::writeSampleFile(data, 3, 3);
+  const std::string vtp = dir.file("a.vtp");
+  std::ofstream(vtp) << "an earlier result";
+  auto run =
+      runProcess({kCli, "extract", data, "-m", "cell-attribute", "-s", "-1", "-o", vtp, "-q"});
+  INFO(run.err);
+  CHECK(run.exitCode == 1);
+  CHECK(crackvis::testing::lines(run.err).size() == 1);
+  CHECK_THAT(run.err, Catch::Contains("a.vtp: these cracks have volume cells") &&
+                          Catch::Contains("name the output .vtu"));
+  CHECK(slurp(vtp) == "an earlier result");
+  CHECK_FALSE(std::filesystem::exists(vtp + ".partial"));
+  auto vtu = runProcess(
+      {kCli, "extract", data, "-m", "cell-attribute", "-s", "-1", "-o", dir.file("a.vtu"), "-q"});
+  CHECK(vtu.exitCode == 0);
+}
+
 TEST_CASE("crackvis extract: cell attribute series are .vtu, single steps go where asked",
           "[cli][extract]") {
   TempDir dir;

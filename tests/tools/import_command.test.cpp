@@ -23,6 +23,7 @@ using crackvis::testing::TempDir;
 namespace {
 const std::string kCli = CRACKVIS_CLI;
 const std::string kData = CRACKVIS_TEST_DATA;
+const std::string kRender = CRACKVIS_RENDER;
 }  // namespace
 
 TEST_CASE("crackvis import reads each code's run in one command", "[cli][import]") {
@@ -148,11 +149,14 @@ TEST_CASE("crackvis info refuses a file whose extents no index can reach", "[cli
   CHECK_THAT(info.err, !Catch::Contains("internal error"));
 }
 
-TEST_CASE("crackvis info refuses every file the fuzzers kept, with one line", "[cli][info]") {
-  // tests/fuzz/crashes: inputs that stopped a fuzz run (README "Findings").
-  // Outside ASan each is an ordinary corrupt file: exit 1, a one-line error
-  // naming the file, never "internal error".
+TEST_CASE("Every local reader refuses every file the fuzzers kept, with one line", "[cli][info]") {
+  // tests/fuzz/crashes: inputs that stopped a fuzz run (README "Findings"),
+  // one of them a libhdf5 heap overflow that killed these readers with
+  // SIGSEGV. Each reader opens a file with libhdf5's first look in a child
+  // process (DemFileReader::openGuarded): exit 1 and one line naming the
+  // file, never a signal, never "internal error".
   const std::filesystem::path crashes = kData + "/../fuzz/crashes";
+  TempDir dir;
   int files = 0;
   for (const auto& entry : std::filesystem::directory_iterator(crashes)) {
     if (entry.path().extension() != ".h5") {
@@ -160,17 +164,37 @@ TEST_CASE("crackvis info refuses every file the fuzzers kept, with one line", "[
     }
     ++files;
     const std::string path = entry.path().string();
-    auto info = runProcess({kCli, "info", "--steps", path});
-    INFO(path << "\n" << info.err);
-    if (path.find("heap-overflow") != std::string::npos) {
-      // libhdf5's own memory bug (README "Findings"): the CLI dies of it
-      // (the services run HDF5 in supervised workers); never a success.
-      CHECK(info.exitCode != 0);
-      continue;
+    const std::string name = entry.path().filename().string();
+    const std::string view = dir.file(name + ".xml");
+    std::ofstream(view) << "<pipeline version=\"1\"><data file=\"" << name << "\"/></pipeline>\n";
+    const std::vector<std::vector<std::string>> readers = {
+        {kCli, "info", "--steps", path},
+        {kCli, "extract", path, "-m", "cell-cut", "--metrics", "-q"},
+        {kCli, "export", path, "--particles", "-o", dir.file("out.pvd")},
+        {kCli, "snapshot", path, "-o", dir.file("out.png")},
+        {kRender, "--snapshot", view, "--data-root", crashes.string(), "-o", dir.file("r.png")}};
+    for (const auto& command : readers) {
+      auto run = runProcess(command);
+      INFO(command[1] << " " << command[2] << " on " << path << "\n" << run.err);
+      CHECK(run.exitCode == 1);
+      CHECK(crackvis::testing::lines(run.err).size() == 1);
+      CHECK_THAT(run.err, Catch::Contains(name));
+      CHECK_THAT(run.err, !Catch::Contains("internal error"));
     }
-    CHECK(info.exitCode == 1);
-    CHECK_THAT(info.err, Catch::Contains(path));
-    CHECK_THAT(info.err, !Catch::Contains("internal error"));
+    CHECK_FALSE(std::filesystem::exists(dir.file("out.png")));
+    CHECK_FALSE(std::filesystem::exists(dir.file("r.png")));
   }
   CHECK(files >= 4);
+}
+
+TEST_CASE("A libhdf5 fault while opening is one line naming the file and the signal",
+          "[cli][info]") {
+  const std::string path = kData + "/../fuzz/crashes/dem_reader-hdf5-H5Aexists-heap-overflow.h5";
+  auto info = runProcess({kCli, "info", path});
+  INFO(info.err);
+  CHECK(info.exitCode == 1);
+  CHECK_THAT(info.err, Catch::StartsWith("crackvis info: " + path +
+                                         ": libhdf5 faulted reading the "
+                                         "file's structure (killed by SIG") &&
+                           Catch::Contains("the file is probably corrupt"));
 }

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "support/dem_defects.hpp"
+#include "support/h5_tamper.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/dem/dem_file.hpp>
@@ -132,6 +133,31 @@ TEST_CASE("crackvis info reports each malformed file in one line and exits 1",
       CHECK_THAT(info.err, !Catch::Contains("HDF5-DIAG"));
     }
   }
+}
+
+TEST_CASE("crackvis info refuses a middle step's short arrays, as a render session does",
+          "[cli][info][validation]") {
+  // Without --steps, info reads the first and last steps whole; a middle
+  // step that a session would refuse must be refused here too.
+  TempDir dir;
+  const std::string path = dir.file("short.h5");
+  const auto sample = crackvis::testing::writeSampleFile(path);
+  const auto n = static_cast<std::uint64_t>(sample.lattice.particleCount());
+  crackvis::testing::replaceDataset(path, "/steps/000001/positions",
+                                    crackvis::dem::h5::ElementType::kFloat64, {n - 3, 3});
+  for (const bool perStep : {false, true}) {
+    auto info =
+        perStep ? runProcess({kCli, "info", "--steps", path}) : runProcess({kCli, "info", path});
+    INFO(info.err);
+    CHECK(info.exitCode == 1);
+    REQUIRE(lines(info.err).size() == 1);
+    CHECK_THAT(info.err,
+               Catch::Contains(fmt::format(
+                   "dataset /steps/000001/positions has shape [{},3], expected [{},3]", n - 3, n)));
+  }
+  auto reader = crackvis::dem::DemFileReader::open(path);
+  REQUIRE(reader.isOk());
+  CHECK(reader->readStep(1).status().code() == crackvis::StatusCode::kFailedPrecondition);
 }
 
 TEST_CASE("crackvis info on a missing file or without arguments", "[cli][info]") {

@@ -1,9 +1,12 @@
 // A misspelt subcommand or option is one line with the nearest right one
 // (issue 18: errors that say what to do); every case exits 2 and prints
 // nothing else.
+#include <filesystem>
+
 #include <catch2/catch.hpp>
 
 #include "support/process.hpp"
+#include "support/temp_dir.hpp"
 
 using crackvis::testing::lines;
 using crackvis::testing::runProcess;
@@ -54,4 +57,39 @@ TEST_CASE("Other usage errors keep CLI11's message", "[cli]") {
   const auto none = runProcess({kCli, "bench"});
   CHECK(none.exitCode == 2);
   CHECK_THAT(none.err, Catch::Contains("subcommand is required"));
+}
+
+TEST_CASE("Numbers no run can use are one line and exit 1, before any work", "[cli]") {
+  crackvis::testing::TempDir dir;
+  const std::string out = dir.file("out");
+  struct Case {
+    std::vector<std::string> args;
+    std::string part;
+  };
+  for (const Case& c : std::vector<Case>{
+           {{"movie", "a.h5", "--orbit", "nan", "-o", out + ".mp4"}, "--orbit nan: degrees from"},
+           {{"movie", "a.h5", "--orbit", "inf", "-o", out + ".mp4"}, "--orbit inf: degrees from"},
+           {{"movie", "a.h5", "--orbit", "1e308", "-o", out + ".mp4"},
+            "degrees from -3600 to 3600"},
+           {{"movie", "a.h5", "--size", "2147483648x2", "-o", out + ".mp4"},
+            "--size '2147483648x2': a number beyond any frame size"},
+           {{"movie", "a.h5", "--size", "-64x64", "-o", out + ".mp4"},
+            "--size -64x64: H.264 (4:2:0) needs even sizes from 16 to 7680 pixels"},
+           {{"movie", "a.h5", "--size", "64x64x2", "-o", out + ".mp4"}, "expected WIDTHxHEIGHT"},
+           {{"sim", "cuboid3d", "--duration", "1e308", "-o", out + ".h5"},
+            "a duration of 1e+308 s needs"}}) {
+    std::vector<std::string> argv{kCli};
+    argv.insert(argv.end(), c.args.begin(), c.args.end());
+    DYNAMIC_SECTION(c.args[0] << " " << c.args[2] << " " << c.args[3]) {
+      const auto result = runProcess(argv);
+      INFO(result.err);
+      CHECK(result.exitCode == 1);
+      const auto errorLines = lines(result.err);
+      REQUIRE(errorLines.size() == 1);
+      CHECK_THAT(errorLines[0], Catch::Contains(c.part));
+      CHECK_THAT(result.err, !Catch::Contains("internal error"));
+      CHECK_FALSE(std::filesystem::exists(out + ".mp4"));
+      CHECK_FALSE(std::filesystem::exists(out + ".h5"));
+    }
+  }
 }

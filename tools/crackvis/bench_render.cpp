@@ -21,6 +21,7 @@
 #include "bench_support.hpp"
 #include "commands.hpp"
 #include "crackvis/v1/render.grpc.pb.h"
+#include "pipeline_file.hpp"
 #include <crackvis/dataservice/tls_material.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
@@ -66,17 +67,6 @@ Result<std::string> readFile(const std::string& path) {
     return failedPrecondition(fmt::format("{}: cannot read", path));
   }
   return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-Result<std::pair<int, int>> parseSize(const std::string& text) {
-  int width = 0;
-  int height = 0;
-  char x = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d", &width, &x, &height) != 3 || x != 'x' || width < 16 ||
-      height < 16 || width % 2 != 0 || height % 2 != 0) {
-    return invalidArgument(fmt::format("--size '{}': expected WIDTHxHEIGHT, even, >= 16", text));
-  }
-  return std::pair{width, height};
 }
 
 // The session's frames as they arrive, decoded as a client would.
@@ -231,7 +221,7 @@ Result<Report> run(const RenderBenchOptions& options) {
   if (!material) {
     return material.status();
   }
-  auto size = parseSize(options.size);
+  auto size = cli::parseFrameSize(options.size);
   if (!size) {
     return size.status();
   }

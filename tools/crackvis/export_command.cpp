@@ -117,7 +117,7 @@ Status exportSeries(const ExportOptions& options) {
     return invalidArgument(
         fmt::format("{}: the output is a ParaView collection: name it OUT.pvd", options.output));
   }
-  auto reader = dem::DemFileReader::open(options.file);
+  auto reader = dem::DemFileReader::openGuarded(options.file);
   if (!reader) {
     return reader.status();
   }

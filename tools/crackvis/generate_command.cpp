@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
+#include <crackvis/common/pending_file.hpp>
 #include <crackvis/common/progress.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/lattice_generator.hpp>
@@ -168,13 +169,14 @@ Result<Generated> generateRandom(const GenerateOptions& options) {
 }
 
 // One intact step, or with --planted-crack the series of a planted through
-// crack, written step by step.
-Status writeSteps(const GenerateOptions& options, const Generated& generated) {
+// crack, written step by step to `path`.
+Status writeStepsTo(const std::string& path, const GenerateOptions& options,
+                    const Generated& generated) {
   dem::DemMetadata metadata;
   metadata.source = invocation();
   metadata.sourceCode = "crackvis generate";
   metadata.sourceVersion = CRACKVIS_VERSION;
-  auto writer = dem::DemFileWriter::create(options.output, generated.lattice, metadata);
+  auto writer = dem::DemFileWriter::create(path, generated.lattice, metadata);
   if (!writer) {
     return writer.status();
   }
@@ -200,6 +202,16 @@ Status writeSteps(const GenerateOptions& options, const Generated& generated) {
   }
   progress.finish();
   return writer->close();
+}
+
+// An existing output is replaced only by a complete file.
+Status writeSteps(const GenerateOptions& options, const Generated& generated) {
+  PendingFile output(options.output);
+  Status status = writeStepsTo(output.path(), options, generated);
+  if (status) {
+    status = output.commit();
+  }
+  return output.named(status);
 }
 
 int runGenerate(const GenerateOptions& options) {

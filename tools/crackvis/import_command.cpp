@@ -84,6 +84,9 @@ Command addImportCommand(CLI::App& parent) {
                       "A table of per-step scalars (header of names, a step/iter column): "
                       "LAMMPS fix print, Yade plot.saveDataTxt, CSV; a 'time' column sets the "
                       "step times");
+  command->add_flag("--partial-scalars", options->import.partialScalars,
+                    "Import even when the --scalars table has rows for only some steps (they get "
+                    "no table scalars; with a time column, a time on the table's line)");
   command
       ->add_option("--compress", options->compress,
                    "Store per-step arrays chunked with shuffle + deflate at this level (1-9); "

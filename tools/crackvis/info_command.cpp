@@ -80,7 +80,7 @@ std::string defaultCells(const dem::Lattice& lattice, int dimension) {
 }
 
 Result<FileSummary> summarize(const InfoOptions& options) {
-  auto reader = dem::DemFileReader::open(options.file);
+  auto reader = dem::DemFileReader::openGuarded(options.file);
   if (!reader) {
     return reader.status();
   }
@@ -106,6 +106,11 @@ Result<FileSummary> summarize(const InfoOptions& options) {
   summary.groups.erase(std::unique(summary.groups.begin(), summary.groups.end()),
                        summary.groups.end());
   const int steps = reader->stepCount();
+  // Every step's shapes, as a render session or extract will read them:
+  // headers only, so a file info accepts is one they accept.
+  for (int step = 0; step < steps; ++step) {
+    CRACKVIS_RETURN_IF_ERROR(reader->checkStepHeaders(step));
+  }
   std::vector<int> wanted;
   if (options.perStep) {
     for (int step = 0; step < steps; ++step) {

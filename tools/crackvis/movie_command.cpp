@@ -36,23 +36,6 @@ struct MovieOptions {
   bool quiet = false;
 };
 
-Result<std::pair<int, int>> parseSize(const std::string& text) {
-  int width = 0;
-  int height = 0;
-  char x = 0;
-  char extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &width, &x, &height, &extra) != 3 ||
-      (x != 'x' && x != 'X')) {
-    return invalidArgument(fmt::format("--size '{}': expected WIDTHxHEIGHT, e.g. 1920x1080", text));
-  }
-  if (width < 16 || height < 16 || width > 7680 || height > 7680 || width % 2 != 0 ||
-      height % 2 != 0) {
-    return invalidArgument(fmt::format(
-        "--size {}x{}: H.264 (4:2:0) needs even sizes from 16 to 7680 pixels", width, height));
-  }
-  return std::pair{width, height};
-}
-
 // The camera turned `degrees` about its view-up through the focal point.
 pipeline::CameraDescription orbited(const pipeline::CameraDescription& c, double degrees) {
   const double a = degrees * std::numbers::pi / 180.0;
@@ -72,13 +55,21 @@ int fail(const Status& status) {
   return kExitFailure;
 }
 
+// Ten turns: more is a typo, and NaN or infinity would turn the camera into
+// NaN (a black movie).
+constexpr double kMaxOrbitDegrees = 3600.0;
+
 int runMovie(const MovieOptions& options) {
+  if (!(std::abs(options.orbit) <= kMaxOrbitDegrees)) {
+    return fail(invalidArgument(fmt::format("--orbit {}: degrees from -{:g} to {:g}", options.orbit,
+                                            kMaxOrbitDegrees, kMaxOrbitDegrees)));
+  }
   auto d = readPipelineFile(options.pipelinePath);
   if (!d) {
     return fail(d.status());
   }
   if (!options.size.empty()) {
-    auto size = parseSize(options.size);
+    auto size = cli::parseFrameSize(options.size);
     if (!size) {
       return fail(size.status());
     }
@@ -89,7 +80,11 @@ int runMovie(const MovieOptions& options) {
   }
   d->file = options.file;
   auto scene = scene::ScenePipeline::open(
-      *d, [](const std::string& file) { return source::openLocalSource(file); }, 1);
+      *d,
+      [](const std::string& file) {
+        return source::openLocalSource(file, {}, source::LocalOpen::kStructureInChild);
+      },
+      1);
   if (!scene) {
     return fail(scene.status());
   }

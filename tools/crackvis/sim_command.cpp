@@ -76,7 +76,7 @@ Result<sim::Preset> tensionPreset(const SimOptions& options, const sim::PresetOp
   if (options.specimen.empty()) {
     return invalidArgument("tension needs the specimen file: crackvis sim tension FILE -o OUT");
   }
-  auto reader = dem::DemFileReader::open(options.specimen);
+  auto reader = dem::DemFileReader::openGuarded(options.specimen);
   if (!reader) {
     return reader.status();
   }

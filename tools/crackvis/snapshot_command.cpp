@@ -62,7 +62,11 @@ int runSnapshot(const SnapshotOptions& options) {
   // scene input as a session's (and `crackvis-render --snapshot`'s) picture.
   d->file = options.file;
   auto scene = scene::ScenePipeline::open(
-      *d, [](const std::string& file) { return source::openLocalSource(file); }, 1);
+      *d,
+      [](const std::string& file) {
+        return source::openLocalSource(file, {}, source::LocalOpen::kStructureInChild);
+      },
+      1);
   if (!scene) {
     return fail(scene.status());
   }

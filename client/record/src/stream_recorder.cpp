@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include <crackvis/common/pending_file.hpp>
 #include <crackvis/record/stream_recorder.hpp>
 
 extern "C" {
@@ -122,6 +123,9 @@ struct StreamRecorder::Impl {
   CodecContext parserContext;
   Parser parser;
   Packet packet;
+  // The recording is written beside its name and renamed over it only when
+  // complete: an existing file survives a failed or empty recording.
+  std::unique_ptr<PendingFile> output;
   bool opened = false;  // the file is ours: only then may finish() write or remove it
   bool headerWritten = false;
   bool finished = false;
@@ -144,8 +148,12 @@ Result<std::unique_ptr<StreamRecorder>> StreamRecorder::start(const std::string&
   recorder->m_impl = std::make_unique<Impl>();
   Impl& impl = *recorder->m_impl;
   AVFormatContext* format = nullptr;
+  // The partial file's name is the muxer's URL too: moving the index to the
+  // front (faststart) opens the file again by it.
+  impl.output = std::make_unique<PendingFile>(path);
   // "mp4" by name: the container does not depend on the file's extension.
-  const int allocated = avformat_alloc_output_context2(&format, nullptr, "mp4", path.c_str());
+  const int allocated =
+      avformat_alloc_output_context2(&format, nullptr, "mp4", impl.output->path().c_str());
   if (allocated < 0) {
     return avFailure(path, "avformat_alloc_output_context2(mp4)", allocated);
   }
@@ -162,7 +170,7 @@ Result<std::unique_ptr<StreamRecorder>> StreamRecorder::start(const std::string&
   impl.stream->time_base = kClock;
   impl.stream->avg_frame_rate = AVRational{fps, 1};
   // Opened now, so an unwritable path fails here and not at the first frame.
-  const int openCode = avio_open(&format->pb, path.c_str(), AVIO_FLAG_WRITE);
+  const int openCode = avio_open(&format->pb, impl.output->path().c_str(), AVIO_FLAG_WRITE);
   if (openCode < 0) {
     return openFailure(path, openCode);
   }
@@ -317,12 +325,14 @@ Status StreamRecorder::closeFile() {
     status = avFailure(m_path, "avio_close", closed);
   }
   if (!impl.headerWritten) {
-    // An empty file that no player opens would only mislead.
-    std::error_code ignored;
-    std::filesystem::remove(m_path, ignored);
+    // An empty file that no player opens would only mislead: the partial
+    // file goes (PendingFile) and the name is left as it was.
     status = failedPrecondition(fmt::format(
         "recording {}: no keyframe arrived ({} frames skipped); nothing recorded, file removed",
         m_path, m_skipped));
+  }
+  if (status) {
+    status = impl.output->commit();
   }
   return status;
 }

@@ -15,6 +15,7 @@
 #include <QPlainTextEdit>
 #include <QProgressDialog>
 #include <QPushButton>
+#include <QSaveFile>
 #include <QScrollArea>
 #include <QSettings>
 #include <QSlider>
@@ -431,9 +432,11 @@ bool MainWindow::saveView(const QString& path) {
   }
   pipeline::PipelineDescription view = *shown;
   view.clientLayout = layoutOf(*this);
-  QFile out(path);
+  // QSaveFile writes beside the name and renames when committed: a full
+  // disk leaves an existing view as it was.
+  QSaveFile out(path);
   const QByteArray bytes = QByteArray::fromStdString(pipeline::toXml(view));
-  if (!out.open(QIODevice::WriteOnly | QIODevice::Truncate) || out.write(bytes) != bytes.size()) {
+  if (!out.open(QIODevice::WriteOnly) || out.write(bytes) != bytes.size() || !out.commit()) {
     report(tr("cannot write %1: %2").arg(path, out.errorString()));
     return false;
   }
@@ -528,8 +531,8 @@ void MainWindow::saveScreenshot(const QString& given, QSize size) {
     report(QString::fromStdString(png.status().message()));
     return;
   }
-  QFile out(path);
-  if (!out.open(QIODevice::WriteOnly) || out.write(*png) != png->size()) {
+  QSaveFile out(path);
+  if (!out.open(QIODevice::WriteOnly) || out.write(*png) != png->size() || !out.commit()) {
     report(tr("cannot write %1: %2").arg(path, out.errorString()));
     return;
   }

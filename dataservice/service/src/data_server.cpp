@@ -79,6 +79,10 @@ Result<std::unique_ptr<DataServer>> DataServer::start(const ServerConfig& config
   settings.service = crackvis::v1::DataService::service_full_name();
   settings.maxReceiveMessageBytes = 4 << 20;
   settings.maxConcurrentStreams = config.limits.maxConcurrentStreams;
+  settings.handshake =
+      std::chrono::milliseconds(static_cast<std::int64_t>(config.limits.handshakeSeconds * 1000.0));
+  settings.idleConnection = std::chrono::milliseconds(
+      static_cast<std::int64_t>(config.limits.idleConnectionSeconds * 1000.0));
   settings.reapPeriod = std::chrono::milliseconds(100);
   settings.reap = [self] { self->reap(); };
   settings.beforeStop = [self] {

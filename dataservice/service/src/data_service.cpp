@@ -237,6 +237,7 @@ class StreamReactor : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
       return slot.status();
     }
     m_slot = *slot;
+    m_user = caller->name;
     return resolved;
   }
 
@@ -266,6 +267,10 @@ class StreamReactor : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
       m_slot = 0;
     }
   }
+
+  // Who the stream is for (set by begin()): the HDF5 workers share
+  // themselves fairly between users.
+  const std::string& user() const { return m_user; }
 
   virtual Status open(const v1::ReadRequest& /*request*/) { return internalError("not a Read"); }
   virtual Status open(const v1::FetchRequest& /*request*/) { return internalError("not a Fetch"); }
@@ -297,6 +302,7 @@ class StreamReactor : public grpc::ServerWriteReactor<grpc::ByteBuffer> {
  protected:
   DataServiceImpl& m_service;
   grpc::CallbackServerContext* m_context;
+  std::string m_user;
   Clock::time_point m_start;
   AccessRecord m_record;
   std::uint64_t m_slot = 0;
@@ -327,7 +333,7 @@ class ReadReactor final : public StreamReactor {
       return resolved.status();
     }
     auto plan = m_service.workers().planRead(*resolved, fromProto(request),
-                                             m_service.limits().maxReadBytes);
+                                             m_service.limits().maxReadBytes, user());
     if (!plan) {
       return plan.status();
     }
@@ -409,7 +415,7 @@ class ReadReactor final : public StreamReactor {
       std::memcpy(data.data(), m_plan.firstPiece.data(), m_piece.bytes);
       m_plan.firstPiece = std::string();
     } else if (Status status = m_service.workers().readPiece(m_file, m_plan.slabs[m_piece.slab],
-                                                             m_piece, data.data());
+                                                             m_piece, data.data(), user());
                !status) {
       finish(status);
       return;
@@ -603,26 +609,6 @@ grpc::ServerUnaryReactor* DataServiceImpl::unary(grpc::CallbackServerContext* co
   });
 }
 
-template <typename Body>
-grpc::ServerUnaryReactor* DataServiceImpl::unaryRaw(grpc::CallbackServerContext* context,
-                                                    const char* method, const std::string& file,
-                                                    grpc::ByteBuffer* response, Body&& body) {
-  return unaryCall(context, method, file, [&](const Caller& caller, AccessRecord& record) {
-    Result<std::string> answer = body(caller);
-    if (!answer) {
-      return answer.status();
-    }
-    // The bytes go to gRPC as they are, freed when it is done with them.
-    auto* owned = new std::string(std::move(*answer));
-    grpc::Slice slice(
-        owned->data(), owned->size(), [](void* held) { delete static_cast<std::string*>(held); },
-        owned);
-    record.bytes = slice.size();
-    *response = grpc::ByteBuffer(&slice, 1);
-    return Status::ok();
-  });
-}
-
 grpc::ServerUnaryReactor* DataServiceImpl::ListFiles(grpc::CallbackServerContext* context,
                                                      const v1::ListFilesRequest* request,
                                                      v1::ListFilesResponse* response) {
@@ -659,44 +645,102 @@ grpc::ServerUnaryReactor* DataServiceImpl::ListFiles(grpc::CallbackServerContext
   });
 }
 
+namespace {
+
+// The bytes of an answer handed to gRPC as they are, freed when it is done
+// with them.
+grpc::ByteBuffer ownedBuffer(std::string bytes) {
+  auto* owned = new std::string(std::move(bytes));
+  grpc::Slice slice(
+      owned->data(), owned->size(), [](void* held) { delete static_cast<std::string*>(held); },
+      owned);
+  return grpc::ByteBuffer(&slice, 1);
+}
+
+}  // namespace
+
+Status DataServiceImpl::walk(grpc::CallbackServerContext* context, const Caller& caller,
+                             const ResolvedPath& resolved, const std::string& key,
+                             const std::optional<FileStamp>& stamp, grpc::ByteBuffer* response,
+                             AccessRecord& record) {
+  // A client that gave up (or whose deadline passed) stops the walk (its
+  // worker is replaced): a hostile file must not hold a worker for a caller
+  // who is gone.
+  auto described = m_workers.describe(
+      resolved, m_limits.describe, [context] { return context->IsCancelled(); }, caller.name);
+  if (!described) {
+    return described.status();
+  }
+  if (v1::DescribeResponse check; !check.ParseFromString(*described)) {
+    return internalError(fmt::format("Describe of {}: an HDF5 worker sent an unreadable answer",
+                                     echoed(resolved.requested)));
+  }
+  if (stamp) {
+    m_descriptions.store(key, *stamp, *described);
+  }
+  record.bytes = described->size();
+  *response = ownedBuffer(std::move(*described));
+  return Status::ok();
+}
+
 grpc::ServerUnaryReactor* DataServiceImpl::Describe(grpc::CallbackServerContext* context,
                                                     const grpc::ByteBuffer* request,
                                                     grpc::ByteBuffer* response) {
-  v1::DescribeRequest parsed;
-  const Status readable = parseRequest(request, parsed);
-  return unaryRaw(
-      context, "Describe", parsed.file(), response,
-      [&](const Caller& caller) -> Result<std::string> {
-        CRACKVIS_RETURN_IF_ERROR(readable);
-        auto resolved = resolveFor(caller, parsed.file());
-        if (!resolved) {
-          return resolved.status();
-        }
-        // The answer is the file's as named by the caller (it echoes the name).
-        const std::string key = resolved->absolute.string() + '\n' + resolved->requested;
-        const std::optional<FileStamp> stamp = stampOf(resolved->absolute.string());
-        if (stamp && !parsed.uncached()) {
-          if (auto held = m_descriptions.find(key, *stamp)) {
-            return std::move(*held);  // checked when it was stored
-          }
-        }
-        // A client that gave up (or whose deadline passed) stops the walk (its
-        // worker is replaced): a hostile file must not hold a worker for a
-        // caller who is gone.
-        auto described = m_workers.describe(*resolved, m_limits.describe,
-                                            [context] { return context->IsCancelled(); });
-        if (!described) {
-          return described.status();
-        }
-        if (v1::DescribeResponse check; !check.ParseFromString(*described)) {
-          return internalError(fmt::format(
-              "Describe of {}: an HDF5 worker sent an unreadable answer", echoed(parsed.file())));
-        }
-        if (stamp) {
-          m_descriptions.store(key, *stamp, *described);
-        }
-        return std::move(*described);
-      });
+  // What the walk needs after this handler has returned.
+  struct Call {
+    AccessRecord record;
+    Clock::time_point start = Clock::now();
+    v1::DescribeRequest request;
+    std::optional<Caller> caller;
+    std::optional<ResolvedPath> resolved;
+    std::string key;
+    std::optional<FileStamp> stamp;
+  };
+  auto call = std::make_shared<Call>();
+  const Status readable = parseRequest(request, call->request);
+  call->record.method = "Describe";
+  call->record.file = call->request.file();
+  auto* reactor = context->DefaultReactor();
+  bool walking = false;
+  const Status status = rpc::guarded(kProgram, call->record, [&]() -> Status {
+    auto caller = authenticate(context, call->record);
+    if (!caller) {
+      return caller.status();
+    }
+    CRACKVIS_RETURN_IF_ERROR(readable);
+    auto resolved = resolveFor(*caller, call->request.file());
+    if (!resolved) {
+      return resolved.status();
+    }
+    // The answer is the file's as named by the caller (it echoes the name).
+    call->key = resolved->absolute.string() + '\n' + resolved->requested;
+    call->stamp = stampOf(resolved->absolute.string());
+    if (call->stamp && !call->request.uncached()) {
+      if (auto held = m_descriptions.find(call->key, *call->stamp)) {
+        call->record.bytes = held->size();
+        *response = ownedBuffer(std::move(*held));  // checked when it was stored
+        return Status::ok();
+      }
+    }
+    call->caller = std::move(*caller);
+    call->resolved = std::move(*resolved);
+    // The walk waits for an HDF5 worker and takes up to Describe's time
+    // limit: on a thread of its own, never one of gRPC's few.
+    CRACKVIS_RETURN_IF_ERROR(
+        m_walks.start(call->caller->name, [this, call, context, reactor, response] {
+          const Status walked = rpc::guarded(kProgram, call->record, [&] {
+            return walk(context, *call->caller, *call->resolved, call->key, call->stamp, response,
+                        call->record);
+          });
+          reactor->Finish(rpc::finishCall(m_log, call->record, call->start, walked));
+        }));
+    walking = true;
+    return Status::ok();
+  });
+  if (!walking) {
+    reactor->Finish(rpc::finishCall(m_log, call->record, call->start, status));
+  }
+  return reactor;
 }
 
 grpc::ServerUnaryReactor* DataServiceImpl::Resolve(grpc::CallbackServerContext* context,

@@ -9,12 +9,14 @@
 #include <cstdint>
 #include <map>
 #include <mutex>
+#include <optional>
 
 #include <grpcpp/grpcpp.h>
 
 #include "crackvis/v1/data.grpc.pb.h"
 #include "describe_cache.hpp"
 #include "hdf5_workers.hpp"
+#include "walk_threads.hpp"
 #include <crackvis/dataservice/catalogue.hpp>
 #include <crackvis/dataservice/server_config.hpp>
 #include <crackvis/rpc/access_log.hpp>
@@ -132,11 +134,13 @@ class DataServiceImpl final : public DataServiceBase {
   grpc::ServerUnaryReactor* unary(grpc::CallbackServerContext* context, const char* method,
                                   const std::string& file,
                                   const google::protobuf::Message& response, Body&& body);
-  // The same for a raw answer: `body` returns the serialized response.
-  template <typename Body>
-  grpc::ServerUnaryReactor* unaryRaw(grpc::CallbackServerContext* context, const char* method,
-                                     const std::string& file, grpc::ByteBuffer* response,
-                                     Body&& body);
+  // Describe's walk of a file in an HDF5 worker, on a thread of m_walks;
+  // stores the answer in the cache (when the file has a stamp) and in
+  // `response`.
+  Status walk(grpc::CallbackServerContext* context, const Caller& caller,
+              const ResolvedPath& resolved, const std::string& key,
+              const std::optional<FileStamp>& stamp, grpc::ByteBuffer* response,
+              AccessRecord& record);
 
   Catalogue m_catalogue;
   Hdf5Workers& m_workers;
@@ -145,6 +149,8 @@ class DataServiceImpl final : public DataServiceBase {
   AccessLog& m_log;
   StreamRegistry m_streams;
   DescribeCache m_descriptions;
+  // Last: destroyed first, it waits for running walks, which use the rest.
+  WalkThreads m_walks{16, 64};
 };
 
 }  // namespace crackvis::dataservice

@@ -15,6 +15,7 @@
 
 #include "crackvis/v1/data.pb.h"
 #include "describe_proto.hpp"
+#include <crackvis/common/child_process.hpp>
 #include <crackvis/common/log.hpp>
 
 namespace crackvis::dataservice {
@@ -207,6 +208,13 @@ bool sendFrame(int socket, std::uint32_t kind, std::string_view payload) {
   return sendAll(socket, frame.data(), frame.size());
 }
 
+// Whether an idle worker's socket shows its end closed (it died) or bytes
+// nobody asked for; either way it cannot take a request.
+bool hungUp(int socket) {
+  pollfd entry{socket, POLLIN | POLLRDHUP, 0};
+  return ::poll(&entry, 1, 0) > 0;
+}
+
 enum class Wait { kReady, kClosed, kTimeout, kCancelled };
 
 // Reads exactly `size` bytes, waiting at most until `deadline` and asking
@@ -382,18 +390,6 @@ std::pair<std::uint32_t, std::string> serve(const Catalogue& catalogue, std::uin
   runWorker(root, shared);
 }
 
-std::string describeExit(int status) {
-  if (WIFSIGNALED(status)) {
-    const int signal = WTERMSIG(status);
-    const char* name = ::sigabbrev_np(signal);
-    return fmt::format("killed by SIG{} (signal {})", name != nullptr ? name : "?", signal);
-  }
-  if (WIFEXITED(status)) {
-    return fmt::format("exited with status {}", WEXITSTATUS(status));
-  }
-  return "ended";
-}
-
 }  // namespace
 
 // ------------------------------------------------------------ supervisor --
@@ -442,7 +438,47 @@ Status Hdf5Workers::spawn(Worker& worker) {
   return Status::ok();
 }
 
+Hdf5Workers::ForkThread::ForkThread() {
+  m_thread = std::thread([this] {
+    std::unique_lock lock(m_mutex);
+    for (;;) {
+      m_wake.wait(lock, [&] { return m_stop || m_work != nullptr; });
+      if (m_work == nullptr) {
+        return;
+      }
+      (*m_work)();
+      m_work = nullptr;
+      ++m_finished;
+      m_done.notify_all();
+    }
+  });
+}
+
+Hdf5Workers::ForkThread::~ForkThread() {
+  {
+    std::lock_guard lock(m_mutex);
+    m_stop = true;
+  }
+  m_wake.notify_all();
+  m_thread.join();
+}
+
+void Hdf5Workers::ForkThread::run(const std::function<void()>& work) {
+  std::unique_lock lock(m_mutex);
+  m_done.wait(lock, [&] { return m_work == nullptr; });  // one at a time
+  m_work = &work;
+  const std::uint64_t ticket = m_finished + 1;
+  m_wake.notify_all();
+  m_done.wait(lock, [&] { return m_finished >= ticket; });
+}
+
 Result<Hdf5Workers::Started> Hdf5Workers::startWorker() {
+  Result<Started> started = internalError("the fork thread did not run");
+  m_forks->run([&] { started = forkWorker(); });
+  return started;
+}
+
+Result<Hdf5Workers::Started> Hdf5Workers::forkWorker() {
   int sockets[2];
   if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sockets) != 0) {
     return unavailable(
@@ -480,30 +516,61 @@ Result<Hdf5Workers::Started> Hdf5Workers::startWorker() {
   return Started{pid, sockets[0], shared};
 }
 
-Hdf5Workers::Worker* Hdf5Workers::checkOut() {
-  std::unique_lock lock(m_mutex);
-  for (;;) {
-    for (Worker& worker : m_workers) {
-      if (!worker.busy && worker.pid > 0) {
-        worker.busy = true;
-        return &worker;
-      }
+bool Hdf5Workers::isNext(const Ticket& ticket) const {
+  const Ticket* next = nullptr;
+  int nextHeld = 0;
+  for (const Ticket* waiting : m_waiting) {
+    if (waiting->lane == Lane::kWalk && m_walking >= walkLimit()) {
+      continue;  // cannot take a worker now; others go first
     }
+    const auto held = m_held.find(*waiting->user);
+    const int count = held == m_held.end() ? 0 : held->second;
+    if (next == nullptr || count < nextHeld ||
+        (count == nextHeld && waiting->order < next->order)) {
+      next = waiting;
+      nextHeld = count;
+    }
+  }
+  return next == &ticket;
+}
+
+Hdf5Workers::Worker* Hdf5Workers::checkOut(Lane lane, const std::string& user) {
+  std::unique_lock lock(m_mutex);
+  const Ticket ticket{m_tickets++, &user, lane};
+  m_waiting.push_back(&ticket);
+  auto leave = [&] { m_waiting.erase(std::find(m_waiting.begin(), m_waiting.end(), &ticket)); };
+  for (;;) {
     const bool anyAlive = std::any_of(m_workers.begin(), m_workers.end(),
                                       [](const Worker& worker) { return worker.pid > 0; });
     if (!anyAlive) {
+      leave();
+      m_idle.notify_all();
       return nullptr;
+    }
+    auto idle = std::find_if(m_workers.begin(), m_workers.end(),
+                             [](const Worker& worker) { return !worker.busy && worker.pid > 0; });
+    if (idle != m_workers.end() && isNext(ticket)) {
+      idle->busy = true;
+      ++m_held[user];
+      m_walking += lane == Lane::kWalk ? 1 : 0;
+      leave();
+      m_idle.notify_all();  // the next in line may find another free worker
+      return &*idle;
     }
     m_idle.wait(lock);
   }
 }
 
-void Hdf5Workers::checkIn(Worker* worker) {
+void Hdf5Workers::checkIn(Worker* worker, Lane lane, const std::string& user) {
   {
     std::lock_guard lock(m_mutex);
     worker->busy = false;
+    if (auto held = m_held.find(user); held != m_held.end() && --held->second <= 0) {
+      m_held.erase(held);
+    }
+    m_walking -= lane == Lane::kWalk ? 1 : 0;
   }
-  m_idle.notify_one();
+  m_idle.notify_all();
 }
 
 std::string Hdf5Workers::replace(Worker& worker, const std::string& file, const std::string& why) {
@@ -532,10 +599,11 @@ std::string Hdf5Workers::replace(Worker& worker, const std::string& file, const 
   return ended;
 }
 
-Status Hdf5Workers::call(std::uint32_t kind, const std::string& request, const std::string& file,
+Status Hdf5Workers::call(std::uint32_t kind, Lane lane, const std::string& user,
+                         const std::string& request, const std::string& file,
                          Clock::time_point deadline, const std::function<bool()>& isCancelled,
                          Answer answer) {
-  Worker* worker = checkOut();
+  Worker* worker = checkOut(lane, user);
   if (worker == nullptr) {
     return unavailable("no HDF5 worker is running (they could not be restarted)");
   }
@@ -543,12 +611,35 @@ Status Hdf5Workers::call(std::uint32_t kind, const std::string& request, const s
   struct Return {
     Hdf5Workers* workers;
     Worker* worker;
-    ~Return() { workers->checkIn(worker); }
-  } giveBack{this, worker};
+    Lane lane;
+    const std::string& user;
+    ~Return() { workers->checkIn(worker, lane, user); }
+  } giveBack{this, worker, lane, user};
 
+  // Only a fault during this call's own HDF5 work may be blamed on its file:
+  // a worker found dead before it took the request (it died while idle, or
+  // the request could not be handed to it) is replaced and the call goes to
+  // the new one.
+  bool sent = false;
+  for (int attempt = 0; attempt < 2 && !sent; ++attempt) {
+    if (worker->pid <= 0) {
+      break;  // could not be restarted
+    }
+    if (hungUp(worker->socket)) {
+      replace(*worker, file, "died while idle");
+      continue;
+    }
+    sent = sendFrame(worker->socket, kind, request);
+    if (!sent) {
+      replace(*worker, file, "died before taking a request");
+    }
+  }
+  if (worker->pid <= 0) {
+    return unavailable("no HDF5 worker is running (they could not be restarted)");
+  }
   FrameHeader header;
   Wait waited = Wait::kClosed;
-  if (sendFrame(worker->socket, kind, request)) {
+  if (sent) {
     waited = receiveAll(worker->socket, &header, sizeof header, deadline, isCancelled);
   }
   if (waited == Wait::kReady && header.kind == kOkShared) {
@@ -610,7 +701,8 @@ Status Hdf5Workers::call(std::uint32_t kind, const std::string& request, const s
 }
 
 Result<std::string> Hdf5Workers::describe(const ResolvedPath& file, const DescribeLimits& limits,
-                                          const std::function<bool()>& cancelled) {
+                                          const std::function<bool()>& cancelled,
+                                          const std::string& user) {
   WireWriter request;
   put(request, file);
   request.u64(static_cast<std::uint64_t>(limits.maxDepth));
@@ -619,14 +711,14 @@ Result<std::string> Hdf5Workers::describe(const ResolvedPath& file, const Descri
   std::string answer;
   // The walk bounds itself by limits.maxTime; opening the file comes first.
   const auto deadline = Clock::now() + limits.maxTime + m_settings.pieceTime;
-  CRACKVIS_RETURN_IF_ERROR(call(kDescribe, request.take(), file.requested, deadline, cancelled,
-                                {&answer, nullptr, 0, {}}));
+  CRACKVIS_RETURN_IF_ERROR(call(kDescribe, Lane::kWalk, user, request.take(), file.requested,
+                                deadline, cancelled, {&answer, nullptr, 0, {}}));
   return answer;
 }
 
 Result<ReadPlan> Hdf5Workers::planRead(const ResolvedPath& file,
-                                       const std::vector<Hyperslab>& slabs,
-                                       std::uint64_t maxBytes) {
+                                       const std::vector<Hyperslab>& slabs, std::uint64_t maxBytes,
+                                       const std::string& user) {
   WireWriter request;
   put(request, file);
   request.u64(slabs.size());
@@ -654,19 +746,19 @@ Result<ReadPlan> Hdf5Workers::planRead(const ResolvedPath& file,
     }
     return in.ok();
   };
-  CRACKVIS_RETURN_IF_ERROR(
-      call(kPlan, request.take(), file.requested, Clock::now() + m_settings.pieceTime, {}, into));
+  CRACKVIS_RETURN_IF_ERROR(call(kPlan, Lane::kRead, user, request.take(), file.requested,
+                                Clock::now() + m_settings.pieceTime, {}, into));
   return plan;
 }
 
 Status Hdf5Workers::readPiece(const ResolvedPath& file, const SlabPlan& slab, const Piece& piece,
-                              void* out) {
+                              void* out, const std::string& user) {
   WireWriter request;
   put(request, file);
   put(request, slab);
   put(request, piece);
-  return call(kPiece, request.take(), file.requested, Clock::now() + m_settings.pieceTime, {},
-              {nullptr, out, piece.bytes, {}});
+  return call(kPiece, Lane::kRead, user, request.take(), file.requested,
+              Clock::now() + m_settings.pieceTime, {}, {nullptr, out, piece.bytes, {}});
 }
 
 std::vector<pid_t> Hdf5Workers::pids() const {

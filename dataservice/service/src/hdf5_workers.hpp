@@ -17,13 +17,16 @@
 // Private to the service library.
 #pragma once
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -58,15 +61,24 @@ class Hdf5Workers {
   Hdf5Workers& operator=(const Hdf5Workers&) = delete;
   ~Hdf5Workers();  // kills and reaps every worker
 
+  // Each call names its `user`: workers are shared fairly between users
+  // (issue 29 point 2). A Describe walks a whole file (seconds for a hostile
+  // one), so walks may hold all workers but one: a Read's plan and pieces,
+  // a few milliseconds each, always find a worker within one piece's time.
+  // When callers wait, a free worker goes to the one whose user holds the
+  // fewest workers (then the earliest), so one user's many calls do not
+  // queue ahead of another user's few.
+  //
   // A serialized crackvis.v1.DescribeResponse. `cancelled` is asked every
   // 100 ms while the worker walks the file: true kills the worker.
   Result<std::string> describe(const ResolvedPath& file, const DescribeLimits& limits,
-                               const std::function<bool()>& cancelled);
+                               const std::function<bool()>& cancelled, const std::string& user);
   // Catalogue::openRead in a worker: the validated plan of every slab.
   Result<ReadPlan> planRead(const ResolvedPath& file, const std::vector<Hyperslab>& slabs,
-                            std::uint64_t maxBytes);
+                            std::uint64_t maxBytes, const std::string& user);
   // Catalogue::readPiece in a worker, into `out` (piece.bytes long).
-  Status readPiece(const ResolvedPath& file, const SlabPlan& slab, const Piece& piece, void* out);
+  Status readPiece(const ResolvedPath& file, const SlabPlan& slab, const Piece& piece, void* out,
+                   const std::string& user);
 
   // For tests and operators: the workers' process ids now, and how many
   // workers have been replaced since start.
@@ -96,15 +108,51 @@ class Hdf5Workers {
     std::function<bool(const void* shared)> shared;
   };
 
+  // Walks (Describe) may not take the last free worker; reads may.
+  enum class Lane { kWalk, kRead };
+  // A caller waiting for a worker.
+  struct Ticket {
+    std::uint64_t order;
+    const std::string* user;
+    Lane lane;
+  };
+
+  // Forks on one thread that lives as long as the workers. A worker dies
+  // with the *thread* that forked it (PR_SET_PDEATHSIG), so a worker forked
+  // on a caller's thread died as soon as that thread ended (a gRPC thread
+  // the pool let go, a Describe's walk thread), and the next call found it
+  // dead.
+  class ForkThread {
+   public:
+    ForkThread();
+    ~ForkThread();
+    // Runs `work` on the thread and waits for it.
+    void run(const std::function<void()>& work);
+
+   private:
+    std::mutex m_mutex;
+    std::condition_variable m_wake;
+    std::condition_variable m_done;
+    const std::function<void()>* m_work = nullptr;
+    std::uint64_t m_finished = 0;
+    bool m_stop = false;
+    std::thread m_thread;
+  };
+
   Hdf5Workers(DataRoot root, Settings settings);
   Status spawn(Worker& worker);
   Result<Started> startWorker();  // maps a buffer and forks a worker
-  Worker* checkOut();
-  void checkIn(Worker* worker);
+  Result<Started> forkWorker();   // startWorker's work, on the fork thread
+  Worker* checkOut(Lane lane, const std::string& user);
+  void checkIn(Worker* worker, Lane lane, const std::string& user);
+  // Whether `ticket` is the waiting caller a free worker goes to next (the
+  // lock held).
+  bool isNext(const Ticket& ticket) const;
+  int walkLimit() const { return std::max(1, static_cast<int>(m_workers.size()) - 1); }
   // Sends a request and waits for its answer; a worker that dies, overruns
   // `deadline` or whose caller cancels is replaced.
-  Status call(std::uint32_t kind, const std::string& request, const std::string& file,
-              std::chrono::steady_clock::time_point deadline,
+  Status call(std::uint32_t kind, Lane lane, const std::string& user, const std::string& request,
+              const std::string& file, std::chrono::steady_clock::time_point deadline,
               const std::function<bool()>& isCancelled, Answer answer);
   // Kills (if need be) and reaps a worker, starts another in its place and
   // logs it; returns how the old one ended ("killed by SIGSEGV (signal 11)").
@@ -116,6 +164,11 @@ class Hdf5Workers {
   std::condition_variable m_idle;
   std::vector<Worker> m_workers;
   int m_replaced = 0;
+  std::unique_ptr<ForkThread> m_forks = std::make_unique<ForkThread>();
+  std::vector<const Ticket*> m_waiting;
+  std::map<std::string, int> m_held;  // workers each user holds now
+  int m_walking = 0;                  // workers on the walk lane now
+  std::uint64_t m_tickets = 0;
 };
 
 }  // namespace crackvis::dataservice

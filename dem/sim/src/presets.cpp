@@ -208,17 +208,28 @@ void clampEnds(SimulationSetup& setup, double reach, double velocity) {
   }
 }
 
+// More integration steps between two saves than any run finishes (at the
+// cuboid's ~1 microsecond a step, 1e8 steps a save is days per saved step).
+constexpr double kMaxStepsPerSave = 1e8;
+
 // Whole steps between saves, the time step no larger than the stable one,
 // and the last of `fullSaved` saved steps exactly at `duration`.
-void scheduleSteps(Preset& preset, const MaterialModel& model, double duration, int fullSaved,
-                   int savedSteps) {
+Status scheduleSteps(Preset& preset, const MaterialModel& model, double duration, int fullSaved,
+                     int savedSteps) {
   SimulationSetup& setup = preset.setup;
   const double maxStep = model.timeStepFraction * bondTimeScale(setup.lattice, setup.material);
   const double interval = duration / (fullSaved - 1);
-  preset.stepsPerSave =
-      std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(interval / maxStep)));
+  const double perSave = std::ceil(interval / maxStep);
+  if (!(perSave <= kMaxStepsPerSave)) {
+    return invalidArgument(fmt::format(
+        "a duration of {:g} s needs {:.3g} time steps of at most {:.3g} s between two saved steps; "
+        "more than {:g} cannot finish (give a shorter --duration)",
+        duration, perSave, maxStep, kMaxStepsPerSave));
+  }
+  preset.stepsPerSave = std::max<std::int64_t>(1, static_cast<std::int64_t>(perSave));
   setup.timeStep = interval / static_cast<double>(preset.stepsPerSave);
   preset.savedSteps = savedSteps > 0 ? savedSteps : fullSaved;
+  return Status::ok();
 }
 
 // The material of a preset for bonds of typical radius r.
@@ -343,8 +354,8 @@ Result<Preset> makePreset(const PresetOptions& options) {
   setup.clampRampTime = plate ? kPlateRampTime : kCuboidRampTime;
   const double duration =
       options.duration > 0.0 ? options.duration : (plate ? kPlateDuration : kCuboidDuration);
-  scheduleSteps(preset, model, duration, plate ? kPlateSavedSteps : kCuboidSavedSteps,
-                options.savedSteps);
+  CRACKVIS_RETURN_IF_ERROR(scheduleSteps(
+      preset, model, duration, plate ? kPlateSavedSteps : kCuboidSavedSteps, options.savedSteps));
   return preset;
 }
 
@@ -423,7 +434,8 @@ Result<Preset> makeTensionPreset(const dem::Lattice& specimen,
   setup.clampRampTime = (plate ? kPlateRampTime : kCuboidRampTime) * length / referenceLength;
   const double duration =
       options.duration > 0.0 ? options.duration : (plate ? kPlateDuration : kCuboidDuration);
-  scheduleSteps(preset, model, duration, kCuboidSavedSteps, options.savedSteps);
+  CRACKVIS_RETURN_IF_ERROR(
+      scheduleSteps(preset, model, duration, kCuboidSavedSteps, options.savedSteps));
   return preset;
 }
 

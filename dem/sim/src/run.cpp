@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <crackvis/common/pending_file.hpp>
 #include <crackvis/sim/run.hpp>
 
 namespace crackvis::sim {
@@ -27,9 +28,13 @@ Result<RunSummary> runToFile(SimulationSetup setup, const RunOptions& options) {
   }
   dem::DemMetadata metadata = options.metadata;
   metadata.plannedSteps = options.savedSteps;
-  auto writer = dem::DemFileWriter::create(options.path, lattice, metadata);
+  // Written beside the output and renamed over it at the end: an existing
+  // file stays as it was until the run is complete (a killed run leaves its
+  // complete steps readable in OUTPUT.partial).
+  PendingFile output(options.path);
+  auto writer = dem::DemFileWriter::create(output.path(), lattice, metadata);
   if (!writer) {
-    return writer.status();
+    return output.named(writer.status());
   }
   RunSummary summary;
   summary.particles = simulator->particleCount();
@@ -39,8 +44,8 @@ Result<RunSummary> runToFile(SimulationSetup setup, const RunOptions& options) {
       simulator->advance(options.stepsPerSave);
     }
     const auto writeStart = std::chrono::steady_clock::now();
-    CRACKVIS_RETURN_IF_ERROR(
-        writer->appendStep(simulator->snapshot(options.writeVelocities, options.writeBondForce)));
+    CRACKVIS_RETURN_IF_ERROR(output.named(
+        writer->appendStep(simulator->snapshot(options.writeVelocities, options.writeBondForce))));
     summary.writeSeconds += secondsSince(writeStart);
     summary.brokenPerSavedStep.push_back(simulator->brokenBondCount());
     if (options.onSaved) {
@@ -48,7 +53,8 @@ Result<RunSummary> runToFile(SimulationSetup setup, const RunOptions& options) {
                        summary.brokenPerSavedStep.back()});
     }
   }
-  CRACKVIS_RETURN_IF_ERROR(writer->close());
+  CRACKVIS_RETURN_IF_ERROR(output.named(writer->close()));
+  CRACKVIS_RETURN_IF_ERROR(output.named(output.commit()));
   summary.savedSteps = options.savedSteps;
   summary.steps = simulator->stepIndex();
   summary.simulatedTime = simulator->time();

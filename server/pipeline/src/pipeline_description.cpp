@@ -645,6 +645,94 @@ std::string escaped(const std::string& raw) {
   return out;
 }
 
+// How many elements and attributes a document holds, counted on its raw
+// text before libxml2 sees it. libxml2's duplicate-attribute check and the
+// schema validator cost time that grows faster than the document (80,000
+// made-up attributes on one element, 0.87 MB, took 93 s), so a document
+// that cannot be a pipeline by its counts alone is refused in one linear
+// pass. Comments, CDATA sections and processing instructions are skipped;
+// a '<' or '=' in an attribute value is inside quotes and not counted.
+struct DocumentShape {
+  std::size_t elements = 0;
+  std::size_t mostAttributes = 0;  // on any one element
+  std::size_t line = 0;            // where that element starts
+};
+
+DocumentShape shapeOf(std::string_view xml) {
+  DocumentShape shape;
+  std::size_t line = 1;
+  std::size_t i = 0;
+  auto skipPast = [&](std::string_view end) {
+    const std::size_t found = xml.find(end, i);
+    const std::size_t stop = found == std::string_view::npos ? xml.size() : found + end.size();
+    line += static_cast<std::size_t>(std::count(xml.begin() + i, xml.begin() + stop, '\n'));
+    i = stop;
+  };
+  while (i < xml.size()) {
+    const char ch = xml[i];
+    if (ch == '\n') {
+      ++line;
+    }
+    if (ch != '<') {
+      ++i;
+      continue;
+    }
+    const std::string_view rest = xml.substr(i);
+    if (rest.substr(0, 4) == "<!--") {
+      skipPast("-->");
+    } else if (rest.substr(0, 9) == "<![CDATA[") {
+      skipPast("]]>");
+    } else if (rest.substr(0, 2) == "<?") {
+      skipPast("?>");
+    } else if (rest.size() > 1 && rest[1] != '/' && rest[1] != '!') {
+      ++shape.elements;
+      const std::size_t start = line;
+      std::size_t attributes = 0;
+      char quote = 0;
+      for (++i; i < xml.size() && (quote != 0 || xml[i] != '>'); ++i) {
+        const char c = xml[i];
+        line += c == '\n' ? 1 : 0;
+        if (quote != 0) {
+          quote = c == quote ? 0 : quote;
+        } else if (c == '"' || c == '\'') {
+          quote = c;
+        } else if (c == '=') {
+          ++attributes;
+        }
+      }
+      if (attributes > shape.mostAttributes) {
+        shape.mostAttributes = attributes;
+        shape.line = start;
+      }
+    } else {
+      ++i;
+    }
+  }
+  return shape;
+}
+
+// A valid pipeline has at most 19 elements (one of each, clips and
+// thresholds on three layers, a camera) and 14 attributes on one element;
+// the limits leave room for namespace declarations.
+constexpr std::size_t kMaxPipelineElements = 64;
+constexpr std::size_t kMaxPipelineAttributes = 64;
+
+Status checkShape(std::string_view xml) {
+  const DocumentShape shape = shapeOf(xml);
+  if (shape.elements > kMaxPipelineElements) {
+    return invalidArgument(
+        fmt::format("pipeline: {} elements, more than a pipeline description can hold ({})",
+                    shape.elements, kMaxPipelineElements));
+  }
+  if (shape.mostAttributes > kMaxPipelineAttributes) {
+    return invalidArgument(fmt::format(
+        "pipeline line {}: an element with {} attributes, more than any pipeline element has "
+        "({} at most)",
+        shape.line, shape.mostAttributes, kMaxPipelineAttributes));
+  }
+  return Status::ok();
+}
+
 }  // namespace
 
 std::string_view pipelineSchema() {
@@ -656,6 +744,7 @@ Result<PipelineDescription> parsePipeline(std::string_view xml) {
     return invalidArgument(fmt::format("pipeline document of {} bytes, the limit is {}", xml.size(),
                                        kMaxPipelineBytes));
   }
+  CRACKVIS_RETURN_IF_ERROR(checkShape(xml));
   xmlSchema* compiled = schema();
   if (compiled == nullptr) {
     return internalError("the built-in pipeline schema does not parse");

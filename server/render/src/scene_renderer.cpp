@@ -37,6 +37,7 @@
 #include "overlays.hpp"
 #include "point_sprite_sphere_mapper.hpp"
 #include "vtk_errors.hpp"
+#include <crackvis/common/pending_file.hpp>
 #include <crackvis/render/egl_context.hpp>
 #include <crackvis/render/scene_renderer.hpp>
 #include <crackvis/scene/scene_content.hpp>
@@ -753,16 +754,15 @@ vtkSmartPointer<vtkImageData> toImageData(const Image& image) {
 }  // namespace
 
 Status writePng(const Image& image, const std::string& path) {
-  const VtkErrorScope vtkErrors;
-  vtkNew<vtkPNGWriter> writer;
-  writer->SetFileName(path.c_str());
-  writer->SetInputData(toImageData(image));
-  writer->Write();
-  if (const Status vtk = vtkErrors.status("vtkPNGWriter"); writer->GetErrorCode() != 0 || !vtk) {
-    return failedPrecondition(fmt::format("{}: cannot write the PNG ({})", path,
-                                          vtk ? "no detail from VTK" : vtk.message()));
+  // Encoded in memory and written beside its name, renamed over it when
+  // complete: a full disk leaves an existing picture as it was, and libpng
+  // never writes (nor prints its write errors) itself.
+  auto png = encodePng(image);
+  if (!png) {
+    return png.status();
   }
-  return Status::ok();
+  return replaceFile(path,
+                     std::string_view(reinterpret_cast<const char*>(png->data()), png->size()));
 }
 
 Result<std::vector<std::uint8_t>> encodePng(const Image& image) {

@@ -159,20 +159,34 @@ class SessionRegistry {
       : m_limit(limit), m_perUserLimit(perUserLimit), m_grace(graceSeconds) {}
 
   // `perUser`: the owner is a configured user, counted against the
-  // per-user limit (without users every client shares one certificate name).
-  Status reserve(const std::string& owner, bool perUser) {
+  // per-user limit (without users every client of one certificate name is
+  // one owner). A full server lets in an owner below its fair share (the
+  // limit divided among the owners with sessions, the newcomer counted) by
+  // reclaiming a session of the owner furthest above it: the one whose
+  // stream has been gone longest, else the one idle longest. It goes in
+  // `reclaimed`, for the caller to close outside the lock.
+  Status reserve(const std::string& owner, bool perUser, std::shared_ptr<Session>& reclaimed) {
     std::lock_guard lock(m_mutex);
-    if (static_cast<int>(m_sessions.size()) + m_opening >= m_limit) {
-      return resourceExhausted(
-          fmt::format("the server has its maximum of {} sessions open", m_limit));
-    }
-    int own = 0;
+    std::map<std::string, int> held = m_openingBy;
     for (const auto& [id, entry] : m_sessions) {
-      own += entry.owner == owner ? 1 : 0;
+      ++held[entry.owner];
     }
-    if (perUser && own + m_openingBy[owner] >= m_perUserLimit) {
+    const int own = held[owner];
+    if (perUser && own >= m_perUserLimit) {
       return resourceExhausted(fmt::format("user '{}' has the maximum of {} sessions per user open",
                                            owner, m_perUserLimit));
+    }
+    if (static_cast<int>(m_sessions.size()) + m_opening >= m_limit) {
+      const int share = std::max(1, m_limit / static_cast<int>(held.size()));
+      auto victim = own < share ? reclaimable(held, share) : m_sessions.end();
+      if (victim == m_sessions.end()) {
+        return resourceExhausted(fmt::format(
+            "the server has its maximum of {} sessions open ({} owners; a fair share is {}, "
+            "and '{}' holds {})",
+            m_limit, held.size(), share, owner, own));
+      }
+      reclaimed = std::move(victim->second.session);
+      m_sessions.erase(victim);
     }
     ++m_opening;
     ++m_openingBy[owner];
@@ -267,6 +281,35 @@ class SessionRegistry {
     std::shared_ptr<Session> session;
     std::string owner;
   };
+  using Entries = std::map<std::string, Entry>;
+
+  // The session to reclaim from the owner furthest above `share` (none when
+  // every owner is within it): detached the longest, else idle the longest.
+  Entries::iterator reclaimable(const std::map<std::string, int>& held, int share) {
+    std::string richest;
+    int most = share;
+    for (const auto& [owner, count] : held) {
+      if (count > most) {
+        richest = owner;
+        most = count;
+      }
+    }
+    auto victim = m_sessions.end();
+    auto rank = [](const Session& session) {
+      const auto detached = session.detachedSince();
+      // A session without a stream goes before any with one.
+      return std::pair{detached ? 0 : 1, detached ? *detached : session.lastActive()};
+    };
+    for (auto it = m_sessions.begin(); it != m_sessions.end() && !richest.empty(); ++it) {
+      if (it->second.owner == richest &&
+          (victim == m_sessions.end() ||
+           rank(*it->second.session) < rank(*victim->second.session))) {
+        victim = it;
+      }
+    }
+    return victim;
+  }
+
   const int m_limit;
   const int m_perUserLimit;
   const double m_grace;
@@ -577,7 +620,16 @@ class RenderServiceImpl final : public v1::RenderService::Service {
       return description.status();
     }
     record.file = description->file;
-    CRACKVIS_RETURN_IF_ERROR(m_sessions.reserve(caller.name, caller.restricted));
+    std::shared_ptr<Session> reclaimed;
+    CRACKVIS_RETURN_IF_ERROR(m_sessions.reserve(caller.name, caller.restricted, reclaimed));
+    if (reclaimed) {
+      reclaimed->close(fmt::format(
+          "reclaimed for another user: the server's {} sessions are shared fairly between users",
+          m_config.maxSessions));
+      log::event(stderr, kProgram, "session_reclaimed",
+                 {{"session", reclaimed->id()}, {"for", caller.name}});
+      reclaimed.reset();  // joins its thread
+    }
     Result<std::shared_ptr<Session>> session = internalError("the session did not open");
     try {
       session = Session::open(newSessionId(), *description, opener(caller), m_config.limits);
@@ -675,10 +727,13 @@ class RenderServiceImpl final : public v1::RenderService::Service {
           ended = unavailable(fmt::format("session {}: another stream attached", session->id()));
           open = false;
           continue;
-        case Session::Next::kClosed:
-          ended = unavailable(fmt::format("session {} closed", session->id()));
+        case Session::Next::kClosed: {
+          const std::string reason = session->closeReason();
+          ended = unavailable(fmt::format("session {} closed{}", session->id(),
+                                          reason.empty() ? "" : ": " + reason));
           open = false;
           continue;
+        }
       }
       if (auto stats = encoder.stats(session->framesDropped())) {
         v1::ServerMessage statsMessage;

@@ -457,8 +457,9 @@ struct Session::Worker {
 
   // A full-resolution picture of the current state (0: the view's size).
   Result<render::Image> snapshot(int w, int h, int& step, std::optional<int> atStep) {
-    w = w > 0 ? w : width;
-    h = h > 0 ? h : height;
+    // Only 0 means the view's size: a negative size is refused by the check.
+    w = w == 0 ? width : w;
+    h = h == 0 ? height : h;
     CRACKVIS_RETURN_IF_ERROR(checkViewSize(w, h, session.m_limits));
     CRACKVIS_RETURN_IF_ERROR(ensureRenderer(w, h));
     if (atStep) {
@@ -633,6 +634,7 @@ void Session::post(SessionEvent event) {
   std::optional<std::uint64_t> refused;
   {
     std::lock_guard lock(m_mutex);
+    m_lastActive = Clock::now();
     auto* camera = std::get_if<CameraEvent>(&event.what);
     auto* last = m_events.empty() ? nullptr : std::get_if<CameraEvent>(&m_events.back().what);
     if (camera != nullptr && last != nullptr && camera->move == last->move &&
@@ -674,6 +676,7 @@ std::uint64_t Session::attach() {
     std::lock_guard lock(m_mutex);
     attachment = m_nextAttachment++;
     m_attachment = attachment;
+    m_lastActive = Clock::now();
     m_detachedSince.reset();
     m_latest.reset();  // a frame encoded for another stream's decoder
     m_needFrame = true;
@@ -804,10 +807,13 @@ Result<render::Image> Session::snapshot(int width, int height, int* step,
   return result;
 }
 
-void Session::close() {
+void Session::close(std::string reason) {
   {
     std::lock_guard lock(m_mutex);
     m_closing = true;
+    if (!reason.empty() && m_closeReason.empty()) {
+      m_closeReason = std::move(reason);
+    }
   }
   m_wake.notify_all();
   m_outgoing.notify_all();
@@ -816,6 +822,16 @@ void Session::close() {
 bool Session::closed() const {
   std::lock_guard lock(m_mutex);
   return m_closing;
+}
+
+std::string Session::closeReason() const {
+  std::lock_guard lock(m_mutex);
+  return m_closeReason;
+}
+
+Clock::time_point Session::lastActive() const {
+  std::lock_guard lock(m_mutex);
+  return m_lastActive;
 }
 
 std::uint64_t Session::framesDropped() const {

@@ -255,8 +255,9 @@ Result<std::unique_ptr<StepSource>> openRemoteSource(const dataservice::DataClie
 }
 
 Result<std::unique_ptr<StepSource>> openLocalSource(const std::string& path,
-                                                    const dem::SizeLimits& limits) {
-  auto reader = dem::DemFileReader::open(path);
+                                                    const dem::SizeLimits& limits, LocalOpen how) {
+  auto reader = how == LocalOpen::kStructureInChild ? dem::DemFileReader::openGuarded(path)
+                                                    : dem::DemFileReader::open(path);
   if (!reader) {
     return reader.status();
   }

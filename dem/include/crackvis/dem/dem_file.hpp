@@ -8,6 +8,7 @@
 // completed steps are readable.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -96,6 +97,15 @@ class DemFileReader {
   // version attributes, the time-independent datasets' presence, dtypes and
   // shapes, and the list of steps. Array contents are checked when read.
   static Result<DemFileReader> open(const std::string& path);
+  // open(), for a reader without a supervised HDF5 worker (the CLI, an
+  // offline render): libhdf5 first reads the file's structure in a forked
+  // child, so a corrupt file that makes libhdf5 fault (the fuzzer keeps one,
+  // tests/fuzz/crashes) gives FAILED_PRECONDITION naming the file and the
+  // signal instead of killing the process; a structure that takes longer
+  // than `limit` to read is refused the same way. Not for processes whose
+  // other threads use libhdf5, nor under MPI (fork).
+  static Result<DemFileReader> openGuarded(
+      const std::string& path, std::chrono::milliseconds limit = std::chrono::minutes(5));
 
   const DemFileInfo& info() const { return m_info; }
   int stepCount() const { return static_cast<int>(m_info.steps.size()); }
@@ -113,6 +123,9 @@ class DemFileReader {
   Result<StepState> readStep(int step) const;
   // Only the bond states of a step (for statistics over many steps).
   Result<std::vector<std::uint8_t>> readBondState(int step) const;
+  // The headers of a step's datasets (type and shape against N and M),
+  // without reading their data: what readStep would refuse for its shape.
+  Status checkStepHeaders(int step) const;
 
  private:
   DemFileReader() = default;
@@ -164,6 +177,8 @@ class DemFileWriter {
 
  private:
   DemFileWriter() = default;
+  // The root attributes, groups and time-independent datasets of a new file.
+  Status writeTimeIndependent(const DemMetadata& metadata);
   Status recordBreaks(const StepState& step, bool& changed);
   Status writeStepData(const StepState& step, bool breaksChanged);
   Status writeExtras(hid_t location, const std::vector<ExtraArray>& extras);

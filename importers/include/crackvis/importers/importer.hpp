@@ -24,7 +24,11 @@ struct ImportOptions {
   std::string steps;         // "A", "A:B" or "A:B:K" over the source's steps; empty: all
   double timestep = 0.0;     // s per source step, for sources that write no time
   std::string scalarsTable;  // optional table of per-step scalars (scalar_table.hpp)
-  bool dryRun = false;       // read the first and last step only, write nothing
+  // Import although the table has rows for only some of the imported steps
+  // (the others get no table scalars; with a time column, their time from
+  // a straight line through the table's times). Without it that is refused.
+  bool partialScalars = false;
+  bool dryRun = false;  // read the first and last step only, write nothing
   bool progress = true;
   dem::h5::Storage storage;
   std::string invocation;  // the command line, recorded as the file's `source`
@@ -46,6 +50,8 @@ struct ImportSummary {
   bool timesFromSource = false;  // false: time = step number x --timestep
   int stepsWritten = 0;
   std::vector<std::string> scalarNames;
+  std::size_t scalarRowsMatched = 0;    // imported steps the --scalars table has a row for
+  std::vector<std::string> notes;       // the summary's "note" lines, beside the source's
   std::vector<std::string> extraNames;  // "particles/NAME", "bonds/NAME"
   bool withVelocities = false;
   bool withGroups = false;

@@ -52,6 +52,9 @@ struct SourceDescription {
   std::string version;  // as the code wrote it, when it did
   std::vector<std::string> files;
   int dimension = 3;
+  // What the source skipped or guessed, for the summary's "note" lines
+  // ("skipped 11 files of VTKRecorder's 'cracks' recorder ...").
+  std::vector<std::string> notes;
 };
 
 class StepSource {

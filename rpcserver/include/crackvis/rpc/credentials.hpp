@@ -9,15 +9,25 @@
 // SHA-256 per call. Passwords are chosen by people and stay slow:
 // "pbkdf2-sha256$<iterations>$<salt base64>$<hash base64>" (PBKDF2-HMAC-
 // SHA256, 16-byte random salt, 32-byte hash). Token hashes in the PBKDF2 form
-// (made before the fast form existed) are still accepted. Failed sign-ins
-// are counted per peer address; past kMaxFailuresPerPeer in
-// kFailureWindowSeconds that peer's calls are refused without hashing.
+// (made before the fast form existed) are still accepted.
+//
+// Failed sign-ins are counted per claimed identity and peer address together
+// (the user name of Basic credentials, "a bearer token" for tokens), because
+// behind a NAT, a proxy or the browser gateway every user shares one
+// address. Past kMaxFailuresPerIdentity in kFailureWindowSeconds, passwords
+// for that name from that address are refused without hashing; past
+// kMaxFailuresPerAddress, any unverified password from that address is. A
+// valid credential is never locked out by others' failures: a credential
+// verified before passes without a check of the throttle, and a bearer token
+// (32 random bytes, one SHA-256 to check, nothing to guess) is always
+// checked, a throttled peer's wrong ones refused as RESOURCE_EXHAUSTED.
 #pragma once
 
 #include <chrono>
 #include <cstddef>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -31,7 +41,8 @@ namespace crackvis::rpc {
 using dataservice::UserEntry;
 
 inline constexpr int kDefaultHashIterations = 200000;
-inline constexpr int kMaxFailuresPerPeer = 10;
+inline constexpr int kMaxFailuresPerIdentity = 10;  // one name (or tokens) from one address
+inline constexpr int kMaxFailuresPerAddress = 100;  // every name from one address
 inline constexpr double kFailureWindowSeconds = 60.0;
 
 // Hashes a password with a fresh random salt (PBKDF2).
@@ -77,7 +88,8 @@ class Authenticator {
   // "Basic <base64 name:password>"), empty when absent; `peer` the caller's
   // address as gRPC names it ("ipv4:127.0.0.1:53412"). UNAUTHENTICATED when
   // users are configured and the credentials match none of them;
-  // RESOURCE_EXHAUSTED while the peer's address has too many failures.
+  // RESOURCE_EXHAUSTED while the name (or tokens) claimed from the peer's
+  // address, or the address as a whole, has too many failures.
   Result<Caller> authenticate(std::string_view authorization, std::string_view certificateName,
                               std::string_view peer = {}) const;
 
@@ -88,9 +100,19 @@ class Authenticator {
     Clock::time_point windowStart;
   };
 
+  // A failed sign-in is counted under both keys; either past its limit
+  // throttles.
+  struct ThrottleKeys {
+    std::string identity;  // "<address> user '<name>'" or "<address> a bearer token"
+    std::string address;   // empty for tokens: only passwords count per address
+    std::string claimed;   // for messages: "user 'bob'"
+    std::string peer;      // for messages: the address
+  };
+  static ThrottleKeys throttleKeys(std::string_view authorization, std::string_view peer);
+  std::optional<std::size_t> verifiedUser(std::string_view authorization) const;
   Result<std::size_t> findUser(std::string_view authorization) const;
-  Status checkThrottle(const std::string& address) const;
-  void recordFailure(const std::string& address) const;
+  Status checkThrottle(const ThrottleKeys& keys) const;
+  void recordFailure(const ThrottleKeys& keys) const;
 
   std::vector<UserEntry> m_users;
   std::string m_dummyPasswordHash;  // verified for unknown names: they cost as much as known
@@ -98,7 +120,7 @@ class Authenticator {
   // PBKDF2 runs once per client rather than once per call.
   mutable std::mutex m_mutex;
   mutable std::unordered_map<std::string, std::size_t> m_verified;
-  mutable std::map<std::string, Failures> m_failures;  // by peer address without the port
+  mutable std::map<std::string, Failures> m_failures;  // by ThrottleKeys' two keys
 };
 
 }  // namespace crackvis::rpc

@@ -51,6 +51,12 @@ struct ServerSettings {
   int maxReceiveMessageBytes = 4 << 20;
   int maxConcurrentStreams = 0;  // per connection; 0: gRPC's default
   int maxThreads = 0;            // gRPC's handler threads (sync services); 0: unbounded
+  // A connection must finish its TLS and HTTP/2 handshake within this time
+  // (an idle TCP connection is closed then), and one with no call for
+  // `idleConnection` is sent GOAWAY and closed; a client reconnects when it
+  // next calls. Idle connections must not pile up for ever.
+  std::chrono::milliseconds handshake{10'000};
+  std::chrono::milliseconds idleConnection{300'000};
   std::chrono::milliseconds reapPeriod{100};
   std::function<void()> reap;        // run every reapPeriod on the reaper thread; may be empty
   std::function<void()> beforeStop;  // run by shutdown() before gRPC stops; may be empty

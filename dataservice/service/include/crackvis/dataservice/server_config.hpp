@@ -27,8 +27,11 @@ struct Limits {
   int maxSlabsPerRead = 4096;
   double maxCallSeconds = 600.0;  // a stream running longer is cancelled
   // A raw TLS connection must finish its handshake and send its request
-  // within this time, so idle TCP connections cannot hold the slots.
+  // within this time, and a gRPC connection its TLS and HTTP/2 handshake,
+  // so idle TCP connections cannot hold the slots.
   double handshakeSeconds = 10.0;
+  // A gRPC connection without a call for this long is closed (GOAWAY).
+  double idleConnectionSeconds = 300.0;
   // Bytes of data buffered by all Read and Fetch streams together. A stream
   // holds at most one chunk (about 1 MiB) whatever it reads, and reserves it
   // from this budget when it starts; past it, RESOURCE_EXHAUSTED.

@@ -142,9 +142,14 @@ class Session {
   };
   QueueStats queueStats() const;
 
-  void close();
+  // `reason`, when given, is what the session's stream tells its client
+  // ("reclaimed for another user ...").
+  void close(std::string reason = {});
   bool closed() const;
+  std::string closeReason() const;
   std::uint64_t framesDropped() const;
+  // When a client last did something here: an event, or a stream attaching.
+  Clock::time_point lastActive() const;
 
  private:
   Session(std::string id, pipeline::PipelineDescription description, SourceOpener opener,
@@ -176,6 +181,8 @@ class Session {
   std::optional<Clock::time_point> m_detachedSince;
   bool m_needFrame = false;  // a stream attached and wants a keyframe now
   bool m_closing = false;
+  std::string m_closeReason;
+  Clock::time_point m_lastActive = Clock::now();
   std::uint64_t m_dropped = 0;
   QueueStats m_queue;  // the counters
   std::thread m_thread;

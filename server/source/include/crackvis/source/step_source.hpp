@@ -81,9 +81,17 @@ class StepSource {
 Result<std::unique_ptr<StepSource>> openRemoteSource(const dataservice::DataClient& client,
                                                      const std::string& file,
                                                      const dem::SizeLimits& limits = {});
+// How a local file is first opened: in this process, or with its structure
+// read in a child first (DemFileReader::openGuarded), for the one-shot
+// readers (snapshot, movie, crackvis-render --snapshot) that a libhdf5 fault
+// on a corrupt file would otherwise kill. Sessions that run beside other
+// threads' HDF5 work open in process.
+enum class LocalOpen { kInProcess, kStructureInChild };
+
 // `path` on this machine.
 Result<std::unique_ptr<StepSource>> openLocalSource(const std::string& path,
-                                                    const dem::SizeLimits& limits = {});
+                                                    const dem::SizeLimits& limits = {},
+                                                    LocalOpen how = LocalOpen::kInProcess);
 
 // OUT_OF_RANGE "FILE: step K out of range (the file has steps 0..N-1)": the
 // one step check of every reader.

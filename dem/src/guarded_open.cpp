@@ -1,0 +1,51 @@
+// DemFileReader::openGuarded: the structure read in a child first.
+#include <charconv>
+
+#include <fmt/format.h>
+
+#include <crackvis/common/child_process.hpp>
+#include <crackvis/dem/dem_file.hpp>
+
+namespace crackvis::dem {
+namespace {
+
+// The child's answer: "<code> <message>".
+std::string encode(const Status& status) {
+  return fmt::format("{} {}", static_cast<int>(status.code()), status.message());
+}
+
+Status decode(const std::string& answer, const std::string& path) {
+  int code = -1;
+  const auto [end, error] = std::from_chars(answer.data(), answer.data() + answer.size(), code);
+  if (error != std::errc() || code < 0 || code > static_cast<int>(StatusCode::kDeadlineExceeded) ||
+      end == answer.data() + answer.size() || *end != ' ') {
+    return internalError(fmt::format("{}: the structure check sent an unreadable answer", path));
+  }
+  return {static_cast<StatusCode>(code),
+          answer.substr(static_cast<std::size_t>(end - answer.data()) + 1)};
+}
+
+}  // namespace
+
+Result<DemFileReader> DemFileReader::openGuarded(const std::string& path,
+                                                 std::chrono::milliseconds limit) {
+  auto outcome = runInChild([&] { return encode(open(path).status()); }, limit);
+  if (!outcome) {
+    return outcome.status();
+  }
+  if (outcome->timedOut) {
+    return failedPrecondition(fmt::format(
+        "{}: libhdf5 did not finish reading the file's structure in {} s (the file may be corrupt)",
+        path, std::chrono::duration_cast<std::chrono::seconds>(limit).count()));
+  }
+  if (!outcome->finished()) {
+    return failedPrecondition(
+        fmt::format("{}: libhdf5 faulted reading the file's structure ({}); the file is probably "
+                    "corrupt",
+                    path, describeExit(outcome->waitStatus)));
+  }
+  CRACKVIS_RETURN_IF_ERROR(decode(outcome->output, path));
+  return open(path);
+}
+
+}  // namespace crackvis::dem
