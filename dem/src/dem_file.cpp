@@ -273,6 +273,15 @@ Status DemFileReader::readProvenance() {
   if (auto files = h5::readStringAttribute(root, "source_files")) {
     m_info.sourceFiles = splitLines(*files);
   }
+  if (H5Aexists(root, kTimeUnitAttribute) > 0) {
+    auto unit = h5::readStringAttribute(root, kTimeUnitAttribute);
+    if (!unit || (*unit != "s" && *unit != kTimeInIterations)) {
+      return fail(failedPrecondition(fmt::format(
+          "root attribute '{}' is {}, expected 's' or '{}'", kTimeUnitAttribute,
+          unit ? "'" + echoed(*unit) + "'" : std::string("not a string"), kTimeInIterations)));
+    }
+    m_info.timeUnit = *unit;
+  }
   return Status::ok();
 }
 
@@ -634,6 +643,9 @@ Status DemFileWriter::writeTimeIndependent(const DemMetadata& metadata) {
   if (!metadata.sourceFiles.empty()) {
     CRACKVIS_RETURN_IF_ERROR(
         h5::writeStringAttribute(root, "source_files", joinLines(metadata.sourceFiles)));
+  }
+  if (metadata.timeUnit != "s") {
+    CRACKVIS_RETURN_IF_ERROR(h5::writeStringAttribute(root, kTimeUnitAttribute, metadata.timeUnit));
   }
 
   const auto n = static_cast<std::uint64_t>(lattice.particleCount());

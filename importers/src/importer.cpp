@@ -40,6 +40,11 @@ class SeriesConverter {
   const dem::Lattice& lattice() const { return m_lattice; }
   std::size_t reappeared() const { return m_reappeared; }
   bool timesFromSource() const { return m_timesFromSource; }
+  // Whether `step`'s time comes from the source or the table (else it is
+  // the code's step number, times --timestep when given).
+  bool timeKnown(const SourceStep& step) const {
+    return step.timeKnown || timeFromTable(step.sourceStep).has_value();
+  }
 
  private:
   Status placeParticles(const SourceStep& step, std::vector<dem::ParticleIndex>& rowIndex) const;
@@ -399,10 +404,6 @@ Status writeSeries(StepSource& source, SeriesConverter& converter, SourceStep fi
                    const std::string& path, const dem::DemMetadata& metadata,
                    const ImportOptions& options, ImportSummary& summary);
 
-}  // namespace
-
-namespace {
-
 // How many imported steps the --scalars table has a row for: none is a
 // table of another run (or another step numbering) and is refused; some is
 // refused unless asked for, since those steps would lack the scalars and,
@@ -530,6 +531,11 @@ Result<ImportSummary> importSeries(StepSource& source, const ImportOptions& opti
   }
   metadata.plannedSteps = static_cast<int>(summary.selected.size());
   metadata.storage = options.storage;
+  // Without a time from the code, the table or --timestep, `time` is the
+  // code's step number: the file says so, and readers label it iterations.
+  if (!converter.timeKnown(*first) && !(options.timestep > 0.0)) {
+    metadata.timeUnit = dem::kTimeInIterations;
+  }
   // Written beside the output and renamed at the end, so a failed import
   // leaves no half file and an existing output as it was.
   const std::string partial = options.output + ".importing";
@@ -614,8 +620,8 @@ std::string formatSummary(const ImportSummary& s, const ImportOptions& options) 
           ? "as the source wrote it"
           : (options.timestep > 0.0
                  ? fmt::format("the code's step number x {} s (--timestep)", options.timestep)
-                 : std::string("the code's step number (the source writes no time; give "
-                               "--timestep to convert)")));
+                 : std::string("the code's step number, labelled as iterations (the source "
+                               "writes no time; give --timestep to convert to seconds)")));
   out +=
       fmt::format("step scalars  {}{}\n", fmt::join(s.scalarNames, ", "),
                   options.scalarsTable.empty()

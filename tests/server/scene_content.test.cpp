@@ -295,6 +295,10 @@ TEST_CASE("annotations name the step, its time and the crack method", "[scene][l
   input.stepCount = 200;
   input.time = 1.25e-3;
   CHECK(scene::stepAnnotation(input) == "step 120 of 0..199   t = 0.00125 s");
+  // A file whose code wrote no time (time_unit "iteration"): no seconds.
+  input.time = 18950;
+  input.timeInIterations = true;
+  CHECK(scene::stepAnnotation(input) == "step 120 of 0..199   iteration 18950");
   pipeline::CracksDescription cracks;
   CHECK(scene::methodAnnotation(cracks) == "cracks: local Voronoi, validated (tolerance 0.1)");
   cracks.method = cracks::Method::kCellCentre;

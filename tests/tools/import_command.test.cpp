@@ -49,6 +49,30 @@ TEST_CASE("crackvis import reads each code's run in one command", "[cli][import]
   }
 }
 
+TEST_CASE("A run imported without any time shows iterations, not seconds", "[cli][import]") {
+  // Yade's VTKRecorder writes no time: without --scalars (a time column) or
+  // --timestep, `time` holds the iteration number, and info said
+  // "time 0 .. 4000 s" (a Yade user read "t = 1.895e+04 s").
+  TempDir dir;
+  const std::string bare = dir.file("bare.h5");
+  auto run = runProcess({kCli, "import", "yade", kData + "/yade/notched_bar", "-q", "-o", bare});
+  REQUIRE(run.exitCode == 0);
+  CHECK_THAT(run.out, Catch::Contains("labelled as iterations"));
+  auto info = runProcess({kCli, "info", bare});
+  REQUIRE(info.exitCode == 0);
+  CHECK_THAT(info.out, Catch::Contains("(iterations 0 .. 4000; the code wrote no time)"));
+  auto json = runProcess({kCli, "info", bare, "--json"});
+  CHECK(nlohmann::json::parse(json.out)["time_unit"] == "iteration");
+  // With --timestep the times are seconds again.
+  const std::string timed = dir.file("timed.h5");
+  REQUIRE(runProcess({kCli, "import", "yade", kData + "/yade/notched_bar", "--timestep", "1e-7",
+                      "-q", "-o", timed})
+              .exitCode == 0);
+  auto seconds = runProcess({kCli, "info", timed});
+  CHECK_THAT(seconds.out, Catch::Contains("(time 0 .. 0.0004 s)"));
+  CHECK(nlohmann::json::parse(runProcess({kCli, "info", timed, "--json"}).out)["time_unit"] == "s");
+}
+
 TEST_CASE("crackvis import --dry-run writes nothing", "[cli][import]") {
   TempDir dir;
   auto run = runProcess(

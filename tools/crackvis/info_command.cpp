@@ -176,6 +176,7 @@ nlohmann::json toJson(const FileSummary& summary, bool perStep) {
       {"extras", extrasJson(info)},
       {"dimension", info.dimension},
       {"units", info.units},
+      {"time_unit", info.timeUnit},
       {"source", info.source},
       {"particles", info.particleCount},
       {"bonds", info.bondCount},
@@ -227,8 +228,13 @@ void printText(const FileSummary& summary, bool perStep) {
   if (summary.rows.empty()) {
     fmt::print("steps         0\n");
   } else {
-    fmt::print("steps         {} (time {:.6g} .. {:.6g} s)\n", info.steps.size(),
-               info.steps.front().time, info.steps.back().time);
+    if (info.timeUnit == dem::kTimeInIterations) {
+      fmt::print("steps         {} (iterations {:.12g} .. {:.12g}; the code wrote no time)\n",
+                 info.steps.size(), info.steps.front().time, info.steps.back().time);
+    } else {
+      fmt::print("steps         {} (time {:.6g} .. {:.6g} s)\n", info.steps.size(),
+                 info.steps.front().time, info.steps.back().time);
+    }
     const StepRow& first = summary.rows.front();
     const StepRow& last = summary.rows.back();
     fmt::print("broken bonds  first step: {} ({:.2f} %), last step: {} ({:.2f} %){}\n",
@@ -268,8 +274,9 @@ void printText(const FileSummary& summary, bool perStep) {
     fmt::print("source        {}\n", info.source);
   }
   if (perStep) {
-    fmt::print("\n{:>8} {:>14} {:>10} {:>9} {:>8}", "step", "time [s]", "broken", "broken %",
-               "new");
+    fmt::print("\n{:>8} {:>14} {:>10} {:>9} {:>8}", "step",
+               info.timeUnit == dem::kTimeInIterations ? "iteration" : "time [s]", "broken",
+               "broken %", "new");
     for (const std::string& name : info.scalarNames) {
       fmt::print(" {:>14}", name.substr(0, 14));
     }

@@ -155,6 +155,12 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   remote.m_client = client;
   remote.m_file = file;
   remote.m_dimension = *dimension;
+  if (const GroupInfo* root = description->findGroup("/")) {
+    if (const AttributeInfo* unit = root->findAttribute(dem::kTimeUnitAttribute)) {
+      const auto* text = std::get_if<std::string>(&unit->value);
+      remote.m_timeInIterations = text != nullptr && *text == dem::kTimeInIterations;
+    }
+  }
   // N and M from the datasets that carry them, as the local reader does.
   dem::LayoutSizes sizes;
   CRACKVIS_RETURN_IF_ERROR(

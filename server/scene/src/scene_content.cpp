@@ -449,6 +449,10 @@ std::string stepAnnotation(const SceneInput& input) {
   if (input.stepIndex < 0) {
     return {};
   }
+  if (input.timeInIterations) {
+    return fmt::format("step {} of 0..{}   iteration {:.12g}", input.stepIndex,
+                       std::max(0, input.stepCount - 1), input.time);
+  }
   return fmt::format("step {} of 0..{}   t = {:.4g} s", input.stepIndex,
                      std::max(0, input.stepCount - 1), input.time);
 }

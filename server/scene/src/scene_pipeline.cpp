@@ -42,6 +42,7 @@ class GuardedSource final : public source::StepSource {
   const dem::Lattice& lattice() const override { return m_inner->lattice(); }
   int stepCount() const override { return m_inner->stepCount(); }
   const std::vector<std::int32_t>& breakSteps() const override { return m_inner->breakSteps(); }
+  bool timeInIterations() const override { return m_inner->timeInIterations(); }
   Status setExtraArrays(const source::ExtraArrays& extras) override {
     return guardedCall(
         fmt::format("{}: reading the extra arrays", file()),
@@ -448,7 +449,8 @@ SceneInput ScenePipeline::input() const {
           m_state.series,
           m_state.current->index,
           stepCount(),
-          m_state.current->time};
+          m_state.current->time,
+          source().timeInIterations()};
 }
 
 }  // namespace crackvis::scene

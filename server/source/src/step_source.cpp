@@ -76,6 +76,7 @@ class RemoteSource final : public StepSource {
   const std::string& file() const override { return m_remote.file(); }
   const dem::Lattice& lattice() const override { return m_lattice; }
   int stepCount() const override { return m_remote.stepCount(); }
+  bool timeInIterations() const override { return m_remote.timeInIterations(); }
   const std::vector<std::int32_t>& breakSteps() const override { return m_breakSteps; }
 
   Status setExtraArrays(const ExtraArrays& extras) override {
@@ -157,6 +158,9 @@ class LocalSource final : public StepSource {
   const std::string& file() const override { return m_path; }
   const dem::Lattice& lattice() const override { return m_lattice; }
   int stepCount() const override { return m_reader.stepCount(); }
+  bool timeInIterations() const override {
+    return m_reader.info().timeUnit == dem::kTimeInIterations;
+  }
   const std::vector<std::int32_t>& breakSteps() const override { return m_breakSteps; }
 
   Status setExtraArrays(const ExtraArrays& extras) override {

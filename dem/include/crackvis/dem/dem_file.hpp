@@ -28,6 +28,11 @@ inline constexpr int kFormatVersion = 1;
 inline constexpr int kFormatMinorVersion = 1;
 // The attribute of /steps that records how many steps a writer planned.
 inline constexpr const char* kPlannedStepsAttribute = "planned";
+// The root attribute (v1.1, optional) naming the unit of the steps' `time`:
+// absent or "s" for seconds; kTimeInIterations when a code wrote no time and
+// none was given, so `time` holds the code's step (iteration) number.
+inline constexpr const char* kTimeUnitAttribute = "time_unit";
+inline constexpr const char* kTimeInIterations = "iteration";
 
 // "/steps/000042": the group that holds step 42.
 std::string stepGroupPath(int step);
@@ -42,6 +47,7 @@ struct DemMetadata {
   std::string sourceVersion;             // the code's version as it reported it
   std::vector<std::string> sourceFiles;  // the input files, as given
   h5::Storage storage;                   // per-step datasets: contiguous or compressed
+  std::string timeUnit = "s";            // "s" or kTimeInIterations
 };
 
 // Metadata naming only what produced the file.
@@ -84,6 +90,7 @@ struct DemFileInfo {
   std::string sourceCode;          // v1.1 provenance; empty when not recorded
   std::string sourceVersion;
   std::vector<std::string> sourceFiles;
+  std::string timeUnit = "s";            // "s", or kTimeInIterations: `time` is the code's step
   bool hasStrength = false;              // /bonds/strength present (required before v1.1)
   std::vector<std::string> scalarNames;  // step scalars of any step, in first-seen order
   std::vector<ExtraInfo> extras;         // constant ones, then per-step ones (of step 0)

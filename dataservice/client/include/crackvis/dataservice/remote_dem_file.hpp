@@ -73,6 +73,9 @@ class RemoteDemFile {
   const std::string& file() const { return m_file; }
   const FileDescription& description() const { return *m_description; }
   int dimension() const { return m_dimension; }
+  // The root attribute time_unit is "iteration": steps' times are the code's
+  // step numbers (it wrote no time).
+  bool timeInIterations() const { return m_timeInIterations; }
   std::int64_t particleCount() const { return m_particles; }
   std::int64_t bondCount() const { return m_bonds; }
   int stepCount() const { return static_cast<int>(m_description->steps.size()); }
@@ -112,6 +115,7 @@ class RemoteDemFile {
   std::string m_file;
   std::shared_ptr<const FileDescription> m_description;
   int m_dimension = 0;
+  bool m_timeInIterations = false;
   std::int64_t m_particles = 0;
   std::int64_t m_bonds = 0;
   std::shared_ptr<const std::vector<dem::Bond>> m_bondList;

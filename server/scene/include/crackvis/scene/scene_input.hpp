@@ -43,6 +43,7 @@ struct SceneInput {
   int stepIndex = -1;
   int stepCount = 0;
   double time = 0.0;
+  bool timeInIterations = false;  // `time` is the code's step number (no time was written)
 };
 
 }  // namespace crackvis::scene

@@ -73,6 +73,9 @@ class StepSource {
   virtual const std::vector<std::int32_t>& breakSteps() const = 0;
   // OUT_OF_RANGE naming the file's steps for a step outside them.
   virtual Result<SourceStep> read(int step) = 0;
+  // Whether steps' times are the code's step numbers (the file's
+  // time_unit is "iteration": the code wrote no time).
+  virtual bool timeInIterations() const { return false; }
 };
 
 // `file` relative to the data service's root. A file declaring more
