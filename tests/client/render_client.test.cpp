@@ -22,6 +22,7 @@
 
 #include "dataservice/service_fixture.hpp"
 #include "server/render_fixture.hpp"
+#include "support/full_disk.hpp"
 #include "support/network.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
@@ -392,6 +393,25 @@ TEST_CASE("a saved view opens again as it was: file, step, camera, another file 
     auto png = window.client().snapshotPng();
     REQUIRE(png.isOk());
     saved = QImage::fromData(*png, "PNG");
+    // On a full disk the save fails with a message and an earlier view of
+    // that name is kept as it was (the client writes through QSaveFile).
+    {
+      testing::FullDisk disk(64 * 1024, 0);
+      const std::string earlier = disk.file("view.xml");
+      std::ofstream(earlier) << "an earlier view";
+      disk.fill();
+      const auto failed = [&] {
+        std::optional<testing::FileSizeLimit> limit;  // without a mount: no write may grow a file
+        if (!disk.mounted()) {
+          limit.emplace(0);
+        }
+        return !window.saveView(QString::fromStdString(earlier));
+      }();
+      CHECK(failed);
+      CHECK(window.lastMessage().contains(QStringLiteral("cannot write")));
+      std::ifstream in(earlier);
+      CHECK(std::string(std::istreambuf_iterator<char>(in), {}) == "an earlier view");
+    }
     REQUIRE(window.saveView(viewPath));
     CHECK(window.messages().contains(QStringLiteral("saved the view to")));
     QFile file(viewPath);

@@ -5,8 +5,6 @@
 // where this process may not mount one, the writers run under a file size
 // limit (RLIMIT_FSIZE with SIGXFSZ ignored), which fails their writes the
 // same way (EFBIG instead of ENOSPC).
-#include <cerrno>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -14,14 +12,13 @@
 #include <vector>
 
 #include <catch2/catch.hpp>
-#include <fcntl.h>
 #include <fmt/format.h>
-#include <sys/mount.h>
-#include <unistd.h>
 
+#include "support/full_disk.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
 
+using crackvis::testing::FullDisk;
 using crackvis::testing::runProcess;
 using crackvis::testing::TempDir;
 
@@ -34,62 +31,6 @@ std::string slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
-
-// A tmpfs of `size` bytes mounted on a fresh folder and filled until
-// `slack` bytes are left, or (when mounting is not allowed) a plain folder
-// whose writers run under a file size limit of `slack` bytes.
-class FullDisk {
- public:
-  FullDisk(std::size_t size, std::size_t slack) : m_slack(slack) {
-    std::filesystem::create_directories(m_dir.path() / "disk");
-    m_mounted = ::mount("tmpfs", path().c_str(), "tmpfs", MS_NOSUID | MS_NODEV,
-                        fmt::format("size={}", size).c_str()) == 0;
-  }
-  ~FullDisk() {
-    if (m_mounted) {
-      ::umount2(path().c_str(), MNT_DETACH);
-    }
-  }
-  std::string path() const { return (m_dir.path() / "disk").string(); }
-  std::string file(const std::string& name) const { return path() + "/" + name; }
-  bool mounted() const { return m_mounted; }
-
-  // Fills the disk, keeping `slack` bytes free; call after placing the
-  // files that must survive.
-  void fill() const {
-    if (!m_mounted) {
-      return;
-    }
-    const std::string slack = file("slack");
-    std::ofstream(slack, std::ios::binary) << std::string(m_slack, 's');
-    const int fd = ::open(file("filler").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
-    REQUIRE(fd >= 0);
-    const std::string block(4096, 'f');
-    while (::write(fd, block.data(), block.size()) > 0) {
-    }
-    CHECK(errno == ENOSPC);
-    ::close(fd);
-    std::filesystem::remove(slack);
-  }
-
-  // `argv` run as a writer on this disk.
-  std::vector<std::string> command(const std::vector<std::string>& argv) const {
-    if (m_mounted) {
-      return argv;
-    }
-    std::vector<std::string> limited{"/bin/bash", "-c",
-                                     fmt::format("trap '' XFSZ; ulimit -f {}; exec \"$@\"",
-                                                 std::max<std::size_t>(1, m_slack / 1024)),
-                                     "writer"};
-    limited.insert(limited.end(), argv.begin(), argv.end());
-    return limited;
-  }
-
- private:
-  TempDir m_dir;
-  std::size_t m_slack;
-  bool m_mounted = false;
-};
 
 }  // namespace
 
@@ -140,7 +81,7 @@ TEST_CASE("On a full disk every writer fails with one line and keeps the existin
   for (const Writer& writer : writers) {
     DYNAMIC_SECTION(writer.argv[1] << " -o " << writer.output) {
       const std::string before = slurp(disk.file(writer.output));
-      auto run = runProcess(disk.command(writer.argv));
+      auto run = runProcess(disk.limitedCommand(writer.argv));
       INFO(run.err);
       CHECK(run.exitCode == 1);
       CHECK(crackvis::testing::lines(run.err).size() == 1);

@@ -15,7 +15,6 @@
 #include <QPlainTextEdit>
 #include <QProgressDialog>
 #include <QPushButton>
-#include <QSaveFile>
 #include <QScrollArea>
 #include <QSettings>
 #include <QSlider>
@@ -29,6 +28,7 @@
 #include <algorithm>
 
 #include <crackvis/client/main_window.hpp>
+#include <crackvis/common/pending_file.hpp>
 
 namespace crackvis::client {
 
@@ -432,12 +432,11 @@ bool MainWindow::saveView(const QString& path) {
   }
   pipeline::PipelineDescription view = *shown;
   view.clientLayout = layoutOf(*this);
-  // QSaveFile writes beside the name and renames when committed: a full
-  // disk leaves an existing view as it was.
-  QSaveFile out(path);
-  const QByteArray bytes = QByteArray::fromStdString(pipeline::toXml(view));
-  if (!out.open(QIODevice::WriteOnly) || out.write(bytes) != bytes.size() || !out.commit()) {
-    report(tr("cannot write %1: %2").arg(path, out.errorString()));
+  // Written beside the name and renamed over it when complete: a full disk
+  // leaves an existing view as it was. (Qt 6.4's QSaveFile::commit returned
+  // true after a write had failed with ENOSPC, leaving an empty file.)
+  if (const Status written = replaceFile(path.toStdString(), pipeline::toXml(view)); !written) {
+    report(tr("cannot write %1: %2").arg(path, QString::fromStdString(written.message())));
     return false;
   }
   report(tr("saved the view to %1").arg(path));
@@ -531,9 +530,10 @@ void MainWindow::saveScreenshot(const QString& given, QSize size) {
     report(QString::fromStdString(png.status().message()));
     return;
   }
-  QSaveFile out(path);
-  if (!out.open(QIODevice::WriteOnly) || out.write(*png) != png->size() || !out.commit()) {
-    report(tr("cannot write %1: %2").arg(path, out.errorString()));
+  if (const Status written =
+          replaceFile(path.toStdString(), std::string_view(png->constData(), png->size()));
+      !written) {
+    report(tr("cannot write %1: %2").arg(path, QString::fromStdString(written.message())));
     return;
   }
   report(tr("wrote %1").arg(path));
