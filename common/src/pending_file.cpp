@@ -70,7 +70,8 @@ Status replaceFile(const std::string& path, std::string_view bytes) {
   PendingFile output(path);
   std::ofstream out(output.path(), std::ios::binary | std::ios::trunc);
   if (!out) {
-    return failedPrecondition(fmt::format("{}: cannot open for writing", path));
+    return failedPrecondition(
+        fmt::format("{}: cannot open for writing ({})", path, std::strerror(errno)));
   }
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   out.close();

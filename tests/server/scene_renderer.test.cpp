@@ -515,16 +515,15 @@ TEST_CASE("hidden particles are culled without changing the picture", "[render][
   CHECK(differing < kWidth * kHeight / 500);
 }
 
-TEST_CASE("VTK's errors become the call's error, not a line on stderr", "[render]") {
+TEST_CASE("A PNG that cannot be written is the call's error, naming the file and why", "[render]") {
+  // The PNG is encoded in memory (VTK's writer never touches the disk, so
+  // libpng prints nothing) and written through a partial file.
   render::Image image{16, 16, std::vector<std::uint8_t>(16 * 16 * 3, 128)};
   const Status status = render::writePng(image, "/nonexistent-folder/x.png");
   CHECK(status.code() == StatusCode::kFailedPrecondition);
   INFO(status.message());
-  // The writer's own words, with its class and without its address.
-  CHECK_THAT(status.message(),
-             Catch::StartsWith("/nonexistent-folder/x.png: cannot write the PNG (vtkPNGWriter: "
-                               "VTK: vtkPNGWriter: "));
-  CHECK_THAT(status.message(), !Catch::Contains("0x"));
+  CHECK(status.message() ==
+        "/nonexistent-folder/x.png: cannot open for writing (No such file or directory)");
   // An error is the call's own: the next call succeeds.
   testing::TempDir dir;
   CHECK(render::writePng(image, dir.file("x.png")));

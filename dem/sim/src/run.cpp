@@ -12,6 +12,19 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// A run that stops part way (a full disk) keeps its complete steps in the
+// partial file, readable, and says where; the output's name still holds
+// what it held before.
+Status keptSteps(PendingFile& output, int steps, const Status& failure) {
+  const Status named = output.named(failure);
+  if (steps == 0) {
+    return named;
+  }
+  output.keep();
+  return {named.code(), fmt::format("{} (the {} complete steps are in {})", named.message(), steps,
+                                    output.path())};
+}
+
 }  // namespace
 
 Result<RunSummary> runToFile(SimulationSetup setup, const RunOptions& options) {
@@ -44,8 +57,11 @@ Result<RunSummary> runToFile(SimulationSetup setup, const RunOptions& options) {
       simulator->advance(options.stepsPerSave);
     }
     const auto writeStart = std::chrono::steady_clock::now();
-    CRACKVIS_RETURN_IF_ERROR(output.named(
-        writer->appendStep(simulator->snapshot(options.writeVelocities, options.writeBondForce))));
+    if (Status written = writer->appendStep(
+            simulator->snapshot(options.writeVelocities, options.writeBondForce));
+        !written) {
+      return keptSteps(output, writer->stepCount(), written);
+    }
     summary.writeSeconds += secondsSince(writeStart);
     summary.brokenPerSavedStep.push_back(simulator->brokenBondCount());
     if (options.onSaved) {

@@ -1,6 +1,11 @@
+#include <fstream>
+#include <iterator>
+#include <string>
+
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
+#include "support/full_disk.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/dem/dem_file.hpp>
@@ -96,44 +101,32 @@ namespace {
 // A tmpfs of `size` mounted on a fresh directory for the test's lifetime.
 // Mounting needs root, which the test environment has; a failure to mount
 // fails the test rather than skipping it.
-class SmallFileSystem {
- public:
-  explicit SmallFileSystem(const std::string& size) {
-    auto mounted =
-        runProcess({"mount", "-t", "tmpfs", "-o", "size=" + size, "tmpfs", m_dir.path().string()});
-    INFO("mount: " << mounted.err);
-    REQUIRE(mounted.exitCode == 0);
-    m_mounted = true;
-  }
-  SmallFileSystem(const SmallFileSystem&) = delete;
-  SmallFileSystem& operator=(const SmallFileSystem&) = delete;
-  ~SmallFileSystem() {
-    if (m_mounted) {
-      runProcess({"umount", m_dir.path().string()});
-    }
-  }
-  std::string file(const std::string& name) const { return m_dir.file(name); }
-
- private:
-  TempDir m_dir;
-  bool m_mounted = false;
-};
 
 }  // namespace
 
-TEST_CASE("crackvis sim on a full disk exits 1 with one line and leaves its steps readable",
+TEST_CASE("crackvis sim on a full disk exits 1 with one line, keeps the old file and its steps",
           "[sim][cli]") {
-  SmallFileSystem disk("300k");
-  const std::string path = disk.file("plate.h5");
+  testing::FullDisk disk(300 * 1024, 0);  // small, not filled: the run fills it
+  REQUIRE(disk.mounted());
+  const std::string output = disk.file("plate.h5");
+  std::ofstream(output) << "an earlier run";
   auto run = runProcess({kCli, "sim", "plate2d", "--scale", "0.2", "--steps", "400", "--quiet",
-                         "--threads", "1", "-o", path});
+                         "--threads", "1", "-o", output});
   INFO("stderr: " << run.err);
   CHECK(run.exitCode == 1);
   const auto errors = testing::lines(run.err);
   REQUIRE(errors.size() == 1);
-  CHECK_THAT(errors[0], Catch::StartsWith("crackvis sim: " + path + ": step ") &&
-                            Catch::Contains("not written"));
+  const std::string path = output + ".partial";
+  CHECK_THAT(errors[0], Catch::StartsWith("crackvis sim: " + output + ": step ") &&
+                            Catch::Contains("not written") &&
+                            Catch::EndsWith("complete steps are in " + path + ")"));
   CHECK_THAT(run.err, !Catch::Contains("HDF5-DIAG"));
+  {
+    // The output's name still holds the earlier run (issue 29: it held the
+    // partial one).
+    std::ifstream earlier(output);
+    CHECK(std::string(std::istreambuf_iterator<char>(earlier), {}) == "an earlier run");
+  }
 
   // Every step the count promises is there and valid.
   auto reader = dem::DemFileReader::open(path);
