@@ -637,11 +637,12 @@ Status Hdf5Workers::call(std::uint32_t kind, Lane lane, const std::string& user,
   if (worker->pid <= 0) {
     return unavailable("no HDF5 worker is running (they could not be restarted)");
   }
-  FrameHeader header;
-  Wait waited = Wait::kClosed;
-  if (sent) {
-    waited = receiveAll(worker->socket, &header, sizeof header, deadline, isCancelled);
+  if (!sent) {  // neither worker took it: nothing about the file is known
+    return unavailable(fmt::format(
+        "{}: two HDF5 workers in a row died before taking the request; retry", echoed(file)));
   }
+  FrameHeader header;
+  Wait waited = receiveAll(worker->socket, &header, sizeof header, deadline, isCancelled);
   if (waited == Wait::kReady && header.kind == kOkShared) {
     // A piece, in the worker's buffer: it wrote all of it before answering.
     if (answer.bytes != nullptr && header.length == 0 && answer.size <= kMaxChunkBytes) {
