@@ -1211,3 +1211,57 @@ TEST_CASE(
   CHECK(json.at("targets").at("interactive_spheres_at_most_2x_reduction").is_boolean());
   CHECK(json.at("load_before").size() == 3);
 }
+
+TEST_CASE("a session at the largest view stays within its memory bound, and closing frees it",
+          "[render][service][integration]") {
+  // issue 29 point 5: 8 sessions at 3840x2160 took 3.2 GiB. What one session
+  // at the largest view (limits.max_width x max_height) costs this process,
+  // the render server, is bounded here; docs/security.md states the bound.
+  auto services = startServices();
+  auto stub = connect(*services.render);
+  auto snapshotOf = [&](const std::string& id, int width, int height) {
+    grpc::ClientContext context;
+    v1::SnapshotRequest request;
+    request.set_session_id(id);
+    request.set_width(width);
+    request.set_height(height);
+    v1::SnapshotResponse png;
+    return stub->Snapshot(&context, request, &png).ok();
+  };
+  auto closeOf = [&](const std::string& id) {
+    grpc::ClientContext context;
+    v1::CloseSessionRequest close;
+    close.set_session_id(id);
+    v1::CloseSessionResponse closed;
+    return stub->CloseSession(&context, close, &closed).ok();
+  };
+  // Once first, so that libraries, caches and the file's description are
+  // not counted.
+  auto view = crackView();
+  view.view.width = 3840;
+  view.view.height = 2160;
+  const std::string warm = openSession(*stub, view);
+  REQUIRE(snapshotOf(warm, 3840, 2160));
+  REQUIRE(closeOf(warm));
+  const std::uint64_t before = residentBytes();
+  std::vector<std::string> ids;
+  for (int i = 0; i < 2; ++i) {
+    ids.push_back(openSession(*stub, view));
+    REQUIRE(snapshotOf(ids.back(), 3840, 2160));
+  }
+  const std::uint64_t loaded = residentBytes();
+  const double perSessionMiB =
+      static_cast<double>(loaded - std::min(loaded, before)) / 2 / (1 << 20);
+  for (const std::string& id : ids) {
+    CHECK(closeOf(id));
+  }
+  REQUIRE(waitUntil([&] { return services.render->sessionCount() == 0; }, 10.0));
+  const double leftMiB =
+      static_cast<double>(residentBytes() - std::min(residentBytes(), before)) / (1 << 20);
+  std::printf(
+      "a session of cuboid A at 3840x2160: %.0f MiB resident; %.0f MiB left after closing "
+      "two\n",
+      perSessionMiB, leftMiB);
+  CHECK(perSessionMiB < 512.0);
+  CHECK(leftMiB < 256.0);
+}
