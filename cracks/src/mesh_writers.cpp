@@ -8,6 +8,8 @@
 #include <crackvis/cracks/lattice_cells.hpp>
 #include <crackvis/cracks/mesh_writers.hpp>
 
+// Every file is written beside its name and renamed over it when complete
+// (replaceFile): a full disk leaves an existing file as it was.
 namespace crackvis::cracks {
 namespace {
 
@@ -81,12 +83,6 @@ std::vector<double> flatPoints(const std::vector<Vec3>& points) {
 
 std::vector<std::int32_t> endOffsets(const PrimitiveList& list) {
   return {list.offsets.begin() + 1, list.offsets.end()};
-}
-
-// Written beside its name and renamed over it when complete: a full disk
-// leaves an existing file as it was.
-Status writeFile(const std::string& path, const std::string& text) {
-  return replaceFile(path, text);
 }
 
 std::string finish(const std::string& type, const std::string& piece, const AppendedData& data) {
@@ -215,7 +211,7 @@ Status writeVtkXml(const CrackMesh& mesh, const std::string& path) {
         "UnstructuredGrid holds: name the output .vtu",
         path));
   }
-  return writeFile(path, endsWith(path, ".vtu") ? unstructuredGridXml(mesh) : polyDataXml(mesh));
+  return replaceFile(path, endsWith(path, ".vtu") ? unstructuredGridXml(mesh) : polyDataXml(mesh));
 }
 
 Status writeStl(const CrackMesh& mesh, const std::string& path) {
@@ -243,7 +239,7 @@ Status writeStl(const CrackMesh& mesh, const std::string& path) {
   const std::string title = "crackvis crack surface";
   header.replace(0, title.size(), title);
   header.append(reinterpret_cast<const char*>(&triangles), sizeof triangles);
-  return writeFile(path, header + body);
+  return replaceFile(path, header + body);
 }
 
 Status writeObj(const CrackMesh& mesh, const std::string& path) {
@@ -268,7 +264,7 @@ Status writeObj(const CrackMesh& mesh, const std::string& path) {
     }
     text += "\n";
   });
-  return writeFile(path, text);
+  return replaceFile(path, text);
 }
 
 Status writeMesh(const CrackMesh& mesh, const std::string& path) {
@@ -297,7 +293,7 @@ Status writePvd(const std::vector<CollectionEntry>& entries, const std::string& 
                         entries[i].time, part, entries[i].file);
   }
   text += "  </Collection>\n</VTKFile>\n";
-  return writeFile(path, text);
+  return replaceFile(path, text);
 }
 
 }  // namespace crackvis::cracks

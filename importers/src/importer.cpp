@@ -438,13 +438,13 @@ Status matchScalarRows(StepSource& source, const ScalarTable& table, const Impor
         "{}: rows for {} of the {} imported steps (none for code steps {}); those steps would get "
         "no scalars{}: pass --partial-scalars to import anyway",
         path, summary.scalarRowsMatched, summary.selected.size(), missingText,
-        table.fittedTime(0) ? " and a time from a straight line through the table's times" : ""));
+        table.fitsTime() ? " and a time from a straight line through the table's times" : ""));
   }
   if (!missing.empty()) {
     summary.notes.push_back(fmt::format(
         "{} has no row for {} imported steps (code steps {}): they have no table scalars{}", path,
         missing.size(), missingText,
-        table.fittedTime(0) ? ", and their time lies on a straight line through the table's" : ""));
+        table.fitsTime() ? ", and their time lies on a straight line through the table's" : ""));
   }
   if (!table.textColumns().empty()) {
     summary.notes.push_back(fmt::format("{}: skipped the columns that hold text: {}", path,

@@ -31,6 +31,8 @@ class ScalarTable {
   std::size_t rowCount() const { return m_rows.size(); }
   std::int64_t firstStep() const { return m_rows.empty() ? 0 : m_rows.begin()->first; }
   std::int64_t lastStep() const { return m_rows.empty() ? 0 : m_rows.rbegin()->first; }
+  // Whether fittedTime() can answer: a time column with two rows or more.
+  bool fitsTime() const { return fittedTime(0).has_value(); }
   // The time of `sourceStep` on the straight line through the table's
   // (step, time) rows (least squares): for a step the table has no row for,
   // in the table's unit. None without a time column or two rows of it.

@@ -409,8 +409,7 @@ TEST_CASE("a saved view opens again as it was: file, step, camera, another file 
       }();
       CHECK(failed);
       CHECK(window.lastMessage().contains(QStringLiteral("cannot write")));
-      std::ifstream in(earlier);
-      CHECK(std::string(std::istreambuf_iterator<char>(in), {}) == "an earlier view");
+      CHECK(testing::fileText(earlier) == "an earlier view");
     }
     REQUIRE(window.saveView(viewPath));
     CHECK(window.messages().contains(QStringLiteral("saved the view to")));

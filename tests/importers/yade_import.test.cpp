@@ -21,6 +21,7 @@
 #include <vtkXMLUnstructuredGridReader.h>
 
 #include "import_helpers.hpp"
+#include "support/process.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/importers/step_source.hpp>
 
@@ -157,11 +158,7 @@ TEST_CASE("damaged Yade records are refused naming the file", "[importers][yade]
   SECTION("a header declaring more points than the file holds") {
     // VTK's reader allocates by the header's counts before reading data.
     const std::string path = dir.file("spheres.2000.vtu");
-    std::string text;
-    {
-      std::ifstream in(path, std::ios::binary);
-      text.assign(std::istreambuf_iterator<char>(in), {});
-    }
+    std::string text = testing::fileText(path);
     const std::string was = "NumberOfPoints=\"327\"      ";
     const std::size_t at = text.find(was);
     REQUIRE(at != std::string::npos);

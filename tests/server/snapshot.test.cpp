@@ -14,14 +14,7 @@
 #include <crackvis/pipeline/pipeline_description.hpp>
 
 namespace crackvis {
-namespace {
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-}  // namespace
+namespace {}  // namespace
 
 TEST_CASE("crackvis snapshot draws what crackvis-render --snapshot draws",
           "[scene][snapshot][integration]") {
@@ -48,9 +41,9 @@ TEST_CASE("crackvis snapshot draws what crackvis-render --snapshot draws",
                              dir.path().string(), "-o", dir.file(tag + "-server.png")});
     INFO(server.err);
     REQUIRE(server.exitCode == 0);
-    const std::string png = slurp(dir.file(tag + "-cli.png"));
+    const std::string png = crackvis::testing::fileText(dir.file(tag + "-cli.png"));
     REQUIRE(png.size() > 100);
-    CHECK(png == slurp(dir.file(tag + "-server.png")));
+    CHECK(png == crackvis::testing::fileText(dir.file(tag + "-server.png")));
     return png;
   };
   // The edges are in the picture: showing the decomposition changes it.
@@ -69,7 +62,7 @@ std::string rawFrames(const testing::TempDir& dir, const std::string& input,
                                         "rawvideo", "-pix_fmt", "rgb24", dir.file(name)});
   INFO(run.err);
   REQUIRE(run.exitCode == 0);
-  return slurp(dir.file(name));
+  return crackvis::testing::fileText(dir.file(name));
 }
 
 // Peak signal-to-noise ratio of two RGB byte strings of one size, dB.

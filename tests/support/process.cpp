@@ -16,14 +16,12 @@
 extern char** environ;
 
 namespace crackvis::testing {
-namespace {
-std::string slurp(const std::string& path) {
+std::string fileText(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream buffer;
   buffer << in.rdbuf();
   return buffer.str();
 }
-}  // namespace
 
 ProcessResult runProcess(const std::vector<std::string>& argv) {
   // Files rather than pipes: no deadlock however much the child prints.
@@ -53,8 +51,8 @@ ProcessResult runProcess(const std::vector<std::string>& argv) {
   }
   ProcessResult result;
   result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  result.out = slurp(outPath);
-  result.err = slurp(errPath);
+  result.out = fileText(outPath);
+  result.err = fileText(errPath);
   return result;
 }
 

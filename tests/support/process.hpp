@@ -26,6 +26,9 @@ int threadCount();
 // its last answer.
 bool waitUntil(const std::function<bool()>& condition, double seconds = 10.0);
 
+// A file's bytes ("" when it cannot be read).
+std::string fileText(const std::string& path);
+
 // Non-empty lines of a text.
 std::vector<std::string> lines(const std::string& text);
 

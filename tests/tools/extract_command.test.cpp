@@ -23,10 +23,6 @@ using crackvis::testing::TempDir;
 namespace {
 const std::string kCli = CRACKVIS_CLI;
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 }  // namespace
 
 TEST_CASE("crackvis extract writes a ParaView time series", "[cli][extract]") {
@@ -37,7 +33,7 @@ TEST_CASE("crackvis extract writes a ParaView time series", "[cli][extract]") {
   auto run =
       runProcess({kCli, "extract", data, "-m", "local-voronoi", "-s", "1:3", "-o", pvd, "-q"});
   REQUIRE(run.exitCode == 0);
-  const std::string collection = slurp(pvd);
+  const std::string collection = crackvis::testing::fileText(pvd);
   for (int step = 1; step <= 3; ++step) {
     const std::string relative = fmt::format("lv/lv_{:06d}.vtp", step);
     CHECK_THAT(collection, Catch::Contains(fmt::format(R"(file="{}")", relative)));
@@ -68,7 +64,7 @@ TEST_CASE("crackvis extract refuses volume cells in a .vtp name and keeps the ol
   CHECK(crackvis::testing::lines(run.err).size() == 1);
   CHECK_THAT(run.err, Catch::Contains("a.vtp: these cracks have volume cells") &&
                           Catch::Contains("name the output .vtu"));
-  CHECK(slurp(vtp) == "an earlier result");
+  CHECK(crackvis::testing::fileText(vtp) == "an earlier result");
   CHECK_FALSE(std::filesystem::exists(vtp + ".partial"));
   auto vtu = runProcess(
       {kCli, "extract", data, "-m", "cell-attribute", "-s", "-1", "-o", dir.file("a.vtu"), "-q"});
@@ -240,7 +236,7 @@ TEST_CASE("crackvis snapshot renders a step to PNG off screen", "[cli][snapshot]
                          "-o", dir.file("last.png")});
   REQUIRE(run.exitCode == 0);
   CHECK_THAT(run.out, Catch::Contains("llvmpipe"));
-  const std::string png = slurp(dir.file("last.png"));
+  const std::string png = crackvis::testing::fileText(dir.file("last.png"));
   REQUIRE(png.size() > 8);
   CHECK(png.substr(1, 3) == "PNG");
 

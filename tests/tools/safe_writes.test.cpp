@@ -27,11 +27,6 @@ namespace {
 const std::string kCli = CRACKVIS_CLI;
 const std::string kData = CRACKVIS_TEST_DATA;
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 }  // namespace
 
 TEST_CASE("On a full disk every writer fails with one line and keeps the existing file",
@@ -80,13 +75,13 @@ TEST_CASE("On a full disk every writer fails with one line and keeps the existin
   disk.fill();
   for (const Writer& writer : writers) {
     DYNAMIC_SECTION(writer.argv[1] << " -o " << writer.output) {
-      const std::string before = slurp(disk.file(writer.output));
+      const std::string before = crackvis::testing::fileText(disk.file(writer.output));
       auto run = runProcess(disk.limitedCommand(writer.argv));
       INFO(run.err);
       CHECK(run.exitCode == 1);
       CHECK(crackvis::testing::lines(run.err).size() == 1);
       CHECK_THAT(run.err, !Catch::Contains("internal error"));
-      CHECK(slurp(disk.file(writer.output)) == before);
+      CHECK(crackvis::testing::fileText(disk.file(writer.output)) == before);
       for (const char* suffix : {".partial", ".importing"}) {
         CHECK_FALSE(std::filesystem::exists(disk.file(writer.output) + suffix));
       }
@@ -102,6 +97,6 @@ TEST_CASE("With room on the disk, each writer replaces the existing file", "[cli
   auto run = runProcess({kCli, "generate", "--lattice", "fcc", "--sites", "3", "3", "3", "-r",
                          "0.001", "-q", "-o", out});
   REQUIRE(run.exitCode == 0);
-  CHECK(slurp(out).substr(1, 3) == "HDF");
+  CHECK(crackvis::testing::fileText(out).substr(1, 3) == "HDF");
   CHECK_FALSE(std::filesystem::exists(out + ".partial"));
 }

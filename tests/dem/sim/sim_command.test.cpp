@@ -121,12 +121,9 @@ TEST_CASE("crackvis sim on a full disk exits 1 with one line, keeps the old file
                             Catch::Contains("not written") &&
                             Catch::EndsWith("complete steps are in " + path + ")"));
   CHECK_THAT(run.err, !Catch::Contains("HDF5-DIAG"));
-  {
-    // The output's name still holds the earlier run (issue 29: it held the
-    // partial one).
-    std::ifstream earlier(output);
-    CHECK(std::string(std::istreambuf_iterator<char>(earlier), {}) == "an earlier run");
-  }
+  // The output's name still holds the earlier run (issue 29: it held the
+  // partial one).
+  CHECK(testing::fileText(output) == "an earlier run");
 
   // Every step the count promises is there and valid.
   auto reader = dem::DemFileReader::open(path);
