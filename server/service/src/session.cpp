@@ -68,7 +68,10 @@ struct Session::Worker {
   std::uint64_t lastEventId = 0;
   std::optional<Clock::time_point> lastEventReceived;
   std::uint64_t frameId = 0;
-  bool cameraMoved = false;  // since the last state sent
+  // The next full-resolution frame is followed by a state message: the
+  // camera moved since the last one, or a new stream has not had one (the
+  // camera fitted to a newly opened file is known only after a render).
+  bool stateDue = false;
 
   explicit Worker(Session& owner) : session(owner) {}
 
@@ -212,7 +215,7 @@ struct Session::Worker {
       return;
     }
     renderer->moveCamera(camera.move, camera.dx, camera.dy);
-    cameraMoved = true;
+    stateDue = true;
     if (camera.still) {
       stillFrame(event);
       return;
@@ -411,10 +414,10 @@ struct Session::Worker {
       adaptReduction(frame.timings.renderMs);
     }
     frame.frameId = ++frameId;
-    const bool settled = frame.fullResolution && cameraMoved;
+    const bool settled = frame.fullResolution && stateDue;
     session.publish(std::move(frame));
-    if (settled) {  // the camera came to rest: the state carries it
-      cameraMoved = false;
+    if (settled) {  // the camera came to rest, or a new stream: the state carries it
+      stateDue = false;
       session.notify({0, Status::ok(), state()});
     }
     stepTimings = {};
@@ -582,6 +585,7 @@ Status Session::serve(Worker& worker) {
       worker.keyframe = true;
       worker.forceFull = true;
       worker.dirty = true;
+      worker.stateDue = true;
     }
     const bool attached = m_attachment != 0;
     lock.unlock();
