@@ -39,6 +39,7 @@ struct Flags {
   bool insecure = false;
   std::string accessLog;
   std::string rawTlsListen;
+  std::string hdf5WorkerProgram;
   std::optional<std::uint64_t> maxReadBytes;
   std::optional<std::uint64_t> maxFetchBytes;
   std::optional<std::uint64_t> maxMemoryBytes;
@@ -90,6 +91,9 @@ crackvis::Result<ServerConfig> configure(const Flags& flags, const CLI::App& app
   }
   if (given("--raw-tls-listen")) {
     config.rawTlsListen = flags.rawTlsListen;
+  }
+  if (given("--hdf5-worker-program")) {
+    config.hdf5WorkerProgram = flags.hdf5WorkerProgram;
   }
   if (flags.maxReadBytes) {
     config.limits.maxReadBytes = *flags.maxReadBytes;
@@ -230,6 +234,9 @@ int main(int argc, char** argv) {
   app.add_option("--hdf5-workers", flags.hdf5Workers,
                  "processes that make the HDF5 calls, so that a libhdf5 fault on a corrupt file "
                  "ends only the call on it (default 4)");
+  app.add_option("--hdf5-worker-program", flags.hdf5WorkerProgram,
+                 "the program those processes run (default: crackvis-hdf5-worker beside "
+                 "crackvis-data)");
   app.add_option("--max-memory", flags.maxMemoryBytes,
                  "bytes all Read and Fetch streams may buffer together; each stream holds one "
                  "chunk (about 1 MiB), so this caps the streams' memory (default 256 MiB)");

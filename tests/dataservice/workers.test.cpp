@@ -216,4 +216,51 @@ TEST_CASE("A corpus of corrupt files costs the data service nothing",
   CHECK(client.checkHealth().isOk());
 }
 
+TEST_CASE("HDF5 workers run the worker program and keep nothing of the service but a socket",
+          "[dataservice][integration]") {
+  namespace fs = std::filesystem;
+  auto server = startServer(oneWorker());
+  const int pid = server->hdf5WorkerPids().at(0);
+  REQUIRE(pid > 0);
+  const std::string proc = fmt::format("/proc/{}", pid);
+  // It serves (Describe, and a Read through the shared piece buffer); by
+  // then it has mapped that buffer and closed its descriptor.
+  auto client = connect(clientOptions(*server));
+  REQUIRE(client.describe("run.h5").isOk());
+  auto read = client.read("run.h5", {Hyperslab::whole("/steps/000001/positions")});
+  REQUIRE(read.isOk());
+  CHECK(read->front().values<double>().value() ==
+        readDirect<double>(sampleRoot().file("run.h5"), "/steps/000001/positions"));
+
+  // Started with exec, not forked: its own program, an empty environment,
+  // and of the service's descriptors only its socket (3) beside 0-2; any
+  // other is a file of the data root it has opened since.
+  CHECK(fs::read_symlink(proc + "/exe").filename() == "crackvis-hdf5-worker");
+  CHECK(fileText(proc + "/environ").empty());
+  CHECK(fs::is_socket(proc + "/fd/3"));
+  const std::string root = fs::canonical(sampleRoot().root.path()).string() + "/";
+  for (const auto& entry : fs::directory_iterator(proc + "/fd")) {
+    if (std::stoi(entry.path().filename().string()) > 3) {
+      const std::string target = fs::read_symlink(entry.path()).string();
+      INFO(target);
+      CHECK(target.rfind(root, 0) == 0);
+    }
+  }
+
+  // A server whose worker program is missing does not start, and says why.
+  auto config = oneWorker();
+  config.hdf5WorkerProgram = "/nonexistent/crackvis-hdf5-worker";
+  auto refused = dataservice::DataServer::start(config);
+  REQUIRE_FALSE(refused.isOk());
+  CHECK(refused.status().code() == StatusCode::kFailedPrecondition);
+  CHECK_THAT(refused.status().message(), Catch::Contains("/nonexistent/crackvis-hdf5-worker") &&
+                                             Catch::Contains("--hdf5-worker-program"));
+
+  // Run by hand, the program says what it is for.
+  const fs::path program = fs::path(CRACKVIS_DATA).parent_path() / "crackvis-hdf5-worker";
+  const auto byHand = runProcess({program.string()});
+  CHECK(byHand.exitCode == 2);
+  CHECK_THAT(byHand.err, Catch::Contains("crackvis-data starts this program"));
+}
+
 }  // namespace crackvis::testing

@@ -88,12 +88,13 @@ Result<ServerConfig> parseServerConfig(const std::string& text, const std::strin
   ServerConfig config;
   CRACKVIS_RETURN_IF_ERROR(checkKeys(root, origin,
                                      {"listen", "data_root", "tls", "insecure", "limits", "users",
-                                      "access_log", "raw_tls_listen"}));
+                                      "access_log", "raw_tls_listen", "hdf5_worker_program"}));
   CRACKVIS_RETURN_IF_ERROR(read(root, "listen", origin, config.listen));
   CRACKVIS_RETURN_IF_ERROR(read(root, "data_root", origin, config.dataRoot));
   CRACKVIS_RETURN_IF_ERROR(read(root, "insecure", origin, config.insecure));
   CRACKVIS_RETURN_IF_ERROR(read(root, "access_log", origin, config.accessLog));
   CRACKVIS_RETURN_IF_ERROR(read(root, "raw_tls_listen", origin, config.rawTlsListen));
+  CRACKVIS_RETURN_IF_ERROR(read(root, "hdf5_worker_program", origin, config.hdf5WorkerProgram));
   if (root.contains("tls")) {
     const std::string where = origin + ": tls";
     const json& tls = root.at("tls");

@@ -1,4 +1,9 @@
+#include <filesystem>
+#include <system_error>
+#include <vector>
+
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include "data_service.hpp"
 #include "raw_tls_server.hpp"
@@ -27,6 +32,38 @@ struct DataServer::Impl {
   }
 };
 
+namespace {
+
+// The HDF5 worker program: the configured one, else crackvis-hdf5-worker
+// beside the running program (an installation), else the one this build
+// made (a test or the CLI's benchmark, run from the build tree).
+Result<std::string> workerProgram(const std::string& configured) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> candidates;
+  if (!configured.empty()) {
+    candidates.emplace_back(configured);
+  } else {
+    std::error_code error;
+    const fs::path self = fs::read_symlink("/proc/self/exe", error);
+    if (!error) {
+      candidates.push_back(self.parent_path() / "crackvis-hdf5-worker");
+    }
+    candidates.emplace_back(CRACKVIS_HDF5_WORKER_BUILT);
+  }
+  for (const fs::path& candidate : candidates) {
+    if (::access(candidate.c_str(), X_OK) == 0) {
+      return candidate.string();
+    }
+  }
+  return failedPrecondition(fmt::format(
+      "crackvis-data runs libhdf5 in worker processes of the program crackvis-hdf5-worker, and "
+      "{} is not an executable file: install it beside crackvis-data or give "
+      "--hdf5-worker-program (hdf5_worker_program in --config)",
+      candidates.front().string()));
+}
+
+}  // namespace
+
 Result<std::unique_ptr<DataServer>> DataServer::start(const ServerConfig& config) {
   // The same rules as crackvis-data's flags and file: a server started from
   // code (tests, the CLI's benchmark) cannot bypass them.
@@ -50,7 +87,12 @@ Result<std::unique_ptr<DataServer>> DataServer::start(const ServerConfig& config
   }
   impl->log = std::move(*log);
   impl->authenticator = std::make_unique<rpc::Authenticator>(config.users);
+  auto program = workerProgram(config.hdf5WorkerProgram);
+  if (!program) {
+    return program.status();
+  }
   Hdf5Workers::Settings workerSettings;
+  workerSettings.program = std::move(*program);
   workerSettings.workers = config.limits.hdf5Workers;
   workerSettings.pieceTime =
       std::chrono::milliseconds(static_cast<std::int64_t>(config.limits.hdf5CallSeconds * 1000));

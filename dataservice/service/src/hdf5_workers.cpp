@@ -1,12 +1,18 @@
 #include "hdf5_workers.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <csignal>
+#include <cstdio>
 #include <cstring>
+#include <optional>
+#include <string_view>
+#include <utility>
 
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <poll.h>
+#include <spawn.h>
 #include <sys/mman.h>
 #include <sys/prctl.h>
 #include <sys/socket.h>
@@ -17,6 +23,7 @@
 #include "describe_proto.hpp"
 #include <crackvis/common/child_process.hpp>
 #include <crackvis/common/log.hpp>
+#include <crackvis/dataservice/hdf5_worker_main.hpp>
 
 namespace crackvis::dataservice {
 namespace {
@@ -24,7 +31,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr const char* kProgram = "crackvis-data";
-constexpr int kWorkerSocket = 3;  // the one descriptor a worker keeps
+// The two descriptors a worker program is started with: its socket, and the
+// memfd of the piece buffer it shares with the service.
+constexpr int kWorkerSocket = 3;
+constexpr int kWorkerBuffer = 4;
 
 // kOkShared: a piece's bytes are in the worker's shared buffer, not in the
 // frame (two copies through the socket cost a view's Read a third more).
@@ -360,34 +370,21 @@ std::pair<std::uint32_t, std::string> serve(const Catalogue& catalogue, std::uin
   }
 }
 
-// The child's side of fork(): keep only the socket, die with the service,
-// take signals with their default actions, serve.
-[[noreturn]] void workerMain(int socket, pid_t service, const DataRoot& root, void* shared) {
-  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
-  ::prctl(PR_SET_DUMPABLE, 0);  // no core files of users' data when libhdf5 faults
-  if (::getppid() != service) {
-    ::_exit(0);  // the service died before the line above
+// Whether `fd` is a Unix stream socket: the one a worker is given.
+bool isWorkerSocket(int fd) {
+  int type = 0;
+  socklen_t length = sizeof type;
+  return ::getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &length) == 0 && type == SOCK_STREAM;
+}
+
+// The worker program's arguments: the data root and the service's pid.
+std::optional<pid_t> servicePid(std::string_view text) {
+  pid_t pid = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), pid);
+  if (error != std::errc() || end != text.data() + text.size() || pid <= 1) {
+    return std::nullopt;
   }
-  sigset_t none;
-  sigemptyset(&none);
-  ::pthread_sigmask(SIG_SETMASK, &none, nullptr);
-  // Handlers the service installed (a test framework's, a sanitizer's) must
-  // not run in a worker: a fault ends it, and the service reports that.
-  for (int signal = 1; signal < NSIG; ++signal) {
-    if (signal != SIGKILL && signal != SIGSTOP) {
-      ::signal(signal, SIG_DFL);
-    }
-  }
-  ::signal(SIGPIPE, SIG_IGN);
-  if (socket != kWorkerSocket) {
-    ::dup2(socket, kWorkerSocket);  // without O_CLOEXEC
-  } else {
-    ::fcntl(kWorkerSocket, F_SETFD, 0);
-  }
-  // The service's listening sockets, connections and files must not live on
-  // in a worker.
-  ::close_range(kWorkerSocket + 1, ~0U, 0);
-  runWorker(root, shared);
+  return pid;
 }
 
 }  // namespace
@@ -438,7 +435,7 @@ Status Hdf5Workers::spawn(Worker& worker) {
   return Status::ok();
 }
 
-Hdf5Workers::ForkThread::ForkThread() {
+Hdf5Workers::SpawnThread::SpawnThread() {
   m_thread = std::thread([this] {
     std::unique_lock lock(m_mutex);
     for (;;) {
@@ -454,7 +451,7 @@ Hdf5Workers::ForkThread::ForkThread() {
   });
 }
 
-Hdf5Workers::ForkThread::~ForkThread() {
+Hdf5Workers::SpawnThread::~SpawnThread() {
   {
     std::lock_guard lock(m_mutex);
     m_stop = true;
@@ -463,7 +460,7 @@ Hdf5Workers::ForkThread::~ForkThread() {
   m_thread.join();
 }
 
-void Hdf5Workers::ForkThread::run(const std::function<void()>& work) {
+void Hdf5Workers::SpawnThread::run(const std::function<void()>& work) {
   std::unique_lock lock(m_mutex);
   m_done.wait(lock, [&] { return m_work == nullptr; });  // one at a time
   m_work = &work;
@@ -473,47 +470,99 @@ void Hdf5Workers::ForkThread::run(const std::function<void()>& work) {
 }
 
 Result<Hdf5Workers::Started> Hdf5Workers::startWorker() {
-  Result<Started> started = internalError("the fork thread did not run");
-  m_forks->run([&] { started = forkWorker(); });
+  Result<Started> started = internalError("the spawn thread did not run");
+  m_spawns->run([&] { started = spawnWorker(); });
   return started;
 }
 
-Result<Hdf5Workers::Started> Hdf5Workers::forkWorker() {
-  int sockets[2];
-  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sockets) != 0) {
-    return unavailable(
-        fmt::format("cannot make a socket for an HDF5 worker: {}", std::strerror(errno)));
-  }
-  // The worker's piece buffer, shared with the service: mapped before the
-  // fork, so both see the same pages.
-  void* shared =
-      ::mmap(nullptr, kMaxChunkBytes, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
-  if (shared == MAP_FAILED) {
-    ::close(sockets[0]);
-    ::close(sockets[1]);
-    return unavailable(
-        fmt::format("cannot map a buffer for an HDF5 worker: {}", std::strerror(errno)));
-  }
-  const pid_t service = ::getpid();
-  pid_t pid = -1;
-  {
-    // No HDF5 call of this process is in progress while the lock is held,
-    // so the child's copy of libhdf5 is in a consistent state.
-    std::lock_guard lock(hdf5Mutex());
-    pid = ::fork();
-    if (pid == 0) {
-      hdf5Mutex().unlock();  // the child's copy; it never leaves workerMain
-      ::close(sockets[0]);
-      workerMain(sockets[1], service, m_root, shared);
+namespace {
+
+// A descriptor that closes itself.
+class OwnedFd {
+ public:
+  explicit OwnedFd(int fd = -1) : m_fd(fd) {}
+  OwnedFd(const OwnedFd&) = delete;
+  OwnedFd& operator=(const OwnedFd&) = delete;
+  ~OwnedFd() {
+    if (m_fd >= 0) {
+      ::close(m_fd);
     }
   }
-  ::close(sockets[1]);
-  if (pid < 0) {
-    ::close(sockets[0]);
-    ::munmap(shared, kMaxChunkBytes);
-    return unavailable(fmt::format("cannot start an HDF5 worker: {}", std::strerror(errno)));
+  int get() const { return m_fd; }
+  int release() { return std::exchange(m_fd, -1); }
+
+ private:
+  int m_fd;
+};
+
+// Copies of the two descriptors above the ones the worker gets, so that
+// placing one at 3 or 4 cannot overwrite the other.
+constexpr int kAboveWorkerFds = 10;
+
+}  // namespace
+
+// The worker is a program of its own, started with posix_spawn, not a fork
+// of the service: no copy of the service's memory (its TLS key, other
+// users' data) lives in a process that parses hostile files, and nothing
+// runs between fork and exec (under GCC 12's libasan a forked child of the
+// threaded service could stall on a lock another thread held).
+Result<Hdf5Workers::Started> Hdf5Workers::spawnWorker() {
+  auto failed = [](std::string_view what) {
+    return unavailable(
+        fmt::format("cannot start an HDF5 worker: {}: {}", what, std::strerror(errno)));
+  };
+  int sockets[2];
+  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sockets) != 0) {
+    return failed("socketpair");
   }
-  return Started{pid, sockets[0], shared};
+  OwnedFd ours(sockets[0]);
+  OwnedFd theirs(sockets[1]);
+  // The piece buffer both map: a memfd, as an anonymous mapping does not
+  // outlive exec.
+  OwnedFd buffer(::memfd_create("crackvis-hdf5-pieces", MFD_CLOEXEC));
+  if (buffer.get() < 0 || ::ftruncate(buffer.get(), kMaxChunkBytes) != 0) {
+    return failed("memfd");
+  }
+  void* shared =
+      ::mmap(nullptr, kMaxChunkBytes, PROT_READ | PROT_WRITE, MAP_SHARED, buffer.get(), 0);
+  if (shared == MAP_FAILED) {
+    return failed("mmap");
+  }
+  const OwnedFd socketCopy(::fcntl(theirs.get(), F_DUPFD_CLOEXEC, kAboveWorkerFds));
+  const OwnedFd bufferCopy(::fcntl(buffer.get(), F_DUPFD_CLOEXEC, kAboveWorkerFds));
+  const std::string service = std::to_string(::getpid());
+  const std::string root = m_root.path().string();
+  char* argv[] = {const_cast<char*>(m_settings.program.c_str()), const_cast<char*>(root.c_str()),
+                  const_cast<char*>(service.c_str()), nullptr};
+  char* envp[] = {nullptr};  // the service's environment is none of a worker's business
+  posix_spawn_file_actions_t actions;
+  posix_spawnattr_t attributes;
+  ::posix_spawn_file_actions_init(&actions);
+  ::posix_spawnattr_init(&attributes);
+  // dup2 clears close-on-exec: the worker keeps these two and nothing else.
+  ::posix_spawn_file_actions_adddup2(&actions, socketCopy.get(), kWorkerSocket);
+  ::posix_spawn_file_actions_adddup2(&actions, bufferCopy.get(), kWorkerBuffer);
+  ::posix_spawn_file_actions_addclosefrom_np(&actions, kWorkerBuffer + 1);
+  // Signals as a new program expects them, whatever this thread blocks.
+  sigset_t none;
+  sigemptyset(&none);
+  ::posix_spawnattr_setsigmask(&attributes, &none);
+  sigset_t all;
+  sigfillset(&all);
+  ::posix_spawnattr_setsigdefault(&attributes, &all);
+  ::posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
+  pid_t pid = -1;
+  const int error = socketCopy.get() < 0 || bufferCopy.get() < 0
+                        ? errno
+                        : ::posix_spawn(&pid, argv[0], &actions, &attributes, argv, envp);
+  ::posix_spawn_file_actions_destroy(&actions);
+  ::posix_spawnattr_destroy(&attributes);
+  if (error != 0) {
+    ::munmap(shared, kMaxChunkBytes);
+    errno = error;
+    return failed(m_settings.program);
+  }
+  return Started{pid, ours.release(), shared};
 }
 
 bool Hdf5Workers::isNext(const Ticket& ticket) const {
@@ -774,6 +823,39 @@ std::vector<pid_t> Hdf5Workers::pids() const {
 int Hdf5Workers::replaced() const {
   std::lock_guard lock(m_mutex);
   return m_replaced;
+}
+
+// ---------------------------------------------------------------- worker --
+
+int hdf5WorkerMain(int argc, char** argv) {
+  const std::optional<pid_t> service = argc == 3 ? servicePid(argv[2]) : std::nullopt;
+  if (!service || !isWorkerSocket(kWorkerSocket)) {
+    std::fprintf(stderr,
+                 "crackvis-hdf5-worker: crackvis-data starts this program for its HDF5 work "
+                 "(docs/security.md); it is not run by hand\n");
+    return 2;
+  }
+  // Dies with the service's thread that started it; the check after closes
+  // the gap in which the service could have died first.
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+  if (::getppid() != *service) {
+    return 0;
+  }
+  ::prctl(PR_SET_DUMPABLE, 0);  // no core files of users' data when libhdf5 faults
+  // A fault ends the worker by its signal, which the service reports: no
+  // handler a sanitizer installed may turn it into an exit status.
+  for (const int signal : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) {
+    ::signal(signal, SIG_DFL);
+  }
+  ::signal(SIGPIPE, SIG_IGN);
+  void* shared =
+      ::mmap(nullptr, kMaxChunkBytes, PROT_READ | PROT_WRITE, MAP_SHARED, kWorkerBuffer, 0);
+  ::close(kWorkerBuffer);
+  auto root = DataRoot::open(argv[1]);
+  if (shared == MAP_FAILED || !root) {
+    return 1;  // the service sees the socket close and replaces the worker
+  }
+  runWorker(*root, shared);
 }
 
 }  // namespace crackvis::dataservice

@@ -9,12 +9,13 @@
 // file and the signal, and is replaced at once; one that overruns the
 // call's time (or whose caller cancels) is killed and replaced.
 //
-// Workers are forked from the service while it holds hdf5Mutex(), so no
-// HDF5 call of this process is half done in the copy; the child keeps only
-// its socket, dies with its parent (PR_SET_PDEATHSIG) and runs nothing but
-// the catalogue. Requests and answers are length-prefixed frames on a Unix
-// stream socket; a piece's bytes come back through a buffer the two share.
-// Private to the service library.
+// A worker is a program of its own (crackvis-hdf5-worker, beside
+// crackvis-data), started with posix_spawn: it shares no memory with the
+// service but one piece buffer (a memfd), keeps only its socket and that
+// buffer, dies with the service (PR_SET_PDEATHSIG) and runs nothing but the
+// catalogue. Requests and answers are length-prefixed frames on a Unix
+// stream socket; a piece's bytes come back through the shared buffer.
+// Private to the service library; hdf5WorkerMain is the program's main.
 #pragma once
 
 #include <algorithm>
@@ -54,6 +55,8 @@ class Hdf5Workers {
     // A piece read (at most 1 MiB) that takes longer is a worker stuck in
     // libhdf5; Describe gets its own time limit plus this.
     std::chrono::milliseconds pieceTime{30'000};
+    // The worker program (crackvis-hdf5-worker) to start.
+    std::string program;
   };
 
   static Result<std::unique_ptr<Hdf5Workers>> start(const DataRoot& root, Settings settings);
@@ -117,15 +120,15 @@ class Hdf5Workers {
     Lane lane;
   };
 
-  // Forks on one thread that lives as long as the workers. A worker dies
-  // with the *thread* that forked it (PR_SET_PDEATHSIG), so a worker forked
-  // on a caller's thread died as soon as that thread ended (a gRPC thread
-  // the pool let go, a Describe's walk thread), and the next call found it
-  // dead.
-  class ForkThread {
+  // Starts workers on one thread that lives as long as they do. A worker
+  // dies with the *thread* that started it (PR_SET_PDEATHSIG), so a worker
+  // started on a caller's thread died as soon as that thread ended (a gRPC
+  // thread the pool let go, a Describe's walk thread), and the next call
+  // found it dead.
+  class SpawnThread {
    public:
-    ForkThread();
-    ~ForkThread();
+    SpawnThread();
+    ~SpawnThread();
     // Runs `work` on the thread and waits for it.
     void run(const std::function<void()>& work);
 
@@ -141,8 +144,8 @@ class Hdf5Workers {
 
   Hdf5Workers(DataRoot root, Settings settings);
   Status spawn(Worker& worker);
-  Result<Started> startWorker();  // maps a buffer and forks a worker
-  Result<Started> forkWorker();   // startWorker's work, on the fork thread
+  Result<Started> startWorker();  // maps a buffer and starts a worker
+  Result<Started> spawnWorker();  // startWorker's work, on the spawn thread
   Worker* checkOut(Lane lane, const std::string& user);
   void checkIn(Worker* worker, Lane lane, const std::string& user);
   // Whether `ticket` is the waiting caller a free worker goes to next (the
@@ -164,7 +167,7 @@ class Hdf5Workers {
   std::condition_variable m_idle;
   std::vector<Worker> m_workers;
   int m_replaced = 0;
-  std::unique_ptr<ForkThread> m_forks = std::make_unique<ForkThread>();
+  std::unique_ptr<SpawnThread> m_spawns = std::make_unique<SpawnThread>();
   std::vector<const Ticket*> m_waiting;
   std::map<std::string, int> m_held;  // workers each user holds now
   int m_walking = 0;                  // workers on the walk lane now

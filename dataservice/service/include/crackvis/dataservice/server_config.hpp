@@ -74,6 +74,9 @@ struct ServerConfig {
   std::vector<UserEntry> users;  // empty: every certified client reads the whole root
   std::string accessLog = "-";   // file to append access lines to; "-": stderr; "": none
   std::string rawTlsListen;      // host:port of the raw TLS baseline for benchmarks; "": off
+  // The program that runs the HDF5 workers; "": crackvis-hdf5-worker beside
+  // the running program, else the one this build made.
+  std::string hdf5WorkerProgram;
 };
 
 // Reads a JSON configuration; unknown keys are errors (a typo must not
