@@ -1,6 +1,7 @@
 // crackvis-data: serves HDF5 DEM results from beside the storage over gRPC
 // with mutual TLS. Parses options, wires a DataServer, waits for SIGINT or
 // SIGTERM. docs/security.md and docs/protocol.md describe what it does.
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
@@ -132,7 +133,7 @@ crackvis::Result<ServerConfig> configure(const Flags& flags, const CLI::App& app
     config.limits.describe.maxObjects = *flags.describeMaxObjects;
   }
   if (flags.describeMaxSeconds) {
-    config.limits.describe.maxTime = crackvis::dataservice::describeTime(*flags.describeMaxSeconds);
+    config.limits.describe.maxTime = std::chrono::duration<double>(*flags.describeMaxSeconds);
   }
   if (flags.hdf5CallSeconds) {
     config.limits.hdf5CallSeconds = *flags.hdf5CallSeconds;

@@ -10,7 +10,6 @@
 namespace crackvis::dem {
 namespace {
 
-using h5::ElementType;
 using h5::Handle;
 
 // Step groups are named by their zero-padded index; anything else under
@@ -346,7 +345,7 @@ Result<Handle> DemFileReader::openExtra(const ExtraInfo& extra, int step) const 
   const bool rowsMatch = !shape->dims.empty() && shape->dims[0] == static_cast<std::uint64_t>(rows);
   const bool widthValid = shape->dims.size() == 1 ||
                           (shape->dims.size() == 2 && (shape->dims[1] == 1 || shape->dims[1] == 3));
-  if (shape->type != h5::ElementType::kFloat64 || !rowsMatch || !widthValid) {
+  if (shape->type != ElementType::kFloat64 || !rowsMatch || !widthValid) {
     return fail(failedPrecondition(
         fmt::format("dataset {} is {} {}, expected float64 [{}] or [{},3] ({} = {})", path,
                     shape->typeName, h5::formatDims(shape->dims), rows, rows,
@@ -364,7 +363,7 @@ Result<ExtraArray> DemFileReader::readExtra(const ExtraInfo& extra, int step) co
   ExtraArray array{
       extra.name, extra.owner, shape->dims.size() == 2 ? static_cast<int>(shape->dims[1]) : 1, {}};
   array.values.resize(shape->dims[0] * static_cast<std::uint64_t>(array.components));
-  if (Status read = h5::readDataset(dataset->get(), h5::ElementType::kFloat64, array.values.data());
+  if (Status read = h5::readDataset(dataset->get(), ElementType::kFloat64, array.values.data());
       !read) {
     return fail(
         Status(read.code(), fmt::format("dataset {}: {}", extraPath(extra, step), read.message())));

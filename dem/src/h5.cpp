@@ -98,24 +98,6 @@ std::string lastHdf5Error() {
   return text;
 }
 
-const char* elementTypeName(ElementType type) {
-  switch (type) {
-    case ElementType::kInt32:
-      return "int32";
-    case ElementType::kInt64:
-      return "int64";
-    case ElementType::kUInt8:
-      return "uint8";
-    case ElementType::kFloat32:
-      return "float32";
-    case ElementType::kFloat64:
-      return "float64";
-    case ElementType::kOther:
-      break;
-  }
-  return "other";
-}
-
 hid_t nativeType(ElementType type) {
   switch (type) {
     case ElementType::kInt32:

@@ -209,4 +209,22 @@ Status checkDeclaredSizes(const std::string& file, const LayoutSizes& sizes,
   return Status::ok();
 }
 
+const char* elementTypeName(ElementType type) {
+  switch (type) {
+    case ElementType::kInt32:
+      return "int32";
+    case ElementType::kInt64:
+      return "int64";
+    case ElementType::kUInt8:
+      return "uint8";
+    case ElementType::kFloat32:
+      return "float32";
+    case ElementType::kFloat64:
+      return "float64";
+    case ElementType::kOther:
+      break;
+  }
+  return "other";
+}
+
 }  // namespace crackvis::dem

@@ -22,16 +22,12 @@
 #include <crackvis/common/unique_fd.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
+#include <crackvis/rpc/host_port.hpp>
 
 namespace crackvis::rpc {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-struct HostPort {
-  std::string host;
-  std::string port;
-};
 
 // "host:port", "[v6]:port", with gRPC's "dns:///" or "ipv4:" in front; none
 // for other targets (unix sockets), which are not probed.
@@ -42,16 +38,11 @@ std::optional<HostPort> splitTarget(std::string target) {
       break;
     }
   }
-  const std::size_t colon = target.rfind(':');
-  if (colon == std::string::npos || colon == 0 || colon + 1 == target.size() ||
-      target.starts_with("unix:")) {
+  if (target.starts_with("unix:")) {
     return std::nullopt;
   }
-  std::string host = target.substr(0, colon);
-  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
-    host = host.substr(1, host.size() - 2);
-  }
-  return HostPort{host, target.substr(colon + 1)};
+  auto parsed = parseHostPort(target);
+  return parsed ? std::optional<HostPort>(std::move(parsed).value()) : std::nullopt;
 }
 
 using Socket = UniqueFd;
@@ -243,14 +234,8 @@ std::string_view serviceName(ServerKind kind) {
 }
 
 Status checkHostPort(const std::string& what, const std::string& address) {
-  const std::size_t colon = address.rfind(':');
-  const std::string port = colon == std::string::npos ? "" : address.substr(colon + 1);
-  const bool digits = !port.empty() && port.size() <= 5 &&
-                      port.find_first_not_of("0123456789") == std::string::npos;
-  const bool bracketed = address.find('[') == std::string::npos ||
-                         (colon > 0 && address[colon - 1] == ']');  // [::1]:50052
-  if (colon == std::string::npos || colon == 0 || !digits || !bracketed || std::stoi(port) < 1 ||
-      std::stoi(port) > 65535) {
+  const auto parsed = parseHostPort(address);
+  if (!parsed || parsed->port < 1) {  // a server to reach has a port; 0 only listens
     return invalidArgument(
         fmt::format("{} '{}': expected HOST:PORT with the port (crackvis-data listens on 50051 and "
                     "crackvis-render on 50052 unless configured otherwise)",
@@ -269,7 +254,8 @@ TransportProbe probeTransport(const std::string& address, std::chrono::milliseco
   hints.ai_socktype = SOCK_STREAM;
   hints.ai_flags = AI_NUMERICSERV;
   addrinfo* found = nullptr;
-  if (const int error = ::getaddrinfo(target->host.c_str(), target->port.c_str(), &hints, &found);
+  if (const int error =
+          ::getaddrinfo(target->host.c_str(), std::to_string(target->port).c_str(), &hints, &found);
       error != 0) {
     if (error == EAI_NONAME || error == EAI_FAIL || error == EAI_NODATA) {
       return {Transport::kUnresolved,

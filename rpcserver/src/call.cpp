@@ -29,13 +29,12 @@ grpc::Status finishCall(AccessLog& log, AccessRecord& record, CallClock::time_po
   return toGrpcStatus(status);
 }
 
-Status handlerException(std::string_view program, const AccessRecord& record,
-                        std::string_view what) {
+std::string logHandlerException(std::string_view program, const AccessRecord& record,
+                                std::string_view what) {
   log::event(
       stderr, program, "handler_exception",
       {{"method", record.method}, {"file", echoed(record.file)}, {"what", std::string(what)}});
-  return internalError(
-      fmt::format("{}: internal error in {} (logged by the server)", record.method, program));
+  return fmt::format("{}: internal error in {} (logged by the server)", record.method, program);
 }
 
 }  // namespace crackvis::rpc

@@ -8,12 +8,11 @@
 #include <openssl/rand.h>
 #include <openssl/sha.h>
 
-#include <crackvis/dataservice/data_root.hpp>
+#include <crackvis/common/base64.hpp>
 #include <crackvis/rpc/credentials.hpp>
 
 namespace crackvis::rpc {
 
-using dataservice::isWithinFolder;
 namespace {
 
 constexpr std::string_view kScheme = "pbkdf2-sha256";
@@ -22,32 +21,17 @@ constexpr std::size_t kSaltBytes = 16;
 constexpr std::size_t kHashBytes = 32;
 constexpr std::size_t kMaxCachedCredentials = 4096;
 
+// Adapters to crackvis/common/base64.hpp for the byte arrays used here.
 std::string base64(const unsigned char* data, std::size_t size) {
-  std::string out(4 * ((size + 2) / 3) + 1, '\0');
-  const int length =
-      EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()), data, static_cast<int>(size));
-  out.resize(static_cast<std::size_t>(length));
-  return out;
+  return base64Encode({reinterpret_cast<const char*>(data), size});
 }
 
-// Decodes standard base64 (with padding); false on malformed input.
 bool unbase64(std::string_view text, std::string& out) {
-  if (text.empty() || text.size() % 4 != 0) {
+  auto decoded = base64Decode(text);
+  if (!decoded) {
     return false;
   }
-  out.assign(3 * text.size() / 4 + 1, '\0');
-  const int length = EVP_DecodeBlock(reinterpret_cast<unsigned char*>(out.data()),
-                                     reinterpret_cast<const unsigned char*>(text.data()),
-                                     static_cast<int>(text.size()));
-  if (length < 0) {
-    return false;
-  }
-  std::size_t size = static_cast<std::size_t>(length);
-  // EVP_DecodeBlock counts the padding as zero bytes.
-  for (std::size_t i = text.size(); i > 0 && text[i - 1] == '='; --i) {
-    --size;
-  }
-  out.resize(size);
+  out = std::move(*decoded);
   return true;
 }
 
@@ -399,6 +383,19 @@ Result<Caller> Authenticator::authenticate(std::string_view authorization,
   caller.restricted = true;
   caller.folders = user.folders;
   return caller;
+}
+
+bool isWithinFolder(std::string_view path, std::string_view folder) {
+  while (!folder.empty() && folder.back() == '/') {
+    folder.remove_suffix(1);
+  }
+  if (folder.empty() || folder == "*") {
+    return true;
+  }
+  if (path.size() < folder.size() || path.substr(0, folder.size()) != folder) {
+    return false;
+  }
+  return path.size() == folder.size() || path[folder.size()] == '/';
 }
 
 }  // namespace crackvis::rpc

@@ -6,6 +6,7 @@
 #include <grpcpp/resource_quota.h>
 #include <grpcpp/security/server_credentials.h>
 
+#include <crackvis/rpc/host_port.hpp>
 #include <crackvis/rpc/server.hpp>
 
 namespace crackvis::rpc {
@@ -15,11 +16,11 @@ std::string formatHostPort(const std::string& host, int port) {
 }
 
 Status requireLoopback(const std::string& target, const std::string& what) {
-  auto hostPort = dataservice::parseHostPort(target);
+  auto hostPort = parseHostPort(target);
   if (!hostPort) {
     return hostPort.status();
   }
-  if (!dataservice::isLoopbackHost(hostPort->host)) {
+  if (!isLoopbackHost(hostPort->host)) {
     return failedPrecondition(
         fmt::format("{} refuses '{}': without TLS only a loopback address (127.0.0.1, ::1, "
                     "localhost) may be used",
@@ -29,11 +30,11 @@ Status requireLoopback(const std::string& target, const std::string& what) {
 }
 
 Result<Listener> prepareListener(const std::string& listen, bool insecure,
-                                 const dataservice::TlsFiles& tls) {
+                                 const tls::TlsFiles& tls) {
   Listener listener;
   listener.listen = listen;
   listener.insecure = insecure;
-  auto hostPort = dataservice::parseHostPort(listen);
+  auto hostPort = parseHostPort(listen);
   if (!hostPort) {
     return hostPort.status();
   }
@@ -43,7 +44,7 @@ Result<Listener> prepareListener(const std::string& listen, bool insecure,
     listener.credentials = grpc::InsecureServerCredentials();
     return listener;
   }
-  auto material = dataservice::loadTlsMaterial(tls);
+  auto material = tls::loadTlsMaterial(tls);
   if (!material) {
     return material.status();
   }

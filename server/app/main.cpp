@@ -23,6 +23,7 @@
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/render/probe_scene.hpp>
 #include <crackvis/render/scene_renderer.hpp>
+#include <crackvis/rpc/setting_check.hpp>
 #include <crackvis/service/render_server.hpp>
 
 namespace {
@@ -309,8 +310,8 @@ int main(int argc, char** argv) {
     }
     if (flags.step != kDescriptionStep) {
       // Steps are int indices: a wider value must not wrap.
-      if (Status valid = crackvis::dataservice::checkSetting<std::int64_t>(
-              {"--step", ""}, flags.step, -1, std::numeric_limits<int>::max());
+      if (Status valid = crackvis::rpc::checkSetting<std::int64_t>({"--step", ""}, flags.step, -1,
+                                                                   std::numeric_limits<int>::max());
           !valid) {
         return fail(valid.message());
       }

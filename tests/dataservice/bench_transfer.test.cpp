@@ -53,6 +53,7 @@ TEST_CASE("crackvis bench transfer measures Fetch, a first and a warm view, and 
   std::vector<std::string> jsonArgs = common;
   jsonArgs.push_back("--json");
   const ProcessResult json = runProcess(jsonArgs);
+  INFO(json.err);
   REQUIRE(json.exitCode == 0);
   const auto report = nlohmann::json::parse(json.out);
   const SampleData& sample = sampleRoot().sample3d;

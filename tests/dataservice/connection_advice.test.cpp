@@ -23,7 +23,7 @@ namespace {
 const std::string kCli = CRACKVIS_CLI;
 
 std::vector<std::string> healthOf(const std::string& address, std::vector<std::string> more = {},
-                                  const dataservice::TlsFiles& tls = clientTls("client")) {
+                                  const tls::TlsFiles& tls = clientTls("client")) {
   std::vector<std::string> argv{kCli,     "health", address, "--ca", tls.ca,
                                 "--cert", tls.cert, "--key", tls.key};
   argv.insert(argv.end(), more.begin(), more.end());

@@ -4,6 +4,7 @@
 
 #include <crackvis/dataservice/server_config.hpp>
 #include <crackvis/rpc/credentials.hpp>
+#include <crackvis/rpc/host_port.hpp>
 
 namespace crackvis::testing {
 namespace {
@@ -11,7 +12,8 @@ namespace {
 using namespace crackvis::dataservice;
 using namespace crackvis::rpc;
 
-TEST_CASE("Secrets are stored as salted PBKDF2 hashes", "[dataservice]") {
+TEST_CASE("Passwords are stored as salted PBKDF2 hashes, random tokens as SHA-256",
+          "[dataservice]") {
   auto hash = hashSecret("correct horse", 2000);
   REQUIRE(hash.isOk());
   CHECK_THAT(*hash, Catch::StartsWith("pbkdf2-sha256$2000$"));
@@ -31,6 +33,17 @@ TEST_CASE("Secrets are stored as salted PBKDF2 hashes", "[dataservice]") {
   REQUIRE(token.isOk());
   CHECK(token->size() == 43);
   CHECK(generateToken().value() != *token);
+  // A token (32 random bytes) is stored as one SHA-256 of it, unsalted:
+  // the same token, the same hash, and only that token matches.
+  auto tokenHash = hashToken(*token);
+  REQUIRE(tokenHash.isOk());
+  CHECK_THAT(*tokenHash, Catch::StartsWith("sha256$"));
+  CHECK(tokenHash->find(*token) == std::string::npos);
+  CHECK(hashToken(*token).value() == *tokenHash);
+  CHECK(verifySecret(*token, *tokenHash));
+  CHECK_FALSE(verifySecret(token->substr(1), *tokenHash));
+  CHECK_FALSE(verifySecret(*token, "sha256$AAAA"));
+  CHECK(hashToken("").status().code() == StatusCode::kInvalidArgument);
 }
 
 TEST_CASE("The authenticator maps credentials to users and folders", "[dataservice]") {

@@ -4,6 +4,7 @@
 
 #include "service_fixture.hpp"
 #include <crackvis/dataservice/data_root.hpp>
+#include <crackvis/rpc/credentials.hpp>
 
 namespace crackvis::testing {
 namespace {
@@ -57,7 +58,7 @@ TEST_CASE("Files resolve inside the root, symlinks may not leave it", "[dataserv
 }
 
 TEST_CASE("Folder access matches whole path parts", "[dataservice]") {
-  using dataservice::isWithinFolder;
+  using rpc::isWithinFolder;
   CHECK(isWithinFolder("alice/a.h5", "alice"));
   CHECK(isWithinFolder("alice/x/a.h5", "alice/"));
   CHECK(isWithinFolder("alice", "alice"));

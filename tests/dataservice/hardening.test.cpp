@@ -17,7 +17,6 @@
 #include <fmt/format.h>
 #include <grpcpp/grpcpp.h>
 #include <netinet/in.h>
-#include <openssl/evp.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -25,6 +24,7 @@
 #include "crackvis/v1/data.grpc.pb.h"
 #include "service_fixture.hpp"
 #include "support/process.hpp"
+#include <crackvis/common/base64.hpp>
 #include <crackvis/rpc/access_log.hpp>
 #include <crackvis/rpc/call.hpp>
 #include <crackvis/rpc/credentials.hpp>
@@ -36,15 +36,6 @@ namespace {
 
 namespace v1 = crackvis::v1;
 using dataservice::Hyperslab;
-
-std::string base64Of(const std::string& text) {
-  std::string out(4 * ((text.size() + 2) / 3) + 1, '\0');
-  const int written = EVP_EncodeBlock(reinterpret_cast<unsigned char*>(out.data()),
-                                      reinterpret_cast<const unsigned char*>(text.data()),
-                                      static_cast<int>(text.size()));
-  out.resize(static_cast<std::size_t>(written));
-  return out;
-}
 
 double secondsOf(const std::function<void()>& work) {
   const auto start = std::chrono::steady_clock::now();
@@ -194,7 +185,7 @@ TEST_CASE("Password failures from one address are capped across names", "[datase
   }
   users.push_back({"dave", "", rpc::hashSecret("dave's password", 1000).value(), "", {"*"}});
   rpc::Authenticator authenticator(users);
-  auto basic = [](const std::string& pair) { return "Basic " + base64Of(pair); };
+  auto basic = [](const std::string& pair) { return "Basic " + base64Encode(pair); };
   static_assert(rpc::kMaxFailuresPerAddress == 10 * rpc::kMaxFailuresPerIdentity);
   for (int i = 0; i < rpc::kMaxFailuresPerAddress; ++i) {
     const std::string guess = fmt::format("user{}:wrong {}", i % 10, i);

@@ -63,7 +63,7 @@ TEST_CASE("Clients without a certificate the server trusts are refused",
     CHECK_THAT(made.status().message(), Catch::Contains("no certificate file given"));
     // ...so a raw gRPC channel that trusts the server but has no certificate.
     grpc::SslCredentialsOptions ssl;
-    ssl.pem_root_certs = dataservice::loadTlsMaterial(clientTls()).value().caPem;
+    ssl.pem_root_certs = tls::loadTlsMaterial(clientTls()).value().caPem;
     auto channel = grpc::CreateChannel(server->address(), grpc::SslCredentials(ssl));
     auto health = grpc::health::v1::Health::NewStub(channel);
     grpc::ClientContext context;

@@ -105,12 +105,12 @@ const fs::path& certificateDir() {
   return dir.path();
 }
 
-dataservice::TlsFiles serverTls() {
+tls::TlsFiles serverTls() {
   const fs::path& dir = certificateDir();
   return {(dir / "ca.pem").string(), (dir / "server.pem").string(), (dir / "server.key").string()};
 }
 
-dataservice::TlsFiles clientTls(const std::string& name, const std::string& ca) {
+tls::TlsFiles clientTls(const std::string& name, const std::string& ca) {
   const fs::path& dir = certificateDir();
   return {(dir / (ca + ".pem")).string(), (dir / (name + ".pem")).string(),
           (dir / (name + ".key")).string()};
@@ -131,7 +131,7 @@ dataservice::ServerConfig baseConfig() {
 }
 
 std::shared_ptr<grpc::Channel> rawChannel(const dataservice::DataServer& server) {
-  const auto tls = dataservice::loadTlsMaterial(clientTls()).value();
+  const auto tls = tls::loadTlsMaterial(clientTls()).value();
   grpc::SslCredentialsOptions ssl;
   ssl.pem_root_certs = tls.caPem;
   ssl.pem_cert_chain = tls.certPem;

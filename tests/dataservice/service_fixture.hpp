@@ -22,10 +22,10 @@ namespace crackvis::testing {
 // Directory with ca, server, client, crackvis-render, other-ca,
 // other-client and expired-client certificates (.pem/.key).
 const std::filesystem::path& certificateDir();
-dataservice::TlsFiles serverTls();
+tls::TlsFiles serverTls();
 // A client's files: `name` is "client", "crackvis-render", "other-client" or
 // "expired-client"; `ca` is the CA the client trusts for the server.
-dataservice::TlsFiles clientTls(const std::string& name = "client", const std::string& ca = "ca");
+tls::TlsFiles clientTls(const std::string& name = "client", const std::string& ca = "ca");
 
 // The data root, made once per process before any server starts:
 //   run.h5            3D sample, 3 steps, optional arrays      (sample3d)

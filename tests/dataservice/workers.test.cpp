@@ -255,6 +255,13 @@ TEST_CASE("HDF5 workers run the worker program and keep nothing of the service b
   CHECK(refused.status().code() == StatusCode::kFailedPrecondition);
   CHECK_THAT(refused.status().message(), Catch::Contains("/nonexistent/crackvis-hdf5-worker") &&
                                              Catch::Contains("--hdf5-worker-program"));
+  // Nor does one whose worker program ends without getting ready.
+  config.hdf5WorkerProgram = "/bin/true";
+  auto notReady = dataservice::DataServer::start(config);
+  REQUIRE_FALSE(notReady.isOk());
+  CHECK(notReady.status().code() == StatusCode::kUnavailable);
+  CHECK_THAT(notReady.status().message(),
+             Catch::Contains("/bin/true did not get ready (exited with status 0)"));
 
   // Run by hand, the program says what it is for.
   const fs::path program = fs::path(CRACKVIS_DATA).parent_path() / "crackvis-hdf5-worker";

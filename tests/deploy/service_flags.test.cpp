@@ -93,8 +93,12 @@ TEST_CASE("crackvis-data refuses out-of-range limits from flags and file at star
       {"no slabs in the file", base, R"({"limits": {"max_slabs_per_read": 0}})",
        "--max-slabs-per-read must be at least 1, got 0 (limits.max_slabs_per_read in the "
        "configuration file)"},
-      {"describe time not a number", with({"--describe-max-seconds", "1e300"}), "",
-       "--describe-max-seconds must be between 0.001 and 3600, got -0.001 "
+      {"describe time beyond an hour", with({"--describe-max-seconds", "1e300"}), "",
+       "--describe-max-seconds must be between 0.001 and 3600, got 1e+300 "
+       "(limits.describe_max_seconds in the configuration file)"},
+      {"describe time below a millisecond in the file", base,
+       R"({"limits": {"describe_max_seconds": -1e-9}})",
+       "--describe-max-seconds must be between 0.001 and 3600, got -1e-09 "
        "(limits.describe_max_seconds in the configuration file)"},
       {"no describe depth", with({"--describe-max-depth", "0"}), "",
        "--describe-max-depth must be between 1 and 100000, got 0 (limits.describe_max_depth in "

@@ -21,8 +21,8 @@
 #include "support/sample_files.hpp"
 #include <crackvis/cracks/particle_grid.hpp>
 #include <crackvis/dataservice/catalogue.hpp>
-#include <crackvis/dataservice/tls_material.hpp>
 #include <crackvis/source/step_source.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 using namespace crackvis;
 using namespace crackvis::testing;
@@ -137,7 +137,7 @@ void checkSource(const std::function<Result<std::unique_ptr<source::StepSource>>
 }
 
 std::unique_ptr<v1::RenderService::Stub> connectRender(const service::RenderServer& server) {
-  const auto tls = dataservice::loadTlsMaterial(clientTls()).value();
+  const auto tls = tls::loadTlsMaterial(clientTls()).value();
   auto credentials = grpc::SslCredentials({tls.caPem, tls.keyPem, tls.certPem});
   return v1::RenderService::NewStub(
       grpc::CreateChannel(fmt::format("localhost:{}", server.port()), credentials));

@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <chrono>
 #include <condition_variable>
-#include <fstream>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -22,11 +21,11 @@
 #include "commands.hpp"
 #include "crackvis/v1/render.grpc.pb.h"
 #include "pipeline_file.hpp"
-#include <crackvis/dataservice/tls_material.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::cli {
 namespace {
@@ -44,7 +43,7 @@ struct RenderBenchOptions {
   double seconds = 5.0;
   double eventRate = 60.0;  // events per second, a mouse drag's rate
   int stillFrames = 10;     // isolated camera moves answered at full resolution
-  dataservice::TlsFiles tls = dataservice::defaultTlsFiles("client");
+  tls::TlsFiles tls = tls::defaultTlsFiles("client");
   std::string token;
   bool jsonOnly = false;
   bool methodGiven = false;
@@ -59,14 +58,6 @@ struct FrameRecord {
 
 double ms(Clock::duration d) {
   return std::chrono::duration<double, std::milli>(d).count();
-}
-
-Result<std::string> readFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) {
-    return failedPrecondition(fmt::format("{}: cannot read", path));
-  }
-  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 // The session's frames as they arrive, decoded as a client would.
@@ -199,7 +190,7 @@ std::string serverErrors(FrameCollector& collector) {
 }
 
 std::shared_ptr<grpc::Channel> makeChannel(const RenderBenchOptions& options,
-                                           const dataservice::TlsMaterial& material) {
+                                           const tls::TlsMaterial& material) {
   grpc::SslCredentialsOptions ssl;
   ssl.pem_root_certs = material.caPem;
   ssl.pem_private_key = material.keyPem;
@@ -217,7 +208,7 @@ void authorize(grpc::ClientContext& context, const RenderBenchOptions& options) 
 
 Result<Report> run(const RenderBenchOptions& options) {
   CRACKVIS_RETURN_IF_ERROR(checkHostPort("--server", options.server));
-  auto material = dataservice::loadTlsMaterial(options.tls);
+  auto material = tls::loadTlsMaterial(options.tls);
   if (!material) {
     return material.status();
   }
@@ -229,20 +220,12 @@ Result<Report> run(const RenderBenchOptions& options) {
   if (!method) {
     return method.status();
   }
-  pipeline::PipelineDescription d;
-  if (!options.pipelinePath.empty()) {
-    auto xml = readFile(options.pipelinePath);
-    if (!xml) {
-      return xml.status();
-    }
-    auto parsed = pipeline::parsePipeline(*xml);
-    if (!parsed) {
-      return Status(parsed.status().code(),
-                    fmt::format("{}: {}", options.pipelinePath, parsed.status().message()));
-    }
-    d = std::move(parsed).value();
-    d.view.camera.reset();
+  auto described = cli::readPipelineFile(options.pipelinePath);
+  if (!described) {
+    return described.status();
   }
+  pipeline::PipelineDescription d = std::move(described).value();
+  d.view.camera.reset();
   d.file = options.file;
   d.step = options.step;
   d.view.width = size->first;

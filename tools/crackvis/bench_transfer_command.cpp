@@ -21,6 +21,7 @@
 #include <crackvis/dataservice/data_client.hpp>
 #include <crackvis/dataservice/raw_tls_client.hpp>
 #include <crackvis/dataservice/remote_dem_file.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::cli {
 namespace {
@@ -33,7 +34,7 @@ struct TransferOptions {
   std::string raw;
   std::string file;
   int step = -1;
-  ds::TlsFiles tls = ds::defaultTlsFiles("client");
+  tls::TlsFiles tls = tls::defaultTlsFiles("client");
   std::string token;
   int repeat = 5;
   int maxRepeat = 30;

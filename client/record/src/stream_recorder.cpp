@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <crackvis/common/pending_file.hpp>
+#include <crackvis/encode/av_support.hpp>
 #include <crackvis/record/stream_recorder.hpp>
 
 extern "C" {
@@ -26,11 +27,7 @@ constexpr AVRational kClock{1, 90000};
 constexpr int kSpsType = 7;
 constexpr int kPpsType = 8;
 
-std::string avError(int code) {
-  char text[AV_ERROR_MAX_STRING_SIZE] = {};
-  av_strerror(code, text, sizeof text);
-  return text;
-}
+using encode::avError;
 
 struct FormatFree {
   void operator()(AVFormatContext* context) const {
@@ -40,20 +37,8 @@ struct FormatFree {
     avformat_free_context(context);
   }
 };
-struct CodecContextFree {
-  void operator()(AVCodecContext* context) const { avcodec_free_context(&context); }
-};
-struct ParserFree {
-  void operator()(AVCodecParserContext* parser) const { av_parser_close(parser); }
-};
-struct PacketFree {
-  void operator()(AVPacket* packet) const { av_packet_free(&packet); }
-};
 
 using FormatContext = std::unique_ptr<AVFormatContext, FormatFree>;
-using CodecContext = std::unique_ptr<AVCodecContext, CodecContextFree>;
-using Parser = std::unique_ptr<AVCodecParserContext, ParserFree>;
-using Packet = std::unique_ptr<AVPacket, PacketFree>;
 
 Status avFailure(const std::string& path, const char* what, int code) {
   return failedPrecondition(fmt::format("recording {}: {}: {}", path, what, avError(code)));
@@ -120,9 +105,9 @@ struct StreamRecorder::Impl {
   AVStream* stream = nullptr;  // owned by format
   // libavcodec's H.264 parser reads each frame's size from the active SPS;
   // it needs a codec context to keep that state in.
-  CodecContext parserContext;
-  Parser parser;
-  Packet packet;
+  encode::av::CodecContext parserContext;
+  encode::av::Parser parser;
+  encode::av::Packet packet;
   // The recording is written beside its name and renamed over it only when
   // complete: an existing file survives a failed or empty recording.
   std::unique_ptr<PendingFile> output;

@@ -2,6 +2,7 @@
 #include <chrono>
 #include <climits>
 #include <optional>
+#include <string_view>
 
 #include <fmt/format.h>
 #include <google/protobuf/io/coded_stream.h>
@@ -12,10 +13,12 @@
 #include "crackvis/v1/data.grpc.pb.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "grpc_convert.hpp"
+#include <crackvis/common/base64.hpp>
 #include <crackvis/dataservice/data_client.hpp>
 #include <crackvis/dataservice/packed_chunk.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::dataservice {
 namespace v1 = crackvis::v1;
@@ -399,7 +402,7 @@ Result<DataClient> DataClient::connect(const ClientOptions& options) {
   if (options.insecure) {
     credentials = grpc::InsecureChannelCredentials();
   } else {
-    auto material = loadTlsMaterial(options.tls);
+    auto material = tls::loadTlsMaterial(options.tls);
     if (!material) {
       return material.status();
     }
@@ -415,21 +418,7 @@ Result<DataClient> DataClient::connect(const ClientOptions& options) {
   if (!options.token.empty()) {
     impl->authorization = "Bearer " + options.token;
   } else if (!options.user.empty()) {
-    const std::string plain = options.user + ":" + options.password;
-    std::string encoded;
-    static constexpr char kAlphabet[] =
-        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    for (size_t i = 0; i < plain.size(); i += 3) {
-      const auto byte = [&](size_t k) {
-        return k < plain.size() ? static_cast<unsigned>(static_cast<unsigned char>(plain[k])) : 0u;
-      };
-      const unsigned triple = (byte(i) << 16) | (byte(i + 1) << 8) | byte(i + 2);
-      encoded += kAlphabet[(triple >> 18) & 63];
-      encoded += kAlphabet[(triple >> 12) & 63];
-      encoded += i + 1 < plain.size() ? kAlphabet[(triple >> 6) & 63] : '=';
-      encoded += i + 2 < plain.size() ? kAlphabet[triple & 63] : '=';
-    }
-    impl->authorization = "Basic " + encoded;
+    impl->authorization = "Basic " + base64Encode(options.user + ":" + options.password);
   }
   impl->channel = grpc::CreateCustomChannel(options.target, credentials, arguments);
   if (!impl->channel) {

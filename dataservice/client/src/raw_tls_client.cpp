@@ -15,6 +15,7 @@
 
 #include <crackvis/common/unique_fd.hpp>
 #include <crackvis/dataservice/raw_tls_client.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::dataservice {
 namespace {
@@ -57,7 +58,7 @@ Result<int> connectTcp(const std::string& host, const std::string& port) {
   return fd;
 }
 
-bool usePem(SSL_CTX* context, const TlsMaterial& tls) {
+bool usePem(SSL_CTX* context, const tls::TlsMaterial& tls) {
   BIO* certBio = BIO_new_mem_buf(tls.certPem.data(), static_cast<int>(tls.certPem.size()));
   X509* cert = PEM_read_bio_X509(certBio, nullptr, nullptr, nullptr);
   BIO_free(certBio);
@@ -90,14 +91,14 @@ Result<RawTransfer> rawTlsRead(const RawTlsOptions& options, const std::string& 
     host = host.substr(1, host.size() - 2);
   }
   const std::string port = options.target.substr(colon + 1);
-  auto material = loadTlsMaterial(options.tls);
+  auto material = tls::loadTlsMaterial(options.tls);
   if (!material) {
     return material.status();
   }
   std::unique_ptr<SSL_CTX, ContextFree> context(SSL_CTX_new(TLS_client_method()));
   if (!context || !usePem(context.get(), *material)) {
     return failedPrecondition(
-        fmt::format("raw TLS: cannot use the certificates ({})", opensslError()));
+        fmt::format("raw TLS: cannot use the certificates ({})", tls::opensslError()));
   }
   SSL_CTX_set_min_proto_version(context.get(), TLS1_2_VERSION);
   SSL_CTX_set_verify(context.get(), SSL_VERIFY_PEER, nullptr);
@@ -121,7 +122,7 @@ Result<RawTransfer> rawTlsRead(const RawTlsOptions& options, const std::string& 
   }
   if (SSL_connect(ssl.get()) != 1) {
     return Status(StatusCode::kUnavailable, fmt::format("raw TLS handshake with {} failed ({})",
-                                                        options.target, opensslError()));
+                                                        options.target, tls::opensslError()));
   }
   transfer.connectSeconds = std::chrono::duration<double>(Clock::now() - connectStart).count();
   transfer.protocol = SSL_get_version(ssl.get());
@@ -137,7 +138,7 @@ Result<RawTransfer> rawTlsRead(const RawTlsOptions& options, const std::string& 
   size_t written = 0;
   if (SSL_write_ex(ssl.get(), request.data(), request.size(), &written) != 1) {
     return Status(StatusCode::kUnavailable,
-                  fmt::format("raw TLS: write failed ({})", opensslError()));
+                  fmt::format("raw TLS: write failed ({})", tls::opensslError()));
   }
   std::vector<char> buffer(1 << 20);
   std::string header;

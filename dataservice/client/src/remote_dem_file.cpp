@@ -9,6 +9,7 @@
 #include <crackvis/dataservice/remote_dem_file.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/layout.hpp>
+#include <crackvis/dem/model.hpp>
 
 namespace crackvis::dataservice {
 namespace {
@@ -77,31 +78,14 @@ std::string bondStatePath(int step) {
   return dem::datasetPath(dem::DemDataset::kBondState, step);
 }
 
-// Every bond must join two existing particles; `first` is the index of
-// bonds[0] in the file's list (readStep checks the list chunk by chunk). The
-// common case, all in range, is one branch-free pass that vectorizes: read
-// as unsigned, a negative index is larger than any particle count up to
-// 2^31, so a single maximum checks both bounds (a min and a max pass took
-// twice as long). Only a bad file pays for finding the first offending bond.
+// Every bond must join two existing particles (dem::checkBondEnds); `first`
+// is the index of bonds[0] in the file's list (readStep checks the list
+// chunk by chunk). A file that breaks it is FAILED_PRECONDITION, as every
+// other problem of a file's content on this path.
 Status checkBonds(std::span<const dem::Bond> bonds, std::int64_t particles, const std::string& file,
                   std::size_t first = 0) {
-  if (particles <= (std::int64_t{1} << 31)) {
-    std::uint32_t highest = 0;
-    for (const dem::Bond& bond : bonds) {
-      highest = std::max(highest, std::max(static_cast<std::uint32_t>(bond.first),
-                                           static_cast<std::uint32_t>(bond.second)));
-    }
-    if (bonds.empty() || static_cast<std::int64_t>(highest) < particles) {
-      return Status::ok();
-    }
-  }
-  for (size_t b = 0; b < bonds.size(); ++b) {
-    if (bonds[b].first < 0 || bonds[b].first >= particles || bonds[b].second < 0 ||
-        bonds[b].second >= particles) {
-      return failedPrecondition(
-          fmt::format("{}: bond {} joins particles {} and {}: index out of range (N = {})", file,
-                      first + b, bonds[b].first, bonds[b].second, particles));
-    }
+  if (Status ends = dem::checkBondEnds(bonds, particles, first); !ends) {
+    return failedPrecondition(fmt::format("{}: {}", file, ends.message()));
   }
   return Status::ok();
 }

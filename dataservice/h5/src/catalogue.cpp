@@ -222,9 +222,8 @@ bool withinBounds(TreeWalk& walk, const std::string& path) {
     walk.status =
         resourceExhausted(fmt::format("more than {} objects, Describe's limit", limits.maxObjects));
   } else if (std::chrono::steady_clock::now() > walk.deadline) {
-    walk.status =
-        resourceExhausted(fmt::format("the tree took longer than {} s to walk, Describe's limit",
-                                      std::chrono::duration<double>(limits.maxTime).count()));
+    walk.status = resourceExhausted(fmt::format(
+        "the tree took longer than {} s to walk, Describe's limit", limits.maxTime.count()));
   } else if (walk.options->cancelled && walk.options->cancelled()) {
     walk.status = Status(StatusCode::kUnavailable, "Describe cancelled by the caller");
   }
@@ -690,8 +689,10 @@ Result<FileDescription> Catalogue::describe(const ResolvedPath& file,
                   fmt::format("{}: {}", file.requested, rootAttributes.status().message()));
   }
   description.groups.push_back({"/", std::move(*rootAttributes)});
-  TreeWalk walk{&description, Status::ok(), &options,
-                std::chrono::steady_clock::now() + options.limits.maxTime};
+  TreeWalk walk{
+      &description, Status::ok(), &options,
+      std::chrono::steady_clock::now() +
+          std::chrono::duration_cast<std::chrono::steady_clock::duration>(options.limits.maxTime)};
   const herr_t visited = H5Lvisit(handle->get(), H5_INDEX_NAME, H5_ITER_INC, visitLink, &walk);
   if (!walk.status) {
     return Status(walk.status.code(), fmt::format("{}: {}", file.requested, walk.status.message()));

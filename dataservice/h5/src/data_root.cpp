@@ -125,19 +125,6 @@ Result<ResolvedPath> DataRoot::resolveFolder(std::string_view path) const {
   return resolve(path, true);
 }
 
-bool isWithinFolder(std::string_view path, std::string_view folder) {
-  while (!folder.empty() && folder.back() == '/') {
-    folder.remove_suffix(1);
-  }
-  if (folder.empty() || folder == "*") {
-    return true;
-  }
-  if (path.size() < folder.size() || path.substr(0, folder.size()) != folder) {
-    return false;
-  }
-  return path.size() == folder.size() || path[folder.size()] == '/';
-}
-
 bool hasHdf5Signature(const fs::path& file) {
   static constexpr std::array<char, 8> kSignature = {'\x89', 'H',  'D',    'F',
                                                      '\r',   '\n', '\x1a', '\n'};

@@ -191,11 +191,11 @@ Status checkDemDataset(const FileDescription& description, dem::DemDataset id, i
     return dem::missingDataset(path);
   }
   // The element types the layout uses; any other stays kOther.
-  static constexpr std::pair<DataType, dem::h5::ElementType> kLayoutTypes[] = {
-      {DataType::kInt32, dem::h5::ElementType::kInt32},
-      {DataType::kUInt8, dem::h5::ElementType::kUInt8},
-      {DataType::kFloat32, dem::h5::ElementType::kFloat32},
-      {DataType::kFloat64, dem::h5::ElementType::kFloat64}};
+  static constexpr std::pair<DataType, dem::ElementType> kLayoutTypes[] = {
+      {DataType::kInt32, dem::ElementType::kInt32},
+      {DataType::kUInt8, dem::ElementType::kUInt8},
+      {DataType::kFloat32, dem::ElementType::kFloat32},
+      {DataType::kFloat64, dem::ElementType::kFloat64}};
   dem::DatasetHeader header;
   for (const auto& [stored, element] : kLayoutTypes) {
     if (dataset->dtype == stored) {

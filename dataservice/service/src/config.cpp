@@ -8,6 +8,9 @@
 
 #include <crackvis/common/json_config.hpp>
 #include <crackvis/dataservice/server_config.hpp>
+#include <crackvis/rpc/host_port.hpp>
+#include <crackvis/rpc/setting_check.hpp>
+#include <crackvis/tls/tls_config.hpp>
 
 namespace crackvis::dataservice {
 namespace {
@@ -16,15 +19,10 @@ using nlohmann::json;
 
 using config::checkKeys;
 using config::read;
+using rpc::checkSetting;
+using tls::readTlsFiles;
 
 }  // namespace
-
-std::chrono::milliseconds describeTime(double seconds) {
-  // Out of range (or not finite) becomes -1 ms, which validateServerConfig
-  // refuses, naming the flag and the key.
-  const bool usable = std::isfinite(seconds) && seconds >= 0.0 && seconds <= 1e6;
-  return std::chrono::milliseconds(usable ? static_cast<std::int64_t>(seconds * 1000) : -1);
-}
 
 namespace {
 
@@ -41,9 +39,9 @@ Status readLimits(const json& object, const std::string& where, Limits& limits) 
   std::uint64_t objects = limits.describe.maxObjects;
   CRACKVIS_RETURN_IF_ERROR(read(object, "describe_max_objects", where, objects));
   limits.describe.maxObjects = objects;
-  double seconds = std::chrono::duration<double>(limits.describe.maxTime).count();
+  double seconds = limits.describe.maxTime.count();
   CRACKVIS_RETURN_IF_ERROR(read(object, "describe_max_seconds", where, seconds));
-  limits.describe.maxTime = describeTime(seconds);
+  limits.describe.maxTime = std::chrono::duration<double>(seconds);
   CRACKVIS_RETURN_IF_ERROR(read(object, "describe_cache_bytes", where, limits.describeCacheBytes));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_memory_bytes", where, limits.maxMemoryBytes));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_read_bytes", where, limits.maxReadBytes));
@@ -96,12 +94,7 @@ Result<ServerConfig> parseServerConfig(const std::string& text, const std::strin
   CRACKVIS_RETURN_IF_ERROR(read(root, "raw_tls_listen", origin, config.rawTlsListen));
   CRACKVIS_RETURN_IF_ERROR(read(root, "hdf5_worker_program", origin, config.hdf5WorkerProgram));
   if (root.contains("tls")) {
-    const std::string where = origin + ": tls";
-    const json& tls = root.at("tls");
-    CRACKVIS_RETURN_IF_ERROR(checkKeys(tls, where, {"ca", "cert", "key"}));
-    CRACKVIS_RETURN_IF_ERROR(read(tls, "ca", where, config.tls.ca));
-    CRACKVIS_RETURN_IF_ERROR(read(tls, "cert", where, config.tls.cert));
-    CRACKVIS_RETURN_IF_ERROR(read(tls, "key", where, config.tls.key));
+    CRACKVIS_RETURN_IF_ERROR(readTlsFiles(root.at("tls"), origin + ": tls", config.tls));
   }
   if (root.contains("limits")) {
     CRACKVIS_RETURN_IF_ERROR(readLimits(root.at("limits"), origin + ": limits", config.limits));
@@ -134,48 +127,15 @@ Result<ServerConfig> loadServerConfig(const std::string& path) {
   return parseServerConfig(*text, path);
 }
 
-template <typename T>
-Status checkSetting(SettingName name, T value, T min, T max) {
-  std::string bounds;
-  if constexpr (std::is_floating_point_v<T>) {
-    if (!std::isfinite(value)) {
-      bounds = "must be a finite number";
-    }
-  }
-  if (bounds.empty() && (value < min || value > max)) {
-    bounds = max == std::numeric_limits<T>::max()
-                 ? fmt::format("must be at least {}", min)
-                 : fmt::format("must be between {} and {}", min, max);
-  }
-  if (bounds.empty()) {
-    return Status::ok();
-  }
-  if (name.flag.empty()) {
-    return invalidArgument(
-        fmt::format("{} in the configuration file {}, got {}", name.key, bounds, value));
-  }
-  if (name.key.empty()) {
-    return invalidArgument(fmt::format("{} {}, got {}", name.flag, bounds, value));
-  }
-  return invalidArgument(fmt::format("{} {}, got {} ({} in the configuration file)", name.flag,
-                                     bounds, value, name.key));
-}
-
-template Status checkSetting<int>(SettingName, int, int, int);
-template Status checkSetting<std::int64_t>(SettingName, std::int64_t, std::int64_t, std::int64_t);
-template Status checkSetting<std::uint64_t>(SettingName, std::uint64_t, std::uint64_t,
-                                            std::uint64_t);
-template Status checkSetting<double>(SettingName, double, double, double);
-
 Status validateServerConfig(const ServerConfig& config) {
   if (config.dataRoot.empty()) {
     return invalidArgument("no data root: give --root DIR or data_root in --config");
   }
-  if (auto listen = parseHostPort(config.listen); !listen) {
+  if (auto listen = rpc::parseHostPort(config.listen); !listen) {
     return invalidArgument(fmt::format("--listen: {}", listen.status().message()));
   }
   if (!config.rawTlsListen.empty()) {
-    if (auto raw = parseHostPort(config.rawTlsListen); !raw) {
+    if (auto raw = rpc::parseHostPort(config.rawTlsListen); !raw) {
       return invalidArgument(fmt::format("--raw-tls-listen: {}", raw.status().message()));
     }
   }
@@ -196,9 +156,8 @@ Status validateServerConfig(const ServerConfig& config) {
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--describe-max-objects", "limits.describe_max_objects"},
                                         std::uint64_t{limits.describe.maxObjects}, std::uint64_t{1},
                                         std::uint64_t{100'000'000}));
-  CRACKVIS_RETURN_IF_ERROR(
-      checkSetting({"--describe-max-seconds", "limits.describe_max_seconds"},
-                   std::chrono::duration<double>(limits.describe.maxTime).count(), 0.001, 3600.0));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--describe-max-seconds", "limits.describe_max_seconds"},
+                                        limits.describe.maxTime.count(), 0.001, 3600.0));
   // One stream's buffer must fit, or no Read could ever run.
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-memory", "limits.max_memory_bytes"},
                                         limits.maxMemoryBytes, std::uint64_t{kStreamBufferBytes},
@@ -218,44 +177,6 @@ Status validateServerConfig(const ServerConfig& config) {
   // Deadlines are computed from it: a week keeps them far from overflow.
   return checkSetting({"--max-call-seconds", "limits.max_call_seconds"}, limits.maxCallSeconds,
                       0.001, 7 * 86400.0);
-}
-
-Result<HostPort> parseHostPort(const std::string& address) {
-  HostPort result;
-  std::string portText;
-  if (!address.empty() && address.front() == '[') {
-    const size_t close = address.find(']');
-    if (close == std::string::npos || close + 1 >= address.size() || address[close + 1] != ':') {
-      return invalidArgument(fmt::format("address '{}': expected [host]:port", address));
-    }
-    result.host = address.substr(1, close - 1);
-    portText = address.substr(close + 2);
-  } else {
-    const size_t colon = address.rfind(':');
-    if (colon == std::string::npos || colon == 0) {
-      return invalidArgument(fmt::format("address '{}': expected host:port", address));
-    }
-    result.host = address.substr(0, colon);
-    portText = address.substr(colon + 1);
-  }
-  if (portText.empty() || portText.size() > 5 ||
-      portText.find_first_not_of("0123456789") != std::string::npos ||
-      std::stoi(portText) > 65535) {
-    return invalidArgument(fmt::format("address '{}': port must be 0..65535", address));
-  }
-  result.port = std::stoi(portText);
-  return result;
-}
-
-bool isLoopbackHost(const std::string& host) {
-  if (host == "localhost" || host == "::1") {
-    return true;
-  }
-  // 127.0.0.0/8, written as four decimal parts.
-  unsigned a = 0, b = 0, c = 0, d = 0;
-  char tail = 0;
-  return std::sscanf(host.c_str(), "%u.%u.%u.%u%c", &a, &b, &c, &d, &tail) == 4 && a == 127 &&
-         b < 256 && c < 256 && d < 256;
 }
 
 }  // namespace crackvis::dataservice

@@ -9,6 +9,7 @@
 #include "raw_tls_server.hpp"
 #include <crackvis/dataservice/data_server.hpp>
 #include <crackvis/rpc/server.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::dataservice {
 
@@ -104,7 +105,7 @@ Result<std::unique_ptr<DataServer>> DataServer::start(const ServerConfig& config
   impl->service = std::make_unique<DataServiceImpl>(
       Catalogue(std::move(*root)), *impl->workers, *impl->authenticator, config.limits, *impl->log);
   if (!config.rawTlsListen.empty()) {
-    auto material = loadTlsMaterial(config.tls);
+    auto material = tls::loadTlsMaterial(config.tls);
     if (!material) {
       return material.status();
     }

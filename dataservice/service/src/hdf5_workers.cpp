@@ -1,9 +1,7 @@
 #include "hdf5_workers.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <csignal>
-#include <cstdio>
 #include <cstring>
 #include <optional>
 #include <string_view>
@@ -14,378 +12,23 @@
 #include <poll.h>
 #include <spawn.h>
 #include <sys/mman.h>
-#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "crackvis/v1/data.pb.h"
-#include "describe_proto.hpp"
+#include "worker_protocol.hpp"
 #include <crackvis/common/child_process.hpp>
 #include <crackvis/common/log.hpp>
-#include <crackvis/dataservice/hdf5_worker_main.hpp>
 
 namespace crackvis::dataservice {
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using namespace worker_protocol;
 
 constexpr const char* kProgram = "crackvis-data";
-// The two descriptors a worker program is started with: its socket, and the
-// memfd of the piece buffer it shares with the service.
-constexpr int kWorkerSocket = 3;
-constexpr int kWorkerBuffer = 4;
-
-// kOkShared: a piece's bytes are in the worker's shared buffer, not in the
-// frame (two copies through the socket cost a view's Read a third more).
-enum Kind : std::uint32_t {
-  kDescribe = 1,
-  kPlan = 2,
-  kPiece = 3,
-  kOk = 100,
-  kError = 101,
-  kOkShared = 102
-};
-
-// ------------------------------------------------------------------ wire --
-// Little-endian fields in a string: what crosses the socket between the
-// service and a worker (both the same build of the same program).
-
-class WireWriter {
- public:
-  void u64(std::uint64_t value) { m_out.append(reinterpret_cast<const char*>(&value), 8); }
-  void text(std::string_view value) {
-    u64(value.size());
-    m_out.append(value);
-  }
-  template <typename T>
-  void numbers(const std::vector<T>& values) {
-    u64(values.size());
-    for (T value : values) {
-      u64(static_cast<std::uint64_t>(value));
-    }
-  }
-  std::string take() { return std::move(m_out); }
-
- private:
-  std::string m_out;
-};
-
-class WireReader {
- public:
-  explicit WireReader(std::string_view in) : m_in(in) {}
-  std::uint64_t u64() {
-    std::uint64_t value = 0;
-    if (m_in.size() < 8) {
-      m_ok = false;
-      return 0;
-    }
-    std::memcpy(&value, m_in.data(), 8);
-    m_in.remove_prefix(8);
-    return value;
-  }
-  std::string text() {
-    const std::uint64_t size = u64();
-    if (size > m_in.size()) {
-      m_ok = false;
-      return {};
-    }
-    std::string value(m_in.substr(0, size));
-    m_in.remove_prefix(size);
-    return value;
-  }
-  template <typename T>
-  std::vector<T> numbers() {
-    const std::uint64_t size = u64();
-    if (size > m_in.size() / 8) {
-      m_ok = false;
-      return {};
-    }
-    std::vector<T> values(size);
-    for (T& value : values) {
-      value = static_cast<T>(u64());
-    }
-    return values;
-  }
-  bool ok() const { return m_ok; }
-
- private:
-  std::string_view m_in;
-  bool m_ok = true;
-};
-
-void put(WireWriter& out, const ResolvedPath& file) {
-  out.text(file.requested);
-  out.text(file.relative);
-  out.text(file.absolute.string());
-}
-ResolvedPath getPath(WireReader& in) {
-  ResolvedPath file;
-  file.requested = in.text();
-  file.relative = in.text();
-  file.absolute = in.text();
-  return file;
-}
-
-void put(WireWriter& out, const SlabPlan& slab) {
-  out.text(slab.dataset);
-  out.text(slab.resolvedDataset);
-  out.u64(static_cast<std::uint64_t>(slab.dtype));
-  out.numbers(slab.datasetShape);
-  out.numbers(slab.start);
-  out.numbers(slab.count);
-  out.u64(slab.bytes);
-  out.u64(slab.rowBytes);
-}
-SlabPlan getSlab(WireReader& in) {
-  SlabPlan slab;
-  slab.dataset = in.text();
-  slab.resolvedDataset = in.text();
-  slab.dtype = static_cast<DataType>(in.u64());
-  slab.datasetShape = in.numbers<std::uint64_t>();
-  slab.start = in.numbers<std::uint64_t>();
-  slab.count = in.numbers<std::uint64_t>();
-  slab.bytes = in.u64();
-  slab.rowBytes = in.u64();
-  return slab;
-}
-
-void put(WireWriter& out, const Piece& piece) {
-  out.u64(piece.slab);
-  out.u64(piece.offset);
-  out.u64(piece.bytes);
-  out.numbers(piece.start);
-  out.numbers(piece.count);
-}
-Piece getPiece(WireReader& in) {
-  Piece piece;
-  piece.slab = in.u64();
-  piece.offset = in.u64();
-  piece.bytes = in.u64();
-  piece.start = in.numbers<std::uint64_t>();
-  piece.count = in.numbers<std::uint64_t>();
-  return piece;
-}
-
-std::string encodeStatus(const Status& status) {
-  WireWriter out;
-  out.u64(static_cast<std::uint64_t>(status.code()));
-  out.text(status.message());
-  return out.take();
-}
-Status decodeStatus(std::string_view payload) {
-  WireReader in(payload);
-  const auto code = static_cast<StatusCode>(in.u64());
-  std::string message = in.text();
-  if (!in.ok() || code == StatusCode::kOk) {
-    return internalError("an HDF5 worker sent an unreadable error");
-  }
-  return Status(code, std::move(message));
-}
-
-// ---------------------------------------------------------------- frames --
-// A frame: kind (4 bytes), 4 bytes of padding, payload length (8 bytes),
-// payload.
-
-struct FrameHeader {
-  std::uint32_t kind = 0;
-  std::uint32_t padding = 0;
-  std::uint64_t length = 0;
-};
-
-bool sendAll(int socket, const void* data, std::size_t size) {
-  const auto* bytes = static_cast<const char*>(data);
-  while (size > 0) {
-    const ssize_t sent = ::send(socket, bytes, size, MSG_NOSIGNAL);
-    if (sent < 0) {
-      if (errno == EINTR) {
-        continue;
-      }
-      return false;
-    }
-    bytes += sent;
-    size -= static_cast<std::size_t>(sent);
-  }
-  return true;
-}
-
-// One send for the header and the payload: requests and most answers are
-// small, and each system call is a wake-up of the other side.
-bool sendFrame(int socket, std::uint32_t kind, std::string_view payload) {
-  const FrameHeader header{kind, 0, payload.size()};
-  std::string frame(reinterpret_cast<const char*>(&header), sizeof header);
-  frame.append(payload);
-  return sendAll(socket, frame.data(), frame.size());
-}
-
-// Whether an idle worker's socket shows its end closed (it died) or bytes
-// nobody asked for; either way it cannot take a request.
-bool hungUp(int socket) {
-  pollfd entry{socket, POLLIN | POLLRDHUP, 0};
-  return ::poll(&entry, 1, 0) > 0;
-}
-
-enum class Wait { kReady, kClosed, kTimeout, kCancelled };
-
-// Reads exactly `size` bytes, waiting at most until `deadline` and asking
-// `cancelled` every 100 ms.
-Wait receiveAll(int socket, void* data, std::size_t size, Clock::time_point deadline,
-                const std::function<bool()>& cancelled) {
-  auto* bytes = static_cast<char*>(data);
-  while (size > 0) {
-    // What has arrived already is taken without a poll first.
-    const ssize_t got = ::recv(socket, bytes, size, MSG_DONTWAIT);
-    if (got > 0) {
-      bytes += got;
-      size -= static_cast<std::size_t>(got);
-      continue;
-    }
-    if (got == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
-      return Wait::kClosed;
-    }
-    const auto left =
-        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-    if (left.count() <= 0) {
-      return Wait::kTimeout;
-    }
-    pollfd ready{socket, POLLIN, 0};
-    const int polled =
-        ::poll(&ready, 1, static_cast<int>(std::min<std::int64_t>(left.count(), 100)));
-    if (polled < 0 && errno != EINTR) {
-      return Wait::kClosed;
-    }
-    if (polled <= 0 && cancelled && cancelled()) {
-      return Wait::kCancelled;
-    }
-  }
-  return Wait::kReady;
-}
-
-// --------------------------------------------------------------- worker --
-
-// What a worker answers to one request: kOk and its payload, or kError and
-// an encoded Status.
-std::pair<std::uint32_t, std::string> serve(const Catalogue& catalogue, std::uint32_t kind,
-                                            std::string_view payload, void* shared) {
-  WireReader in(payload);
-  const ResolvedPath file = getPath(in);
-  auto failed = [](const Status& status) { return std::pair{kError, encodeStatus(status)}; };
-  switch (kind) {
-    case kDescribe: {
-      DescribeOptions options;
-      options.limits.maxDepth = static_cast<int>(in.u64());
-      options.limits.maxObjects = in.u64();
-      options.limits.maxTime = std::chrono::milliseconds(in.u64());
-      if (!in.ok()) {
-        break;
-      }
-      auto description = catalogue.describe(file, options);
-      if (!description) {
-        return failed(description.status());
-      }
-      crackvis::v1::DescribeResponse response;
-      toProto(*description, response);
-      return {kOk, response.SerializeAsString()};
-    }
-    case kPlan: {
-      const std::uint64_t count = in.u64();
-      if (count > payload.size()) {
-        break;
-      }
-      std::vector<Hyperslab> slabs(count);
-      for (Hyperslab& slab : slabs) {
-        slab.dataset = in.text();
-        slab.start = in.numbers<std::int64_t>();
-        slab.count = in.numbers<std::int64_t>();
-      }
-      const std::uint64_t maxBytes = in.u64();
-      if (!in.ok()) {
-        break;
-      }
-      auto reader = catalogue.openRead(file, slabs, maxBytes);
-      if (!reader) {
-        return failed(reader.status());
-      }
-      WireWriter out;
-      out.u64((*reader)->totalBytes());
-      out.u64((*reader)->slabs().size());
-      for (const SlabPlan& slab : (*reader)->slabs()) {
-        put(out, slab);
-      }
-      // The first piece comes with the plan, in the shared buffer: one
-      // round trip fewer for every Read (a view's has seven). If it cannot
-      // be read now, the service asks for it again and gets the error then.
-      PieceCursor cursor;
-      const auto first = cursor.next((*reader)->slabs());
-      const bool read = first && (*reader)->read(*first, shared).isOk();
-      out.u64(read ? first->bytes : 0);
-      return {kOk, out.take()};
-    }
-    case kPiece: {
-      const SlabPlan slab = getSlab(in);
-      const Piece piece = getPiece(in);
-      if (!in.ok() || piece.bytes > kMaxChunkBytes) {
-        break;
-      }
-      if (Status read = catalogue.readPiece(file, slab, piece, shared); !read) {
-        return failed(read);
-      }
-      return {kOkShared, {}};
-    }
-    default:
-      break;
-  }
-  return failed(internalError("an HDF5 worker got a request it cannot read"));
-}
-
-[[noreturn]] void runWorker(const DataRoot& root, void* shared) {
-  const Catalogue catalogue(root);
-  for (;;) {
-    pollfd ready{kWorkerSocket, POLLIN, 0};
-    const int polled = ::poll(&ready, 1, 1000);
-    if (polled == 0) {
-      catalogue.closeIdleFiles();  // a writer is not kept out by an idle worker
-      continue;
-    }
-    if (polled < 0) {
-      if (errno == EINTR) {
-        continue;
-      }
-      ::_exit(1);
-    }
-    FrameHeader header;
-    const auto forever = Clock::now() + std::chrono::hours(24 * 365);
-    if (receiveAll(kWorkerSocket, &header, sizeof header, forever, {}) != Wait::kReady ||
-        header.length > (std::uint64_t{64} << 20)) {
-      ::_exit(0);  // the service closed the socket (or speaks nonsense): done
-    }
-    std::string payload(header.length, '\0');
-    if (receiveAll(kWorkerSocket, payload.data(), payload.size(), forever, {}) != Wait::kReady) {
-      ::_exit(0);
-    }
-    const auto [kind, answer] = serve(catalogue, header.kind, payload, shared);
-    if (!sendFrame(kWorkerSocket, kind, answer)) {
-      ::_exit(0);
-    }
-  }
-}
-
-// Whether `fd` is a Unix stream socket: the one a worker is given.
-bool isWorkerSocket(int fd) {
-  int type = 0;
-  socklen_t length = sizeof type;
-  return ::getsockopt(fd, SOL_SOCKET, SO_TYPE, &type, &length) == 0 && type == SOCK_STREAM;
-}
-
-// The worker program's arguments: the data root and the service's pid.
-std::optional<pid_t> servicePid(std::string_view text) {
-  pid_t pid = 0;
-  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), pid);
-  if (error != std::errc() || end != text.data() + text.size() || pid <= 1) {
-    return std::nullopt;
-  }
-  return pid;
-}
+// A worker loads its program and libhdf5 in milliseconds (a sanitizer
+// build in a second); much longer is a program that hangs.
+constexpr std::chrono::seconds kWorkerStartTime{30};
 
 }  // namespace
 
@@ -562,6 +205,22 @@ Result<Hdf5Workers::Started> Hdf5Workers::spawnWorker() {
     errno = error;
     return failed(m_settings.program);
   }
+  // A worker counts once it says it is ready: a signal sent to it earlier
+  // could meet the handlers of its start (a sanitizer's turned a SIGSEGV
+  // into exit status 1), and a program that cannot set itself up is one
+  // clear error here rather than a fault blamed on the first caller's file.
+  FrameHeader ready;
+  if (receiveAll(ours.get(), &ready, sizeof ready, Clock::now() + kWorkerStartTime, {}) !=
+          Wait::kReady ||
+      ready.kind != kReady || ready.length != 0) {
+    ::kill(pid, SIGKILL);
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    ::munmap(shared, kMaxChunkBytes);
+    return unavailable(fmt::format("cannot start an HDF5 worker: {} did not get ready ({})",
+                                   m_settings.program, describeExit(status)));
+  }
   return Started{pid, ours.release(), shared};
 }
 
@@ -589,8 +248,9 @@ Hdf5Workers::Worker* Hdf5Workers::checkOut(Lane lane, const std::string& user) {
   m_waiting.push_back(&ticket);
   auto leave = [&] { m_waiting.erase(std::find(m_waiting.begin(), m_waiting.end(), &ticket)); };
   for (;;) {
-    const bool anyAlive = std::any_of(m_workers.begin(), m_workers.end(),
-                                      [](const Worker& worker) { return worker.pid > 0; });
+    const bool anyAlive = std::any_of(m_workers.begin(), m_workers.end(), [](const Worker& worker) {
+      return worker.pid > 0 || worker.starting;
+    });
     if (!anyAlive) {
       leave();
       m_idle.notify_all();
@@ -636,9 +296,15 @@ std::string Hdf5Workers::replace(Worker& worker, const std::string& file, const 
     worker.pid = -1;
     worker.socket = -1;
     worker.shared = nullptr;
+    worker.starting = true;
     ++m_replaced;
   }
   const Status spawned = spawn(worker);
+  {
+    std::lock_guard lock(m_mutex);
+    worker.starting = false;
+  }
+  m_idle.notify_all();  // a caller waiting for any worker may find none will come
   log::event(stderr, kProgram, "hdf5_worker_replaced",
              {{"pid", std::to_string(old)},
               {"file", echoed(file)},
@@ -757,10 +423,12 @@ Result<std::string> Hdf5Workers::describe(const ResolvedPath& file, const Descri
   put(request, file);
   request.u64(static_cast<std::uint64_t>(limits.maxDepth));
   request.u64(limits.maxObjects);
-  request.u64(static_cast<std::uint64_t>(limits.maxTime.count()));
+  request.u64(static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::milliseconds>(limits.maxTime).count()));
   std::string answer;
   // The walk bounds itself by limits.maxTime; opening the file comes first.
-  const auto deadline = Clock::now() + limits.maxTime + m_settings.pieceTime;
+  const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(limits.maxTime) +
+                        m_settings.pieceTime;
   CRACKVIS_RETURN_IF_ERROR(call(kDescribe, Lane::kWalk, user, request.take(), file.requested,
                                 deadline, cancelled, {&answer, nullptr, 0, {}}));
   return answer;
@@ -823,39 +491,6 @@ std::vector<pid_t> Hdf5Workers::pids() const {
 int Hdf5Workers::replaced() const {
   std::lock_guard lock(m_mutex);
   return m_replaced;
-}
-
-// ---------------------------------------------------------------- worker --
-
-int hdf5WorkerMain(int argc, char** argv) {
-  const std::optional<pid_t> service = argc == 3 ? servicePid(argv[2]) : std::nullopt;
-  if (!service || !isWorkerSocket(kWorkerSocket)) {
-    std::fprintf(stderr,
-                 "crackvis-hdf5-worker: crackvis-data starts this program for its HDF5 work "
-                 "(docs/security.md); it is not run by hand\n");
-    return 2;
-  }
-  // Dies with the service's thread that started it; the check after closes
-  // the gap in which the service could have died first.
-  ::prctl(PR_SET_PDEATHSIG, SIGKILL);
-  if (::getppid() != *service) {
-    return 0;
-  }
-  ::prctl(PR_SET_DUMPABLE, 0);  // no core files of users' data when libhdf5 faults
-  // A fault ends the worker by its signal, which the service reports: no
-  // handler a sanitizer installed may turn it into an exit status.
-  for (const int signal : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) {
-    ::signal(signal, SIG_DFL);
-  }
-  ::signal(SIGPIPE, SIG_IGN);
-  void* shared =
-      ::mmap(nullptr, kMaxChunkBytes, PROT_READ | PROT_WRITE, MAP_SHARED, kWorkerBuffer, 0);
-  ::close(kWorkerBuffer);
-  auto root = DataRoot::open(argv[1]);
-  if (shared == MAP_FAILED || !root) {
-    return 1;  // the service sees the socket close and replaces the worker
-  }
-  runWorker(*root, shared);
 }
 
 }  // namespace crackvis::dataservice

@@ -94,6 +94,10 @@ class Hdf5Workers {
     int socket = -1;
     void* shared = nullptr;  // kMaxChunkBytes the worker reads pieces into
     bool busy = false;
+    // Being replaced: no process now, but one is starting (until it is
+    // ready, which takes a moment), so callers wait for it rather than
+    // finding no worker at all.
+    bool starting = false;
   };
   struct Started {
     pid_t pid;

@@ -19,6 +19,8 @@
 #include <unistd.h>
 
 #include <crackvis/rpc/call.hpp>
+#include <crackvis/rpc/host_port.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::dataservice {
 namespace {
@@ -26,7 +28,7 @@ namespace {
 constexpr size_t kMaxRequestBytes = 8192;
 constexpr int kSocketTimeoutSeconds = 30;
 
-bool loadPemIntoContext(SSL_CTX* context, const TlsMaterial& tls, std::string& error) {
+bool loadPemIntoContext(SSL_CTX* context, const tls::TlsMaterial& tls, std::string& error) {
   BIO* certBio = BIO_new_mem_buf(tls.certPem.data(), static_cast<int>(tls.certPem.size()));
   X509* cert = PEM_read_bio_X509(certBio, nullptr, nullptr, nullptr);
   bool ok = cert != nullptr && SSL_CTX_use_certificate(context, cert) == 1;
@@ -61,7 +63,7 @@ bool loadPemIntoContext(SSL_CTX* context, const TlsMaterial& tls, std::string& e
   }
   BIO_free(caBio);
   if (!ok || added == 0) {
-    error = opensslError();
+    error = tls::opensslError();
     return false;
   }
   return true;
@@ -149,18 +151,18 @@ Result<Request> parseRequest(const std::string& text) {
 }  // namespace
 
 Result<std::unique_ptr<RawTlsServer>> RawTlsServer::start(const std::string& listen,
-                                                          const TlsMaterial& tls,
+                                                          const tls::TlsMaterial& tls,
                                                           const Catalogue& catalogue,
                                                           const Authenticator& authenticator,
                                                           const Limits& limits, AccessLog& log) {
-  auto hostPort = parseHostPort(listen);
+  auto hostPort = rpc::parseHostPort(listen);
   if (!hostPort) {
     return hostPort.status();
   }
   std::unique_ptr<RawTlsServer> server(new RawTlsServer(catalogue, authenticator, limits, log));
   server->m_context = SSL_CTX_new(TLS_server_method());
   if (server->m_context == nullptr) {
-    return internalError(fmt::format("raw TLS: SSL_CTX_new failed ({})", opensslError()));
+    return internalError(fmt::format("raw TLS: SSL_CTX_new failed ({})", tls::opensslError()));
   }
   SSL_CTX_set_min_proto_version(server->m_context, TLS1_2_VERSION);
   std::string error;
@@ -298,7 +300,7 @@ void RawTlsServer::serve(int fd, std::string peer) {
   Status status = rpc::guarded("crackvis-data", record, [&]() -> Status {
     if (SSL_accept(ssl) != 1) {
       return Status(StatusCode::kUnauthenticated,
-                    fmt::format("TLS handshake failed ({})", opensslError()));
+                    fmt::format("TLS handshake failed ({})", tls::opensslError()));
     }
     if (X509* cert = SSL_get1_peer_certificate(ssl); cert != nullptr) {
       char name[256] = {};

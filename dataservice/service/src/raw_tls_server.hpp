@@ -19,9 +19,9 @@
 
 #include <crackvis/dataservice/catalogue.hpp>
 #include <crackvis/dataservice/server_config.hpp>
-#include <crackvis/dataservice/tls_material.hpp>
 #include <crackvis/rpc/access_log.hpp>
 #include <crackvis/rpc/credentials.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 typedef struct ssl_ctx_st SSL_CTX;
 
@@ -34,7 +34,7 @@ using rpc::Authenticator;
 class RawTlsServer {
  public:
   static Result<std::unique_ptr<RawTlsServer>> start(const std::string& listen,
-                                                     const TlsMaterial& tls,
+                                                     const tls::TlsMaterial& tls,
                                                      const Catalogue& catalogue,
                                                      const Authenticator& authenticator,
                                                      const Limits& limits, AccessLog& log);

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include <crackvis/encode/av_support.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 
 extern "C" {
@@ -19,28 +20,10 @@ extern "C" {
 namespace crackvis::encode {
 namespace {
 
-std::string avError(int code) {
-  char text[AV_ERROR_MAX_STRING_SIZE] = {};
-  av_strerror(code, text, sizeof text);
-  return text;
-}
-
-struct CodecContextFree {
-  void operator()(AVCodecContext* context) const { avcodec_free_context(&context); }
-};
-struct FrameFree {
-  void operator()(AVFrame* frame) const { av_frame_free(&frame); }
-};
-struct PacketFree {
-  void operator()(AVPacket* packet) const { av_packet_free(&packet); }
-};
 struct ScaleFree {
   void operator()(SwsContext* context) const { sws_freeContext(context); }
 };
 
-using CodecContext = std::unique_ptr<AVCodecContext, CodecContextFree>;
-using Frame = std::unique_ptr<AVFrame, FrameFree>;
-using Packet = std::unique_ptr<AVPacket, PacketFree>;
 using Scaler = std::unique_ptr<SwsContext, ScaleFree>;
 
 // libavcodec's allocators return null when out of memory.
@@ -89,9 +72,9 @@ Status check(int code, const char* call) {
 }  // namespace
 
 struct FrameEncoder::Impl {
-  CodecContext context;
-  Frame yuv;
-  Packet packet;
+  av::CodecContext context;
+  av::Frame yuv;
+  av::Packet packet;
   Scaler toYuv;
   std::int64_t next = 0;
 };
@@ -187,9 +170,9 @@ Result<EncodedFrame> FrameEncoder::encode(const RgbFrame& frame, bool keyframe) 
 }
 
 struct FrameDecoder::Impl {
-  CodecContext context;
-  Frame yuv;
-  Packet packet;
+  av::CodecContext context;
+  av::Frame yuv;
+  av::Packet packet;
   Scaler toRgb;
   int scalerWidth = 0;
   int scalerHeight = 0;

@@ -5,10 +5,10 @@
 
 #include <fmt/format.h>
 
+#include <crackvis/common/exception_boundary.hpp>
 #include <crackvis/cracks/bond_graph.hpp>
 #include <crackvis/cracks/bond_mapping.hpp>
 #include <crackvis/cracks/crack_components.hpp>
-#include <crackvis/scene/guarded_call.hpp>
 #include <crackvis/scene/scene_content.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 
@@ -44,14 +44,18 @@ class GuardedSource final : public source::StepSource {
   const std::vector<std::int32_t>& breakSteps() const override { return m_inner->breakSteps(); }
   bool timeInIterations() const override { return m_inner->timeInIterations(); }
   Status setExtraArrays(const source::ExtraArrays& extras) override {
-    return guardedCall(
-        fmt::format("{}: reading the extra arrays", file()),
-        [&] { return m_inner->setExtraArrays(extras); }, [](std::string_view) {});
+    return guardedCall([&] { return m_inner->setExtraArrays(extras); },
+                       [&](std::string_view detail) {
+                         return failedOnException(
+                             fmt::format("{}: reading the extra arrays", file()), detail);
+                       });
   }
   Result<source::SourceStep> read(int step) override {
-    return guardedCall(
-        fmt::format("{}: reading step {}", file(), step), [&] { return m_inner->read(step); },
-        [](std::string_view) {});
+    return guardedCall([&] { return m_inner->read(step); },
+                       [&](std::string_view detail) {
+                         return failedOnException(fmt::format("{}: reading step {}", file(), step),
+                                                  detail);
+                       });
   }
 
  private:

@@ -2,8 +2,12 @@
 #include <nlohmann/json.hpp>
 
 #include <crackvis/common/json_config.hpp>
+#include <crackvis/dataservice/server_config.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
+#include <crackvis/rpc/host_port.hpp>
+#include <crackvis/rpc/setting_check.hpp>
 #include <crackvis/service/render_server.hpp>
+#include <crackvis/tls/tls_config.hpp>
 
 namespace crackvis::service {
 namespace {
@@ -11,13 +15,7 @@ namespace {
 using config::checkKeys;
 using config::read;
 using nlohmann::json;
-
-Status readTls(const json& object, const std::string& where, dataservice::TlsFiles& tls) {
-  CRACKVIS_RETURN_IF_ERROR(checkKeys(object, where, {"ca", "cert", "key"}));
-  CRACKVIS_RETURN_IF_ERROR(read(object, "ca", where, tls.ca));
-  CRACKVIS_RETURN_IF_ERROR(read(object, "cert", where, tls.cert));
-  return read(object, "key", where, tls.key);
-}
+using tls::readTlsFiles;
 
 Status readDataService(const json& object, const std::string& where,
                        dataservice::ClientOptions& data) {
@@ -71,7 +69,7 @@ Result<RenderServerConfig> parseRenderServerConfig(const std::string& text,
   CRACKVIS_RETURN_IF_ERROR(read(root, "insecure", origin, config.insecure));
   CRACKVIS_RETURN_IF_ERROR(read(root, "access_log", origin, config.accessLog));
   if (root.contains("tls")) {
-    CRACKVIS_RETURN_IF_ERROR(readTls(root.at("tls"), origin + ": tls", config.tls));
+    CRACKVIS_RETURN_IF_ERROR(readTlsFiles(root.at("tls"), origin + ": tls", config.tls));
   }
   if (root.contains("data_service")) {
     CRACKVIS_RETURN_IF_ERROR(
@@ -94,8 +92,8 @@ Result<RenderServerConfig> parseRenderServerConfig(const std::string& text,
 }
 
 Status validateRenderServerConfig(const RenderServerConfig& config) {
-  using dataservice::checkSetting;
-  if (auto listen = dataservice::parseHostPort(config.listen); !listen) {
+  using rpc::checkSetting;
+  if (auto listen = rpc::parseHostPort(config.listen); !listen) {
     return invalidArgument(fmt::format("--listen: {}", listen.status().message()));
   }
   if (config.data.target.empty()) {

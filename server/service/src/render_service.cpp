@@ -18,7 +18,6 @@
 #include <crackvis/common/log.hpp>
 #include <crackvis/dataservice/data_root.hpp>
 #include <crackvis/dataservice/remote_dem_file.hpp>
-#include <crackvis/dataservice/tls_material.hpp>
 #include <crackvis/dem/layout.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/rpc/access_log.hpp>
@@ -28,6 +27,7 @@
 #include <crackvis/rpc/grpc_status.hpp>
 #include <crackvis/rpc/server.hpp>
 #include <crackvis/service/render_server.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::service {
 namespace {
@@ -793,7 +793,7 @@ Result<std::shared_ptr<grpc::Channel>> dataChannel(const dataservice::ClientOpti
   if (options.insecure) {
     return grpc::CreateCustomChannel(options.target, grpc::InsecureChannelCredentials(), arguments);
   }
-  auto material = dataservice::loadTlsMaterial(options.tls);
+  auto material = tls::loadTlsMaterial(options.tls);
   if (!material) {
     return material.status();
   }
@@ -809,7 +809,7 @@ Result<std::shared_ptr<grpc::Channel>> dataChannel(const dataservice::ClientOpti
 dataservice::ClientOptions defaultDataOptions() {
   dataservice::ClientOptions options;
   options.target = "localhost:50051";
-  options.tls = dataservice::defaultTlsFiles("crackvis-render", "--data-", "data_service.");
+  options.tls = tls::defaultTlsFiles("crackvis-render", "--data-", "data_service.");
   return options;
 }
 

@@ -5,8 +5,8 @@
 #include <fmt/format.h>
 #include <malloc.h>
 
+#include <crackvis/common/exception_boundary.hpp>
 #include <crackvis/common/log.hpp>
-#include <crackvis/scene/guarded_call.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 #include <crackvis/service/session.hpp>
 
@@ -31,13 +31,12 @@ const char* eventName(const SessionEvent& event) {
 // would end the process for every user.
 template <typename Work>
 Status guarded(const std::string& session, std::string_view during, Work&& work) noexcept {
-  return scene::guardedCall(fmt::format("session {}: {}", session, during), work,
-                            [&](std::string_view detail) {
-                              log::event(stderr, "crackvis-render", "session_exception",
-                                         {{"session", session},
-                                          {"during", std::string(during)},
-                                          {"detail", std::string(detail)}});
-                            });
+  return guardedCall(work, [&](std::string_view detail) {
+    log::event(
+        stderr, "crackvis-render", "session_exception",
+        {{"session", session}, {"during", std::string(during)}, {"detail", std::string(detail)}});
+    return failedOnException(fmt::format("session {}: {}", session, during), detail);
+  });
 }
 
 }  // namespace

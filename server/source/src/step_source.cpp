@@ -51,123 +51,20 @@ Result<std::vector<float>> extraValues(const std::string& file, int step, const 
   return out;
 }
 
-class RemoteSource final : public StepSource {
+// What the two sources share: the lattice, the break steps, the arrays a
+// view colours by, and how a step read from either becomes a SourceStep
+// (the range check, the timing, the colours, whatever the view does not use
+// left out). A subclass reads the file.
+class FileSource : public StepSource {
  public:
-  explicit RemoteSource(dataservice::RemoteDemFile remote) : m_remote(std::move(remote)) {}
+  const dem::Lattice& lattice() const final { return m_lattice; }
+  const std::vector<std::int32_t>& breakSteps() const final { return m_breakSteps; }
 
-  Status load() {
-    auto bonds = m_remote.bonds();
-    if (!bonds) {
-      return bonds.status();
-    }
-    auto radii = m_remote.radii();
-    if (!radii) {
-      return radii.status();
-    }
-    m_lattice.dimension = m_remote.dimension();
-    m_lattice.bonds = **bonds;
-    m_lattice.radius = std::move(radii).value();
-    if (Status valid = dem::validateTopology(m_lattice); !valid) {
-      return badData(file(), valid);
-    }
-    return Status::ok();
-  }
-
-  const std::string& file() const override { return m_remote.file(); }
-  const dem::Lattice& lattice() const override { return m_lattice; }
-  int stepCount() const override { return m_remote.stepCount(); }
-  bool timeInIterations() const override { return m_remote.timeInIterations(); }
-  const std::vector<std::int32_t>& breakSteps() const override { return m_breakSteps; }
-
-  Status setExtraArrays(const ExtraArrays& extras) override {
-    m_extras = {extras.velocities, extras.bondForce, extras.particleExtra, extras.bondExtra};
-    m_breakSteps.clear();
-    if (extras.breakStep) {
-      auto breakSteps = m_remote.breakSteps();
-      if (!breakSteps) {
-        return breakSteps.status();
-      }
-      m_breakSteps = std::move(breakSteps).value();
-    }
-    return Status::ok();
-  }
-
-  Result<SourceStep> read(int step) override {
-    CRACKVIS_RETURN_IF_ERROR(checkStepInRange(file(), step, stepCount()));
-    const auto start = Clock::now();
-    auto remote = m_remote.readStep(step, m_extras);
-    if (!remote) {
-      return remote.status();
-    }
-    dem::StepState state;
-    state.time = remote->time;
-    state.positions = std::move(remote->positions);
-    state.bondState = std::move(remote->bondState);
-    state.velocities = std::move(remote->velocities);
-    state.bondForce = std::move(remote->bondForce);
-    if (Status valid = dem::validateStep(m_lattice, state); !valid) {
-      return badData(file(), valid, step);
-    }
-    SourceStep out;
-    out.index = remote->index;
-    out.time = state.time;
-    out.positions = std::move(state.positions);
-    out.bondState = std::move(state.bondState);
-    out.velocities = std::move(state.velocities);
-    out.bondForce = std::move(state.bondForce);
-    for (const auto& [name, values, components, target] :
-         {std::tuple{&m_extras.particleExtra, &remote->particleExtra,
-                     remote->particleExtraComponents, &out.particleExtra},
-          std::tuple{&m_extras.bondExtra, &remote->bondExtra, remote->bondExtraComponents,
-                     &out.bondExtra}}) {
-      if (!name->empty()) {
-        auto colours = extraValues(file(), step, *name, *values, components);
-        if (!colours) {
-          return colours.status();
-        }
-        *target = std::move(colours).value();
-      }
-    }
-    out.loadMs = millisecondsSince(start);
-    return out;
-  }
-
- private:
-  dataservice::RemoteDemFile m_remote;
-  dem::Lattice m_lattice;
-  dataservice::StepExtras m_extras;
-  std::vector<std::int32_t> m_breakSteps;
-};
-
-// The local reader validates with the same rules as it reads (readLattice,
-// readStep): FAILED_PRECONDITION "FILE: step K: ..." as above.
-class LocalSource final : public StepSource {
- public:
-  LocalSource(std::string path, dem::DemFileReader reader)
-      : m_path(std::move(path)), m_reader(std::move(reader)) {}
-
-  Status load() {
-    auto lattice = m_reader.readLattice();
-    if (!lattice) {
-      return lattice.status();
-    }
-    m_lattice = std::move(lattice).value();
-    return Status::ok();
-  }
-
-  const std::string& file() const override { return m_path; }
-  const dem::Lattice& lattice() const override { return m_lattice; }
-  int stepCount() const override { return m_reader.stepCount(); }
-  bool timeInIterations() const override {
-    return m_reader.info().timeUnit == dem::kTimeInIterations;
-  }
-  const std::vector<std::int32_t>& breakSteps() const override { return m_breakSteps; }
-
-  Status setExtraArrays(const ExtraArrays& extras) override {
+  Status setExtraArrays(const ExtraArrays& extras) final {
     m_extras = extras;
     m_breakSteps.clear();
     if (extras.breakStep) {
-      auto breakSteps = m_reader.readBreakSteps();
+      auto breakSteps = readBreakSteps();
       if (!breakSteps) {
         return breakSteps.status();
       }
@@ -176,10 +73,10 @@ class LocalSource final : public StepSource {
     return Status::ok();
   }
 
-  Result<SourceStep> read(int step) override {
+  Result<SourceStep> read(int step) final {
     CRACKVIS_RETURN_IF_ERROR(checkStepInRange(file(), step, stepCount()));
     const auto start = Clock::now();
-    auto state = m_reader.readStep(step);
+    auto state = readState(step);
     if (!state) {
       return state.status();
     }
@@ -188,29 +85,37 @@ class LocalSource final : public StepSource {
     out.time = state->time;
     out.positions = std::move(state->positions);
     out.bondState = std::move(state->bondState);
-    // The local reader reads them anyway; kept only when the view uses them.
     if (m_extras.velocities) {
       out.velocities = std::move(state->velocities);
     }
     if (m_extras.bondForce) {
       out.bondForce = std::move(state->bondForce);
     }
-    if (!m_extras.particleExtra.empty()) {
-      CRACKVIS_RETURN_IF_ERROR(localExtra(step, *state, dem::ExtraOwner::kParticles,
-                                          m_extras.particleExtra, out.particleExtra));
-    }
-    if (!m_extras.bondExtra.empty()) {
-      CRACKVIS_RETURN_IF_ERROR(
-          localExtra(step, *state, dem::ExtraOwner::kBonds, m_extras.bondExtra, out.bondExtra));
+    for (const auto& [owner, name, target] :
+         {std::tuple{dem::ExtraOwner::kParticles, &m_extras.particleExtra, &out.particleExtra},
+          std::tuple{dem::ExtraOwner::kBonds, &m_extras.bondExtra, &out.bondExtra}}) {
+      if (!name->empty()) {
+        CRACKVIS_RETURN_IF_ERROR(extraColours(step, *state, owner, *name, *target));
+      }
     }
     out.loadMs = millisecondsSince(start);
     return out;
   }
 
+ protected:
+  virtual Result<std::vector<std::int32_t>> readBreakSteps() = 0;
+  // A step checked by the rules of dem::validateStep, with the extra arrays
+  // the view colours by among its extras (or the lattice's constant ones).
+  virtual Result<dem::StepState> readState(int step) = 0;
+
+  const ExtraArrays& extras() const { return m_extras; }
+  dem::Lattice m_lattice;
+
  private:
-  // The extra array by name: the step's own, else the lattice's constant one.
-  Status localExtra(int step, const dem::StepState& state, dem::ExtraOwner owner,
-                    const std::string& name, std::vector<float>& out) const {
+  // The extra array by name: the step's own, else the lattice's constant
+  // one; one value per row.
+  Status extraColours(int step, const dem::StepState& state, dem::ExtraOwner owner,
+                      const std::string& name, std::vector<float>& out) const {
     std::vector<std::string> known;
     for (const auto* extras : {&state.extras, &m_lattice.extras}) {
       for (const dem::ExtraArray& extra : *extras) {
@@ -234,11 +139,100 @@ class LocalSource final : public StepSource {
         known.empty() ? std::string("none") : fmt::format("{}", fmt::join(known, ", "))));
   }
 
-  std::string m_path;
-  dem::DemFileReader m_reader;
-  dem::Lattice m_lattice;
   ExtraArrays m_extras;
   std::vector<std::int32_t> m_breakSteps;
+};
+
+class RemoteSource final : public FileSource {
+ public:
+  explicit RemoteSource(dataservice::RemoteDemFile remote) : m_remote(std::move(remote)) {}
+
+  Status load() {
+    auto bonds = m_remote.bonds();
+    if (!bonds) {
+      return bonds.status();
+    }
+    auto radii = m_remote.radii();
+    if (!radii) {
+      return radii.status();
+    }
+    m_lattice.dimension = m_remote.dimension();
+    m_lattice.bonds = **bonds;
+    m_lattice.radius = std::move(radii).value();
+    // The bond list's range was checked as it arrived (RemoteDemFile).
+    if (Status valid = dem::validateTopology(m_lattice, dem::BondEnds::kCheckedAlready); !valid) {
+      return badData(file(), valid);
+    }
+    return Status::ok();
+  }
+
+  const std::string& file() const override { return m_remote.file(); }
+  int stepCount() const override { return m_remote.stepCount(); }
+  bool timeInIterations() const override { return m_remote.timeInIterations(); }
+
+ private:
+  Result<std::vector<std::int32_t>> readBreakSteps() override { return m_remote.breakSteps(); }
+
+  // Only what the view uses crosses the network: the extras are asked for.
+  Result<dem::StepState> readState(int step) override {
+    const ExtraArrays& wanted = extras();
+    auto remote = m_remote.readStep(
+        step, {wanted.velocities, wanted.bondForce, wanted.particleExtra, wanted.bondExtra});
+    if (!remote) {
+      return remote.status();
+    }
+    dem::StepState state;
+    state.time = remote->time;
+    state.positions = std::move(remote->positions);
+    state.bondState = std::move(remote->bondState);
+    state.velocities = std::move(remote->velocities);
+    state.bondForce = std::move(remote->bondForce);
+    if (Status valid = dem::validateStep(m_lattice, state); !valid) {
+      return badData(file(), valid, step);
+    }
+    if (!wanted.particleExtra.empty()) {
+      state.extras.push_back({wanted.particleExtra, dem::ExtraOwner::kParticles,
+                              remote->particleExtraComponents, std::move(remote->particleExtra)});
+    }
+    if (!wanted.bondExtra.empty()) {
+      state.extras.push_back({wanted.bondExtra, dem::ExtraOwner::kBonds,
+                              remote->bondExtraComponents, std::move(remote->bondExtra)});
+    }
+    return state;
+  }
+
+  dataservice::RemoteDemFile m_remote;
+};
+
+// The local reader validates with the same rules as it reads (readLattice,
+// readStep): FAILED_PRECONDITION "FILE: step K: ..." as above. It reads
+// every optional array of a step anyway.
+class LocalSource final : public FileSource {
+ public:
+  LocalSource(std::string path, dem::DemFileReader reader)
+      : m_path(std::move(path)), m_reader(std::move(reader)) {}
+
+  Status load() {
+    auto lattice = m_reader.readLattice();
+    if (!lattice) {
+      return lattice.status();
+    }
+    m_lattice = std::move(lattice).value();
+    return Status::ok();
+  }
+
+  const std::string& file() const override { return m_path; }
+  int stepCount() const override { return m_reader.stepCount(); }
+  bool timeInIterations() const override {
+    return m_reader.info().timeUnit == dem::kTimeInIterations;
+  }
+
+ private:
+  Result<std::vector<std::int32_t>> readBreakSteps() override { return m_reader.readBreakSteps(); }
+  Result<dem::StepState> readState(int step) override { return m_reader.readStep(step); }
+
+  std::string m_path;
+  dem::DemFileReader m_reader;
 };
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <hdf5.h>
 
 #include <crackvis/common/status.hpp>
+#include <crackvis/dem/element_type.hpp>
 
 namespace crackvis::dem::h5 {
 
@@ -94,9 +95,10 @@ inline Handle propertyListHandle(hid_t id) {
   return {id, H5Pclose};
 }
 
-// The element types crackvis files use, with their names in messages.
-enum class ElementType { kInt32, kInt64, kUInt8, kFloat32, kFloat64, kOther };
-const char* elementTypeName(ElementType type);
+// The element types crackvis files use (dem/element_type.hpp), here beside
+// their HDF5 types.
+using dem::ElementType;
+using dem::elementTypeName;
 // Native in-memory HDF5 type for reads and writes.
 hid_t nativeType(ElementType type);
 

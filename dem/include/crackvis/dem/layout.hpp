@@ -16,7 +16,7 @@
 #include <vector>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dem/h5.hpp>
+#include <crackvis/dem/element_type.hpp>
 
 namespace crackvis::dem {
 
@@ -48,7 +48,7 @@ struct DatasetSpec {
   std::string_view name;  // absolute, or relative to its step group when perStep
   bool perStep = false;
   bool required = true;
-  h5::ElementType type = h5::ElementType::kOther;
+  ElementType type = ElementType::kOther;
   std::vector<Extent> shape;
 };
 
@@ -79,7 +79,7 @@ Status checkDeclaredSizes(const std::string& file, const LayoutSizes& sizes,
 
 // What a reader saw of a stored dataset.
 struct DatasetHeader {
-  h5::ElementType type = h5::ElementType::kOther;
+  ElementType type = ElementType::kOther;
   std::string typeName;  // as h5::describeDataset names it
   std::vector<std::uint64_t> dims;
 };

@@ -156,8 +156,16 @@ inline constexpr double kMaxCoordinate = 1e15;
 Status validateLattice(const Lattice& lattice);
 // The same without the strengths (a view reads no strengths): the one check
 // of radii and bonds that `crackvis info`, `extract` and the render server's
-// step sources share.
-Status validateTopology(const Lattice& lattice);
+// step sources share. kCheckedAlready skips the bond ends' range, for a list
+// that checkBondEnds passed as it arrived.
+enum class BondEnds { kCheck, kCheckedAlready };
+Status validateTopology(const Lattice& lattice, BondEnds ends = BondEnds::kCheck);
+
+// Every bond joins two of `particles` particles (indices 0..N-1); `first` is
+// the index of bonds[0] in the whole list, for a list checked in pieces.
+// INVALID_ARGUMENT "bond B joins particles I and J: index out of range
+// (N = n particles)". The one range check of a bond list, local or remote.
+Status checkBondEnds(std::span<const Bond> bonds, std::int64_t particles, std::size_t first = 0);
 
 // Checks a step against its lattice: array lengths agree with N and M,
 // positions finite and within kMaxCoordinate, z = 0 in 2D, bond states 0

@@ -1,16 +1,18 @@
 // The boundary of every RPC handler of both services: the caller's identity
 // from the call, and the end of a call (its access-log line, then its gRPC
-// status). guarded() is the one place an exception from a handler's body is
-// caught: it is logged as an event line and fails only that call, with
-// INTERNAL, so a bug hit by one input never takes the process down.
+// status). guarded() is where an exception from a handler's body stops (the
+// boundary of crackvis/common/exception_boundary.hpp): it is logged as an
+// event line and fails only that call, with INTERNAL, so a bug hit by one
+// input never takes the process down.
 #pragma once
 
 #include <chrono>
-#include <exception>
+#include <string>
 #include <string_view>
 
 #include <grpcpp/grpcpp.h>
 
+#include <crackvis/common/exception_boundary.hpp>
 #include <crackvis/common/status.hpp>
 #include <crackvis/rpc/access_log.hpp>
 #include <crackvis/rpc/credentials.hpp>
@@ -29,21 +31,18 @@ Result<Caller> authenticateCall(const Authenticator& authenticator,
 grpc::Status finishCall(AccessLog& log, AccessRecord& record, CallClock::time_point start,
                         const Status& status);
 
-// The INTERNAL status for an exception that reached a handler's boundary,
-// after an event line naming the program, method and exception.
-Status handlerException(std::string_view program, const AccessRecord& record,
-                        std::string_view what);
+// Writes the event line for an exception that reached a handler's boundary
+// (program, method, file, exception) and returns the message its client gets,
+// which names the method and leaves the exception to the server's log.
+std::string logHandlerException(std::string_view program, const AccessRecord& record,
+                                std::string_view what);
 
-// Runs a handler's body; an exception becomes handlerException's status.
+// Runs a handler's body; an exception becomes INTERNAL with
+// logHandlerException's message.
 template <typename Body>
 Status guarded(std::string_view program, const AccessRecord& record, Body&& body) noexcept {
-  try {
-    return body();
-  } catch (const std::exception& error) {
-    return handlerException(program, record, error.what());
-  } catch (...) {
-    return handlerException(program, record, "an exception of unknown type");
-  }
+  return guardedCall(
+      body, [&](std::string_view what) { return logHandlerException(program, record, what); });
 }
 
 }  // namespace crackvis::rpc

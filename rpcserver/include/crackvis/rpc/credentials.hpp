@@ -34,11 +34,23 @@
 #include <vector>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/server_config.hpp>
 
 namespace crackvis::rpc {
 
-using dataservice::UserEntry;
+// A user of the per-user layer on top of mutual TLS. A caller is this user
+// when it sends the token, the name and password, or (with neither) a client
+// certificate whose common name is `certificateName`.
+struct UserEntry {
+  std::string name;
+  std::string tokenHash;             // hashSecret() of the bearer token; empty: none
+  std::string passwordHash;          // hashSecret() of the password; empty: none
+  std::string certificateName;       // client certificate CN that identifies the user; empty: none
+  std::vector<std::string> folders;  // sub-folders of the root the user may read; "*": all
+};
+
+// Whether `path` (normalized, relative) is `folder` or lies below it; the
+// empty folder and "*" contain everything.
+bool isWithinFolder(std::string_view path, std::string_view folder);
 
 inline constexpr int kDefaultHashIterations = 200000;
 inline constexpr int kMaxFailuresPerIdentity = 10;  // one name (or tokens) from one address

@@ -18,8 +18,8 @@
 #include <grpcpp/grpcpp.h>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/server_config.hpp>
-#include <crackvis/dataservice/tls_material.hpp>
+#include <crackvis/rpc/host_port.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::rpc {
 
@@ -33,14 +33,14 @@ Status requireLoopback(const std::string& target, const std::string& what);
 // Where and how a server listens, checked before anything else is set up.
 struct Listener {
   std::string listen;  // as configured
-  dataservice::HostPort hostPort;
+  HostPort hostPort;
   bool insecure = false;
   std::shared_ptr<grpc::ServerCredentials> credentials;
 };
 // Parses the address, applies the loopback rule for `insecure` and loads the
 // TLS files (client certificates required and verified against the CA).
 Result<Listener> prepareListener(const std::string& listen, bool insecure,
-                                 const dataservice::TlsFiles& tls);
+                                 const tls::TlsFiles& tls);
 
 struct ServerSettings {
   std::string program;  // "crackvis-data", for messages and the plaintext warning

@@ -19,17 +19,18 @@
 #include <fmt/format.h>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/tls_material.hpp>
 #include <crackvis/dataservice/types.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::dataservice {
 
 struct ClientOptions {
-  std::string target = "localhost:50051";    // host:port of crackvis-data
-  TlsFiles tls = defaultTlsFiles("client");  // certs/generated/{ca,client}.pem, client.key
-  bool insecure = false;                     // plaintext, for a server started with --insecure
-  std::string token;                         // sent as "authorization: Bearer <token>"
-  std::string user;                          // with `password`: sent as Basic credentials
+  std::string target = "localhost:50051";  // host:port of crackvis-data
+  tls::TlsFiles tls =
+      tls::defaultTlsFiles("client");  // certs/generated/{ca,client}.pem, client.key
+  bool insecure = false;               // plaintext, for a server started with --insecure
+  std::string token;                   // sent as "authorization: Bearer <token>"
+  std::string user;                    // with `password`: sent as Basic credentials
   std::string password;
   std::string serverName;         // name the server certificate must carry; default: target's host
   double timeoutSeconds = 120.0;  // deadline of each call

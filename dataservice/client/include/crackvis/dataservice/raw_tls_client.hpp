@@ -9,13 +9,13 @@
 #include <string>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/tls_material.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::dataservice {
 
 struct RawTlsOptions {
   std::string target;         // host:port of the raw TLS baseline
-  TlsFiles tls;               // CA, client certificate and key
+  tls::TlsFiles tls;          // CA, client certificate and key
   std::string serverName;     // default: target's host
   std::string authorization;  // "Bearer <token>" when the server has users
 };

@@ -120,9 +120,9 @@ class FileReader {
 // Bounds on one Describe, so that one hostile file cannot hold the HDF5
 // lock for long: RESOURCE_EXHAUSTED past them.
 struct DescribeLimits {
-  int maxDepth = 64;                          // levels of nested groups
-  std::size_t maxObjects = 100'000;           // groups, datasets and other links
-  std::chrono::milliseconds maxTime{10'000};  // walking the tree
+  int maxDepth = 64;                            // levels of nested groups
+  std::size_t maxObjects = 100'000;             // groups, datasets and other links
+  std::chrono::duration<double> maxTime{10.0};  // walking the tree (seconds, as configured)
 };
 
 struct DescribeOptions {

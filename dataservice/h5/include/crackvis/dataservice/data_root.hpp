@@ -57,10 +57,6 @@ class DataRoot {
   std::filesystem::path m_root;
 };
 
-// Whether `path` (normalized, relative) is `folder` or lies below it; the
-// empty folder and "*" contain everything.
-bool isWithinFolder(std::string_view path, std::string_view folder);
-
 // Whether the file carries the HDF5 signature where HDF5 looks for it (offset
 // 0, 512, 1024, 2048, ...). Reads a few bytes; no HDF5 call.
 bool hasHdf5Signature(const std::filesystem::path& file);

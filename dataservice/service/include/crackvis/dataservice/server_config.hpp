@@ -11,7 +11,8 @@
 
 #include <crackvis/common/status.hpp>
 #include <crackvis/dataservice/catalogue.hpp>
-#include <crackvis/dataservice/tls_material.hpp>
+#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::dataservice {
 
@@ -54,21 +55,12 @@ struct Limits {
   double hdf5CallSeconds = 30.0;
 };
 
-// A user of the per-user layer on top of mutual TLS. A caller is this user
-// when it sends the token, the name and password, or (with neither) a client
-// certificate whose common name is `certificateName`.
-struct UserEntry {
-  std::string name;
-  std::string tokenHash;             // hashSecret() of the bearer token; empty: none
-  std::string passwordHash;          // hashSecret() of the password; empty: none
-  std::string certificateName;       // client certificate CN that identifies the user; empty: none
-  std::vector<std::string> folders;  // sub-folders of the root the user may read; "*": all
-};
+using rpc::UserEntry;
 
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  // host:port; port 0 lets the OS choose
   std::string dataRoot;
-  TlsFiles tls = defaultTlsFiles("server", "--", "tls.");
+  tls::TlsFiles tls = tls::defaultTlsFiles("server", "--", "tls.");
   bool insecure = false;  // plaintext, loopback only
   Limits limits;
   std::vector<UserEntry> users;  // empty: every certified client reads the whole root
@@ -91,32 +83,5 @@ Result<ServerConfig> parseServerConfig(const std::string& json, const std::strin
 // must be at least 1, got 0 (limits.max_concurrent_streams in the
 // configuration file)".
 Status validateServerConfig(const ServerConfig& config);
-
-// Describe's time limit from seconds; a value out of range or not finite
-// becomes one validateServerConfig refuses.
-std::chrono::milliseconds describeTime(double seconds);
-
-// A setting as a user may give it: its command-line flag and its key in the
-// configuration file (either may be empty).
-struct SettingName {
-  std::string_view flag;
-  std::string_view key;
-};
-
-// OK when min <= value <= max (and a real is finite), otherwise
-// INVALID_ARGUMENT naming the setting, its bounds and the value. The
-// services' configuration checks are made of these (T: int, std::int64_t,
-// std::uint64_t, double).
-template <typename T>
-Status checkSetting(SettingName name, T value, T min, T max);
-
-// Splits "host:port" ("[::1]:50051" for IPv6); the port must be 0..65535.
-struct HostPort {
-  std::string host;
-  int port = 0;
-};
-Result<HostPort> parseHostPort(const std::string& address);
-// 127.0.0.0/8, ::1 and "localhost".
-bool isLoopbackHost(const std::string& host);
 
 }  // namespace crackvis::dataservice

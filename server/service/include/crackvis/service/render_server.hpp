@@ -12,7 +12,7 @@
 
 #include <crackvis/common/status.hpp>
 #include <crackvis/dataservice/data_client.hpp>
-#include <crackvis/dataservice/server_config.hpp>
+#include <crackvis/rpc/credentials.hpp>
 #include <crackvis/service/session.hpp>
 
 namespace crackvis::service {
@@ -22,9 +22,9 @@ dataservice::ClientOptions defaultDataOptions();
 
 struct RenderServerConfig {
   std::string listen = "127.0.0.1:50052";  // host:port; port 0 lets the OS choose
-  dataservice::TlsFiles tls = dataservice::defaultTlsFiles("server", "--", "tls.");
-  bool insecure = false;                      // plaintext, loopback only
-  std::vector<dataservice::UserEntry> users;  // empty: every certified client
+  tls::TlsFiles tls = tls::defaultTlsFiles("server", "--", "tls.");
+  bool insecure = false;              // plaintext, loopback only
+  std::vector<rpc::UserEntry> users;  // empty: every certified client
   // crackvis-data, reached with the render server's own client certificate.
   dataservice::ClientOptions data = defaultDataOptions();
   int maxSessions = 8;

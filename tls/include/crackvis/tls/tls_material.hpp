@@ -7,7 +7,7 @@
 
 #include <crackvis/common/status.hpp>
 
-namespace crackvis::dataservice {
+namespace crackvis::tls {
 
 struct TlsFiles {
   std::string ca;    // the CA that signs the peer's certificate (PEM)
@@ -44,4 +44,4 @@ Result<TlsMaterial> loadTlsMaterial(const TlsFiles& files);
 // messages about a failed handshake or a bad key.
 std::string opensslError();
 
-}  // namespace crackvis::dataservice
+}  // namespace crackvis::tls

@@ -7,9 +7,9 @@
 #include <openssl/x509.h>
 
 #include <crackvis/common/certificates.hpp>
-#include <crackvis/dataservice/tls_material.hpp>
+#include <crackvis/tls/tls_material.hpp>
 
-namespace crackvis::dataservice {
+namespace crackvis::tls {
 namespace {
 
 struct BioFree {
@@ -120,4 +120,4 @@ Result<TlsMaterial> loadTlsMaterial(const TlsFiles& given) {
   return material;
 }
 
-}  // namespace crackvis::dataservice
+}  // namespace crackvis::tls
