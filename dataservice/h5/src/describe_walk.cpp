@@ -1,0 +1,282 @@
+// Describe: the walk of a file's tree, bounded in depth, objects and time.
+#include <algorithm>
+#include <chrono>
+
+#include <fmt/format.h>
+
+#include "catalogue_internal.hpp"
+#include "open_files.hpp"
+#include <crackvis/dataservice/catalogue.hpp>
+#include <crackvis/dem/dem_file.hpp>
+#include <crackvis/dem/h5.hpp>
+
+namespace crackvis::dataservice {
+namespace fs = std::filesystem;
+namespace h5 = crackvis::dem::h5;
+
+namespace {
+
+// ------------------------------------------------------------- Describe --
+
+Result<AttributeInfo> readAttribute(hid_t object, const char* name) {
+  AttributeInfo info;
+  info.name = name;
+  h5::Handle attribute = h5::attributeHandle(H5Aopen(object, name, H5P_DEFAULT));
+  h5::Handle type = h5::datatypeHandle(attribute.valid() ? H5Aget_type(attribute.get()) : -1);
+  h5::Handle space = h5::dataspaceHandle(attribute.valid() ? H5Aget_space(attribute.get()) : -1);
+  if (!type.valid() || !space.valid()) {
+    return failedPrecondition(
+        fmt::format("cannot read attribute '{}' ({})", name, h5::lastHdf5Error()));
+  }
+  info.dtype = classifyType(type.get());
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  if (rank > 0) {
+    std::vector<hsize_t> dims(static_cast<size_t>(rank));
+    H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+    info.shape.assign(dims.begin(), dims.end());
+  }
+  const hssize_t points = H5Sget_simple_extent_npoints(space.get());
+  // Attributes are small by HDF5's design; a huge one is described, not read.
+  constexpr hssize_t kMaxPointsRead = 1 << 20;
+  if (points <= 0 || points > kMaxPointsRead) {
+    info.truncated = points > 0;
+    return info;
+  }
+  const auto count = static_cast<size_t>(points);
+  switch (H5Tget_class(type.get())) {
+    case H5T_STRING:
+      if (count == 1) {
+        auto text = h5::readStringAttribute(object, name);
+        if (!text) {
+          return text.status();
+        }
+        info.value = *text;
+      } else {
+        info.truncated = true;
+      }
+      break;
+    case H5T_INTEGER: {
+      std::vector<std::int64_t> values(count);
+      if (H5Aread(attribute.get(), H5T_NATIVE_INT64, values.data()) < 0) {
+        return failedPrecondition(
+            fmt::format("cannot read attribute '{}' ({})", name, h5::lastHdf5Error()));
+      }
+      info.truncated = values.size() > AttributeInfo::kMaxAttributeValues;
+      values.resize(std::min(values.size(), AttributeInfo::kMaxAttributeValues));
+      info.value = std::move(values);
+      break;
+    }
+    case H5T_FLOAT: {
+      std::vector<double> values(count);
+      if (H5Aread(attribute.get(), H5T_NATIVE_DOUBLE, values.data()) < 0) {
+        return failedPrecondition(
+            fmt::format("cannot read attribute '{}' ({})", name, h5::lastHdf5Error()));
+      }
+      info.truncated = values.size() > AttributeInfo::kMaxAttributeValues;
+      values.resize(std::min(values.size(), AttributeInfo::kMaxAttributeValues));
+      info.value = std::move(values);
+      break;
+    }
+    default:
+      break;
+  }
+  return info;
+}
+
+struct AttributeWalk {
+  std::vector<AttributeInfo> attributes;
+  Status status;
+};
+
+herr_t collectAttribute(hid_t object, const char* name, const H5A_info_t*, void* data) {
+  auto* walk = static_cast<AttributeWalk*>(data);
+  auto attribute = readAttribute(object, name);
+  if (!attribute) {
+    walk->status = attribute.status();
+    return 1;  // stop
+  }
+  walk->attributes.push_back(std::move(*attribute));
+  return 0;
+}
+
+Result<std::vector<AttributeInfo>> readAttributes(hid_t object, const std::string& path) {
+  AttributeWalk walk;
+  hsize_t index = 0;
+  if (H5Aiterate2(object, H5_INDEX_NAME, H5_ITER_INC, &index, collectAttribute, &walk) < 0) {
+    return failedPrecondition(
+        fmt::format("cannot list the attributes of {} ({})", path, h5::lastHdf5Error()));
+  }
+  if (!walk.status) {
+    return Status(walk.status.code(), fmt::format("{}: {}", path, walk.status.message()));
+  }
+  return std::move(walk.attributes);
+}
+
+struct TreeWalk {
+  FileDescription* description = nullptr;
+  Status status;
+  const DescribeOptions* options = nullptr;
+  std::chrono::steady_clock::time_point deadline;
+  std::size_t objects = 0;
+};
+
+// A path for a message: a hostile one may be thousands of levels long.
+std::string shortPath(const std::string& path) {
+  constexpr std::size_t kShown = 80;
+  return path.size() <= kShown ? path : path.substr(0, kShown) + "...";
+}
+
+// Whether the walk may go on: a chain of 1,000 nested groups took 9 s under
+// the HDF5 lock (every lookup walks the whole path), so depth, objects and
+// time are bounded, and a caller that went away stops it.
+bool withinBounds(TreeWalk& walk, const std::string& path) {
+  const DescribeLimits& limits = walk.options->limits;
+  const auto depth = static_cast<int>(std::count(path.begin(), path.end(), '/'));
+  if (depth > limits.maxDepth) {
+    walk.status = resourceExhausted(fmt::format("{} lies deeper than {} levels, Describe's limit",
+                                                shortPath(path), limits.maxDepth));
+  } else if (++walk.objects > limits.maxObjects) {
+    walk.status =
+        resourceExhausted(fmt::format("more than {} objects, Describe's limit", limits.maxObjects));
+  } else if (std::chrono::steady_clock::now() > walk.deadline) {
+    walk.status = resourceExhausted(fmt::format(
+        "the tree took longer than {} s to walk, Describe's limit", limits.maxTime.count()));
+  } else if (walk.options->cancelled && walk.options->cancelled()) {
+    walk.status = Status(StatusCode::kUnavailable, "Describe cancelled by the caller");
+  }
+  return walk.status.isOk();
+}
+
+herr_t visitLink(hid_t root, const char* name, const H5L_info_t* link, void* data) {
+  auto* walk = static_cast<TreeWalk*>(data);
+  if (!withinBounds(*walk, std::string("/") + name)) {
+    return 1;  // stop
+  }
+  // Soft links name objects that are listed under their hard link; external
+  // and user-defined links lead out of the file, which the service never
+  // follows.
+  if (link->type != H5L_TYPE_HARD) {
+    return 0;
+  }
+  const std::string path = std::string("/") + name;
+  H5O_info_t object{};
+  if (H5Oget_info_by_name2(root, name, &object, H5O_INFO_BASIC, H5P_DEFAULT) < 0) {
+    walk->status =
+        failedPrecondition(fmt::format("cannot inspect {} ({})", path, h5::lastHdf5Error()));
+    return 1;
+  }
+  if (object.type != H5O_TYPE_GROUP && object.type != H5O_TYPE_DATASET) {
+    return 0;  // named datatypes
+  }
+  h5::Handle handle = {H5Oopen(root, name, H5P_DEFAULT), H5Oclose};
+  if (!handle.valid()) {
+    walk->status =
+        failedPrecondition(fmt::format("cannot open {} ({})", path, h5::lastHdf5Error()));
+    return 1;
+  }
+  auto attributes = readAttributes(handle.get(), path);
+  if (!attributes) {
+    walk->status = attributes.status();
+    return 1;
+  }
+  if (object.type == H5O_TYPE_GROUP) {
+    walk->description->groups.push_back({path, std::move(*attributes)});
+    return 0;
+  }
+  auto shape = h5::describeDataset(handle.get());
+  h5::Handle type = h5::datatypeHandle(H5Dget_type(handle.get()));
+  if (!shape || !type.valid()) {
+    walk->status = failedPrecondition(fmt::format(
+        "dataset {}: {}", path, shape ? h5::lastHdf5Error() : shape.status().message()));
+    return 1;
+  }
+  DatasetInfo dataset;
+  dataset.path = path;
+  dataset.dtype = classifyType(type.get());
+  if (dataset.dtype == DataType::kString) {
+    dataset.dtype = DataType::kUnspecified;  // Read sends numbers only
+  }
+  dataset.dtypeName = dataset.dtype != DataType::kUnspecified
+                          ? std::string(dataTypeName(dataset.dtype))
+                          : shape->typeName;
+  dataset.shape = shape->dims;
+  dataset.chunkShape = shape->chunkDims;
+  dataset.attributes = std::move(*attributes);
+  walk->description->datasets.push_back(std::move(dataset));
+  return 0;
+}
+
+// The format, version and complete steps of a crackvis-dem file, taken from
+// the attributes already collected.
+void fillDemSummary(FileDescription& description) {
+  const GroupInfo* root = description.findGroup("/");
+  if (root == nullptr) {
+    return;
+  }
+  const dem::RootAttributes attributes = demRootAttributes(description);
+  if (attributes.format) {
+    description.format = *attributes.format;
+  }
+  description.formatVersion = static_cast<int>(attributes.version.isOk() ? *attributes.version : 0);
+  if (description.format != dem::kFormatName) {
+    return;
+  }
+  const GroupInfo* steps = description.findGroup("/steps");
+  if (steps == nullptr) {
+    return;
+  }
+  const std::int64_t count = steps->integerAttribute("count").value_or(0);
+  // A damaged file: the steps before the first problem are reported.
+  const dem::StepList list = dem::listSteps(count, [&](int k) -> std::optional<Result<double>> {
+    const GroupInfo* group = description.findGroup(dem::stepGroupPath(k));
+    if (group == nullptr) {
+      return std::nullopt;
+    }
+    if (auto time = group->floatAttribute("time")) {
+      return Result<double>(*time);
+    }
+    return Result<double>(failedPrecondition("missing attribute 'time'"));
+  });
+  for (const auto& [index, time] : list.steps) {
+    description.steps.push_back({index, time, dem::stepGroupPath(index)});
+  }
+}
+
+}  // namespace
+
+Result<FileDescription> Catalogue::describe(const ResolvedPath& file,
+                                            const DescribeOptions& options) const {
+  FileDescription description;
+  description.file = file.requested;
+  std::error_code error;
+  description.sizeBytes = fs::file_size(file.absolute, error);
+  std::lock_guard lock(hdf5Mutex());
+  h5::quietHdf5();
+  auto handle = m_openFiles->open(file);
+  if (!handle) {
+    return handle.status();
+  }
+  auto rootAttributes = readAttributes(handle->get(), "/");
+  if (!rootAttributes) {
+    return Status(rootAttributes.status().code(),
+                  fmt::format("{}: {}", file.requested, rootAttributes.status().message()));
+  }
+  description.groups.push_back({"/", std::move(*rootAttributes)});
+  TreeWalk walk{
+      &description, Status::ok(), &options,
+      std::chrono::steady_clock::now() +
+          std::chrono::duration_cast<std::chrono::steady_clock::duration>(options.limits.maxTime)};
+  const herr_t visited = H5Lvisit(handle->get(), H5_INDEX_NAME, H5_ITER_INC, visitLink, &walk);
+  if (!walk.status) {
+    return Status(walk.status.code(), fmt::format("{}: {}", file.requested, walk.status.message()));
+  }
+  if (visited < 0) {
+    return failedPrecondition(
+        fmt::format("{}: cannot walk the file's tree ({})", file.requested, h5::lastHdf5Error()));
+  }
+  description.buildIndex();
+  fillDemSummary(description);
+  return description;
+}
+
+}  // namespace crackvis::dataservice

@@ -1,0 +1,577 @@
+// DemFileReader: opens a DEM file, checks its structure and reads it.
+#include <algorithm>
+#include <filesystem>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "dem_file_internal.hpp"
+#include <crackvis/dem/dem_file.hpp>
+#include <crackvis/dem/layout.hpp>
+
+namespace crackvis::dem {
+namespace {
+
+using detail::extraFolder;
+using h5::Handle;
+
+// Step groups are named by their zero-padded index; anything else under
+// /steps is not ours.
+bool parseStepName(const char* name, int& index) {
+  const std::string_view text(name);
+  if (text.size() != 6 ||
+      !std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+    return false;
+  }
+  index = std::stoi(std::string(text));
+  return true;
+}
+
+struct StepNames {
+  std::vector<int> indices;
+  std::string unexpected;
+};
+
+herr_t collectStepName(hid_t, const char* name, const H5L_info_t*, void* data) {
+  auto* names = static_cast<StepNames*>(data);
+  int index = 0;
+  if (parseStepName(name, index)) {
+    names->indices.push_back(index);
+  } else if (names->unexpected.empty()) {
+    names->unexpected = name;
+  }
+  return 0;
+}
+
+std::vector<std::string> splitLines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    lines.push_back(text.substr(start, end - start));
+    start = end + 1;
+  }
+  return lines;
+}
+
+}  // namespace
+
+Result<DemFileReader> DemFileReader::open(const std::string& path) {
+  h5::quietHdf5();
+  std::error_code error;
+  if (!std::filesystem::exists(path, error)) {
+    return notFound(fmt::format("{}: no such file", path));
+  }
+  if (!std::filesystem::is_regular_file(path, error)) {
+    return invalidArgument(fmt::format("{}: not a regular file", path));
+  }
+  if (H5Fis_hdf5(path.c_str()) <= 0) {
+    h5::lastHdf5Error();
+    return failedPrecondition(fmt::format("{}: not an HDF5 file", path));
+  }
+  DemFileReader reader;
+  reader.m_path = path;
+  reader.m_info.path = path;
+  reader.m_file = h5::fileHandle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
+  if (!reader.m_file.valid()) {
+    return failedPrecondition(fmt::format("{}: cannot open: file is truncated or corrupt ({})",
+                                          path, h5::lastHdf5Error()));
+  }
+  CRACKVIS_RETURN_IF_ERROR(reader.readStructure());
+  CRACKVIS_RETURN_IF_ERROR(reader.readSteps());
+  CRACKVIS_RETURN_IF_ERROR(reader.listExtras());
+  return reader;
+}
+
+Status DemFileReader::fail(const Status& status) const {
+  return {status.code(), fmt::format("{}: {}", m_path, status.message())};
+}
+
+Result<DemFileReader::OpenedDataset> DemFileReader::openInFile(const std::string& path) const {
+  auto resolved = h5::resolveInFile(m_file.get(), path);
+  if (!resolved) {
+    if (resolved.status().code() == StatusCode::kNotFound) {
+      return fail(missingDataset(path));
+    }
+    return fail(
+        failedPrecondition(fmt::format("dataset {}: {}; crackvis reads only data inside "
+                                       "the file",
+                                       path, resolved.status().message())));
+  }
+  Handle access = h5::noExternalLinks();
+  Handle dataset = h5::datasetHandle(H5Dopen2(m_file.get(), resolved->c_str(), access.get()));
+  if (!dataset.valid()) {
+    return fail(failedPrecondition(
+        fmt::format("{} is not a readable dataset ({})", path, h5::lastHdf5Error())));
+  }
+  auto shape = h5::describeDataset(dataset.get());
+  if (!shape) {
+    return fail(shape.status());
+  }
+  return OpenedDataset{std::move(dataset), std::move(*shape)};
+}
+
+Result<Handle> DemFileReader::openChecked(DemDataset id, int step) const {
+  const std::string path = datasetPath(id, step);
+  auto opened = openInFile(path);
+  if (!opened) {
+    return opened.status();
+  }
+  const h5::DatasetShape* shape = &opened->shape;
+  Handle dataset = std::move(opened->dataset);
+  const LayoutSizes sizes{m_info.particleCount, m_info.bondCount};
+  if (Status valid =
+          checkDatasetHeader(id, path, {shape->type, shape->typeName, shape->dims}, sizes);
+      !valid) {
+    return fail(valid);
+  }
+  return dataset;
+}
+
+Status DemFileReader::readStructure() {
+  const hid_t root = m_file.get();
+  m_info.particleCount = -1;  // unknown until the datasets that carry them are read
+  m_info.bondCount = -1;
+  RootAttributes attributes;
+  attributes.format = h5::readStringAttribute(root, "format");
+  if (attributes.format) {
+    attributes.version = h5::readIntAttribute(root, "version");
+    attributes.dimension = h5::readIntAttribute(root, "dimension");
+  }
+  auto dimension = checkRootAttributes(attributes);
+  if (!dimension) {
+    return fail(dimension.status());
+  }
+  m_info.format = *attributes.format;
+  m_info.version = static_cast<int>(*attributes.version);
+  m_info.dimension = *dimension;
+  if (auto units = h5::readStringAttribute(root, "units")) {
+    m_info.units = *units;
+  }
+  if (auto source = h5::readStringAttribute(root, "source")) {
+    m_info.source = *source;
+  }
+  CRACKVIS_RETURN_IF_ERROR(readProvenance());
+
+  // N and M come from the first dataset that carries them; every other
+  // dataset must agree.
+  auto radius = openChecked(DemDataset::kRadius);
+  if (!radius) {
+    return radius.status();
+  }
+  m_info.particleCount = static_cast<std::int64_t>(h5::describeDataset(radius->get())->dims[0]);
+  auto pairs = openChecked(DemDataset::kPairs);
+  if (!pairs) {
+    return pairs.status();
+  }
+  m_info.bondCount = static_cast<std::int64_t>(h5::describeDataset(pairs->get())->dims[0]);
+  CRACKVIS_RETURN_IF_ERROR(checkIndexable());
+  // Kept, not returned: the file still opens, so a caller with size limits
+  // reports those first (RESOURCE_EXHAUSTED); every read that allocates N or
+  // M values returns this.
+  m_countsStored = checkStored(DemDataset::kRadius, m_info.particleCount);
+  if (m_countsStored) {
+    m_countsStored = checkStored(DemDataset::kPairs, m_info.bondCount);
+  }
+  if (auto dataset = openChecked(DemDataset::kBreakStep); !dataset) {
+    return dataset.status();
+  }
+  // Before v1.1 every file had strengths; now they and the new arrays are
+  // optional, but checked whenever present.
+  for (DemDataset id : {DemDataset::kStrength, DemDataset::kParticleId, DemDataset::kParticleGroup,
+                        DemDataset::kBondFlags}) {
+    if (!h5::linkExists(m_file.get(), datasetPath(id))) {
+      if (id == DemDataset::kStrength && m_info.minorVersion < 1) {
+        return fail(missingDataset(datasetPath(id)));
+      }
+      continue;
+    }
+    if (auto dataset = openChecked(id); !dataset) {
+      return dataset.status();
+    }
+    m_info.hasStrength = m_info.hasStrength || id == DemDataset::kStrength;
+  }
+  return Status::ok();
+}
+
+// Particles and bonds are indexed by int32 (ParticleIndex, BondIndex, the
+// int32 pairs): a file declaring more (a corrupt extent, 7.7e18 in one the
+// fuzzer made) is refused before anything of that size is allocated.
+Status DemFileReader::checkIndexable() const {
+  constexpr std::int64_t kMaxIndexable = std::numeric_limits<std::int32_t>::max();
+  if (m_info.particleCount < 0 || m_info.particleCount > kMaxIndexable || m_info.bondCount < 0 ||
+      m_info.bondCount > kMaxIndexable) {
+    return fail(failedPrecondition(fmt::format(
+        "declares N = {} particles and M = {} bonds; crackvis indexes at most {} of each (file "
+        "corrupt?)",
+        static_cast<std::uint64_t>(m_info.particleCount),
+        static_cast<std::uint64_t>(m_info.bondCount), kMaxIndexable)));
+  }
+  return Status::ok();
+}
+
+// N and M size every array the lattice allocates, so they must be backed by
+// data the file really holds: a 20 KB file the fuzzer made declared 9e8
+// radii in unwritten chunks (read as the fill value) and the reader
+// allocated 7 GB for them. Deflate cannot compress more than about 1032:1,
+// so a dataset claiming more than kMaxExpansion times its stored bytes is
+// corrupt or unwritten, never a real packing.
+Status DemFileReader::checkStored(DemDataset id, std::int64_t rows) const {
+  constexpr std::uint64_t kMaxExpansion = 1100;
+  constexpr std::uint64_t kRowBytes = 8;  // one float64 radius, or two int32 particle indices
+  auto dataset = openChecked(id);
+  if (!dataset) {
+    return dataset.status();
+  }
+  const auto declared = static_cast<std::uint64_t>(rows) * kRowBytes;
+  const std::uint64_t stored = h5::storedBytes(dataset->get());
+  if (declared > 0 && (stored == 0 || declared / kMaxExpansion > stored)) {
+    return fail(failedPrecondition(fmt::format(
+        "dataset {} declares {} rows ({} bytes) but the file stores only {} bytes of it "
+        "(unwritten or corrupt; deflate compresses at most about 1000:1)",
+        datasetPath(id), rows, declared, stored)));
+  }
+  return Status::ok();
+}
+
+Status DemFileReader::readProvenance() {
+  const hid_t root = m_file.get();
+  if (H5Aexists(root, "version_minor") > 0) {
+    auto minor = h5::readIntAttribute(root, "version_minor");
+    if (!minor || *minor < 0) {
+      return fail(
+          failedPrecondition("root attribute 'version_minor' is not a non-negative integer"));
+    }
+    m_info.minorVersion = static_cast<int>(*minor);
+  }
+  if (auto code = h5::readStringAttribute(root, "source_code")) {
+    m_info.sourceCode = *code;
+  }
+  if (auto version = h5::readStringAttribute(root, "source_version")) {
+    m_info.sourceVersion = *version;
+  }
+  if (auto files = h5::readStringAttribute(root, "source_files")) {
+    m_info.sourceFiles = splitLines(*files);
+  }
+  if (H5Aexists(root, kTimeUnitAttribute) > 0) {
+    auto unit = h5::readStringAttribute(root, kTimeUnitAttribute);
+    if (!unit || (*unit != "s" && *unit != kTimeInIterations)) {
+      return fail(failedPrecondition(fmt::format(
+          "root attribute '{}' is {}, expected 's' or '{}'", kTimeUnitAttribute,
+          unit ? "'" + echoed(*unit) + "'" : std::string("not a string"), kTimeInIterations)));
+    }
+    m_info.timeUnit = *unit;
+  }
+  return Status::ok();
+}
+
+// Extra arrays are found by listing /extra/{particles,bonds} and step 0's
+// extra groups; each must be float64 [N] / [N,3] (or M for bonds).
+Status DemFileReader::listExtras() {
+  // Per-step extras are listed from step 0, once it is complete.
+  const bool anyStep = stepCount() > 0;
+  for (bool perStep : {false, true}) {
+    if (perStep && !anyStep) {
+      continue;
+    }
+    for (ExtraOwner owner : {ExtraOwner::kParticles, ExtraOwner::kBonds}) {
+      const std::string folder = extraFolder(owner, perStep, 0);
+      auto resolved = h5::resolveInFile(m_file.get(), folder);
+      if (!resolved) {
+        if (resolved.status().code() == StatusCode::kNotFound) {
+          continue;
+        }
+        return fail(
+            failedPrecondition(fmt::format("group {}: {}; crackvis reads only data "
+                                           "inside the file",
+                                           folder, resolved.status().message())));
+      }
+      Handle group = h5::groupHandle(H5Gopen2(m_file.get(), resolved->c_str(), H5P_DEFAULT));
+      if (!group.valid()) {
+        return fail(failedPrecondition(
+            fmt::format("{} is not a readable group ({})", folder, h5::lastHdf5Error())));
+      }
+      auto names = h5::memberNames(group.get());
+      if (!names) {
+        return fail(names.status());
+      }
+      for (const std::string& name : *names) {
+        ExtraInfo extra{name, owner, 1, perStep};
+        if (Status valid = validateName("extra array", name); !valid) {
+          return fail(failedPrecondition(fmt::format("{}/{}: {}", folder, name, valid.message())));
+        }
+        auto dataset = openExtra(extra, 0);
+        if (!dataset) {
+          return dataset.status();
+        }
+        auto shape = h5::describeDataset(dataset->get());
+        extra.components = shape->dims.size() == 2 ? static_cast<int>(shape->dims[1]) : 1;
+        m_info.extras.push_back(extra);
+      }
+    }
+  }
+  return Status::ok();
+}
+
+Result<Handle> DemFileReader::openExtra(const ExtraInfo& extra, int step) const {
+  const std::string path = extraPath(extra, step);
+  auto opened = openInFile(path);
+  if (!opened) {
+    return opened.status();
+  }
+  const h5::DatasetShape* shape = &opened->shape;
+  Handle dataset = std::move(opened->dataset);
+  const std::int64_t rows =
+      extra.owner == ExtraOwner::kParticles ? m_info.particleCount : m_info.bondCount;
+  const bool rowsMatch = !shape->dims.empty() && shape->dims[0] == static_cast<std::uint64_t>(rows);
+  const bool widthValid = shape->dims.size() == 1 ||
+                          (shape->dims.size() == 2 && (shape->dims[1] == 1 || shape->dims[1] == 3));
+  if (shape->type != ElementType::kFloat64 || !rowsMatch || !widthValid) {
+    return fail(failedPrecondition(
+        fmt::format("dataset {} is {} {}, expected float64 [{}] or [{},3] ({} = {})", path,
+                    shape->typeName, h5::formatDims(shape->dims), rows, rows,
+                    extra.owner == ExtraOwner::kParticles ? "N" : "M", rows)));
+  }
+  return dataset;
+}
+
+Result<ExtraArray> DemFileReader::readExtra(const ExtraInfo& extra, int step) const {
+  auto dataset = openExtra(extra, step);
+  if (!dataset) {
+    return dataset.status();
+  }
+  auto shape = h5::describeDataset(dataset->get());
+  ExtraArray array{
+      extra.name, extra.owner, shape->dims.size() == 2 ? static_cast<int>(shape->dims[1]) : 1, {}};
+  array.values.resize(shape->dims[0] * static_cast<std::uint64_t>(array.components));
+  if (Status read = h5::readDataset(dataset->get(), ElementType::kFloat64, array.values.data());
+      !read) {
+    return fail(
+        Status(read.code(), fmt::format("dataset {}: {}", extraPath(extra, step), read.message())));
+  }
+  return array;
+}
+
+Result<std::vector<StepScalar>> DemFileReader::readScalars(hid_t stepGroup, int step) const {
+  auto names = h5::attributeNames(stepGroup);
+  if (!names) {
+    return fail(Status(names.status().code(), fmt::format("step group {}: {}", stepGroupPath(step),
+                                                          names.status().message())));
+  }
+  std::vector<StepScalar> scalars;
+  for (const std::string& name : *names) {
+    if (name == "time") {
+      continue;
+    }
+    auto value = h5::readDoubleAttribute(stepGroup, name);
+    if (!value) {
+      return fail(failedPrecondition(fmt::format(
+          "step group {}: scalar '{}': {}", stepGroupPath(step), name, value.status().message())));
+    }
+    scalars.push_back({name, *value});
+  }
+  return scalars;
+}
+
+Status DemFileReader::readSteps() {
+  auto stepsPath = h5::resolveInFile(m_file.get(), "/steps");
+  if (!stepsPath) {
+    return fail(
+        failedPrecondition(stepsPath.status().code() == StatusCode::kNotFound
+                               ? std::string("missing group /steps")
+                               : fmt::format("group /steps: {}", stepsPath.status().message())));
+  }
+  Handle steps = h5::groupHandle(H5Gopen2(m_file.get(), stepsPath->c_str(), H5P_DEFAULT));
+  if (!steps.valid()) {
+    return fail(failedPrecondition(
+        fmt::format("/steps is not a readable group ({})", h5::lastHdf5Error())));
+  }
+  auto count = h5::readIntAttribute(steps.get(), "count");
+  if (!count) {
+    return fail(failedPrecondition(fmt::format("group /steps: {}", count.status().message())));
+  }
+  if (auto planned = h5::readIntAttribute(steps.get(), kPlannedStepsAttribute)) {
+    m_info.plannedSteps = *planned;
+  }
+  StepNames names;
+  if (H5Literate(steps.get(), H5_INDEX_NAME, H5_ITER_INC, nullptr, collectStepName, &names) < 0) {
+    return fail(failedPrecondition(
+        fmt::format("cannot list /steps: file is truncated or corrupt ({})", h5::lastHdf5Error())));
+  }
+  if (!names.unexpected.empty()) {
+    return fail(failedPrecondition(
+        fmt::format("unexpected member /steps/{} (step groups are named 000000, 000001, ...)",
+                    names.unexpected)));
+  }
+  std::sort(names.indices.begin(), names.indices.end());
+  const StepList list = listSteps(*count, [&](int step) -> std::optional<Result<double>> {
+    if (!std::binary_search(names.indices.begin(), names.indices.end(), step)) {
+      return std::nullopt;
+    }
+    auto group = h5::resolveInFile(m_file.get(), stepGroupPath(step));
+    if (!group) {
+      return Result<double>(group.status());
+    }
+    Handle handle = h5::groupHandle(H5Gopen2(m_file.get(), group->c_str(), H5P_DEFAULT));
+    return h5::readDoubleAttribute(handle.get(), "time");
+  });
+  if (!list.problem) {
+    return fail(list.problem);
+  }
+  for (const auto& [index, time] : list.steps) {
+    Handle group =
+        h5::groupHandle(H5Gopen2(m_file.get(), stepGroupPath(index).c_str(), H5P_DEFAULT));
+    auto scalars = readScalars(group.get(), index);
+    if (!scalars) {
+      return scalars.status();
+    }
+    for (const StepScalar& scalar : *scalars) {
+      if (std::find(m_info.scalarNames.begin(), m_info.scalarNames.end(), scalar.name) ==
+          m_info.scalarNames.end()) {
+        m_info.scalarNames.push_back(scalar.name);
+      }
+    }
+    m_info.steps.push_back({index, time, std::move(*scalars)});
+  }
+  const auto complete = static_cast<int>(*count);
+  m_info.incompleteSteps = static_cast<int>(std::count_if(
+      names.indices.begin(), names.indices.end(), [&](int i) { return i >= complete; }));
+  return Status::ok();
+}
+
+Result<Lattice> DemFileReader::readLattice() const {
+  Lattice lattice;
+  lattice.dimension = m_info.dimension;
+  const auto n = static_cast<std::uint64_t>(m_info.particleCount);
+  const auto m = static_cast<std::uint64_t>(m_info.bondCount);
+  CRACKVIS_RETURN_IF_ERROR(m_countsStored);
+  lattice.radius.resize(n);
+  lattice.bonds.resize(m);
+  CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kRadius, 0, lattice.radius.data()));
+  CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kPairs, 0, lattice.bonds.data()));
+  CRACKVIS_RETURN_IF_ERROR(readOptional(DemDataset::kStrength, m, lattice.strength));
+  CRACKVIS_RETURN_IF_ERROR(readOptional(DemDataset::kParticleId, n, lattice.particleId));
+  CRACKVIS_RETURN_IF_ERROR(readOptional(DemDataset::kParticleGroup, n, lattice.particleGroup));
+  CRACKVIS_RETURN_IF_ERROR(readOptional(DemDataset::kBondFlags, m, lattice.bondFlags));
+  for (const ExtraInfo& extra : m_info.extras) {
+    if (!extra.perStep) {
+      auto array = readExtra(extra, 0);
+      if (!array) {
+        return array.status();
+      }
+      lattice.extras.push_back(std::move(*array));
+    }
+  }
+  if (Status valid = validateLattice(lattice); !valid) {
+    return fail(failedPrecondition(valid.message()));
+  }
+  return lattice;
+}
+
+Status DemFileReader::readWhole(DemDataset id, int step, void* out) const {
+  auto dataset = openChecked(id, step);
+  if (!dataset) {
+    return dataset.status();
+  }
+  const DatasetSpec& spec = datasetSpec(id);
+  if (Status read = h5::readDataset(dataset->get(), spec.type, out); !read) {
+    return fail(
+        Status(read.code(), fmt::format("dataset {}: {}", datasetPath(id, step), read.message())));
+  }
+  return Status::ok();
+}
+
+// An optional time-independent array: `count` values when the file has it,
+// empty when not.
+template <typename T>
+Status DemFileReader::readOptional(DemDataset id, std::uint64_t count, std::vector<T>& out) const {
+  out.clear();
+  if (!h5::linkExists(m_file.get(), datasetPath(id))) {
+    return Status::ok();
+  }
+  out.resize(count);
+  return readWhole(id, 0, out.data());
+}
+
+Result<std::vector<std::int32_t>> DemFileReader::readBreakSteps() const {
+  CRACKVIS_RETURN_IF_ERROR(m_countsStored);
+  std::vector<std::int32_t> breakStep(static_cast<std::uint64_t>(m_info.bondCount));
+  CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBreakStep, 0, breakStep.data()));
+  for (size_t b = 0; b < breakStep.size(); ++b) {
+    if (breakStep[b] < -1) {
+      return fail(failedPrecondition(fmt::format(
+          "/bonds/break_step[{}] is {}, expected -1 or a step index", b, breakStep[b])));
+    }
+  }
+  return breakStep;
+}
+
+Result<StepState> DemFileReader::readStep(int step) const {
+  CRACKVIS_RETURN_IF_ERROR(checkStepInRange(m_path, step, stepCount()));
+  CRACKVIS_RETURN_IF_ERROR(m_countsStored);
+  const auto n = static_cast<std::uint64_t>(m_info.particleCount);
+  const auto m = static_cast<std::uint64_t>(m_info.bondCount);
+  StepState state;
+  state.time = m_info.steps[static_cast<size_t>(step)].time;
+  state.positions.resize(n);
+  state.bondState.resize(m);
+  CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kPositions, step, state.positions.data()));
+  CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondState, step, state.bondState.data()));
+  if (h5::linkExists(m_file.get(), datasetPath(DemDataset::kVelocities, step))) {
+    state.velocities.resize(n);
+    CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kVelocities, step, state.velocities.data()));
+  }
+  if (h5::linkExists(m_file.get(), datasetPath(DemDataset::kBondForce, step))) {
+    state.bondForce.resize(m);
+    CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondForce, step, state.bondForce.data()));
+  }
+  state.scalars = m_info.steps[static_cast<size_t>(step)].scalars;
+  for (const ExtraInfo& extra : m_info.extras) {
+    if (extra.perStep) {
+      auto array = readExtra(extra, step);
+      if (!array) {
+        return array.status();
+      }
+      state.extras.push_back(std::move(*array));
+    }
+  }
+  if (Status valid = validateStep(m_info.dimension, n, m, state); !valid) {
+    return fail(failedPrecondition(fmt::format("step {}: {}", step, valid.message())));
+  }
+  return state;
+}
+
+Result<std::vector<std::uint8_t>> DemFileReader::readBondState(int step) const {
+  CRACKVIS_RETURN_IF_ERROR(checkStepInRange(m_path, step, stepCount()));
+  CRACKVIS_RETURN_IF_ERROR(m_countsStored);
+  std::vector<std::uint8_t> state(static_cast<std::uint64_t>(m_info.bondCount));
+  CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondState, step, state.data()));
+  if (Status valid = validateBondStates(state); !valid) {
+    return fail(failedPrecondition(fmt::format("step {}: {}", step, valid.message())));
+  }
+  return state;
+}
+
+Status DemFileReader::checkStepHeaders(int step) const {
+  CRACKVIS_RETURN_IF_ERROR(checkStepInRange(m_path, step, stepCount()));
+  for (DemDataset id : {DemDataset::kPositions, DemDataset::kBondState, DemDataset::kVelocities,
+                        DemDataset::kBondForce}) {
+    const bool optional = id == DemDataset::kVelocities || id == DemDataset::kBondForce;
+    if (optional && !h5::linkExists(m_file.get(), datasetPath(id, step))) {
+      continue;
+    }
+    if (auto opened = openChecked(id, step); !opened) {
+      return opened.status();
+    }
+  }
+  for (const ExtraInfo& extra : m_info.extras) {
+    if (extra.perStep) {
+      if (auto opened = openExtra(extra, step); !opened) {
+        return opened.status();
+      }
+    }
+  }
+  return Status::ok();
+}
+
+}  // namespace crackvis::dem

@@ -1,0 +1,27 @@
+// Private to server/render: the VTK actors SceneRenderer::setScene puts in
+// its renderer for a description's layers (particles, cracks with their marks
+// and intact faces, the local decomposition's edges, bonds). Each coloured
+// layer appends its legend to `legends` (when not null) for the overlays.
+#pragma once
+
+#include <vector>
+
+#include <vtkActor.h>
+#include <vtkRenderer.h>
+#include <vtkSmartPointer.h>
+
+#include "overlays.hpp"
+#include <crackvis/pipeline/pipeline_description.hpp>
+#include <crackvis/render/scene_renderer.hpp>
+
+namespace crackvis::render::detail {
+
+vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
+                                        const SceneInput& input, std::vector<Legend>* legends);
+void addCracks(const pipeline::PipelineDescription& d, const SceneInput& input,
+               vtkRenderer* renderer, std::vector<Legend>* legends);
+void addDecompositionEdges(const SceneInput& input, vtkRenderer* renderer);
+void addBonds(const pipeline::PipelineDescription& d, const SceneInput& input,
+              vtkRenderer* renderer, std::vector<Legend>* legends);
+
+}  // namespace crackvis::render::detail

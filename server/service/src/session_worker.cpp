@@ -1,0 +1,407 @@
+#include "session_worker.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include <fmt/format.h>
+
+#include "session_guard.hpp"
+#include <crackvis/common/log.hpp>
+#include <crackvis/scene/scene_pipeline.hpp>
+
+namespace crackvis::service {
+namespace {
+
+double millisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+}  // namespace
+
+Status Session::Worker::ensureRenderer(int w, int h) {
+  if (renderer && renderer->capacityWidth() >= w && renderer->capacityHeight() >= h) {
+    return Status::ok();
+  }
+  std::optional<pipeline::CameraDescription> camera;
+  int oldWidth = 0;
+  int oldHeight = 0;
+  if (renderer) {
+    camera = renderer->camera();
+    oldWidth = renderer->capacityWidth();
+    oldHeight = renderer->capacityHeight();
+  }
+  renderer.reset();  // one GL context per session at a time
+  auto created = render::SceneRenderer::create(w, h);
+  if (!created) {
+    // Back to a context of the old size, so that the session keeps its view
+    // (without one, frames and camera moves answer "no rendering context").
+    if (oldWidth > 0) {
+      if (auto again = render::SceneRenderer::create(oldWidth, oldHeight)) {
+        renderer = std::move(again).value();
+        (void)restoreScene(camera);  // the creation error is the one to report
+      }
+    }
+    return created.status();
+  }
+  renderer = std::move(created).value();
+  return restoreScene(camera);
+}
+
+Status Session::Worker::restoreScene(const std::optional<pipeline::CameraDescription>& camera) {
+  if (camera) {
+    renderer->setCamera(*camera);
+  }
+  return scene ? buildScene(false) : Status::ok();
+}
+
+Status Session::Worker::needRenderer() const {
+  if (!renderer) {
+    return internalError(
+        fmt::format("session {}: no rendering context (creating one failed)", session.m_id));
+  }
+  return Status::ok();
+}
+
+void Session::Worker::noteStepTimings() {
+  stepTimings = {};
+  stepTimings.loadMs = scene->timings().loadMs;
+  stepTimings.extractMs = scene->timings().extractMs;
+}
+
+Status Session::Worker::buildScene(bool resetCamera) {
+  CRACKVIS_RETURN_IF_ERROR(needRenderer());
+  const auto start = Clock::now();
+  CRACKVIS_RETURN_IF_ERROR(renderer->setScene(description(), scene->input(), resetCamera));
+  stepTimings.sceneMs = millisecondsSince(start);
+  dirty = true;
+  return Status::ok();
+}
+
+Status Session::Worker::showStep(int step) {
+  CRACKVIS_RETURN_IF_ERROR(scene->showStep(step));
+  noteStepTimings();
+  return buildScene(false);
+}
+
+Status Session::Worker::start() {
+  const auto& d = session.m_initial;
+  CRACKVIS_RETURN_IF_ERROR(checkViewSize(d.view.width, d.view.height, session.m_limits));
+  auto opened = scene::ScenePipeline::open(d, session.m_opener, session.m_limits.cacheSteps);
+  if (!opened) {
+    return opened.status();
+  }
+  scene = std::move(opened).value();
+  noteStepTimings();
+  width = d.view.width;
+  height = d.view.height;
+  auto created = render::SceneRenderer::create(width, height);
+  if (!created) {
+    return created.status();
+  }
+  renderer = std::move(created).value();
+  CRACKVIS_RETURN_IF_ERROR(buildScene(false));
+  const dem::Lattice& lattice = scene->source().lattice();
+  session.m_info.stepCount = stepCount();
+  session.m_info.particleCount = static_cast<std::int64_t>(lattice.particleCount());
+  session.m_info.bondCount = static_cast<std::int64_t>(lattice.bondCount());
+  session.m_info.backend = renderer->backend();
+  session.m_info.file = d.file;
+  return Status::ok();
+}
+
+SessionState Session::Worker::state() const {
+  const scene::ScenePipeline::CrackMapping& mapping = scene->crackMapping();
+  return {scene->step(), stepCount(), playing,          width,
+          height,        viewXml(),   mapping.fraction, mapping.warning};
+}
+
+std::string Session::Worker::viewXml() const {
+  pipeline::PipelineDescription d = description();
+  d.step = scene->step();
+  d.view.width = width;
+  d.view.height = height;
+  if (renderer) {
+    d.view.camera = renderer->camera();
+  }
+  return pipeline::toXml(d);
+}
+
+void Session::Worker::interacted(const SessionEvent& event) {
+  lastInteraction = event.received;
+  lastEventReceived = event.received;
+  dirty = true;
+}
+
+void Session::Worker::reject(const SessionEvent& event, const Status& status) {
+  session.notify({event.id, status, std::nullopt});
+}
+
+void Session::Worker::apply(const SessionEvent& event) {
+  lastEventId = std::max(lastEventId, event.id);
+  if (Status status = checkEvent(event, session.m_limits); !status) {
+    reject(event, status);
+    return;
+  }
+  std::visit([&](const auto& what) { handle(event, what); }, event.what);
+}
+
+void Session::Worker::handle(const SessionEvent& event, const CameraEvent& camera) {
+  if (Status status = needRenderer(); !status) {
+    session.notify({event.id, status, std::nullopt});
+    return;
+  }
+  renderer->moveCamera(camera.move, camera.dx, camera.dy);
+  stateDue = true;
+  if (camera.still) {
+    stillFrame(event);
+    return;
+  }
+  interacted(event);
+}
+
+void Session::Worker::handle(const SessionEvent& event, const ResizeEvent& resize) {
+  if (Status status = ensureRenderer(resize.width, resize.height); !status) {
+    reject(event, status);
+    return;
+  }
+  width = resize.width;
+  height = resize.height;
+  scene->setViewSize(width, height);
+  interacted(event);
+  session.notify({event.id, Status::ok(), state()});
+}
+
+void Session::Worker::handle(const SessionEvent& event, const SetStepEvent& set) {
+  const int step = set.step == -1 ? stepCount() - 1 : set.step;
+  if (Status status = showStep(step); !status) {
+    reject(event, status);
+    return;
+  }
+  scene->prefetch(step + 1);
+  interacted(event);
+  session.notify({event.id, Status::ok(), state()});
+}
+
+void Session::Worker::handle(const SessionEvent& event, const PlayEvent& play) {
+  playing = play.playing;
+  loop = play.loop;
+  playFps = play.fps > 0.0 ? play.fps : description().stream.fps;
+  nextTick = Clock::now();
+  if (playing) {
+    scene->prefetch(scene->step() + 1);
+  }
+  lastEventReceived = event.received;
+  dirty = true;
+  session.notify({event.id, Status::ok(), state()});
+}
+
+void Session::Worker::handle(const SessionEvent& event, const ReplacePipelineEvent& replace) {
+  auto parsed = pipeline::parsePipeline(replace.xml);
+  if (!parsed) {
+    reject(event, parsed.status());
+    return;
+  }
+  if (Status status = replaceDescription(std::move(parsed).value()); !status) {
+    reject(event, status);
+    return;
+  }
+  interacted(event);
+  session.notify({event.id, Status::ok(), state()});
+}
+
+Status Session::Worker::replaceDescription(pipeline::PipelineDescription next) {
+  CRACKVIS_RETURN_IF_ERROR(checkViewSize(next.view.width, next.view.height, session.m_limits));
+  const bool newFile = next.file != description().file;
+  const bool cameraGiven =
+      next.view.camera.has_value() && next.view.camera != description().view.camera;
+  CRACKVIS_RETURN_IF_ERROR(scene->replace(std::move(next)));
+  noteStepTimings();
+  Status status = ensureRenderer(description().view.width, description().view.height);
+  if (status) {
+    status = buildScene(false);
+  }
+  if (!status) {
+    scene->revert();
+    // Same data as before the replacement: a failure here would be new.
+    if (Status rebuilt = buildScene(false); !rebuilt) {
+      log::event(stderr, "crackvis-render", "restore_failed",
+                 {{"session", session.m_id}, {"detail", rebuilt.message()}});
+    }
+    dirty = true;
+    return status;
+  }
+  scene->commit();
+  width = description().view.width;
+  height = description().view.height;
+  if (cameraGiven) {
+    renderer->setCamera(*description().view.camera);
+  } else if (newFile) {
+    renderer->moveCamera(render::CameraMove::kReset, 0, 0);
+  }
+  return Status::ok();
+}
+
+void Session::Worker::handle(const SessionEvent& event, const PickEvent& at) {
+  if (Status status = needRenderer(); !status) {
+    reject(event, status);
+    return;
+  }
+  const scene::Ray ray = renderer->viewRay(at.x, at.y, width, height);
+  SessionNotice notice{event.id, Status::ok(), std::nullopt};
+  notice.pick = scene::pick(description(), scene->input(), ray);
+  session.notify(std::move(notice));
+}
+
+void Session::Worker::stillFrame(const SessionEvent& event) {
+  forceFull = true;
+  lastEventReceived = event.received;
+  dirty = true;
+}
+
+void Session::Worker::handle(const SessionEvent& event, const KeyframeEvent&) {
+  keyframe = true;
+  lastEventReceived = event.received;
+  dirty = true;
+}
+
+void Session::Worker::tick() {
+  if (!playing || Clock::now() < nextTick) {
+    return;
+  }
+  const auto period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(1.0 / std::max(playFps, 0.1)));
+  nextTick = std::max(nextTick + period, Clock::now());
+  int step = scene->step() + 1;
+  if (step >= stepCount()) {
+    if (!loop) {
+      playing = false;
+      session.notify({0, Status::ok(), state()});
+      forceFull = true;
+      dirty = true;
+      return;
+    }
+    step = 0;
+  }
+  if (Status status = showStep(step); !status) {
+    playing = false;
+    session.notify({0, status, state()});
+    return;
+  }
+  scene->prefetch(step + 1 < stepCount() ? step + 1 : 0);
+}
+
+void Session::Worker::renderIfDirty() {
+  const auto now = Clock::now();
+  if (refineAt && now >= *refineAt) {
+    refineAt.reset();
+    forceFull = true;
+    dirty = true;
+  }
+  if (!dirty) {
+    return;
+  }
+  const bool interacting =
+      playing || std::chrono::duration<double, std::milli>(now - lastInteraction).count() <
+                     session.m_limits.refineAfterMs;
+  const int factor = interacting && !forceFull ? reduction.factor() : 1;
+  RenderedFrame frame;
+  frame.step = scene->step();
+  frame.reduction = factor;
+  frame.fullResolution = factor == 1;
+  frame.keyframe = keyframe;
+  frame.bitrate = description().stream.bitrate;
+  frame.fps = description().stream.fps;
+  frame.lastEventId = lastEventId;
+  frame.lastEventReceived = lastEventReceived;
+  frame.timings = stepTimings;
+  render::Image image;
+  const int w = std::max(16, width / factor);
+  const int h = std::max(16, height / factor);
+  const auto start = Clock::now();
+  Status rendered = needRenderer();
+  if (rendered) {
+    rendered = renderer->renderFrame(w, h, image, factor > 1);
+  }
+  if (Status status = rendered; !status) {
+    session.notify({lastEventId, status, std::nullopt});
+    dirty = false;
+    return;
+  }
+  frame.timings.renderMs = millisecondsSince(start);
+  frame.particles = particleDrawing();
+  if (factor > 1) {
+    render::resample(image, width, height, frame.image);
+    refineAt = lastInteraction +
+               std::chrono::duration_cast<Clock::duration>(
+                   std::chrono::duration<double, std::milli>(session.m_limits.refineAfterMs));
+  } else {
+    frame.image = std::move(image);
+  }
+  if (interacting && !forceFull) {
+    reduction.adaptReduction(frame.timings.renderMs);
+  }
+  frame.frameId = ++frameId;
+  const bool settled = frame.fullResolution && stateDue;
+  session.publish(std::move(frame));
+  if (settled) {  // the camera came to rest, or a new stream: the state carries it
+    stateDue = false;
+    session.notify({0, Status::ok(), state()});
+  }
+  stepTimings = {};
+  lastEventReceived.reset();
+  dirty = false;
+  forceFull = false;
+  keyframe = false;
+}
+
+std::string Session::Worker::particleDrawing() const {
+  const auto& particles = description().particles;
+  if (!particles.visible) {
+    return "none";
+  }
+  return particles.representation == pipeline::ParticleRepresentation::kImpostors ? "spheres"
+                                                                                  : "points";
+}
+
+Result<render::Image> Session::Worker::snapshot(int w, int h, int& step,
+                                                std::optional<int> atStep) {
+  // Only 0 means the view's size: a negative size is refused by the check.
+  w = w == 0 ? width : w;
+  h = h == 0 ? height : h;
+  CRACKVIS_RETURN_IF_ERROR(checkViewSize(w, h, session.m_limits));
+  CRACKVIS_RETURN_IF_ERROR(ensureRenderer(w, h));
+  if (atStep) {
+    const int shown = *atStep == -1 ? stepCount() - 1 : *atStep;
+    CRACKVIS_RETURN_IF_ERROR(dem::checkStepInRange(description().file, shown, stepCount()));
+    if (shown != scene->step()) {
+      CRACKVIS_RETURN_IF_ERROR(showStep(shown));
+      scene->prefetch(shown + 1);
+      session.notify({0, Status::ok(), state()});
+    }
+  }
+  render::Image image;
+  CRACKVIS_RETURN_IF_ERROR(renderer->renderFrame(w, h, image));
+  step = scene->step();
+  dirty = true;  // the stream's next frame is rendered again at its own size
+  return image;
+}
+
+Status Session::Worker::recover() {
+  playing = false;
+  dirty = true;
+  forceFull = true;
+  return guarded(session.m_id, "recovery", [&] {
+    scene->revert();
+    return buildScene(false);
+  });
+}
+
+std::optional<Clock::time_point> Session::Worker::wakeTime() const {
+  std::optional<Clock::time_point> at = refineAt;
+  if (playing && (!at || nextTick < *at)) {
+    at = nextTick;
+  }
+  return at;
+}
+
+}  // namespace crackvis::service
