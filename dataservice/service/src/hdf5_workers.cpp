@@ -19,6 +19,7 @@
 #include "worker_protocol.hpp"
 #include <crackvis/common/child_process.hpp>
 #include <crackvis/common/log.hpp>
+#include <crackvis/common/unique_fd.hpp>
 
 namespace crackvis::dataservice {
 namespace {
@@ -26,6 +27,16 @@ namespace {
 using namespace worker_protocol;
 
 constexpr const char* kProgram = "crackvis-data";
+
+// Kills a worker (a no-op for one that has died already) and waits for it;
+// how it ended, as waitpid tells it.
+int killAndReap(pid_t pid) {
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  return status;
+}
 // A worker loads its program and libhdf5 in milliseconds (a sanitizer
 // build in a second); much longer is a program that hangs.
 constexpr std::chrono::seconds kWorkerStartTime{30};
@@ -58,10 +69,7 @@ Hdf5Workers::~Hdf5Workers() {
       ::munmap(worker.shared, kMaxChunkBytes);
     }
     if (worker.pid > 0) {
-      ::kill(worker.pid, SIGKILL);
-      int status = 0;
-      while (::waitpid(worker.pid, &status, 0) < 0 && errno == EINTR) {
-      }
+      (void)killAndReap(worker.pid);
     }
   }
 }
@@ -120,24 +128,6 @@ Result<Hdf5Workers::Started> Hdf5Workers::startWorker() {
 
 namespace {
 
-// A descriptor that closes itself.
-class OwnedFd {
- public:
-  explicit OwnedFd(int fd = -1) : m_fd(fd) {}
-  OwnedFd(const OwnedFd&) = delete;
-  OwnedFd& operator=(const OwnedFd&) = delete;
-  ~OwnedFd() {
-    if (m_fd >= 0) {
-      ::close(m_fd);
-    }
-  }
-  int get() const { return m_fd; }
-  int release() { return std::exchange(m_fd, -1); }
-
- private:
-  int m_fd;
-};
-
 // Copies of the two descriptors above the ones the worker gets, so that
 // placing one at 3 or 4 cannot overwrite the other.
 constexpr int kAboveWorkerFds = 10;
@@ -158,11 +148,11 @@ Result<Hdf5Workers::Started> Hdf5Workers::spawnWorker() {
   if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sockets) != 0) {
     return failed("socketpair");
   }
-  OwnedFd ours(sockets[0]);
-  OwnedFd theirs(sockets[1]);
+  UniqueFd ours(sockets[0]);
+  UniqueFd theirs(sockets[1]);
   // The piece buffer both map: a memfd, as an anonymous mapping does not
   // outlive exec.
-  OwnedFd buffer(::memfd_create("crackvis-hdf5-pieces", MFD_CLOEXEC));
+  UniqueFd buffer(::memfd_create("crackvis-hdf5-pieces", MFD_CLOEXEC));
   if (buffer.get() < 0 || ::ftruncate(buffer.get(), kMaxChunkBytes) != 0) {
     return failed("memfd");
   }
@@ -171,8 +161,8 @@ Result<Hdf5Workers::Started> Hdf5Workers::spawnWorker() {
   if (shared == MAP_FAILED) {
     return failed("mmap");
   }
-  const OwnedFd socketCopy(::fcntl(theirs.get(), F_DUPFD_CLOEXEC, kAboveWorkerFds));
-  const OwnedFd bufferCopy(::fcntl(buffer.get(), F_DUPFD_CLOEXEC, kAboveWorkerFds));
+  const UniqueFd socketCopy(::fcntl(theirs.get(), F_DUPFD_CLOEXEC, kAboveWorkerFds));
+  const UniqueFd bufferCopy(::fcntl(buffer.get(), F_DUPFD_CLOEXEC, kAboveWorkerFds));
   const std::string service = std::to_string(::getpid());
   const std::string root = m_root.path().string();
   char* argv[] = {const_cast<char*>(m_settings.program.c_str()), const_cast<char*>(root.c_str()),
@@ -213,10 +203,7 @@ Result<Hdf5Workers::Started> Hdf5Workers::spawnWorker() {
   if (receiveAll(ours.get(), &ready, sizeof ready, Clock::now() + kWorkerStartTime, {}) !=
           Wait::kReady ||
       ready.kind != kReady || ready.length != 0) {
-    ::kill(pid, SIGKILL);
-    int status = 0;
-    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-    }
+    const int status = killAndReap(pid);
     ::munmap(shared, kMaxChunkBytes);
     return unavailable(fmt::format("cannot start an HDF5 worker: {} did not get ready ({})",
                                    m_settings.program, describeExit(status)));
@@ -283,11 +270,7 @@ void Hdf5Workers::checkIn(Worker* worker, Lane lane, const std::string& user) {
 }
 
 std::string Hdf5Workers::replace(Worker& worker, const std::string& file, const std::string& why) {
-  ::kill(worker.pid, SIGKILL);  // a no-op for one that has died already
-  int status = 0;
-  while (::waitpid(worker.pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  const std::string ended = describeExit(status);
+  const std::string ended = describeExit(killAndReap(worker.pid));
   ::close(worker.socket);
   ::munmap(worker.shared, kMaxChunkBytes);
   const pid_t old = worker.pid;

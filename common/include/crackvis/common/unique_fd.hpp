@@ -1,6 +1,9 @@
-// A file descriptor (a socket) that closes itself: the raw sockets of the
-// connection probe and of the raw TLS baseline.
+// A file descriptor that closes itself: the raw sockets of the connection
+// probe and of the raw TLS baseline, an HDF5 worker's socket and buffer
+// while it starts.
 #pragma once
+
+#include <utility>
 
 #include <unistd.h>
 
@@ -17,6 +20,8 @@ class UniqueFd {
     }
   }
   int get() const { return m_fd; }
+  // Hands the descriptor over; this no longer closes it.
+  int release() { return std::exchange(m_fd, -1); }
 
  private:
   int m_fd;
