@@ -7,6 +7,7 @@
 #
 #   deploy/install-deps.sh                   # everything (build, test, run)
 #   deploy/install-deps.sh --runtime         # only what the built services and CLI load
+#   deploy/install-deps.sh --client          # only what the `client` preset builds with
 #   deploy/install-deps.sh [--runtime] --list   # print the package list and exit
 set -euo pipefail
 
@@ -53,14 +54,25 @@ readonly RUNTIME_PACKAGES=(
   libegl1 libegl-mesa0 libgl1-mesa-dri
 )
 
+# What the `client` preset (crackvis-client alone, docs/client.md) builds and
+# tests with: no HDF5, CGAL, TBB or VTK. ffmpeg brings ffprobe, which the
+# recorder's tests read MP4 files with.
+readonly CLIENT_PACKAGES=(
+  build-essential cmake ninja-build pkg-config libfmt-dev libssl-dev
+  libgrpc++-dev libgrpc-dev protobuf-compiler protobuf-compiler-grpc libprotobuf-dev
+  libxml2-dev libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
+  qt6-base-dev qt6-base-dev-tools catch2 ffmpeg
+)
+
 selected=("${PACKAGES[@]}")
 list_only=false
 for argument in "$@"; do
   case "$argument" in
     --runtime) selected=("${RUNTIME_PACKAGES[@]}") ;;
+    --client) selected=("${CLIENT_PACKAGES[@]}") ;;
     --list) list_only=true ;;
     -h | --help)
-      sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'
+      sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'
       exit 0
       ;;
     *)

@@ -145,18 +145,6 @@ Status checkUniqueIds(const std::vector<std::int64_t>& ids) {
 
 }  // namespace
 
-Status validateName(const std::string& what, const std::string& name) {
-  const bool valid =
-      !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
-        return std::isalnum(static_cast<unsigned char>(c)) != 0 || c == '_' || c == '.' || c == '-';
-      });
-  if (!valid) {
-    return invalidArgument(
-        fmt::format("{} name '{}': expected 1 to 64 characters of A-Z a-z 0-9 _ . -", what, name));
-  }
-  return Status::ok();
-}
-
 Status validateExtras(std::span<const ExtraArray> extras, std::size_t particleCount,
                       std::size_t bondCount) {
   for (std::size_t i = 0; i < extras.size(); ++i) {

@@ -9,6 +9,7 @@
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
+#include "client/client_process.hpp"
 #include "dataservice/service_fixture.hpp"
 #include "server/render_fixture.hpp"
 #include "support/network.hpp"
@@ -20,34 +21,6 @@ using namespace crackvis;
 using namespace crackvis::testing;
 
 namespace {
-
-const std::string kClient = CRACKVIS_CLIENT;
-
-// The client with this environment ("-u NAME" removes, "NAME=value" sets).
-ProcessResult runClient(const std::vector<std::string>& environment,
-                        const std::vector<std::string>& args) {
-  std::vector<std::string> argv{"env"};
-  argv.insert(argv.end(), environment.begin(), environment.end());
-  argv.push_back(kClient);
-  argv.insert(argv.end(), args.begin(), args.end());
-  return runProcess(argv);
-}
-
-const std::vector<std::string> kNoDisplay{"-u", "DISPLAY",        "-u", "WAYLAND_DISPLAY",
-                                          "-u", "QT_QPA_PLATFORM"};
-const std::vector<std::string> kOffscreen{"QT_QPA_PLATFORM=offscreen"};
-
-// The lines crackvis-client printed itself (Qt's own notes, such as the
-// offscreen plugin's, are not its messages).
-std::vector<std::string> clientLines(const std::string& err) {
-  std::vector<std::string> own;
-  for (const std::string& line : lines(err)) {
-    if (line.starts_with("crackvis-client: ")) {
-      own.push_back(line);
-    }
-  }
-  return own;
-}
 
 std::vector<std::string> connection(const std::string& address) {
   const auto tls = clientTls("client");
@@ -67,38 +40,6 @@ TimedRun screenshotRun(const std::vector<std::string>& args) {
 }
 
 }  // namespace
-
-TEST_CASE("crackvis-client without a display says what to run instead", "[client]") {
-  const std::string expected =
-      "crackvis-client: no display (DISPLAY and WAYLAND_DISPLAY are not set): run the scripted "
-      "session without a window with --demo FOLDER, or the window off screen with "
-      "QT_QPA_PLATFORM=offscreen\n";
-  for (const auto& platform :
-       {std::vector<std::string>{}, std::vector<std::string>{"QT_QPA_PLATFORM=xcb"},
-        std::vector<std::string>{"QT_QPA_PLATFORM=wayland"}}) {
-    auto environment = kNoDisplay;
-    environment.insert(environment.end(), platform.begin(), platform.end());
-    const auto result = runClient(environment, {"--connect", "localhost:50052"});
-    CHECK(result.exitCode == 2);  // not Qt's abort (134)
-    CHECK(result.err == expected);
-  }
-  // --help needs no display.
-  const auto help = runClient(kNoDisplay, {"--help"});
-  CHECK(help.exitCode == 0);
-  CHECK_THAT(help.out, Catch::Contains("--window-screenshot"));
-}
-
-TEST_CASE("crackvis-client names a misspelt option and the nearest one", "[client]") {
-  const auto typo = runClient(kOffscreen, {"--conect", "localhost:50052"});
-  CHECK(typo.exitCode == 2);
-  CHECK(clientLines(typo.err) ==
-        std::vector<std::string>{
-            "crackvis-client: unknown option '--conect' (did you mean --connect?)"});
-  const auto unknown = runClient(kOffscreen, {"--frobnicate"});
-  CHECK(unknown.exitCode == 2);
-  CHECK(clientLines(unknown.err) ==
-        std::vector<std::string>{"crackvis-client: unknown option '--frobnicate'"});
-}
 
 TEST_CASE(
     "with --window-screenshot the client prints why it cannot take the picture and exits at once",

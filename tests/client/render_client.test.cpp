@@ -230,31 +230,6 @@ TEST_CASE("the window connects, opens a file, switches the method and steps",
   CHECK(window.messages().count(QStringLiteral("isolated breaks")) == 1);
 }
 
-TEST_CASE("the pipeline panel offers a file's extra arrays under colour by", "[client]") {
-  application();
-  client::PipelinePanel panel;
-  pipeline::PipelineDescription changed;
-  QObject::connect(&panel, &client::PipelinePanel::changed,
-                   [&](const pipeline::PipelineDescription& d) { changed = d; });
-  panel.setExtras({"damage", "nbCracks"}, {"forceN"});
-  QComboBox* box = panel.particleColourBox();
-  REQUIRE(box->findText("extra: damage") >= 0);
-  box->setCurrentIndex(box->findText("extra: nbCracks"));
-  CHECK(changed.particles.colourBy == pipeline::ParticleColourBy::kExtra);
-  CHECK(changed.particles.colourByExtra == "nbCracks");
-  CHECK_THAT(pipeline::toXml(changed), Catch::Contains("colour-by=\"extra:nbCracks\""));
-  QComboBox* bonds = panel.bondColourBox();
-  bonds->setCurrentIndex(bonds->findText("extra: forceN"));
-  CHECK(changed.bonds.colourBy == pipeline::BondColourBy::kExtra);
-  CHECK(changed.bonds.colourByExtra == "forceN");
-  CHECK_THAT(pipeline::toXml(changed), Catch::Contains("colour-by=\"extra:forceN\""));
-  // Another file's arrays replace these ones.
-  panel.setExtras({"force"}, {});
-  CHECK(box->findText("extra: damage") < 0);
-  CHECK(box->findText("extra: force") >= 0);
-  CHECK(bonds->findText("extra: forceN") < 0);
-}
-
 TEST_CASE("the client says what is wrong with the server it was pointed at",
           "[client][integration]") {
   application();
@@ -539,57 +514,6 @@ TEST_CASE("the messages pane folds a repeated error into a count", "[client][ui]
   CHECK(window.messages().count(QStringLiteral("out of range")) == 2);
 }
 
-TEST_CASE("the panel's clip, threshold and colour range reach every layer", "[client][ui]") {
-  application();
-  client::PipelinePanel panel;
-  QSignalSpy changed(&panel, &client::PipelinePanel::changed);
-  const auto& cracks = panel.crackControls();
-  const auto& bonds = panel.bondControls();
-  panel.clipNormal(0)->setValue(0.0);
-  panel.clipNormal(2)->setValue(1.0);
-  panel.clipOrigin(2)->setValue(0.05);
-  cracks.clip->setChecked(true);
-  bonds.clip->setChecked(true);
-  const auto& d1 = panel.description();
-  REQUIRE(d1.cracks.clip.has_value());
-  CHECK(d1.cracks.clip->normal == dem::Vec3{0, 0, 1});
-  CHECK(d1.cracks.clip->origin.z == Approx(0.05));
-  REQUIRE(d1.bonds.clip.has_value());
-  CHECK_FALSE(d1.particles.clip.has_value());
-
-  cracks.thresholdBy->setCurrentIndex(cracks.thresholdBy->findText(QStringLiteral("break step")));
-  cracks.thresholdMin->setText(QStringLiteral("100"));
-  cracks.threshold->setChecked(true);
-  const auto& d2 = panel.description();
-  REQUIRE(d2.cracks.threshold.has_value());
-  CHECK(d2.cracks.threshold->by == pipeline::CrackColourBy::kBreakStep);
-  CHECK(d2.cracks.threshold->min == 100.0);
-  CHECK(std::isinf(d2.cracks.threshold->max));
-
-  const auto& particles = panel.particleControls();
-  particles.rangeMin->setText(QStringLiteral("-0.5"));
-  particles.rangeMax->setText(QStringLiteral("2e-3"));
-  particles.rangeMode->setCurrentIndex(particles.rangeMode->findText(QStringLiteral("set")));
-  const auto& d3 = panel.description();
-  CHECK(d3.particles.range.mode == pipeline::RangeMode::kUser);
-  CHECK(d3.particles.range.min == -0.5);
-  CHECK(d3.particles.range.max == 0.002);
-  CHECK(changed.count() >= 4);
-  // What the panel makes is a valid document that says the same.
-  pipeline::PipelineDescription made = panel.description();
-  made.file = "cuboidA.h5";  // the window adds the file it opened
-  auto parsed = pipeline::parsePipeline(pipeline::toXml(made));
-  INFO(parsed.status().message());
-  REQUIRE(parsed.isOk());
-  CHECK(*parsed == made);
-  // And a description shown comes back unchanged.
-  client::PipelinePanel other;
-  other.setDescription(*parsed);
-  CHECK(other.crackControls().threshold->isChecked());
-  CHECK(other.crackControls().thresholdMin->text() == QStringLiteral("100"));
-  CHECK(other.particleControls().rangeMax->text() == QStringLiteral("0.002"));
-}
-
 TEST_CASE("a double click shows the values of the particle under it", "[client][ui][integration]") {
   application();
   auto services = startServices();
@@ -656,43 +580,4 @@ TEST_CASE("the step plot shows the broken bonds of every step and goes to a clic
   // A scalar the file lacks is not drawn (the simulator's files have none).
   CHECK_FALSE(window.stepPlot().setScalar(QStringLiteral("load")));
   CHECK(window.plotScalarBox().count() == 1 + history.scalarNames.size());
-}
-
-TEST_CASE("the step plot draws a chosen step scalar beside the broken bonds", "[client][ui]") {
-  application();
-  client::StepPlot plot;
-  plot.resize(400, 200);
-  client::StepHistory history;
-  history.time = {0.0, 1.0, 2.0, 3.0};
-  history.brokenBonds = {0, 1, 3, 6};
-  history.bondCount = 10;
-  history.scalarNames = {QStringLiteral("load")};
-  history.scalars = {{0.0, 5.0, std::nan(""), 2.0}};
-  plot.setHistory(history);
-  auto pixelsOf = [&](QColor colour) {
-    const QImage image = plot.grab().toImage().convertToFormat(QImage::Format_RGB888);
-    int n = 0;
-    for (int y = 0; y < image.height(); ++y) {
-      for (int x = 0; x < image.width(); ++x) {
-        const QColor c = image.pixelColor(x, y);
-        n += std::abs(c.red() - colour.red()) + std::abs(c.green() - colour.green()) +
-                         std::abs(c.blue() - colour.blue()) <
-                     30
-                 ? 1
-                 : 0;
-      }
-    }
-    return n;
-  };
-  const QColor scalarColour(0x4c, 0xc9, 0xf0);
-  const QColor brokenColour(0xff, 0x9f, 0x1c);
-  CHECK(pixelsOf(brokenColour) > 50);
-  CHECK(pixelsOf(scalarColour) == 0);
-  REQUIRE(plot.setScalar(QStringLiteral("load")));
-  CHECK(plot.scalar() == QStringLiteral("load"));
-  CHECK(pixelsOf(scalarColour) > 50);
-  CHECK_FALSE(plot.setScalar(QStringLiteral("energy")));
-  CHECK(pixelsOf(scalarColour) == 0);
-  CHECK(plot.stepAt(plot.plotArea().right()) == 3);
-  CHECK(plot.stepAt(-100) == 0);
 }

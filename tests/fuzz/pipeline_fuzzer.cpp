@@ -1,4 +1,4 @@
-// libFuzzer target: pipeline descriptions (server/pipeline). Any input must
+// libFuzzer target: pipeline descriptions (pipeline/). Any input must
 // end in a description or an INVALID_ARGUMENT, never a crash, an exception or
 // a sanitizer report; and a description that parses must survive toXml and
 // parse back to the same values (the attribute conversions and their

@@ -3,11 +3,13 @@
 // (they drifted once: the CLI dropped the decomposition's edges).
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 
 #include <catch2/catch.hpp>
 
+#include "pipeline/bad_attributes.hpp"
 #include "support/process.hpp"
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
@@ -132,6 +134,29 @@ TEST_CASE("crackvis movie renders every frame at full resolution, orbiting",
       CHECK(run.exitCode == 1);
       CHECK_THAT(run.err, Catch::Contains(bad.says));
       CHECK(std::count(run.err.begin(), run.err.end(), '\n') == 1);
+    }
+  }
+}
+
+TEST_CASE("crackvis-render --snapshot with a bad description exits 1 with one line",
+          "[pipeline][validation][cli]") {
+  using testing::lines;
+  using testing::runProcess;
+  testing::TempDir dir;
+  for (const testing::BadAttribute& bad : testing::badAttributes()) {
+    DYNAMIC_SECTION(bad.name) {
+      const std::string path = dir.file("view.xml");
+      std::ofstream(path) << bad.xml;
+      auto run = runProcess({CRACKVIS_RENDER, "--snapshot", path, "--data-root",
+                             dir.path().string(), "-o", dir.file("view.png")});
+      CHECK(run.exitCode == 1);
+      CHECK(run.out.empty());
+      const auto errorLines = lines(run.err);
+      REQUIRE(errorLines.size() == 1);
+      CHECK_THAT(errorLines[0],
+                 Catch::StartsWith("crackvis-render: " + path + ": pipeline " + bad.where));
+      CHECK_THAT(errorLines[0], Catch::Contains("attribute '" + bad.attribute + "'"));
+      CHECK_FALSE(std::filesystem::exists(dir.file("view.png")));
     }
   }
 }

@@ -23,7 +23,7 @@ import time
 from paraview import servermanager
 from paraview import simple
 
-# crackvis's default view (server/pipeline/.../pipeline_description.hpp):
+# crackvis's default view (pipeline/.../pipeline_description.hpp):
 # background #1e1e28, particles solid #b0b0b0, cracks solid #e03c31.
 BACKGROUND = [0x1E / 255, 0x1E / 255, 0x28 / 255]
 PARTICLE_COLOUR = [0xB0 / 255, 0xB0 / 255, 0xB0 / 255]

@@ -292,7 +292,8 @@ bool MainWindow::connectTo(const ConnectionSettings& settings) {
   m_files->clear();
   for (const FileEntry& entry : *files) {
     auto* item = new QTreeWidgetItem(
-        m_files, {entry.path, QStringLiteral("%1 MB").arg(entry.sizeBytes / 1e6, 0, 'f', 1)});
+        m_files, {entry.path, QStringLiteral("%1 MB").arg(
+                                  static_cast<double>(entry.sizeBytes) / 1e6, 0, 'f', 1)});
     item->setData(0, Qt::UserRole, entry.path);
     item->setDisabled(!entry.isHdf5);
   }
@@ -310,7 +311,7 @@ void MainWindow::describe(const QString& file) {
       tr("%1\nformat %2, %3 MB\nN = %4 particles, M = %5 bonds\n%6 steps, t = %7 .. %8 s\n\n")
           .arg(summary->file,
                summary->format.isEmpty() ? tr("(not crackvis-dem)") : summary->format)
-          .arg(summary->sizeBytes / 1e6, 0, 'f', 1)
+          .arg(static_cast<double>(summary->sizeBytes) / 1e6, 0, 'f', 1)
           .arg(summary->particles)
           .arg(summary->bonds)
           .arg(summary->steps)

@@ -18,6 +18,7 @@
 #include <crackvis/cracks/crack_mesh.hpp>
 #include <crackvis/cracks/lattice_decomposition.hpp>
 #include <crackvis/cracks/triangulation.hpp>
+#include <crackvis/vocabulary/crack_method.hpp>
 
 // dem::Bounds has no comparison of its own; ExtractOptions compares its domain.
 namespace crackvis::dem {
@@ -27,25 +28,6 @@ inline bool operator==(const Bounds& a, const Bounds& b) {
 }  // namespace crackvis::dem
 
 namespace crackvis::cracks {
-
-enum class Method { kCellAttribute, kCellCut, kLocalVoronoi, kCellCentre };
-
-std::string_view toString(Method method);
-Result<Method> parseMethod(std::string_view name);
-
-// How space is divided into cells (docs/methods.md, "Any packing"):
-//  - lattice: the cells the bonds span (tetrahedra and octahedra in 3D,
-//    triangles in 2D), found from the bond graph alone;
-//  - triangulation: the Delaunay triangulation of the reference
-//    configuration's centres, regular (weighted by r^2) for unequal radii;
-//    triangulation edges that were never bonded count as bonded through
-//    their common bonded neighbours;
-//  - auto: lattice when the bonds span lattice cells (isLatticeGraph), else
-//    triangulation.
-enum class Decomposition { kAuto, kLattice, kTriangulation };
-
-std::string_view toString(Decomposition decomposition);
-Result<Decomposition> parseDecomposition(std::string_view name);
 
 // An axis-aligned box (the domain that clips local Voronoi cells).
 using Box = dem::Bounds;

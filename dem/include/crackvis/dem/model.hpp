@@ -16,39 +16,13 @@
 #include <vector>
 
 #include <crackvis/common/status.hpp>
+#include <crackvis/vocabulary/names.hpp>
+#include <crackvis/vocabulary/vec3.hpp>
 
 namespace crackvis::dem {
 
 using ParticleIndex = std::int32_t;
 using BondIndex = std::int32_t;
-
-struct Vec3 {
-  double x = 0.0;
-  double y = 0.0;
-  double z = 0.0;
-
-  friend bool operator==(const Vec3&, const Vec3&) = default;
-};
-static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 must map onto float64[N,3] rows");
-
-inline Vec3 operator+(Vec3 a, Vec3 b) {
-  return {a.x + b.x, a.y + b.y, a.z + b.z};
-}
-inline Vec3 operator-(Vec3 a, Vec3 b) {
-  return {a.x - b.x, a.y - b.y, a.z - b.z};
-}
-inline Vec3 operator*(double s, Vec3 a) {
-  return {s * a.x, s * a.y, s * a.z};
-}
-inline double dot(Vec3 a, Vec3 b) {
-  return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-inline double norm(Vec3 a) {
-  return std::sqrt(dot(a, a));
-}
-inline double component(Vec3 p, int axis) {
-  return axis == 0 ? p.x : (axis == 1 ? p.y : p.z);
-}
 
 // An axis-aligned box.
 struct Bounds {
@@ -134,9 +108,6 @@ struct StepState {
   std::size_t brokenBondCount() const;
 };
 
-// Names of extra arrays and step scalars: 1..64 characters of [A-Za-z0-9_.-],
-// so they are safe as HDF5 link names and in pipeline descriptions.
-Status validateName(const std::string& what, const std::string& name);
 // Checks extra arrays against N and M: valid unique names, 1 or 3
 // components, the right number of rows, finite values.
 Status validateExtras(std::span<const ExtraArray> extras, std::size_t particleCount,

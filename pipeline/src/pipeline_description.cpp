@@ -11,8 +11,8 @@
 #include <libxml/xmlschemas.h>
 
 #include "pipeline_schema_text.hpp"
-#include <crackvis/dem/model.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
+#include <crackvis/vocabulary/names.hpp>
 
 namespace crackvis::pipeline {
 namespace {

@@ -15,7 +15,8 @@
 #include <string_view>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/cracks/extractor.hpp>
+#include <crackvis/vocabulary/crack_method.hpp>
+#include <crackvis/vocabulary/vec3.hpp>
 
 namespace crackvis::pipeline {
 
