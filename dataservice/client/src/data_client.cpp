@@ -18,7 +18,7 @@
 #include <crackvis/dataservice/packed_chunk.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
-#include <crackvis/tls/tls_material.hpp>
+#include <crackvis/tls/channel.hpp>
 
 namespace crackvis::dataservice {
 namespace v1 = crackvis::v1;
@@ -390,40 +390,27 @@ struct DataClient::Impl {
 Result<DataClient> DataClient::connect(const ClientOptions& options) {
   auto impl = std::make_shared<Impl>();
   impl->options = options;
-  grpc::ChannelArguments arguments;
+  tls::ChannelOptions channel;
+  channel.target = options.target;
+  channel.insecure = options.insecure;
+  channel.files = options.tls;
+  channel.serverName = options.serverName;
   // Each client its own connection: 16 clients are 16 TCP connections, as
   // they would be from 16 machines.
-  arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
-  arguments.SetMaxReceiveMessageSize(64 << 20);
+  channel.ownConnection = true;
   // A view's Read is a few MiB on a fresh stream: a large initial window
   // lets the server send it without waiting for window updates.
-  arguments.SetInt(GRPC_ARG_HTTP2_STREAM_LOOKAHEAD_BYTES, 16 << 20);
-  std::shared_ptr<grpc::ChannelCredentials> credentials;
-  if (options.insecure) {
-    credentials = grpc::InsecureChannelCredentials();
-  } else {
-    auto material = tls::loadTlsMaterial(options.tls);
-    if (!material) {
-      return material.status();
-    }
-    grpc::SslCredentialsOptions ssl;
-    ssl.pem_root_certs = material->caPem;
-    ssl.pem_cert_chain = material->certPem;
-    ssl.pem_private_key = material->keyPem;
-    credentials = grpc::SslCredentials(ssl);
-    if (!options.serverName.empty()) {
-      arguments.SetSslTargetNameOverride(options.serverName);
-    }
+  channel.streamWindowBytes = 16 << 20;
+  auto created = tls::createChannel(channel);
+  if (!created) {
+    return created.status();
   }
   if (!options.token.empty()) {
     impl->authorization = "Bearer " + options.token;
   } else if (!options.user.empty()) {
     impl->authorization = "Basic " + base64Encode(options.user + ":" + options.password);
   }
-  impl->channel = grpc::CreateCustomChannel(options.target, credentials, arguments);
-  if (!impl->channel) {
-    return invalidArgument(fmt::format("cannot create a channel to '{}'", options.target));
-  }
+  impl->channel = std::move(created).value();
   impl->stub = v1::DataService::NewStub(impl->channel);
   impl->health = grpc::health::v1::Health::NewStub(impl->channel);
   impl->readStub = std::make_unique<grpc::TemplatedGenericStub<v1::ReadRequest, grpc::ByteBuffer>>(

@@ -27,6 +27,7 @@
 #include <crackvis/rpc/grpc_status.hpp>
 #include <crackvis/rpc/server.hpp>
 #include <crackvis/service/render_server.hpp>
+#include <crackvis/tls/channel.hpp>
 #include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::service {
@@ -788,20 +789,12 @@ class RenderServiceImpl final : public v1::RenderService::Service {
 };
 
 Result<std::shared_ptr<grpc::Channel>> dataChannel(const dataservice::ClientOptions& options) {
-  grpc::ChannelArguments arguments;
-  arguments.SetMaxReceiveMessageSize(64 << 20);
-  if (options.insecure) {
-    return grpc::CreateCustomChannel(options.target, grpc::InsecureChannelCredentials(), arguments);
-  }
-  auto material = tls::loadTlsMaterial(options.tls);
-  if (!material) {
-    return material.status();
-  }
-  if (!options.serverName.empty()) {
-    arguments.SetSslTargetNameOverride(options.serverName);
-  }
-  grpc::SslCredentialsOptions ssl{material->caPem, material->keyPem, material->certPem};
-  return grpc::CreateCustomChannel(options.target, grpc::SslCredentials(ssl), arguments);
+  tls::ChannelOptions channel;
+  channel.target = options.target;
+  channel.insecure = options.insecure;
+  channel.files = options.tls;
+  channel.serverName = options.serverName;
+  return tls::createChannel(channel);
 }
 
 }  // namespace
