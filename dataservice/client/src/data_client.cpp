@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <climits>
@@ -377,13 +378,25 @@ struct DataClient::Impl {
     return rpc::fromGrpcStatus(status, call, peer(kind), channel);
   }
 
-  void prepare(grpc::ClientContext& context) const {
-    context.set_deadline(std::chrono::system_clock::now() +
-                         std::chrono::duration_cast<std::chrono::system_clock::duration>(
-                             std::chrono::duration<double>(options.timeoutSeconds)));
+  // The options' timeout from now, or `deadline` when it comes first.
+  void prepare(grpc::ClientContext& context, Deadline deadline = Deadline::max()) const {
+    context.set_deadline(
+        std::min(deadline, std::chrono::system_clock::now() +
+                               std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                                   std::chrono::duration<double>(options.timeoutSeconds))));
     if (!authorization.empty()) {
       context.AddMetadata("authorization", authorization);
     }
+  }
+
+  // One unary call for crackvis-render (DataClient::resolve, the relays):
+  // `invoke` makes it on a prepared context.
+  template <typename Invoke>
+  Status relay(const char* call, Deadline deadline, Invoke&& invoke) const {
+    grpc::ClientContext context;
+    prepare(context, deadline);
+    return rpc::fromGrpcStatus(invoke(context), fmt::format("crackvis-data {}", call), peer(),
+                               channel);
   }
 };
 
@@ -492,6 +505,30 @@ Result<FileDescription> DataClient::describe(const std::string& file, bool uncac
     return m_impl->failure(status, "Describe");
   }
   return fromProto(response);
+}
+
+Result<std::string> DataClient::resolve(const std::string& file, Deadline deadline) const {
+  v1::ResolveRequest request;
+  request.set_file(file);
+  v1::ResolveResponse response;
+  CRACKVIS_RETURN_IF_ERROR(m_impl->relay("Resolve", deadline, [&](grpc::ClientContext& context) {
+    return m_impl->stub->Resolve(&context, request, &response);
+  }));
+  return response.resolved_file();
+}
+
+Status DataClient::relayListFiles(const v1::ListFilesRequest& request,
+                                  v1::ListFilesResponse& response, Deadline deadline) const {
+  return m_impl->relay("ListFiles", deadline, [&](grpc::ClientContext& context) {
+    return m_impl->stub->ListFiles(&context, request, &response);
+  });
+}
+
+Status DataClient::relayDescribe(const v1::DescribeRequest& request, v1::DescribeResponse& response,
+                                 Deadline deadline) const {
+  return m_impl->relay("Describe", deadline, [&](grpc::ClientContext& context) {
+    return m_impl->stub->Describe(&context, request, &response);
+  });
 }
 
 // One Read call on its own completion queue, driven from the caller's

@@ -13,7 +13,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "client_events.hpp"
-#include "crackvis/v1/data.grpc.pb.h"
+#include "crackvis/v1/data.pb.h"
 #include "crackvis/v1/render.grpc.pb.h"
 #include <crackvis/common/log.hpp>
 #include <crackvis/dataservice/data_root.hpp>
@@ -22,12 +22,10 @@
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/rpc/access_log.hpp>
 #include <crackvis/rpc/call.hpp>
-#include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/credentials.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
 #include <crackvis/rpc/server.hpp>
 #include <crackvis/service/render_server.hpp>
-#include <crackvis/tls/channel.hpp>
 #include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::service {
@@ -51,60 +49,23 @@ std::string newSessionId() {
   return fmt::format("{:016x}{:016x}", generator(), generator());
 }
 
-// crackvis-data as the render server reaches it: its own certificate (and
-// token, if it has one), each call bounded by the configured timeout and the
-// caller's deadline. Shared by the handlers and the sessions' source openers.
-class DataAccess {
- public:
-  DataAccess(const dataservice::ClientOptions& options, std::shared_ptr<grpc::Channel> channel)
-      : m_options(options),
-        m_channel(std::move(channel)),
-        m_stub(v1::DataService::NewStub(m_channel)) {}
-
-  v1::DataService::Stub& stub() { return *m_stub; }
-
-  template <typename Call>
-  Status call(const char* name, std::chrono::system_clock::time_point deadline, Call call) {
-    grpc::ClientContext client;
-    client.set_deadline(std::min(deadline, std::chrono::system_clock::now() +
-                                               std::chrono::milliseconds(static_cast<std::int64_t>(
-                                                   m_options.timeoutSeconds * 1000))));
-    if (!m_options.token.empty()) {
-      client.AddMetadata("authorization", "Bearer " + m_options.token);
-    }
-    // Unreachable, another kind of server or the wrong transport: one line
-    // of advice (connection_advice.hpp), as the CLI and the client say it.
-    const rpc::Peer peer{rpc::ServerKind::kData, m_options.target, m_options.insecure,
-                         m_options.tls.flagPrefix, true};
-    return rpc::fromGrpcStatus(call(&client), fmt::format("crackvis-data {}", name), peer,
-                               m_channel);
+// The caller's folder rule on the file as named and, asking crackvis-data
+// where it leads, on the real file (rpc::checkResolvedPath, the rule
+// crackvis-data applies to its own users): a symlink in the caller's folder
+// cannot lend another user's file.
+Status checkAccess(const dataservice::DataClient& data, const Caller& caller,
+                   const std::string& file, dataservice::DataClient::Deadline deadline) {
+  auto normalized = dataservice::DataRoot::normalize(file);
+  if (!normalized) {
+    return normalized.status();
   }
-
-  // The caller's folder rule on the file as named and, asking crackvis-data
-  // where it leads, on the real file (rpc::checkResolvedPath, the rule
-  // crackvis-data applies to its own users): a symlink in the caller's
-  // folder cannot lend another user's file.
-  Status checkAccess(const Caller& caller, const std::string& file,
-                     std::chrono::system_clock::time_point deadline) {
-    auto normalized = dataservice::DataRoot::normalize(file);
-    if (!normalized) {
-      return normalized.status();
-    }
-    CRACKVIS_RETURN_IF_ERROR(rpc::checkNamedPath(caller, *normalized));
-    v1::ResolveRequest request;
-    request.set_file(*normalized);
-    v1::ResolveResponse response;
-    CRACKVIS_RETURN_IF_ERROR(call("Resolve", deadline, [&](grpc::ClientContext* client) {
-      return m_stub->Resolve(client, request, &response);
-    }));
-    return rpc::checkResolvedPath(caller, *normalized, response.resolved_file());
+  CRACKVIS_RETURN_IF_ERROR(rpc::checkNamedPath(caller, *normalized));
+  auto resolved = data.resolve(*normalized, deadline);
+  if (!resolved) {
+    return resolved.status();
   }
-
- private:
-  dataservice::ClientOptions m_options;
-  std::shared_ptr<grpc::Channel> m_channel;
-  std::unique_ptr<v1::DataService::Stub> m_stub;
-};
+  return rpc::checkResolvedPath(caller, *normalized, *resolved);
+}
 
 // Streams that have not sent their first (attaching) message yet. Each holds
 // one of gRPC's handler threads while it waits, so one past its time is
@@ -478,12 +439,13 @@ void stepHistory(const dataservice::RemoteDemFile& file, const std::vector<std::
 
 class RenderServiceImpl final : public v1::RenderService::Service {
  public:
+  // `data`: the one channel to crackvis-data, for the handlers and (copied
+  // into each opener) the sessions' step sources.
   RenderServiceImpl(const RenderServerConfig& config, dataservice::DataClient data,
-                    std::shared_ptr<grpc::Channel> dataChannel, rpc::AccessLog& log)
+                    rpc::AccessLog& log)
       : m_config(config),
         m_authenticator(config.users),
         m_data(std::move(data)),
-        m_dataAccess(std::make_shared<DataAccess>(config.data, std::move(dataChannel))),
         m_log(log),
         m_sessions(config.maxSessions, config.maxSessionsPerUser, config.sessionGraceSeconds),
         m_attaching(config.attachSeconds) {}
@@ -533,10 +495,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
         return dataservice::DataRoot::notFound(*folder, /*folder=*/true);
       }
       v1::ListFilesResponse all;
-      CRACKVIS_RETURN_IF_ERROR(
-          m_dataAccess->call("ListFiles", context->deadline(), [&](grpc::ClientContext* client) {
-            return m_dataAccess->stub().ListFiles(client, *request, &all);
-          }));
+      CRACKVIS_RETURN_IF_ERROR(m_data.relayListFiles(*request, all, context->deadline()));
       // Both the name shown and the file it leads to must be the caller's.
       for (const auto& file : all.files()) {
         if (!file.resolved_path().empty() &&
@@ -552,11 +511,8 @@ class RenderServiceImpl final : public v1::RenderService::Service {
                         v1::DescribeResponse* response) override {
     return handle(context, "Describe", [&](const Caller& caller, AccessRecord& record) {
       record.file = request->file();
-      CRACKVIS_RETURN_IF_ERROR(
-          m_dataAccess->checkAccess(caller, request->file(), context->deadline()));
-      return m_dataAccess->call("Describe", context->deadline(), [&](grpc::ClientContext* client) {
-        return m_dataAccess->stub().Describe(client, *request, response);
-      });
+      CRACKVIS_RETURN_IF_ERROR(checkAccess(m_data, caller, request->file(), context->deadline()));
+      return m_data.relayDescribe(*request, *response, context->deadline());
     });
   }
 
@@ -564,8 +520,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
                            v1::StepHistoryResponse* response) override {
     return handle(context, "StepHistory", [&](const Caller& caller, AccessRecord& record) {
       record.file = request->file();
-      CRACKVIS_RETURN_IF_ERROR(
-          m_dataAccess->checkAccess(caller, request->file(), context->deadline()));
+      CRACKVIS_RETURN_IF_ERROR(checkAccess(m_data, caller, request->file(), context->deadline()));
       auto file = dataservice::RemoteDemFile::open(m_data, request->file());
       if (!file) {
         return file.status();
@@ -599,12 +554,11 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   }
 
   Session::SourceOpener opener(const Caller& caller) const {
-    return [data = m_data, access = m_dataAccess, caller, timeout = m_config.data.timeoutSeconds,
-            sizes = m_config.limits.fileSizes](
+    return [data = m_data, caller, sizes = m_config.limits.fileSizes](
                const std::string& file) -> Result<std::unique_ptr<source::StepSource>> {
-      const auto deadline = std::chrono::system_clock::now() +
-                            std::chrono::milliseconds(static_cast<std::int64_t>(timeout * 1000));
-      CRACKVIS_RETURN_IF_ERROR(access->checkAccess(caller, file, deadline));
+      // No caller's deadline here: the data client's timeout bounds the call.
+      CRACKVIS_RETURN_IF_ERROR(
+          checkAccess(data, caller, file, dataservice::DataClient::Deadline::max()));
       return source::openRemoteSource(data, file, sizes);
     };
   }
@@ -759,7 +713,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
     }
     record.file = (*session)->info().file;
     // Checked again: a link may have been changed since the session opened.
-    CRACKVIS_RETURN_IF_ERROR(m_dataAccess->checkAccess(caller, record.file, context.deadline()));
+    CRACKVIS_RETURN_IF_ERROR(checkAccess(m_data, caller, record.file, context.deadline()));
     int step = 0;
     const std::optional<int> atStep =
         request.has_step() ? std::optional<int>(request.step()) : std::nullopt;
@@ -782,20 +736,10 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   const RenderServerConfig& m_config;
   rpc::Authenticator m_authenticator;
   dataservice::DataClient m_data;
-  std::shared_ptr<DataAccess> m_dataAccess;
   rpc::AccessLog& m_log;
   SessionRegistry m_sessions;
   AttachWatch m_attaching;
 };
-
-Result<std::shared_ptr<grpc::Channel>> dataChannel(const dataservice::ClientOptions& options) {
-  tls::ChannelOptions channel;
-  channel.target = options.target;
-  channel.insecure = options.insecure;
-  channel.files = options.tls;
-  channel.serverName = options.serverName;
-  return tls::createChannel(channel);
-}
 
 }  // namespace
 
@@ -838,17 +782,13 @@ Result<std::unique_ptr<RenderServer>> RenderServer::start(const RenderServerConf
     return Status(data.status().code(),
                   fmt::format("the data service client: {}", data.status().message()));
   }
-  auto channel = dataChannel(impl->config.data);
-  if (!channel) {
-    return channel.status();
-  }
   auto log = rpc::AccessLog::open(config.accessLog);
   if (!log) {
     return log.status();
   }
   impl->log = std::move(log).value();
-  impl->service = std::make_unique<RenderServiceImpl>(impl->config, std::move(data).value(),
-                                                      std::move(channel).value(), *impl->log);
+  impl->service =
+      std::make_unique<RenderServiceImpl>(impl->config, std::move(data).value(), *impl->log);
   RenderServiceImpl* service = impl->service.get();
   rpc::ServerSettings settings;
   settings.program = kProgram;
