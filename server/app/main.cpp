@@ -15,10 +15,10 @@
 #include <fmt/format.h>
 #include <grpcpp/grpcpp.h>
 
+#include <crackvis/common/data_root.hpp>
 #include <crackvis/common/log.hpp>
 #include <crackvis/common/service_manager.hpp>
 #include <crackvis/common/termination.hpp>
-#include <crackvis/dataservice/data_root.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/render/probe_scene.hpp>
 #include <crackvis/render/scene_renderer.hpp>
@@ -84,7 +84,7 @@ int snapshot(const Flags& flags, const RenderServerConfig& config) {
   service::Session::SourceOpener opener;
   std::optional<dataservice::DataClient> client;
   if (!flags.dataRoot.empty()) {
-    auto root = dataservice::DataRoot::open(flags.dataRoot);
+    auto root = DataRoot::open(flags.dataRoot);
     if (!root) {
       return fail(root.status().message());
     }

@@ -12,8 +12,8 @@
 #include "client_events.hpp"
 #include "crackvis/v1/data.pb.h"
 #include "stream_encoder.hpp"
+#include <crackvis/common/data_root.hpp>
 #include <crackvis/common/log.hpp>
-#include <crackvis/dataservice/data_root.hpp>
 #include <crackvis/dataservice/remote_dem_file.hpp>
 #include <crackvis/dem/layout.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
@@ -38,7 +38,7 @@ std::string newSessionId() {
 // cannot lend another user's file.
 Status checkAccess(const dataservice::DataClient& data, const Caller& caller,
                    const std::string& file, dataservice::DataClient::Deadline deadline) {
-  auto normalized = dataservice::DataRoot::normalize(file);
+  auto normalized = DataRoot::normalize(file);
   if (!normalized) {
     return normalized.status();
   }
@@ -138,13 +138,13 @@ grpc::Status RenderServiceImpl::ListFiles(grpc::ServerContext* context,
                                           v1::ListFilesResponse* response) {
   return handle(context, "ListFiles", [&](const Caller& caller, AccessRecord& record) {
     record.file = request->folder();
-    auto folder = dataservice::DataRoot::normalize(request->folder());
+    auto folder = DataRoot::normalize(request->folder());
     if (!folder) {
       return folder.status();
     }
     // Another user's folder answers as a missing one, as crackvis-data's.
     if (!caller.mayList(*folder)) {
-      return dataservice::DataRoot::notFound(*folder, /*folder=*/true);
+      return DataRoot::notFound(*folder, /*folder=*/true);
     }
     v1::ListFilesResponse all;
     CRACKVIS_RETURN_IF_ERROR(m_data.relayListFiles(*request, all, context->deadline()));
