@@ -15,15 +15,15 @@
 #include <fmt/format.h>
 #include <grpcpp/grpcpp.h>
 
+#include <crackvis/common/data_root.hpp>
 #include <crackvis/common/log.hpp>
 #include <crackvis/common/service_manager.hpp>
 #include <crackvis/common/termination.hpp>
-#include <crackvis/dataservice/data_root.hpp>
-#include <crackvis/dataservice/server_config.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/render/probe_scene.hpp>
 #include <crackvis/render/scene_renderer.hpp>
 #include <crackvis/rpc/setting_check.hpp>
+#include <crackvis/rpc/user_list.hpp>
 #include <crackvis/service/render_server.hpp>
 
 namespace {
@@ -84,7 +84,7 @@ int snapshot(const Flags& flags, const RenderServerConfig& config) {
   service::Session::SourceOpener opener;
   std::optional<dataservice::DataClient> client;
   if (!flags.dataRoot.empty()) {
-    auto root = dataservice::DataRoot::open(flags.dataRoot);
+    auto root = DataRoot::open(flags.dataRoot);
     if (!root) {
       return fail(root.status().message());
     }
@@ -294,11 +294,11 @@ int main(int argc, char** argv) {
       "         crackvis-render --snapshot view.xml --data-root /data -o view.png");
   CLI11_PARSE(app, argc, argv);
   if (!flags.usersFrom.empty()) {
-    auto users = crackvis::dataservice::loadServerConfig(flags.usersFrom);
+    auto users = crackvis::rpc::loadUsersFrom(flags.usersFrom);
     if (!users) {
       return fail(users.status().message());
     }
-    config.users = users->users;
+    config.users = std::move(users).value();
   }
   // Checked once merged, so a flag and a file value meet the same rules.
   if (Status valid = crackvis::service::validateRenderServerConfig(config); !valid) {

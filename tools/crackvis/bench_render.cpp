@@ -25,6 +25,7 @@
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
+#include <crackvis/tls/channel.hpp>
 #include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::cli {
@@ -189,15 +190,13 @@ std::string serverErrors(FrameCollector& collector) {
   return text;
 }
 
-std::shared_ptr<grpc::Channel> makeChannel(const RenderBenchOptions& options,
-                                           const tls::TlsMaterial& material) {
-  grpc::SslCredentialsOptions ssl;
-  ssl.pem_root_certs = material.caPem;
-  ssl.pem_private_key = material.keyPem;
-  ssl.pem_cert_chain = material.certPem;
-  grpc::ChannelArguments arguments;
-  arguments.SetMaxReceiveMessageSize(64 << 20);
-  return grpc::CreateCustomChannel(options.server, grpc::SslCredentials(ssl), arguments);
+// The material was read (and checked) before the run starts.
+Result<std::shared_ptr<grpc::Channel>> makeChannel(const RenderBenchOptions& options,
+                                                   const tls::TlsMaterial& material) {
+  tls::ChannelOptions channel;
+  channel.target = options.server;
+  channel.material = material;
+  return tls::createChannel(channel);
 }
 
 void authorize(grpc::ClientContext& context, const RenderBenchOptions& options) {
@@ -233,7 +232,11 @@ Result<Report> run(const RenderBenchOptions& options) {
   if (options.pipelinePath.empty() || options.methodGiven) {
     d.cracks.method = *method;
   }
-  const auto channel = makeChannel(options, *material);
+  auto created = makeChannel(options, *material);
+  if (!created) {
+    return created.status();
+  }
+  const auto channel = std::move(created).value();
   auto stub = v1::RenderService::NewStub(channel);
   const LoadAverage loadBefore = loadAverage();
 

@@ -15,6 +15,7 @@
 #include <crackvis/common/certificates.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
+#include <crackvis/tls/channel.hpp>
 
 namespace crackvis::client {
 namespace {
@@ -64,13 +65,18 @@ Status RenderClient::connectTo(const ConnectionSettings& settings) {
       return file->status();
     }
   }
-  grpc::SslCredentialsOptions ssl{*ca, *key, *cert};
-  grpc::ChannelArguments arguments;
-  arguments.SetMaxReceiveMessageSize(64 << 20);
-  arguments.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 100);
-  arguments.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 2000);
-  auto channel = grpc::CreateCustomChannel(settings.address.toStdString(),
-                                           grpc::SslCredentials(ssl), arguments);
+  tls::ChannelOptions options;
+  options.target = settings.address.toStdString();
+  options.material = tls::TlsMaterial{*ca, *cert, *key, {}};
+  // A restarted server is found again within about two seconds, not after
+  // gRPC's backoff of up to two minutes.
+  options.initialReconnectBackoffMs = 100;
+  options.maxReconnectBackoffMs = 2000;
+  auto created = tls::createChannel(options);
+  if (!created) {
+    return created.status();
+  }
+  auto channel = std::move(created).value();
   auto stub = v1::RenderService::NewStub(channel);
   // One round trip that needs the server and our certificate: ListFiles.
   grpc::ClientContext context;

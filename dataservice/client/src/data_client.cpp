@@ -1,24 +1,20 @@
+#include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <climits>
-#include <optional>
-#include <string_view>
 
 #include <fmt/format.h>
-#include <google/protobuf/io/coded_stream.h>
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
-#include <grpcpp/support/proto_buffer_reader.h>
 
+#include "chunk_receiver.hpp"
 #include "crackvis/v1/data.grpc.pb.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "grpc_convert.hpp"
 #include <crackvis/common/base64.hpp>
 #include <crackvis/dataservice/data_client.hpp>
-#include <crackvis/dataservice/packed_chunk.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
-#include <crackvis/tls/tls_material.hpp>
+#include <crackvis/tls/channel.hpp>
 
 namespace crackvis::dataservice {
 namespace v1 = crackvis::v1;
@@ -50,276 +46,6 @@ AttributeInfo fromProto(const v1::Attribute& in) {
       break;
   }
   return out;
-}
-
-// Where the chunks of one Read go: each chunk is checked against its slab
-// (in byte order, inside the slab), and a slab's buffer is asked of the sink
-// when its first chunk announces its dtype, shape and size.
-class SlabReceiver {
- public:
-  struct ChunkHeader {
-    std::uint64_t slabIndex = 0;
-    int dtype = 0;
-    std::vector<std::uint64_t> shape;
-    std::uint64_t slabBytes = 0;
-    std::uint64_t offset = 0;
-    int encoding = 0;  // v1::ChunkEncoding
-    std::optional<std::uint64_t> decodedBytes;
-  };
-
-  SlabReceiver(const DataClient::SlabSink& sink, std::size_t slabs, bool acceptsPacked)
-      : m_sink(sink), m_destinations(slabs), m_acceptsPacked(acceptsPacked) {}
-
-  // Whether the request listed CHUNK_ENCODING_PACKED.
-  bool acceptsPacked() const { return m_acceptsPacked; }
-
-  // Where the `size` data bytes of the chunk `header` describes go.
-  Result<std::byte*> place(const ChunkHeader& header, std::uint64_t size) {
-    const std::uint64_t index = header.slabIndex;
-    if (index >= m_destinations.size()) {
-      return internalError(
-          fmt::format("Read: chunk for slab {} of {}", index, m_destinations.size()));
-    }
-    Destination& destination = m_destinations[index];
-    if (!destination.started) {
-      DataClient::SlabHeader slab{static_cast<std::size_t>(index), dataTypeFromInt(header.dtype),
-                                  header.shape, header.slabBytes};
-      std::uint64_t expected = elementSize(slab.dtype);
-      for (auto d : slab.shape) {
-        expected *= d;
-      }
-      if (expected != slab.bytes) {
-        return internalError(
-            fmt::format("Read: slab {} announces {} bytes for its shape and dtype, expected {}",
-                        index, slab.bytes, expected));
-      }
-      auto buffer = m_sink(slab);
-      if (!buffer) {
-        return buffer.status();
-      }
-      destination = {*buffer, slab.bytes, 0, true};
-    }
-    if (header.offset != destination.received || size > destination.bytes - destination.received) {
-      return internalError(fmt::format("Read: slab {}: chunk at offset {} out of order or too long",
-                                       index, header.offset));
-    }
-    destination.received += size;
-    return destination.data + header.offset;
-  }
-
-  // Every slab that started arrived whole.
-  Status complete() const {
-    for (std::size_t i = 0; i < m_destinations.size(); ++i) {
-      const Destination& destination = m_destinations[i];
-      if (destination.started && destination.received != destination.bytes) {
-        return internalError(fmt::format("Read: slab {} ended after {} of {} bytes", i,
-                                         destination.received, destination.bytes));
-      }
-    }
-    return Status::ok();
-  }
-
- private:
-  struct Destination {
-    std::byte* data = nullptr;
-    std::uint64_t bytes = 0;
-    std::uint64_t received = 0;
-    bool started = false;
-  };
-  const DataClient::SlabSink& m_sink;
-  std::vector<Destination> m_destinations;
-  bool m_acceptsPacked;
-};
-
-// Where one chunk's data went.
-struct PlacedChunk {
-  std::size_t slab = 0;
-  std::uint64_t offset = 0;
-  std::uint64_t bytes = 0;      // in the slab
-  std::uint64_t wireBytes = 0;  // as it came (fewer when packed)
-};
-
-// Parses one serialized ReadChunk and copies its data from gRPC's receive
-// buffers straight into the slab's buffer. Parsing into a v1::ReadChunk
-// would first copy the data into the message's string, one more pass over
-// every byte, which is a tenth of the client's CPU time on a view's Read.
-// The fields are read as protobuf defines them: in any order, shape packed
-// or not, unknown fields skipped, the last value of a field winning. The
-// data goes straight to its place when it is the last field (the server
-// always sends it last), so that no later field can change where it goes;
-// otherwise it is held until the message has been read.
-// Protobuf's wire types (the low three bits of a tag), spelled out here
-// rather than taken from protobuf's internal namespace.
-enum WireType : std::uint32_t { kVarint = 0, kFixed64 = 1, kLengthDelimited = 2, kFixed32 = 5 };
-
-// Skips a field this client does not read; false for a malformed one (and
-// for groups, which proto3 messages never hold).
-bool skipField(google::protobuf::io::CodedInputStream& input, std::uint32_t wire) {
-  switch (wire) {
-    case kVarint: {
-      std::uint64_t ignored = 0;
-      return input.ReadVarint64(&ignored);
-    }
-    case kFixed64:
-      return input.Skip(8);
-    case kLengthDelimited: {
-      std::uint32_t length = 0;
-      return input.ReadVarint32(&length) && length <= static_cast<std::uint32_t>(INT32_MAX) &&
-             input.Skip(static_cast<int>(length));
-    }
-    case kFixed32:
-      return input.Skip(4);
-    default:
-      return false;
-  }
-}
-
-// The data of one chunk in its place: RAW bytes copied straight from
-// gRPC's buffers, PACKED ones unpacked from them (or, when they span
-// buffers, from a copy).
-Result<PlacedChunk> placeData(const SlabReceiver::ChunkHeader& header, std::uint32_t wireBytes,
-                              google::protobuf::io::CodedInputStream& input,
-                              SlabReceiver& receiver) {
-  if (header.encoding == v1::CHUNK_ENCODING_RAW) {
-    if (header.decodedBytes && *header.decodedBytes != wireBytes) {
-      return internalError(fmt::format("Read: slab {}: a raw chunk of {} bytes says it holds {}",
-                                       header.slabIndex, wireBytes, *header.decodedBytes));
-    }
-    auto place = receiver.place(header, wireBytes);
-    if (!place) {
-      return place.status();
-    }
-    if (!input.ReadRaw(*place, static_cast<int>(wireBytes))) {
-      return internalError(fmt::format("Read: slab {}: chunk cut short", header.slabIndex));
-    }
-    return PlacedChunk{header.slabIndex, header.offset, wireBytes, wireBytes};
-  }
-  if (header.encoding != v1::CHUNK_ENCODING_PACKED) {
-    return internalError(fmt::format("Read: slab {}: chunk in an unknown encoding {}",
-                                     header.slabIndex, header.encoding));
-  }
-  if (!receiver.acceptsPacked()) {
-    return internalError(fmt::format(
-        "Read: slab {}: a packed chunk, which the request did not accept", header.slabIndex));
-  }
-  // A packed chunk is smaller than the at most 1 MiB it decodes to, so
-  // neither a copy nor the slab grows beyond what a raw chunk could ask.
-  if (!header.decodedBytes || *header.decodedBytes > kMaxChunkBytes ||
-      wireBytes >= *header.decodedBytes) {
-    return internalError(fmt::format(
-        "Read: slab {}: a packed chunk of {} bytes says it holds {} (at most {}, and more than "
-        "it takes)",
-        header.slabIndex, wireBytes, header.decodedBytes.value_or(0), kMaxChunkBytes));
-  }
-  const std::uint64_t decoded = *header.decodedBytes;
-  auto place = receiver.place(header, decoded);
-  if (!place) {
-    return place.status();
-  }
-  const void* direct = nullptr;
-  int available = 0;
-  const std::byte* packed = nullptr;
-  thread_local std::vector<std::byte> copy;
-  if (input.GetDirectBufferPointer(&direct, &available) &&
-      static_cast<std::uint32_t>(available) >= wireBytes) {
-    packed = static_cast<const std::byte*>(direct);
-  } else {
-    copy.resize(wireBytes);
-    if (!input.ReadRaw(copy.data(), static_cast<int>(wireBytes))) {
-      return internalError(fmt::format("Read: slab {}: chunk cut short", header.slabIndex));
-    }
-    packed = copy.data();
-    direct = nullptr;
-  }
-  if (Status unpacked =
-          unpackChunk(dataTypeFromInt(header.dtype), packed, wireBytes, *place, decoded);
-      !unpacked) {
-    return internalError(fmt::format("Read: slab {}: chunk at offset {}: {}", header.slabIndex,
-                                     header.offset, unpacked.message()));
-  }
-  if (direct != nullptr) {
-    input.Skip(static_cast<int>(wireBytes));
-  }
-  return PlacedChunk{header.slabIndex, header.offset, decoded, wireBytes};
-}
-
-Result<PlacedChunk> receiveChunk(grpc::ByteBuffer& message, SlabReceiver& receiver) {
-  const std::size_t total = message.Length();
-  grpc::ProtoBufferReader stream(&message);
-  google::protobuf::io::CodedInputStream input(&stream);
-  SlabReceiver::ChunkHeader header;
-  bool hasData = false;
-  std::uint32_t dataSize = 0;
-  std::string heldData;
-  bool ok = stream.status().ok();
-  while (ok) {
-    const std::uint32_t tag = input.ReadTag();
-    if (tag == 0) {
-      break;  // the end of the message, or a malformed tag (checked below)
-    }
-    const std::uint32_t field = tag >> 3;
-    const std::uint32_t wire = tag & 7;
-    if (wire == kVarint && ((field >= 1 && field <= 5) || field == 7 || field == 8)) {
-      std::uint64_t value = 0;
-      ok = input.ReadVarint64(&value);
-      switch (field) {
-        case 1:  // slab_index, uint32: protobuf keeps the low 32 bits
-          header.slabIndex = static_cast<std::uint32_t>(value);
-          break;
-        case 2:  // dtype, an enum (int32)
-          header.dtype = static_cast<int>(static_cast<std::int32_t>(value));
-          break;
-        case 3:  // shape, one unpacked element
-          header.shape.push_back(value);
-          break;
-        case 4:
-          header.slabBytes = value;
-          break;
-        case 5:
-          header.offset = value;
-          break;
-        case 7:  // encoding, an enum (int32)
-          header.encoding = static_cast<int>(static_cast<std::int32_t>(value));
-          break;
-        case 8:
-          header.decodedBytes = value;
-          break;
-      }
-    } else if (wire == kLengthDelimited && field == 3) {
-      std::uint32_t length = 0;  // shape, packed
-      ok = input.ReadVarint32(&length) && length <= total;
-      if (ok) {
-        const auto limit = input.PushLimit(static_cast<int>(length));
-        while (ok && input.BytesUntilLimit() > 0) {
-          std::uint64_t value = 0;
-          ok = input.ReadVarint64(&value);
-          header.shape.push_back(value);
-        }
-        input.PopLimit(limit);
-      }
-    } else if (wire == kLengthDelimited && field == 6) {
-      ok = input.ReadVarint32(&dataSize) && dataSize <= total;
-      hasData = ok;
-      heldData.clear();
-      if (ok && static_cast<std::size_t>(input.CurrentPosition()) + dataSize == total) {
-        return placeData(header, dataSize, input, receiver);  // data came last
-      }
-      if (ok) {
-        heldData.resize(dataSize);
-        ok = input.ReadRaw(heldData.data(), static_cast<int>(dataSize));
-      }
-    } else {
-      ok = skipField(input, wire);
-    }
-  }
-  if (!ok || static_cast<std::size_t>(input.CurrentPosition()) != total) {
-    return internalError(fmt::format("Read: malformed chunk of {} bytes", total));
-  }
-  // A chunk without data, or with its data before other fields: placed from
-  // the held copy once every field is known.
-  google::protobuf::io::CodedInputStream held(
-      reinterpret_cast<const std::uint8_t*>(heldData.data()), static_cast<int>(heldData.size()));
-  return placeData(header, hasData ? dataSize : 0, held, receiver);
 }
 
 }  // namespace
@@ -377,53 +103,52 @@ struct DataClient::Impl {
     return rpc::fromGrpcStatus(status, call, peer(kind), channel);
   }
 
-  void prepare(grpc::ClientContext& context) const {
-    context.set_deadline(std::chrono::system_clock::now() +
-                         std::chrono::duration_cast<std::chrono::system_clock::duration>(
-                             std::chrono::duration<double>(options.timeoutSeconds)));
+  // The options' timeout from now, or `deadline` when it comes first.
+  void prepare(grpc::ClientContext& context, Deadline deadline = Deadline::max()) const {
+    context.set_deadline(
+        std::min(deadline, std::chrono::system_clock::now() +
+                               std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                                   std::chrono::duration<double>(options.timeoutSeconds))));
     if (!authorization.empty()) {
       context.AddMetadata("authorization", authorization);
     }
+  }
+
+  // One unary call for crackvis-render (DataClient::resolve, the relays):
+  // `invoke` makes it on a prepared context.
+  template <typename Invoke>
+  Status relay(const char* call, Deadline deadline, Invoke&& invoke) const {
+    grpc::ClientContext context;
+    prepare(context, deadline);
+    return rpc::fromGrpcStatus(invoke(context), fmt::format("crackvis-data {}", call), peer(),
+                               channel);
   }
 };
 
 Result<DataClient> DataClient::connect(const ClientOptions& options) {
   auto impl = std::make_shared<Impl>();
   impl->options = options;
-  grpc::ChannelArguments arguments;
+  tls::ChannelOptions channel;
+  channel.target = options.target;
+  channel.insecure = options.insecure;
+  channel.files = options.tls;
+  channel.serverName = options.serverName;
   // Each client its own connection: 16 clients are 16 TCP connections, as
   // they would be from 16 machines.
-  arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
-  arguments.SetMaxReceiveMessageSize(64 << 20);
+  channel.ownConnection = true;
   // A view's Read is a few MiB on a fresh stream: a large initial window
   // lets the server send it without waiting for window updates.
-  arguments.SetInt(GRPC_ARG_HTTP2_STREAM_LOOKAHEAD_BYTES, 16 << 20);
-  std::shared_ptr<grpc::ChannelCredentials> credentials;
-  if (options.insecure) {
-    credentials = grpc::InsecureChannelCredentials();
-  } else {
-    auto material = tls::loadTlsMaterial(options.tls);
-    if (!material) {
-      return material.status();
-    }
-    grpc::SslCredentialsOptions ssl;
-    ssl.pem_root_certs = material->caPem;
-    ssl.pem_cert_chain = material->certPem;
-    ssl.pem_private_key = material->keyPem;
-    credentials = grpc::SslCredentials(ssl);
-    if (!options.serverName.empty()) {
-      arguments.SetSslTargetNameOverride(options.serverName);
-    }
+  channel.streamWindowBytes = 16 << 20;
+  auto created = tls::createChannel(channel);
+  if (!created) {
+    return created.status();
   }
   if (!options.token.empty()) {
     impl->authorization = "Bearer " + options.token;
   } else if (!options.user.empty()) {
     impl->authorization = "Basic " + base64Encode(options.user + ":" + options.password);
   }
-  impl->channel = grpc::CreateCustomChannel(options.target, credentials, arguments);
-  if (!impl->channel) {
-    return invalidArgument(fmt::format("cannot create a channel to '{}'", options.target));
-  }
+  impl->channel = std::move(created).value();
   impl->stub = v1::DataService::NewStub(impl->channel);
   impl->health = grpc::health::v1::Health::NewStub(impl->channel);
   impl->readStub = std::make_unique<grpc::TemplatedGenericStub<v1::ReadRequest, grpc::ByteBuffer>>(
@@ -505,6 +230,30 @@ Result<FileDescription> DataClient::describe(const std::string& file, bool uncac
     return m_impl->failure(status, "Describe");
   }
   return fromProto(response);
+}
+
+Result<std::string> DataClient::resolve(const std::string& file, Deadline deadline) const {
+  v1::ResolveRequest request;
+  request.set_file(file);
+  v1::ResolveResponse response;
+  CRACKVIS_RETURN_IF_ERROR(m_impl->relay("Resolve", deadline, [&](grpc::ClientContext& context) {
+    return m_impl->stub->Resolve(&context, request, &response);
+  }));
+  return response.resolved_file();
+}
+
+Status DataClient::relayListFiles(const v1::ListFilesRequest& request,
+                                  v1::ListFilesResponse& response, Deadline deadline) const {
+  return m_impl->relay("ListFiles", deadline, [&](grpc::ClientContext& context) {
+    return m_impl->stub->ListFiles(&context, request, &response);
+  });
+}
+
+Status DataClient::relayDescribe(const v1::DescribeRequest& request, v1::DescribeResponse& response,
+                                 Deadline deadline) const {
+  return m_impl->relay("Describe", deadline, [&](grpc::ClientContext& context) {
+    return m_impl->stub->Describe(&context, request, &response);
+  });
 }
 
 // One Read call on its own completion queue, driven from the caller's

@@ -10,6 +10,7 @@
 #include <crackvis/dataservice/server_config.hpp>
 #include <crackvis/rpc/host_port.hpp>
 #include <crackvis/rpc/setting_check.hpp>
+#include <crackvis/rpc/user_list.hpp>
 #include <crackvis/tls/tls_config.hpp>
 
 namespace crackvis::dataservice {
@@ -56,25 +57,6 @@ Status readLimits(const json& object, const std::string& where, Limits& limits) 
   return read(object, "max_call_seconds", where, limits.maxCallSeconds);
 }
 
-Status readUser(const json& object, const std::string& where, UserEntry& user) {
-  CRACKVIS_RETURN_IF_ERROR(checkKeys(
-      object, where, {"name", "token_hash", "password_hash", "certificate_name", "folders"}));
-  CRACKVIS_RETURN_IF_ERROR(read(object, "name", where, user.name));
-  CRACKVIS_RETURN_IF_ERROR(read(object, "token_hash", where, user.tokenHash));
-  CRACKVIS_RETURN_IF_ERROR(read(object, "password_hash", where, user.passwordHash));
-  CRACKVIS_RETURN_IF_ERROR(read(object, "certificate_name", where, user.certificateName));
-  CRACKVIS_RETURN_IF_ERROR(read(object, "folders", where, user.folders));
-  if (user.name.empty() || user.name.find_first_of(": \t\n") != std::string::npos) {
-    return invalidArgument(
-        fmt::format("{}: 'name' must be non-empty, without spaces or ':'", where));
-  }
-  if (user.tokenHash.empty() && user.passwordHash.empty() && user.certificateName.empty()) {
-    return invalidArgument(fmt::format(
-        "{}: user '{}' needs token_hash, password_hash or certificate_name", where, user.name));
-  }
-  return Status::ok();
-}
-
 }  // namespace
 
 Result<ServerConfig> parseServerConfig(const std::string& text, const std::string& origin) {
@@ -100,21 +82,11 @@ Result<ServerConfig> parseServerConfig(const std::string& text, const std::strin
     CRACKVIS_RETURN_IF_ERROR(readLimits(root.at("limits"), origin + ": limits", config.limits));
   }
   if (root.contains("users")) {
-    const json& users = root.at("users");
-    if (!users.is_array()) {
-      return invalidArgument(fmt::format("{}: 'users' must be an array", origin));
+    auto users = rpc::readUsers(root.at("users"), origin);
+    if (!users) {
+      return users.status();
     }
-    for (size_t i = 0; i < users.size(); ++i) {
-      UserEntry user;
-      CRACKVIS_RETURN_IF_ERROR(readUser(users[i], fmt::format("{}: users[{}]", origin, i), user));
-      for (const UserEntry& other : config.users) {
-        if (other.name == user.name) {
-          return invalidArgument(
-              fmt::format("{}: users[{}]: user '{}' appears twice", origin, i, user.name));
-        }
-      }
-      config.users.push_back(std::move(user));
-    }
+    config.users = std::move(users).value();
   }
   return config;
 }

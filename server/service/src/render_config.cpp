@@ -2,10 +2,10 @@
 #include <nlohmann/json.hpp>
 
 #include <crackvis/common/json_config.hpp>
-#include <crackvis/dataservice/server_config.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/host_port.hpp>
 #include <crackvis/rpc/setting_check.hpp>
+#include <crackvis/rpc/user_list.hpp>
 #include <crackvis/service/render_server.hpp>
 #include <crackvis/tls/tls_config.hpp>
 
@@ -81,12 +81,12 @@ Result<RenderServerConfig> parseRenderServerConfig(const std::string& text,
   std::string usersFrom;
   CRACKVIS_RETURN_IF_ERROR(read(root, "users_from", origin, usersFrom));
   if (!usersFrom.empty()) {
-    auto users = dataservice::loadServerConfig(usersFrom);
+    auto users = rpc::loadUsersFrom(usersFrom);
     if (!users) {
       return Status(users.status().code(),
                     fmt::format("{}: users_from: {}", origin, users.status().message()));
     }
-    config.users = users->users;
+    config.users = std::move(users).value();
   }
   return config;
 }

@@ -1,13 +1,15 @@
 // The typed client of crackvis-data for the rest of crackvis (the render
 // server, the bench command, tests). Connects once with mutual TLS and turns
 // the DataService's calls into typed arrays and Status errors; no gRPC type
-// appears in this header.
+// appears in this header (the relay calls for crackvis-render take the wire
+// messages of crackvis/v1/data.pb.h, only declared here).
 //
 // A DataClient is cheap to copy (copies share one channel) and safe to use
 // from several threads at once; each call has the options' deadline.
 #pragma once
 
 #include <bit>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -21,6 +23,13 @@
 #include <crackvis/common/status.hpp>
 #include <crackvis/dataservice/types.hpp>
 #include <crackvis/tls/tls_material.hpp>
+
+namespace crackvis::v1 {
+class ListFilesRequest;
+class ListFilesResponse;
+class DescribeRequest;
+class DescribeResponse;
+}  // namespace crackvis::v1
 
 namespace crackvis::dataservice {
 
@@ -120,6 +129,22 @@ class DataClient {
   using FetchSink = std::function<Status(std::uint64_t offset, const std::byte* data,
                                          std::size_t size, std::uint64_t fileBytes)>;
   Result<std::uint64_t> fetch(const std::string& file, const FetchSink& sink) const;
+
+  // For crackvis-render, which applies its callers' folder rules to what
+  // crackvis-data says and passes crackvis-data's answers on. Each call ends
+  // at `deadline` (its own caller's) or at the options' timeout, whichever
+  // comes first; a failure names the call "crackvis-data <call>", for a
+  // client that never called crackvis-data itself, with the same
+  // connection advice as the other calls.
+  using Deadline = std::chrono::system_clock::time_point;
+  // The real file a normalized path leads to, from the data root, after
+  // symlinks.
+  Result<std::string> resolve(const std::string& file, Deadline deadline) const;
+  // ListFiles and Describe as the messages travel.
+  Status relayListFiles(const v1::ListFilesRequest& request, v1::ListFilesResponse& response,
+                        Deadline deadline) const;
+  Status relayDescribe(const v1::DescribeRequest& request, v1::DescribeResponse& response,
+                       Deadline deadline) const;
 
  private:
   struct Impl;

@@ -1,0 +1,105 @@
+// RenderServer: crackvis-render's start-up (the configuration's checks, the
+// data client, the access log, the service and the reaper on the shared
+// server host) and shut-down.
+#include <chrono>
+#include <memory>
+#include <utility>
+
+#include <fmt/format.h>
+
+#include "render_service.hpp"
+#include <crackvis/rpc/server.hpp>
+#include <crackvis/service/render_server.hpp>
+#include <crackvis/tls/tls_material.hpp>
+
+namespace crackvis::service {
+
+dataservice::ClientOptions defaultDataOptions() {
+  dataservice::ClientOptions options;
+  options.target = "localhost:50051";
+  options.tls = tls::defaultTlsFiles("crackvis-render", "--data-", "data_service.");
+  return options;
+}
+
+struct RenderServer::Impl {
+  RenderServerConfig config;
+  std::unique_ptr<rpc::AccessLog> log;
+  std::unique_ptr<RenderServiceImpl> service;
+  std::unique_ptr<rpc::ServerHost> host;  // last: stops before the service goes
+};
+
+RenderServer::RenderServer(std::unique_ptr<Impl> impl) : m_impl(std::move(impl)) {}
+
+RenderServer::~RenderServer() {
+  shutdown(0.5);
+}
+
+Result<std::unique_ptr<RenderServer>> RenderServer::start(const RenderServerConfig& config) {
+  auto impl = std::make_unique<Impl>();
+  impl->config = config;
+  auto listener = rpc::prepareListener(config.listen, config.insecure, config.tls);
+  if (!listener) {
+    return listener.status();
+  }
+  if (config.data.insecure) {
+    // The token would travel in clear: only to this machine.
+    CRACKVIS_RETURN_IF_ERROR(rpc::requireLoopback(config.data.target, "--data-insecure"));
+  }
+  // The same rules as crackvis-render's flags and file: a server started
+  // from code (tests, the CLI) cannot bypass them.
+  CRACKVIS_RETURN_IF_ERROR(validateRenderServerConfig(config));
+  auto data = dataservice::DataClient::connect(impl->config.data);
+  if (!data) {
+    return Status(data.status().code(),
+                  fmt::format("the data service client: {}", data.status().message()));
+  }
+  auto log = rpc::AccessLog::open(config.accessLog);
+  if (!log) {
+    return log.status();
+  }
+  impl->log = std::move(log).value();
+  impl->service =
+      std::make_unique<RenderServiceImpl>(impl->config, std::move(data).value(), *impl->log);
+  RenderServiceImpl* service = impl->service.get();
+  rpc::ServerSettings settings;
+  settings.program = kProgram;
+  settings.service = v1::RenderService::service_full_name();
+  settings.maxReceiveMessageBytes = static_cast<int>(pipeline::kMaxPipelineBytes) + 4096;
+  settings.reapPeriod = std::chrono::milliseconds(200);
+  settings.reap = [service] {
+    service->sessions().reap();
+    service->attaching().cancelOverdue();
+  };
+  // Each stream holds a handler thread and a reader thread: cap what many
+  // clients opening calls can make us create (gRPC refuses calls beyond it
+  // with RESOURCE_EXHAUSTED).
+  settings.maxThreads = 4 * config.maxSessions + 32;
+  // Closing the sessions ends their streams (next() returns kClosed).
+  settings.beforeStop = [service] { service->sessions().closeAll(); };
+  auto host = rpc::ServerHost::start(*listener, {service}, std::move(settings));
+  if (!host) {
+    return host.status();
+  }
+  impl->host = std::move(host).value();
+  return std::unique_ptr<RenderServer>(new RenderServer(std::move(impl)));
+}
+
+const std::string& RenderServer::address() const {
+  return m_impl->host->address();
+}
+int RenderServer::port() const {
+  return m_impl->host->port();
+}
+int RenderServer::sessionCount() const {
+  return m_impl->service->sessions().count();
+}
+
+void RenderServer::shutdown(double graceSeconds) {
+  m_impl->host->shutdown(graceSeconds);
+}
+
+void RenderServer::wait() {
+  m_impl->host->wait();
+}
+
+}  // namespace crackvis::service

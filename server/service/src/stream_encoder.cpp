@@ -1,0 +1,124 @@
+#include "stream_encoder.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <utility>
+
+#include <crackvis/rpc/grpc_status.hpp>
+
+namespace crackvis::service {
+namespace {
+
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+}  // namespace
+
+Result<v1::Frame> StreamEncoder::encode(RenderedFrame& frame) {
+  const auto& image = frame.image;
+  if (!m_encoder || m_encoder->settings().width != image.width ||
+      m_encoder->settings().height != image.height ||
+      m_encoder->settings().bitrate != frame.bitrate) {
+    auto created = encode::FrameEncoder::create(
+        {image.width, image.height, std::max(1, frame.fps), frame.bitrate});
+    if (!created) {
+      return created.status();
+    }
+    m_encoder = std::move(created).value();
+    frame.keyframe = true;
+  }
+  const auto start = Clock::now();
+  encode::RgbFrame rgb{image.width, image.height, std::move(frame.image.rgb)};
+  auto encoded = m_encoder->encode(rgb, frame.keyframe);
+  if (!encoded) {
+    return encoded.status();
+  }
+  const double encodeMs = secondsSince(start) * 1000.0;
+  v1::Frame out;
+  out.set_frame_id(frame.frameId);
+  out.set_last_event_id(frame.lastEventId);
+  out.set_width(image.width);
+  out.set_height(image.height);
+  out.set_keyframe(encoded->keyframe);
+  out.set_full_resolution(frame.fullResolution);
+  out.set_reduction(frame.reduction);
+  out.set_particles(frame.particles);
+  out.set_step(frame.step);
+  out.set_h264(encoded->data.data(), encoded->data.size());
+  auto* timings = out.mutable_timings();
+  timings->set_load_ms(frame.timings.loadMs);
+  timings->set_extract_ms(frame.timings.extractMs);
+  timings->set_scene_ms(frame.timings.sceneMs);
+  timings->set_render_ms(frame.timings.renderMs);
+  timings->set_encode_ms(encodeMs);
+  if (frame.lastEventReceived) {
+    timings->set_event_to_send_ms(secondsSince(*frame.lastEventReceived) * 1000.0);
+  }
+  m_window.frames += 1;
+  m_window.bytes += encoded->data.size();
+  m_window.renderMs += frame.timings.renderMs;
+  m_window.encodeMs += encodeMs;
+  return out;
+}
+
+std::optional<v1::StreamStats> StreamEncoder::stats(std::uint64_t dropped) {
+  const double seconds = secondsSince(m_windowStart);
+  if (seconds < 1.0) {
+    return std::nullopt;
+  }
+  v1::StreamStats out;
+  out.set_fps(m_window.frames / seconds);
+  out.set_bitrate_bps(8.0 * static_cast<double>(m_window.bytes) / seconds);
+  out.set_frames_dropped(dropped);
+  if (m_window.frames > 0) {
+    out.set_render_ms_mean(m_window.renderMs / m_window.frames);
+    out.set_encode_ms_mean(m_window.encodeMs / m_window.frames);
+  }
+  m_window = {};
+  m_windowStart = Clock::now();
+  return out;
+}
+
+v1::ServerMessage toMessage(const SessionNotice& notice) {
+  v1::ServerMessage message;
+  if (!notice.error.isOk()) {
+    auto* error = message.mutable_error();
+    error->set_event_id(notice.eventId);
+    error->set_code(static_cast<int>(rpc::toGrpcStatus(notice.error).error_code()));
+    error->set_message(notice.error.message());
+    return message;
+  }
+  if (notice.pick) {
+    const scene::PickResult& picked = *notice.pick;
+    auto* pick = message.mutable_pick();
+    pick->set_event_id(notice.eventId);
+    pick->set_kind(scene::pickedKindName(picked.kind));
+    pick->set_index(picked.index);
+    pick->set_x(picked.point.x);
+    pick->set_y(picked.point.y);
+    pick->set_z(picked.point.z);
+    for (const scene::PickedValue& v : picked.values) {
+      auto* value = pick->add_values();
+      value->set_name(v.name);
+      value->set_value(v.value);
+      value->set_unit(v.unit);
+    }
+    pick->set_text(scene::describePick(picked));
+    return message;
+  }
+  if (notice.state) {
+    auto* state = message.mutable_state();
+    state->set_step(notice.state->step);
+    state->set_step_count(notice.state->stepCount);
+    state->set_playing(notice.state->playing);
+    state->set_width(notice.state->width);
+    state->set_height(notice.state->height);
+    state->set_pipeline_xml(notice.state->pipelineXml);
+    state->set_mapped_fraction(notice.state->mappedFraction);
+    state->set_crack_warning(notice.state->crackWarning);
+  }
+  return message;
+}
+
+}  // namespace crackvis::service
