@@ -58,7 +58,7 @@ readonly RUNTIME_PACKAGES=(
 # tests with: no HDF5, CGAL, TBB or VTK. ffmpeg brings ffprobe, which the
 # recorder's tests read MP4 files with.
 readonly CLIENT_PACKAGES=(
-  build-essential cmake ninja-build pkg-config libfmt-dev libssl-dev
+  build-essential cmake ninja-build pkg-config libfmt-dev libssl-dev nlohmann-json3-dev
   libgrpc++-dev libgrpc-dev protobuf-compiler protobuf-compiler-grpc libprotobuf-dev
   libxml2-dev libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
   qt6-base-dev qt6-base-dev-tools catch2 ffmpeg

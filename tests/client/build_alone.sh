@@ -13,7 +13,7 @@ work=$2
 tree=$work/crackvis-client-only
 
 # What the client's tree is made of (CMakeLists.txt, CRACKVIS_CLIENT_ONLY).
-areas=(CMakeLists.txt CMakePresets.json .clang-format cmake common vocabulary proto pipeline
+areas=(CMakeLists.txt CMakePresets.json .clang-format cmake common vocabulary tls proto pipeline
        pipeline-schemas encode client tests/CMakeLists.txt tests/support tests/pipeline
        tests/encode tests/client)
 mkdir -p "$tree/tests"
@@ -22,7 +22,7 @@ for area in "${areas[@]}"; do
   # -a keeps the times, so an unchanged file is not rebuilt on the next run.
   cp -a "$source_dir/$area" "$tree/$area"
 done
-for left_out in dem cracks dataservice rpcserver tls server importers tools; do
+for left_out in dem cracks dataservice rpcserver server importers tools; do
   if [[ -e "$tree/$left_out" ]]; then
     echo "the client's tree holds $left_out/" >&2
     exit 1
