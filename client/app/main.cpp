@@ -7,8 +7,8 @@
 #include <cstdio>
 #include <memory>
 
-#include <crackvis/client/demo_script.hpp>
-#include <crackvis/client/main_window.hpp>
+#include <crackvis/client_core/demo_script.hpp>
+#include <crackvis/client_ui/main_window.hpp>
 #include <crackvis/common/spelling.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
 

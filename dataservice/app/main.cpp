@@ -16,8 +16,8 @@
 #include <crackvis/common/log.hpp>
 #include <crackvis/common/service_manager.hpp>
 #include <crackvis/common/termination.hpp>
-#include <crackvis/dataservice/data_server.hpp>
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/dataservice_service/data_server.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 
 namespace {
 

@@ -7,10 +7,6 @@
 
 namespace crackvis::dem {
 
-std::string stepGroupPath(int step) {
-  return fmt::format("/steps/{:06d}", step);
-}
-
 namespace detail {
 const char* ownerFolder(ExtraOwner owner) {
   return owner == ExtraOwner::kParticles ? "particles" : "bonds";

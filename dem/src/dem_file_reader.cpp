@@ -7,7 +7,7 @@
 
 #include "dem_file_internal.hpp"
 #include <crackvis/dem/dem_file.hpp>
-#include <crackvis/dem/layout.hpp>
+#include <crackvis/dem_layout/layout.hpp>
 
 namespace crackvis::dem {
 namespace {

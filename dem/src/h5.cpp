@@ -211,10 +211,6 @@ std::uint64_t storedBytes(hid_t dataset) {
   return H5Dget_storage_size(dataset);
 }
 
-std::string formatDims(const std::vector<std::uint64_t>& dims) {
-  return fmt::format("[{}]", fmt::join(dims, ","));
-}
-
 namespace {
 
 // The parts of a path inside a file; "." and empty parts name the group

@@ -6,7 +6,7 @@
 #include <fmt/format.h>
 
 #include <crackvis/common/log.hpp>
-#include <crackvis/rpc/access_log.hpp>
+#include <crackvis/rpc_server/access_log.hpp>
 
 namespace crackvis::rpc {
 namespace {

@@ -3,8 +3,8 @@
 #include <fmt/format.h>
 
 #include <crackvis/common/log.hpp>
-#include <crackvis/rpc/call.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
+#include <crackvis/rpc_server/call.hpp>
 
 namespace crackvis::rpc {
 

@@ -9,7 +9,7 @@
 #include <openssl/sha.h>
 
 #include <crackvis/common/base64.hpp>
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 
 namespace crackvis::rpc {
 

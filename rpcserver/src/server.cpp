@@ -7,7 +7,7 @@
 #include <grpcpp/security/server_credentials.h>
 
 #include <crackvis/rpc/host_port.hpp>
-#include <crackvis/rpc/server.hpp>
+#include <crackvis/rpc_server/server.hpp>
 
 namespace crackvis::rpc {
 

@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-#include <crackvis/rpc/setting_check.hpp>
+#include <crackvis/rpc_server/setting_check.hpp>
 
 namespace crackvis::rpc {
 

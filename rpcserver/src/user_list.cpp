@@ -2,7 +2,7 @@
 #include <nlohmann/json.hpp>
 
 #include <crackvis/common/json_config.hpp>
-#include <crackvis/rpc/user_list.hpp>
+#include <crackvis/rpc_server/user_list.hpp>
 
 namespace crackvis::rpc {
 namespace {

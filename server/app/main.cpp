@@ -22,8 +22,8 @@
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/render/probe_scene.hpp>
 #include <crackvis/render/scene_renderer.hpp>
-#include <crackvis/rpc/setting_check.hpp>
-#include <crackvis/rpc/user_list.hpp>
+#include <crackvis/rpc_server/setting_check.hpp>
+#include <crackvis/rpc_server/user_list.hpp>
 #include <crackvis/service/render_server.hpp>
 
 namespace {

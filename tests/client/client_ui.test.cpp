@@ -14,8 +14,8 @@
 #include <catch2/catch.hpp>
 
 #include "client/client_process.hpp"
-#include <crackvis/client/pipeline_panel.hpp>
-#include <crackvis/client/step_plot.hpp>
+#include <crackvis/client_ui/pipeline_panel.hpp>
+#include <crackvis/client_ui/step_plot.hpp>
 
 using namespace crackvis;
 using namespace crackvis::testing;

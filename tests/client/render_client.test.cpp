@@ -26,10 +26,10 @@
 #include "support/network.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
-#include <crackvis/client/main_window.hpp>
-#include <crackvis/client/pipeline_panel.hpp>
-#include <crackvis/client/render_client.hpp>
-#include <crackvis/client/step_plot.hpp>
+#include <crackvis/client_core/render_client.hpp>
+#include <crackvis/client_ui/main_window.hpp>
+#include <crackvis/client_ui/pipeline_panel.hpp>
+#include <crackvis/client_ui/step_plot.hpp>
 #include <crackvis/dem/dem_file.hpp>
 
 using namespace crackvis;

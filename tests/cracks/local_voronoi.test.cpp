@@ -7,7 +7,7 @@
 
 #include "crack_fixtures.hpp"
 #include <crackvis/cracks/local_voronoi.hpp>
-#include <crackvis/cracks/voro_reference.hpp>
+#include <crackvis/cracks_voro/voro_reference.hpp>
 
 using namespace crackvis;
 using namespace crackvis::cracks;

@@ -5,7 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include "service_fixture.hpp"
-#include <crackvis/dataservice/catalogue.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
 
 namespace crackvis::testing {
 namespace {

@@ -2,9 +2,9 @@
 // server.
 #include <catch2/catch.hpp>
 
-#include <crackvis/dataservice/server_config.hpp>
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/dataservice_config/server_config.hpp>
 #include <crackvis/rpc/host_port.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 
 namespace crackvis::testing {
 namespace {

@@ -3,8 +3,8 @@
 #include <catch2/catch.hpp>
 
 #include "service_fixture.hpp"
-#include <crackvis/dataservice/data_root.hpp>
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/dataservice_h5/data_root.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 
 namespace crackvis::testing {
 namespace {

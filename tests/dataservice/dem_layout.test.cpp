@@ -8,7 +8,7 @@
 
 #include "service_fixture.hpp"
 #include "support/h5_tamper.hpp"
-#include <crackvis/dataservice/remote_dem_file.hpp>
+#include <crackvis/dataservice_client/remote_dem_file.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/source/step_source.hpp>
 

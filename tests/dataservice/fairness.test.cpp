@@ -14,7 +14,7 @@
 #include <catch2/catch.hpp>
 
 #include "service_fixture.hpp"
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 
 namespace crackvis::testing {
 namespace {

@@ -25,11 +25,11 @@
 #include "service_fixture.hpp"
 #include "support/process.hpp"
 #include <crackvis/common/base64.hpp>
-#include <crackvis/rpc/access_log.hpp>
-#include <crackvis/rpc/call.hpp>
-#include <crackvis/rpc/credentials.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
-#include <crackvis/rpc/server.hpp>
+#include <crackvis/rpc_server/access_log.hpp>
+#include <crackvis/rpc_server/call.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
+#include <crackvis/rpc_server/server.hpp>
 
 namespace crackvis::testing {
 namespace {

@@ -12,8 +12,8 @@
 #include "crackvis/v1/data.grpc.pb.h"
 #include "service_fixture.hpp"
 #include "support/process.hpp"
-#include <crackvis/dataservice/catalogue.hpp>
-#include <crackvis/dataservice/remote_dem_file.hpp>
+#include <crackvis/dataservice_client/remote_dem_file.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
 #include <crackvis/dem/h5.hpp>
 
 namespace crackvis::testing {

@@ -7,7 +7,7 @@
 
 #include "service_fixture.hpp"
 #include "support/h5_tamper.hpp"
-#include <crackvis/dataservice/catalogue.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
 #include <crackvis/dem/dem_file.hpp>
 
 namespace crackvis::testing {

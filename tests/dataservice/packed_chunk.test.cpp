@@ -1,4 +1,4 @@
-// The PACKED chunk encoding (crackvis/dataservice/packed_chunk.hpp): every
+// The PACKED chunk encoding (crackvis/dataservice_protocol/packed_chunk.hpp): every
 // packable type and column count comes back exactly, a chunk is packed only
 // when that makes it smaller, and a malformed chunk is an error, never a
 // read outside it.
@@ -9,7 +9,7 @@
 
 #include <catch2/catch.hpp>
 
-#include <crackvis/dataservice/packed_chunk.hpp>
+#include <crackvis/dataservice_protocol/packed_chunk.hpp>
 
 namespace crackvis::testing {
 namespace {

@@ -18,9 +18,9 @@
 #include "service_fixture.hpp"
 #include "support/h5_tamper.hpp"
 #include "support/process.hpp"
-#include <crackvis/dataservice/catalogue.hpp>
-#include <crackvis/dataservice/packed_chunk.hpp>
-#include <crackvis/dataservice/remote_dem_file.hpp>
+#include <crackvis/dataservice_client/remote_dem_file.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
+#include <crackvis/dataservice_protocol/packed_chunk.hpp>
 
 namespace crackvis::testing {
 namespace {

@@ -11,7 +11,7 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "service_fixture.hpp"
 #include "support/process.hpp"
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 
 namespace crackvis::testing {
 namespace {

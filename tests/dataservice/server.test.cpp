@@ -16,7 +16,7 @@
 
 #include "crackvis/v1/data.grpc.pb.h"
 #include "service_fixture.hpp"
-#include <crackvis/dataservice/remote_dem_file.hpp>
+#include <crackvis/dataservice_client/remote_dem_file.hpp>
 #include <crackvis/dem/dem_file.hpp>
 
 namespace crackvis::testing {

@@ -9,7 +9,7 @@
 
 #include "support/h5_tamper.hpp"
 #include "support/process.hpp"
-#include <crackvis/dataservice/catalogue.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
 #include <crackvis/dem/h5.hpp>
 
 namespace crackvis::testing {

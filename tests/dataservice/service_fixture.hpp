@@ -14,8 +14,8 @@
 #include "crackvis/v1/data.grpc.pb.h"
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
-#include <crackvis/dataservice/data_client.hpp>
-#include <crackvis/dataservice/data_server.hpp>
+#include <crackvis/dataservice_client/data_client.hpp>
+#include <crackvis/dataservice_service/data_server.hpp>
 
 namespace crackvis::testing {
 

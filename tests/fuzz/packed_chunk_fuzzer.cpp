@@ -1,5 +1,5 @@
 // libFuzzer target: the PACKED chunk codec of the data service's Read
-// (crackvis/dataservice/packed_chunk.hpp). Two halves, chosen by the first
+// (crackvis/dataservice_protocol/packed_chunk.hpp). Two halves, chosen by the first
 // byte: (1) values of one packable type and 1-17 columns are packed and
 // unpacked, each into a buffer of exactly its size; the values must come
 // back bit for bit, and packing into exactly the packed size must give the
@@ -15,7 +15,7 @@
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include "fuzz_require.hpp"
-#include <crackvis/dataservice/packed_chunk.hpp>
+#include <crackvis/dataservice_protocol/packed_chunk.hpp>
 
 const char* const kFuzzTargetName = "packed chunk fuzzer";
 

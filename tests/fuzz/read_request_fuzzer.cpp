@@ -19,7 +19,7 @@
 #include <unistd.h>
 
 #include "fuzz_require.hpp"
-#include <crackvis/dataservice/catalogue.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
 #include <crackvis/dem/h5.hpp>
 
 const char* const kFuzzTargetName = "read request fuzzer";

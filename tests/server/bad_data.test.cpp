@@ -20,7 +20,7 @@
 #include "support/process.hpp"
 #include "support/sample_files.hpp"
 #include <crackvis/cracks/particle_grid.hpp>
-#include <crackvis/dataservice/catalogue.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
 #include <crackvis/source/step_source.hpp>
 #include <crackvis/tls/tls_material.hpp>
 

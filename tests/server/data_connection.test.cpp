@@ -12,7 +12,7 @@
 #include "server/render_fixture.hpp"
 #include "support/network.hpp"
 #include "support/process.hpp"
-#include <crackvis/dataservice/data_client.hpp>
+#include <crackvis/dataservice_client/data_client.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/service/render_server.hpp>
 

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "support/temp_dir.hpp"
-#include <crackvis/dataservice/data_server.hpp>
+#include <crackvis/dataservice_service/data_server.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/service/render_server.hpp>
 

@@ -27,8 +27,8 @@
 #include <crackvis/importers/step_source.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/egl_context.hpp>
-#include <crackvis/rpc/credentials.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 #include <crackvis/service/render_server.hpp>
 #include <crackvis/sim/presets.hpp>
 #include <crackvis/sim/run.hpp>

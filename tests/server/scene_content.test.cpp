@@ -7,7 +7,7 @@
 
 #include "cracks/crack_fixtures.hpp"
 #include <crackvis/dem/random_packing.hpp>
-#include <crackvis/scene/scene_content.hpp>
+#include <crackvis/scene_model/scene_content.hpp>
 
 using namespace crackvis;
 

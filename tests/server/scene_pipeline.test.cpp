@@ -7,8 +7,8 @@
 #include "support/temp_dir.hpp"
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/dem_series.hpp>
-#include <crackvis/scene/scene_content.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
+#include <crackvis/scene_model/scene_content.hpp>
 
 namespace crackvis {
 namespace {

@@ -12,7 +12,7 @@
 #include "support/temp_dir.hpp"
 #include <crackvis/render/scene_renderer.hpp>
 #include <crackvis/render/sphere_occlusion.hpp>
-#include <crackvis/scene/scene_content.hpp>
+#include <crackvis/scene_model/scene_content.hpp>
 
 using namespace crackvis;
 

@@ -20,7 +20,7 @@
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/dem_series.hpp>
 #include <crackvis/cracks/local_voronoi.hpp>
-#include <crackvis/cracks/voro_reference.hpp>
+#include <crackvis/cracks_voro/voro_reference.hpp>
 #include <crackvis/dem/step_range.hpp>
 
 namespace crackvis::cli {

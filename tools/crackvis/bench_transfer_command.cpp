@@ -18,9 +18,9 @@
 
 #include "bench_support.hpp"
 #include "commands.hpp"
-#include <crackvis/dataservice/data_client.hpp>
-#include <crackvis/dataservice/raw_tls_client.hpp>
-#include <crackvis/dataservice/remote_dem_file.hpp>
+#include <crackvis/dataservice_client/data_client.hpp>
+#include <crackvis/dataservice_client/raw_tls_client.hpp>
+#include <crackvis/dataservice_client/remote_dem_file.hpp>
 #include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::cli {

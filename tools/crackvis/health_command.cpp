@@ -4,7 +4,7 @@
 #include <fmt/format.h>
 
 #include "commands.hpp"
-#include <crackvis/dataservice/data_client.hpp>
+#include <crackvis/dataservice_client/data_client.hpp>
 
 namespace crackvis::cli {
 namespace {

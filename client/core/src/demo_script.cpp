@@ -5,7 +5,7 @@
 
 #include <fmt/format.h>
 
-#include <crackvis/client/demo_script.hpp>
+#include <crackvis/client_core/demo_script.hpp>
 
 namespace crackvis::client {
 namespace {

@@ -22,7 +22,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "crackvis/v1/render.grpc.pb.h"
-#include <crackvis/client/render_client.hpp>
+#include <crackvis/client_core/render_client.hpp>
 #include <crackvis/common/status.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/record/stream_recorder.hpp>

@@ -27,7 +27,7 @@
 #include <QVBoxLayout>
 #include <algorithm>
 
-#include <crackvis/client/main_window.hpp>
+#include <crackvis/client_ui/main_window.hpp>
 #include <crackvis/common/pending_file.hpp>
 
 namespace crackvis::client {

@@ -14,7 +14,7 @@
 #include <limits>
 #include <optional>
 
-#include <crackvis/client/pipeline_panel.hpp>
+#include <crackvis/client_ui/pipeline_panel.hpp>
 
 namespace crackvis::client {
 namespace {

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include <crackvis/client/step_plot.hpp>
+#include <crackvis/client_ui/step_plot.hpp>
 
 namespace crackvis::client {
 namespace {

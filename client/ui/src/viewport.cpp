@@ -3,8 +3,8 @@
 #include <QPainter>
 #include <QWheelEvent>
 
-#include <crackvis/client/render_client.hpp>
-#include <crackvis/client/viewport.hpp>
+#include <crackvis/client_core/render_client.hpp>
+#include <crackvis/client_ui/viewport.hpp>
 
 namespace crackvis::client {
 

@@ -8,7 +8,7 @@
 
 #include <voro++/voro++.hh>
 
-#include <crackvis/cracks/voro_reference.hpp>
+#include <crackvis/cracks_voro/voro_reference.hpp>
 
 namespace crackvis::cracks {
 

@@ -8,7 +8,7 @@
 #include <grpcpp/support/proto_buffer_reader.h>
 
 #include "crackvis/v1/data.pb.h"
-#include <crackvis/dataservice/packed_chunk.hpp>
+#include <crackvis/dataservice_protocol/packed_chunk.hpp>
 
 namespace crackvis::dataservice {
 namespace v1 = crackvis::v1;

@@ -12,7 +12,7 @@
 #include <grpcpp/support/byte_buffer.h>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/data_client.hpp>
+#include <crackvis/dataservice_client/data_client.hpp>
 
 namespace crackvis::dataservice {
 

@@ -11,7 +11,7 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "grpc_convert.hpp"
 #include <crackvis/common/base64.hpp>
-#include <crackvis/dataservice/data_client.hpp>
+#include <crackvis/dataservice_client/data_client.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
 #include <crackvis/tls/channel.hpp>

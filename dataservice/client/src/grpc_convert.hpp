@@ -6,7 +6,7 @@
 
 #include "crackvis/v1/data.pb.h"
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/types.hpp>
+#include <crackvis/dataservice_protocol/types.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
 
 namespace crackvis::dataservice {

@@ -14,7 +14,7 @@
 #include <unistd.h>
 
 #include <crackvis/common/unique_fd.hpp>
-#include <crackvis/dataservice/raw_tls_client.hpp>
+#include <crackvis/dataservice_client/raw_tls_client.hpp>
 #include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::dataservice {

@@ -6,10 +6,10 @@
 
 #include <fmt/format.h>
 
-#include <crackvis/dataservice/remote_dem_file.hpp>
+#include <crackvis/dataservice_client/remote_dem_file.hpp>
 #include <crackvis/dem/dem_file.hpp>
-#include <crackvis/dem/layout.hpp>
 #include <crackvis/dem/model.hpp>
+#include <crackvis/dem_layout/layout.hpp>
 
 namespace crackvis::dataservice {
 namespace {

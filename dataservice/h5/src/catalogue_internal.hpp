@@ -3,7 +3,7 @@
 // are open_files.hpp.
 #pragma once
 
-#include <crackvis/dataservice/types.hpp>
+#include <crackvis/dataservice_protocol/types.hpp>
 #include <crackvis/dem/h5.hpp>
 
 namespace crackvis::dataservice {

@@ -6,7 +6,7 @@
 
 #include "catalogue_internal.hpp"
 #include "open_files.hpp"
-#include <crackvis/dataservice/catalogue.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/h5.hpp>
 

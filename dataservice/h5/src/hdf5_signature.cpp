@@ -1,7 +1,7 @@
 #include <array>
 #include <fstream>
 
-#include <crackvis/dataservice/data_root.hpp>
+#include <crackvis/dataservice_h5/data_root.hpp>
 
 namespace crackvis::dataservice {
 namespace fs = std::filesystem;

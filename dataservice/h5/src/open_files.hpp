@@ -11,7 +11,7 @@
 
 #include <sys/stat.h>
 
-#include <crackvis/dataservice/catalogue.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
 #include <crackvis/dem/h5.hpp>
 
 namespace crackvis::dataservice {

@@ -7,10 +7,10 @@
 #include <nlohmann/json.hpp>
 
 #include <crackvis/common/json_config.hpp>
-#include <crackvis/dataservice/server_config.hpp>
+#include <crackvis/dataservice_config/server_config.hpp>
 #include <crackvis/rpc/host_port.hpp>
-#include <crackvis/rpc/setting_check.hpp>
-#include <crackvis/rpc/user_list.hpp>
+#include <crackvis/rpc_server/setting_check.hpp>
+#include <crackvis/rpc_server/user_list.hpp>
 #include <crackvis/tls/tls_config.hpp>
 
 namespace crackvis::dataservice {

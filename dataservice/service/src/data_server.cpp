@@ -7,8 +7,8 @@
 
 #include "data_service.hpp"
 #include "raw_tls_server.hpp"
-#include <crackvis/dataservice/data_server.hpp>
-#include <crackvis/rpc/server.hpp>
+#include <crackvis/dataservice_service/data_server.hpp>
+#include <crackvis/rpc_server/server.hpp>
 #include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::dataservice {

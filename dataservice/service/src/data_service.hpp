@@ -17,12 +17,12 @@
 #include "describe_cache.hpp"
 #include "hdf5_workers.hpp"
 #include "walk_threads.hpp"
-#include <crackvis/dataservice/catalogue.hpp>
-#include <crackvis/dataservice/server_config.hpp>
-#include <crackvis/rpc/access_log.hpp>
-#include <crackvis/rpc/call.hpp>
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/dataservice_config/server_config.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
+#include <crackvis/rpc_server/access_log.hpp>
+#include <crackvis/rpc_server/call.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 
 namespace crackvis::dataservice {
 

@@ -4,7 +4,7 @@
 #pragma once
 
 #include "crackvis/v1/data.pb.h"
-#include <crackvis/dataservice/types.hpp>
+#include <crackvis/dataservice_protocol/types.hpp>
 
 namespace crackvis::dataservice {
 

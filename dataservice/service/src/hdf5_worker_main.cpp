@@ -15,7 +15,7 @@
 #include "crackvis/v1/data.pb.h"
 #include "describe_proto.hpp"
 #include "worker_protocol.hpp"
-#include <crackvis/dataservice/hdf5_worker_main.hpp>
+#include <crackvis/dataservice_service/hdf5_worker_main.hpp>
 
 namespace crackvis::dataservice {
 namespace {

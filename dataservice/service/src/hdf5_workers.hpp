@@ -34,9 +34,9 @@
 #include <sys/types.h>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/catalogue.hpp>
-#include <crackvis/dataservice/data_root.hpp>
-#include <crackvis/dataservice/types.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
+#include <crackvis/dataservice_h5/data_root.hpp>
+#include <crackvis/dataservice_protocol/types.hpp>
 
 namespace crackvis::dataservice {
 

@@ -18,8 +18,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include <crackvis/rpc/call.hpp>
 #include <crackvis/rpc/host_port.hpp>
+#include <crackvis/rpc_server/call.hpp>
 #include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::dataservice {

@@ -17,10 +17,10 @@
 #include <string>
 #include <thread>
 
-#include <crackvis/dataservice/catalogue.hpp>
-#include <crackvis/dataservice/server_config.hpp>
-#include <crackvis/rpc/access_log.hpp>
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/dataservice_config/server_config.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
+#include <crackvis/rpc_server/access_log.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 #include <crackvis/tls/tls_material.hpp>
 
 typedef struct ssl_ctx_st SSL_CTX;

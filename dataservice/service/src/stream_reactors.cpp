@@ -11,7 +11,7 @@
 #include "data_service.hpp"
 #include "data_service_internal.hpp"
 #include "describe_proto.hpp"
-#include <crackvis/dataservice/packed_chunk.hpp>
+#include <crackvis/dataservice_protocol/packed_chunk.hpp>
 
 namespace crackvis::dataservice {
 namespace v1 = crackvis::v1;

@@ -13,8 +13,8 @@
 #include <vector>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/catalogue.hpp>
-#include <crackvis/dataservice/data_root.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
+#include <crackvis/dataservice_h5/data_root.hpp>
 
 namespace crackvis::dataservice::worker_protocol {
 

@@ -21,7 +21,7 @@
 #include <vtkTextActor.h>
 
 #include <crackvis/pipeline/pipeline_description.hpp>
-#include <crackvis/scene/scene_content.hpp>
+#include <crackvis/scene_model/scene_content.hpp>
 
 namespace crackvis::render {
 

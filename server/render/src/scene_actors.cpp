@@ -29,7 +29,7 @@
 #include "overlays.hpp"
 #include "point_sprite_sphere_mapper.hpp"
 #include <crackvis/render/scene_renderer.hpp>
-#include <crackvis/scene/scene_content.hpp>
+#include <crackvis/scene_model/scene_content.hpp>
 
 namespace crackvis::render {
 namespace {

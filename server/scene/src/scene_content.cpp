@@ -5,7 +5,7 @@
 #include <fmt/format.h>
 
 #include <crackvis/cracks/lattice_cells.hpp>
-#include <crackvis/scene/scene_content.hpp>
+#include <crackvis/scene_model/scene_content.hpp>
 
 namespace crackvis::scene {
 namespace {

@@ -5,8 +5,8 @@
 
 #include <fmt/format.h>
 
-#include <crackvis/scene/scene_content.hpp>
-#include <crackvis/scene/scene_pick.hpp>
+#include <crackvis/scene_model/scene_content.hpp>
+#include <crackvis/scene_model/scene_pick.hpp>
 
 namespace crackvis::scene {
 namespace {

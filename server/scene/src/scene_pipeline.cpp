@@ -9,8 +9,8 @@
 #include <crackvis/cracks/bond_graph.hpp>
 #include <crackvis/cracks/bond_mapping.hpp>
 #include <crackvis/cracks/crack_components.hpp>
-#include <crackvis/scene/scene_content.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
+#include <crackvis/scene_model/scene_content.hpp>
 
 namespace crackvis::scene {
 namespace {

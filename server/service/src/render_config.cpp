@@ -4,8 +4,8 @@
 #include <crackvis/common/json_config.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
 #include <crackvis/rpc/host_port.hpp>
-#include <crackvis/rpc/setting_check.hpp>
-#include <crackvis/rpc/user_list.hpp>
+#include <crackvis/rpc_server/setting_check.hpp>
+#include <crackvis/rpc_server/user_list.hpp>
 #include <crackvis/service/render_server.hpp>
 #include <crackvis/tls/tls_config.hpp>
 

@@ -8,7 +8,7 @@
 #include <fmt/format.h>
 
 #include "render_service.hpp"
-#include <crackvis/rpc/server.hpp>
+#include <crackvis/rpc_server/server.hpp>
 #include <crackvis/service/render_server.hpp>
 #include <crackvis/tls/tls_material.hpp>
 

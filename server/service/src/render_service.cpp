@@ -14,8 +14,8 @@
 #include "stream_encoder.hpp"
 #include <crackvis/common/data_root.hpp>
 #include <crackvis/common/log.hpp>
-#include <crackvis/dataservice/remote_dem_file.hpp>
-#include <crackvis/dem/layout.hpp>
+#include <crackvis/dataservice_client/remote_dem_file.hpp>
+#include <crackvis/dem_layout/layout.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
 
 namespace crackvis::service {

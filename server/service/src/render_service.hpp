@@ -10,10 +10,10 @@
 
 #include "crackvis/v1/render.grpc.pb.h"
 #include "session_registry.hpp"
-#include <crackvis/dataservice/data_client.hpp>
-#include <crackvis/rpc/access_log.hpp>
-#include <crackvis/rpc/call.hpp>
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/dataservice_client/data_client.hpp>
+#include <crackvis/rpc_server/access_log.hpp>
+#include <crackvis/rpc_server/call.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 #include <crackvis/service/render_server.hpp>
 #include <crackvis/service/session.hpp>
 

@@ -11,7 +11,7 @@
 #include <string>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 #include <crackvis/service/session.hpp>
 
 namespace grpc {

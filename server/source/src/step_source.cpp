@@ -4,7 +4,7 @@
 
 #include <fmt/format.h>
 
-#include <crackvis/dataservice/remote_dem_file.hpp>
+#include <crackvis/dataservice_client/remote_dem_file.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/source/step_source.hpp>
 

@@ -16,16 +16,11 @@
 
 #include <crackvis/common/status.hpp>
 #include <crackvis/dem/h5.hpp>
-#include <crackvis/dem/layout.hpp>
 #include <crackvis/dem/model.hpp>
+#include <crackvis/dem_layout/layout.hpp>
 
 namespace crackvis::dem {
 
-inline constexpr std::string_view kFormatName = "crackvis-dem";
-// The major version: a reader refuses any other. The minor version (root
-// attribute `version_minor`, absent in v1.0 files) only adds optional parts.
-inline constexpr int kFormatVersion = 1;
-inline constexpr int kFormatMinorVersion = 1;
 // The attribute of /steps that records how many steps a writer planned.
 inline constexpr const char* kPlannedStepsAttribute = "planned";
 // The root attribute (v1.1, optional) naming the unit of the steps' `time`:
@@ -34,8 +29,6 @@ inline constexpr const char* kPlannedStepsAttribute = "planned";
 inline constexpr const char* kTimeUnitAttribute = "time_unit";
 inline constexpr const char* kTimeInIterations = "iteration";
 
-// "/steps/000042": the group that holds step 42.
-std::string stepGroupPath(int step);
 
 // Free-form provenance stored in root attributes.
 struct DemMetadata {

@@ -15,7 +15,7 @@
 #include <hdf5.h>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dem/element_type.hpp>
+#include <crackvis/dem_layout/layout.hpp>
 
 namespace crackvis::dem::h5 {
 
@@ -99,6 +99,7 @@ inline Handle propertyListHandle(hid_t id) {
 // their HDF5 types.
 using dem::ElementType;
 using dem::elementTypeName;
+using dem::formatDims;
 // Native in-memory HDF5 type for reads and writes.
 hid_t nativeType(ElementType type);
 
@@ -126,7 +127,6 @@ Result<DatasetShape> describeDataset(hid_t dataset);
 // nothing was written, less than the logical size when compressed or when
 // chunks were never written (those read as the fill value).
 std::uint64_t storedBytes(hid_t dataset);
-std::string formatDims(const std::vector<std::uint64_t>& dims);
 
 // The path of the object `path` names in `file`, through hard links only:
 // soft links on the way are followed inside the file (their targets checked

@@ -23,8 +23,8 @@
 #include <crackvis/cracks/extractor.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/camera_move.hpp>
-#include <crackvis/scene/scene_input.hpp>
-#include <crackvis/scene/scene_pick.hpp>
+#include <crackvis/scene_model/scene_input.hpp>
+#include <crackvis/scene_model/scene_pick.hpp>
 
 namespace crackvis::render {
 

@@ -20,7 +20,7 @@
 #include <crackvis/common/status.hpp>
 #include <crackvis/cracks/extractor.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
-#include <crackvis/scene/scene_input.hpp>
+#include <crackvis/scene_model/scene_input.hpp>
 #include <crackvis/source/step_source.hpp>
 
 namespace crackvis::scene {

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/data_client.hpp>
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/dataservice_client/data_client.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 #include <crackvis/service/session.hpp>
 
 namespace crackvis::service {

@@ -30,8 +30,8 @@
 #include <crackvis/common/status.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 #include <crackvis/render/scene_renderer.hpp>
-#include <crackvis/scene/scene_pick.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
+#include <crackvis/scene_model/scene_pick.hpp>
 #include <crackvis/service/session_event.hpp>
 #include <crackvis/source/step_source.hpp>
 

@@ -12,7 +12,7 @@
 #include <variant>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dem/layout.hpp>
+#include <crackvis/dem_layout/layout.hpp>
 #include <crackvis/render/camera_move.hpp>
 
 namespace crackvis::service {

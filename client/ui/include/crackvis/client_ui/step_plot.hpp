@@ -7,7 +7,7 @@
 
 #include <QWidget>
 
-#include <crackvis/client/render_client.hpp>
+#include <crackvis/client_core/render_client.hpp>
 
 namespace crackvis::client {
 

@@ -13,7 +13,7 @@
 
 #include <crackvis/cracks/crack_mesh.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
-#include <crackvis/scene/scene_input.hpp>
+#include <crackvis/scene_model/scene_input.hpp>
 
 namespace crackvis::scene {
 

@@ -4,13 +4,10 @@
 
 #include <fmt/format.h>
 
-#include <crackvis/dem/dem_file.hpp>
-#include <crackvis/dem/layout.hpp>
+#include <crackvis/dem_layout/layout.hpp>
 
 namespace crackvis::dem {
 namespace {
-
-using h5::ElementType;
 
 constexpr Extent kN{Extent::kParticles};
 constexpr Extent kM{Extent::kBonds};
@@ -94,7 +91,7 @@ Status checkDatasetHeader(DemDataset id, const std::string& path, const DatasetH
   const DatasetSpec& spec = datasetSpec(id);
   if (header.type != spec.type) {
     return failedPrecondition(fmt::format("dataset {} has dtype {}, expected {}", path,
-                                          header.typeName, h5::elementTypeName(spec.type)));
+                                          header.typeName, elementTypeName(spec.type)));
   }
   std::vector<std::uint64_t> expected;
   for (const Extent& extent : spec.shape) {
@@ -111,7 +108,7 @@ Status checkDatasetHeader(DemDataset id, const std::string& path, const DatasetH
     known.push_back(fmt::format("M = {}", sizes.bonds));
   }
   return failedPrecondition(fmt::format(
-      "dataset {} has shape {}, expected {}{}", path, h5::formatDims(header.dims),
+      "dataset {} has shape {}, expected {}{}", path, formatDims(header.dims),
       formatExpected(expected), known.empty() ? "" : fmt::format(" ({})", fmt::join(known, ", "))));
 }
 
@@ -207,6 +204,14 @@ Status checkDeclaredSizes(const std::string& file, const LayoutSizes& sizes,
                     sizes.bonds, limits.maxBonds));
   }
   return Status::ok();
+}
+
+std::string stepGroupPath(int step) {
+  return fmt::format("/steps/{:06d}", step);
+}
+
+std::string formatDims(const std::vector<std::uint64_t>& dims) {
+  return fmt::format("[{}]", fmt::join(dims, ","));
 }
 
 const char* elementTypeName(ElementType type) {

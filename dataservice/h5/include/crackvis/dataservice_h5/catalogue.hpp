@@ -21,8 +21,8 @@
 #include <vector>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/data_root.hpp>
-#include <crackvis/dataservice/types.hpp>
+#include <crackvis/dataservice_h5/data_root.hpp>
+#include <crackvis/dataservice_protocol/types.hpp>
 
 namespace crackvis::dataservice {
 

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include <crackvis/pipeline/pipeline_description.hpp>
-#include <crackvis/scene/scene_input.hpp>
+#include <crackvis/scene_model/scene_input.hpp>
 
 namespace crackvis::scene {
 

@@ -10,8 +10,8 @@
 #include <vector>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/catalogue.hpp>
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/dataservice_h5/catalogue.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 #include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::dataservice {

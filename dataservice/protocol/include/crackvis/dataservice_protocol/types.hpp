@@ -12,7 +12,7 @@
 #include <vector>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dem/layout.hpp>
+#include <crackvis/dem_layout/layout.hpp>
 
 namespace crackvis::dataservice {
 
@@ -181,7 +181,7 @@ struct Hyperslab {
   static Hyperslab whole(std::string dataset) { return {std::move(dataset), {}, {}}; }
 };
 
-// The crackvis-dem layout (crackvis/dem/layout.hpp) checked on a Describe's
+// The crackvis-dem layout (crackvis/dem_layout/layout.hpp) checked on a Describe's
 // answer, by the catalogue's step summary and the remote reader alike: the
 // root attributes as the layout check takes them, and one dataset's header
 // against the layout table (FAILED_PRECONDITION "missing dataset P" or the

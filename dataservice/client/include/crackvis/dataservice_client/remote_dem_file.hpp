@@ -18,9 +18,9 @@
 #include <vector>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/data_client.hpp>
-#include <crackvis/dem/layout.hpp>
+#include <crackvis/dataservice_client/data_client.hpp>
 #include <crackvis/dem/model.hpp>
+#include <crackvis/dem_layout/layout.hpp>
 
 namespace crackvis::dataservice {
 

@@ -17,10 +17,10 @@
 #include <QTimer>
 #include <cstdint>
 
-#include <crackvis/client/pipeline_panel.hpp>
-#include <crackvis/client/render_client.hpp>
-#include <crackvis/client/step_plot.hpp>
-#include <crackvis/client/viewport.hpp>
+#include <crackvis/client_core/render_client.hpp>
+#include <crackvis/client_ui/pipeline_panel.hpp>
+#include <crackvis/client_ui/step_plot.hpp>
+#include <crackvis/client_ui/viewport.hpp>
 
 class QAction;
 class QComboBox;

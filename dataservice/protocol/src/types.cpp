@@ -3,7 +3,7 @@
 
 #include <fmt/format.h>
 
-#include <crackvis/dataservice/types.hpp>
+#include <crackvis/dataservice_protocol/types.hpp>
 
 namespace crackvis::dataservice {
 

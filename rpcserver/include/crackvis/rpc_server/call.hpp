@@ -14,8 +14,8 @@
 
 #include <crackvis/common/exception_boundary.hpp>
 #include <crackvis/common/status.hpp>
-#include <crackvis/rpc/access_log.hpp>
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/rpc_server/access_log.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 
 namespace crackvis::rpc {
 

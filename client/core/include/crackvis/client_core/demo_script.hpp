@@ -8,7 +8,7 @@
 #include <QString>
 #include <functional>
 
-#include <crackvis/client/render_client.hpp>
+#include <crackvis/client_core/render_client.hpp>
 #include <crackvis/pipeline/pipeline_description.hpp>
 
 namespace crackvis::client {

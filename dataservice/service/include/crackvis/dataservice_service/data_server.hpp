@@ -9,7 +9,7 @@
 #include <vector>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/server_config.hpp>
+#include <crackvis/dataservice_config/server_config.hpp>
 
 namespace crackvis::dataservice {
 

@@ -6,7 +6,7 @@
 
 #include <fmt/format.h>
 
-#include <crackvis/dataservice/packed_chunk.hpp>
+#include <crackvis/dataservice_protocol/packed_chunk.hpp>
 
 namespace crackvis::dataservice {
 

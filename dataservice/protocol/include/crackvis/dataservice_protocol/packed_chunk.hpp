@@ -25,7 +25,7 @@
 #include <cstdint>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/types.hpp>
+#include <crackvis/dataservice_protocol/types.hpp>
 
 namespace crackvis::dataservice {
 

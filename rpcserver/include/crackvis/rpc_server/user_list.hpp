@@ -12,7 +12,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/rpc/credentials.hpp>
+#include <crackvis/rpc_server/credentials.hpp>
 
 namespace crackvis::rpc {
 

@@ -21,7 +21,7 @@
 #include <fmt/format.h>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dataservice/types.hpp>
+#include <crackvis/dataservice_protocol/types.hpp>
 #include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::v1 {

@@ -16,9 +16,20 @@
 #include <vector>
 
 #include <crackvis/common/status.hpp>
-#include <crackvis/dem/element_type.hpp>
+#include <crackvis/dem_layout/element_type.hpp>
 
 namespace crackvis::dem {
+
+inline constexpr std::string_view kFormatName = "crackvis-dem";
+// The major version: a reader refuses any other. The minor version (root
+// attribute `version_minor`, absent in v1.0 files) only adds optional parts.
+inline constexpr int kFormatVersion = 1;
+inline constexpr int kFormatMinorVersion = 1;
+
+// "/steps/000042": the group that holds step 42.
+std::string stepGroupPath(int step);
+// "[2,3]": a dataset's shape in messages.
+std::string formatDims(const std::vector<std::uint64_t>& dims);
 
 // The datasets of the layout.
 enum class DemDataset {
