@@ -120,7 +120,7 @@ Result<std::unique_ptr<FrameEncoder>> FrameEncoder::create(const EncoderSettings
   CRACKVIS_RETURN_IF_ERROR(allocated(impl.packet.get(), "av_packet_alloc"));
   // Same size, so the flag only picks how chroma is subsampled: point
   // sampling converts a 720p frame in 1.4 ms instead of 2.2 ms (bilinear),
-  // and the round trip stays above 35 dB (tests/server/rendered_frames.test.cpp).
+  // and the round trip stays above 35 dB (tests/render/rendered_frames.test.cpp).
   impl.toYuv.reset(sws_getContext(c->width, c->height, AV_PIX_FMT_RGB24, c->width, c->height,
                                   AV_PIX_FMT_YUV420P, SWS_POINT, nullptr, nullptr, nullptr));
   if (!impl.toYuv) {

@@ -11,7 +11,7 @@
 
 #include "client/client_process.hpp"
 #include "dataservice/service_fixture.hpp"
-#include "server/render_fixture.hpp"
+#include "service/render_fixture.hpp"
 #include "support/network.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"

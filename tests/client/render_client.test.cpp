@@ -1,6 +1,6 @@
 // The thin client's core and window against real services: crackvis-data and
 // crackvis-render started in this process on loopback ports with generated
-// certificates (tests/server/render_fixture.hpp), frames decoded by the
+// certificates (tests/service/render_fixture.hpp), frames decoded by the
 // client's own decoder thread. Widgets run under QT_QPA_PLATFORM=offscreen.
 #include <QAction>
 #include <QApplication>
@@ -21,7 +21,7 @@
 #include <catch2/catch.hpp>
 
 #include "dataservice/service_fixture.hpp"
-#include "server/render_fixture.hpp"
+#include "service/render_fixture.hpp"
 #include "support/full_disk.hpp"
 #include "support/network.hpp"
 #include "support/process.hpp"

@@ -4,7 +4,6 @@
 
 #include "service_fixture.hpp"
 #include <crackvis/dataservice_h5/data_root.hpp>
-#include <crackvis/rpc_server/credentials.hpp>
 
 namespace crackvis::testing {
 namespace {
@@ -55,17 +54,6 @@ TEST_CASE("Files resolve inside the root, symlinks may not leave it", "[dataserv
 
   CHECK(DataRoot::open(sample.file("run.h5")).status().code() == StatusCode::kInvalidArgument);
   CHECK(DataRoot::open(sample.file("absent")).status().code() == StatusCode::kNotFound);
-}
-
-TEST_CASE("Folder access matches whole path parts", "[dataservice]") {
-  using rpc::isWithinFolder;
-  CHECK(isWithinFolder("alice/a.h5", "alice"));
-  CHECK(isWithinFolder("alice/x/a.h5", "alice/"));
-  CHECK(isWithinFolder("alice", "alice"));
-  CHECK_FALSE(isWithinFolder("alice2/a.h5", "alice"));
-  CHECK_FALSE(isWithinFolder("bob/a.h5", "alice"));
-  CHECK(isWithinFolder("anything/at/all.h5", "*"));
-  CHECK(isWithinFolder("anything.h5", ""));
 }
 
 TEST_CASE("HDF5 files are told apart by their signature", "[dataservice]") {

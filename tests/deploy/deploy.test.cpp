@@ -22,7 +22,7 @@
 
 #include "crackvis/v1/render.grpc.pb.h"
 #include "dataservice/service_fixture.hpp"
-#include "server/render_fixture.hpp"
+#include "service/render_fixture.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/common/service_manager.hpp>

@@ -1,5 +1,5 @@
 // The H.264 codec alone: settings, sizes and the round trip of frames made
-// here (the rendered frames' picture quality is tests/server's).
+// here (the rendered frames' picture quality is tests/render's..
 #include <cmath>
 #include <cstdlib>
 

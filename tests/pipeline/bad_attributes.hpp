@@ -1,6 +1,6 @@
 // Pipeline documents that each hold one bad numeric attribute, and what the
 // refusal must name: shared by the parser's tests and crackvis-render's
-// command line test (tests/server/snapshot.test.cpp).
+// command line test (tests/scene/snapshot.test.cpp).
 #pragma once
 
 #include <limits>

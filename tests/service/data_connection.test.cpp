@@ -9,7 +9,7 @@
 
 #include "crackvis/v1/render.grpc.pb.h"
 #include "dataservice/service_fixture.hpp"
-#include "server/render_fixture.hpp"
+#include "service/render_fixture.hpp"
 #include "support/network.hpp"
 #include "support/process.hpp"
 #include <crackvis/dataservice_client/data_client.hpp>

@@ -1,4 +1,4 @@
-#include "server/render_fixture.hpp"
+#include "service/render_fixture.hpp"
 
 #include <filesystem>
 #include <fstream>

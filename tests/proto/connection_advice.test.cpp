@@ -8,7 +8,7 @@
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
-#include "service_fixture.hpp"
+#include "dataservice/service_fixture.hpp"
 #include "support/network.hpp"
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"

@@ -6,7 +6,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
-#include "service_fixture.hpp"
+#include "dataservice/service_fixture.hpp"
 #include "support/process.hpp"
 
 namespace crackvis::testing {

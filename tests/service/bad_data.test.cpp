@@ -15,7 +15,7 @@
 
 #include "crackvis/v1/render.grpc.pb.h"
 #include "dataservice/service_fixture.hpp"
-#include "server/render_fixture.hpp"
+#include "service/render_fixture.hpp"
 #include "support/h5_tamper.hpp"
 #include "support/process.hpp"
 #include "support/sample_files.hpp"

@@ -18,7 +18,7 @@
 #include "crackvis/v1/render.grpc.pb.h"
 #include "dataservice/service_fixture.hpp"
 #include "grpc/health/v1/health.grpc.pb.h"
-#include "server/render_fixture.hpp"
+#include "service/render_fixture.hpp"
 #include "support/process.hpp"
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
