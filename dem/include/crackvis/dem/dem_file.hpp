@@ -29,7 +29,6 @@ inline constexpr const char* kPlannedStepsAttribute = "planned";
 inline constexpr const char* kTimeUnitAttribute = "time_unit";
 inline constexpr const char* kTimeInIterations = "iteration";
 
-
 // Free-form provenance stored in root attributes.
 struct DemMetadata {
   std::string source;  // what produced the file, e.g. "crackvis sim cuboid3d --set A"
