@@ -20,12 +20,17 @@ Result<Caller> authenticateCall(const Authenticator& authenticator,
   return caller;
 }
 
-grpc::Status finishCall(AccessLog& log, AccessRecord& record, CallClock::time_point start,
-                        const Status& status) {
+void recordCall(AccessLog& log, AccessRecord& record, CallClock::time_point start,
+                const Status& status) {
   record.seconds = std::chrono::duration<double>(CallClock::now() - start).count();
   record.status = std::string(toString(status.code()));
   record.detail = status.isOk() ? std::string() : status.message();
   log.record(record);
+}
+
+grpc::Status finishCall(AccessLog& log, AccessRecord& record, CallClock::time_point start,
+                        const Status& status) {
+  recordCall(log, record, start, status);
   return toGrpcStatus(status);
 }
 

@@ -164,6 +164,18 @@ int serve(const RenderServerConfig& config) {
                         {"tls", config.insecure ? "none (INSECURE, loopback only)" : "mutual"},
                         {"data_service", config.data.target},
                         {"max_sessions", std::to_string(config.maxSessions)}});
+  if (!config.web.listen.empty()) {
+    // The URL a person opens; "localhost" rather than 127.0.0.1 so that the
+    // page is a secure context even on plaintext loopback.
+    const std::string host =
+        config.web.listen.rfind("127.0.0.1:", 0) == 0 || config.web.listen.rfind("0.0.0.0:", 0) == 0
+            ? "localhost"
+            : (*server)->webAddress().substr(0, (*server)->webAddress().rfind(':'));
+    crackvis::log::event(stdout, "crackvis-render", "web_serving",
+                         {{"address", (*server)->webAddress()},
+                          {"url", fmt::format("{}://{}:{}/", config.insecure ? "http" : "https",
+                                              host, (*server)->webPort())}});
+  }
   std::fflush(stdout);
   crackvis::service_manager::notify("READY=1\nSTATUS=serving " + (*server)->address());
   const int signal = signals.wait();
@@ -220,7 +232,7 @@ int main(int argc, char** argv) {
   std::string configFile;
   app.add_option("-c,--config", configFile,
                  "JSON configuration file (listen, tls, insecure, users_from, data_service, "
-                 "limits, access_log; deploy/config/render.json); flags override it");
+                 "limits, access_log, web; deploy/config/render.json); flags override it");
   app.add_option("--listen", config.listen, "host:port to listen on (port 0 lets the OS choose)")
       ->capture_default_str();
   app.add_option("--ca", config.tls.ca, "CA certificate that signs client certificates")
@@ -274,6 +286,15 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--access-log", config.accessLog, "file for access lines; - stderr; empty none")
       ->capture_default_str();
+  app.add_option("--web-listen", config.web.listen,
+                 "host:port of the browser page (HTTPS with --cert/--key, and a WebSocket per "
+                 "stream); needs users (--users-from): the page signs in with a password or token");
+  app.add_option("--web-root", config.web.root,
+                 "the page's folder (default: share/crackvis/web beside the program, else the "
+                 "build tree's web/dist)");
+  app.add_option("--web-origin", config.web.origins,
+                 "another origin whose page may call, e.g. a proxy's https://viz.example.org "
+                 "(repeatable; the page's own is always allowed)");
   auto* snapshotOption =
       app.add_option("--snapshot", flags.snapshot,
                      "render PIPELINE.xml once, write -o OUT.png and exit (no server)");
@@ -291,6 +312,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(16, 2160));
   app.footer(
       "Example: crackvis-render --listen 127.0.0.1:50052 --data-server localhost:50051\n"
+      "         crackvis-render ... --users-from data.json --web-listen 0.0.0.0:8443\n"
       "         crackvis-render --snapshot view.xml --data-root /data -o view.png");
   CLI11_PARSE(app, argc, argv);
   if (!flags.usersFrom.empty()) {

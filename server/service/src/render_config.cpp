@@ -52,6 +52,13 @@ Status readLimits(const json& object, const std::string& where, RenderServerConf
   return read(object, "max_height", where, config.limits.maxHeight);
 }
 
+Status readWeb(const json& object, const std::string& where, WebConfig& web) {
+  CRACKVIS_RETURN_IF_ERROR(checkKeys(object, where, {"listen", "root", "origins"}));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "listen", where, web.listen));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "root", where, web.root));
+  return read(object, "origins", where, web.origins);
+}
+
 }  // namespace
 
 Result<RenderServerConfig> parseRenderServerConfig(const std::string& text,
@@ -64,7 +71,7 @@ Result<RenderServerConfig> parseRenderServerConfig(const std::string& text,
   RenderServerConfig config;
   CRACKVIS_RETURN_IF_ERROR(checkKeys(
       root, origin,
-      {"listen", "tls", "insecure", "users_from", "data_service", "limits", "access_log"}));
+      {"listen", "tls", "insecure", "users_from", "data_service", "limits", "access_log", "web"}));
   CRACKVIS_RETURN_IF_ERROR(read(root, "listen", origin, config.listen));
   CRACKVIS_RETURN_IF_ERROR(read(root, "insecure", origin, config.insecure));
   CRACKVIS_RETURN_IF_ERROR(read(root, "access_log", origin, config.accessLog));
@@ -77,6 +84,9 @@ Result<RenderServerConfig> parseRenderServerConfig(const std::string& text,
   }
   if (root.contains("limits")) {
     CRACKVIS_RETURN_IF_ERROR(readLimits(root.at("limits"), origin + ": limits", config));
+  }
+  if (root.contains("web")) {
+    CRACKVIS_RETURN_IF_ERROR(readWeb(root.at("web"), origin + ": web", config.web));
   }
   std::string usersFrom;
   CRACKVIS_RETURN_IF_ERROR(read(root, "users_from", origin, usersFrom));
@@ -95,6 +105,24 @@ Status validateRenderServerConfig(const RenderServerConfig& config) {
   using rpc::checkSetting;
   if (auto listen = rpc::parseHostPort(config.listen); !listen) {
     return invalidArgument(fmt::format("--listen: {}", listen.status().message()));
+  }
+  if (!config.web.listen.empty()) {
+    if (auto web = rpc::parseHostPort(config.web.listen); !web) {
+      return invalidArgument(fmt::format("--web-listen (web.listen): {}", web.status().message()));
+    }
+    // A browser has no client certificate: without users, anyone who
+    // reaches the port would read the whole data root.
+    if (config.users.empty()) {
+      return invalidArgument(
+          "--web-listen (web.listen) needs users (--users-from or users_from): the browser page "
+          "signs in with a user's password or token, since browsers bring no client certificate");
+    }
+    for (const std::string& origin : config.web.origins) {
+      if (origin.rfind("https://", 0) != 0 && origin.rfind("http://", 0) != 0) {
+        return invalidArgument(fmt::format(
+            "--web-origin (web.origins): '{}' is not an origin (https://host[:port])", origin));
+      }
+    }
   }
   if (config.data.target.empty()) {
     return invalidArgument("--data-server must name crackvis-data's host:port");

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "render_service.hpp"
+#include "web_front_door.hpp"
 #include <crackvis/rpc_server/server.hpp>
 #include <crackvis/service/render_server.hpp>
 #include <crackvis/tls/tls_material.hpp>
@@ -25,6 +26,7 @@ struct RenderServer::Impl {
   RenderServerConfig config;
   std::unique_ptr<rpc::AccessLog> log;
   std::unique_ptr<RenderServiceImpl> service;
+  std::unique_ptr<WebFrontDoor> web;      // none without web.listen
   std::unique_ptr<rpc::ServerHost> host;  // last: stops before the service goes
 };
 
@@ -81,6 +83,14 @@ Result<std::unique_ptr<RenderServer>> RenderServer::start(const RenderServerConf
     return host.status();
   }
   impl->host = std::move(host).value();
+  if (!config.web.listen.empty()) {
+    auto web = WebFrontDoor::start(impl->config, *service);
+    if (!web) {
+      impl->host->shutdown(0.5);
+      return web.status();
+    }
+    impl->web = std::move(web).value();
+  }
   return std::unique_ptr<RenderServer>(new RenderServer(std::move(impl)));
 }
 
@@ -90,12 +100,21 @@ const std::string& RenderServer::address() const {
 int RenderServer::port() const {
   return m_impl->host->port();
 }
+std::string RenderServer::webAddress() const {
+  return m_impl->web ? m_impl->web->address() : std::string();
+}
+int RenderServer::webPort() const {
+  return m_impl->web ? m_impl->web->port() : 0;
+}
 int RenderServer::sessionCount() const {
   return m_impl->service->sessions().count();
 }
 
 void RenderServer::shutdown(double graceSeconds) {
-  m_impl->host->shutdown(graceSeconds);
+  m_impl->host->shutdown(graceSeconds);  // closes the sessions, so the web streams end too
+  if (m_impl->web) {
+    m_impl->web->shutdown();
+  }
 }
 
 void RenderServer::wait() {

@@ -52,8 +52,8 @@ Status checkAccess(const dataservice::DataClient& data, const Caller& caller,
 
 // Times, broken bonds and step scalars per step: every attribute of a step
 // group but its time is a named scalar (docs/data-format.md).
-void stepHistory(const dataservice::RemoteDemFile& file, const std::vector<std::int32_t>& breaks,
-                 v1::StepHistoryResponse& response) {
+void fillStepHistory(const dataservice::RemoteDemFile& file,
+                     const std::vector<std::int32_t>& breaks, v1::StepHistoryResponse& response) {
   const int steps = file.stepCount();
   for (const std::int64_t broken : dem::brokenBondsPerStep(breaks, steps)) {
     response.add_broken_bonds(broken);
@@ -105,7 +105,7 @@ grpc::Status RenderServiceImpl::OpenSession(grpc::ServerContext* context,
                                             const v1::OpenSessionRequest* request,
                                             v1::OpenSessionResponse* response) {
   return handle(context, "OpenSession", [&](const Caller& caller, AccessRecord& record) {
-    return openSession(*context, caller, *request, *response, record);
+    return openSession(caller, *request, *response, record);
   });
 }
 
@@ -121,7 +121,7 @@ grpc::Status RenderServiceImpl::Snapshot(grpc::ServerContext* context,
                                          const v1::SnapshotRequest* request,
                                          v1::SnapshotResponse* response) {
   return handle(context, "Snapshot", [&](const Caller& caller, AccessRecord& record) {
-    return snapshot(*context, caller, *request, *response, record);
+    return snapshot(caller, *request, *response, record, context->deadline());
   });
 }
 
@@ -129,7 +129,7 @@ grpc::Status RenderServiceImpl::CloseSession(grpc::ServerContext* context,
                                              const v1::CloseSessionRequest* request,
                                              v1::CloseSessionResponse* /*response*/) {
   return handle(context, "CloseSession", [&](const Caller& caller, AccessRecord& /*record*/) {
-    return m_sessions.close(request->session_id(), caller);
+    return closeSession(caller, *request);
   });
 }
 
@@ -137,25 +137,7 @@ grpc::Status RenderServiceImpl::ListFiles(grpc::ServerContext* context,
                                           const v1::ListFilesRequest* request,
                                           v1::ListFilesResponse* response) {
   return handle(context, "ListFiles", [&](const Caller& caller, AccessRecord& record) {
-    record.file = request->folder();
-    auto folder = DataRoot::normalize(request->folder());
-    if (!folder) {
-      return folder.status();
-    }
-    // Another user's folder answers as a missing one, as crackvis-data's.
-    if (!caller.mayList(*folder)) {
-      return DataRoot::notFound(*folder, /*folder=*/true);
-    }
-    v1::ListFilesResponse all;
-    CRACKVIS_RETURN_IF_ERROR(m_data.relayListFiles(*request, all, context->deadline()));
-    // Both the name shown and the file it leads to must be the caller's.
-    for (const auto& file : all.files()) {
-      if (!file.resolved_path().empty() &&
-          rpc::checkResolvedPath(caller, file.path(), file.resolved_path()).isOk()) {
-        *response->add_files() = file;
-      }
-    }
-    return Status::ok();
+    return listFiles(caller, *request, *response, record, context->deadline());
   });
 }
 
@@ -163,9 +145,7 @@ grpc::Status RenderServiceImpl::Describe(grpc::ServerContext* context,
                                          const v1::DescribeRequest* request,
                                          v1::DescribeResponse* response) {
   return handle(context, "Describe", [&](const Caller& caller, AccessRecord& record) {
-    record.file = request->file();
-    CRACKVIS_RETURN_IF_ERROR(checkAccess(m_data, caller, request->file(), context->deadline()));
-    return m_data.relayDescribe(*request, *response, context->deadline());
+    return describe(caller, *request, *response, record, context->deadline());
   });
 }
 
@@ -173,20 +153,63 @@ grpc::Status RenderServiceImpl::StepHistory(grpc::ServerContext* context,
                                             const v1::StepHistoryRequest* request,
                                             v1::StepHistoryResponse* response) {
   return handle(context, "StepHistory", [&](const Caller& caller, AccessRecord& record) {
-    record.file = request->file();
-    CRACKVIS_RETURN_IF_ERROR(checkAccess(m_data, caller, request->file(), context->deadline()));
-    auto file = dataservice::RemoteDemFile::open(m_data, request->file());
-    if (!file) {
-      return file.status();
-    }
-    auto breakSteps = file->breakSteps();
-    if (!breakSteps) {
-      return breakSteps.status();
-    }
-    stepHistory(*file, *breakSteps, *response);
-    record.bytes = breakSteps->size() * sizeof(std::int32_t);
-    return Status::ok();
+    return stepHistory(caller, *request, *response, record, context->deadline());
   });
+}
+
+Status RenderServiceImpl::closeSession(const Caller& caller,
+                                       const v1::CloseSessionRequest& request) {
+  return m_sessions.close(request.session_id(), caller);
+}
+
+Status RenderServiceImpl::listFiles(const Caller& caller, const v1::ListFilesRequest& request,
+                                    v1::ListFilesResponse& response, AccessRecord& record,
+                                    Deadline deadline) {
+  record.file = request.folder();
+  auto folder = DataRoot::normalize(request.folder());
+  if (!folder) {
+    return folder.status();
+  }
+  // Another user's folder answers as a missing one, as crackvis-data's.
+  if (!caller.mayList(*folder)) {
+    return DataRoot::notFound(*folder, /*folder=*/true);
+  }
+  v1::ListFilesResponse all;
+  CRACKVIS_RETURN_IF_ERROR(m_data.relayListFiles(request, all, deadline));
+  // Both the name shown and the file it leads to must be the caller's.
+  for (const auto& file : all.files()) {
+    if (!file.resolved_path().empty() &&
+        rpc::checkResolvedPath(caller, file.path(), file.resolved_path()).isOk()) {
+      *response.add_files() = file;
+    }
+  }
+  return Status::ok();
+}
+
+Status RenderServiceImpl::describe(const Caller& caller, const v1::DescribeRequest& request,
+                                   v1::DescribeResponse& response, AccessRecord& record,
+                                   Deadline deadline) {
+  record.file = request.file();
+  CRACKVIS_RETURN_IF_ERROR(checkAccess(m_data, caller, request.file(), deadline));
+  return m_data.relayDescribe(request, response, deadline);
+}
+
+Status RenderServiceImpl::stepHistory(const Caller& caller, const v1::StepHistoryRequest& request,
+                                      v1::StepHistoryResponse& response, AccessRecord& record,
+                                      Deadline deadline) {
+  record.file = request.file();
+  CRACKVIS_RETURN_IF_ERROR(checkAccess(m_data, caller, request.file(), deadline));
+  auto file = dataservice::RemoteDemFile::open(m_data, request.file());
+  if (!file) {
+    return file.status();
+  }
+  auto breakSteps = file->breakSteps();
+  if (!breakSteps) {
+    return breakSteps.status();
+  }
+  fillStepHistory(*file, *breakSteps, response);
+  record.bytes = breakSteps->size() * sizeof(std::int32_t);
+  return Status::ok();
 }
 
 Session::SourceOpener RenderServiceImpl::opener(const Caller& caller) const {
@@ -199,8 +222,7 @@ Session::SourceOpener RenderServiceImpl::opener(const Caller& caller) const {
   };
 }
 
-Status RenderServiceImpl::openSession(const grpc::ServerContext& /*context*/, const Caller& caller,
-                                      const v1::OpenSessionRequest& request,
+Status RenderServiceImpl::openSession(const Caller& caller, const v1::OpenSessionRequest& request,
                                       v1::OpenSessionResponse& response, AccessRecord& record) {
   if (request.pipeline_xml().size() > pipeline::kMaxPipelineBytes) {
     return invalidArgument(
@@ -241,6 +263,53 @@ Status RenderServiceImpl::openSession(const grpc::ServerContext& /*context*/, co
   return Status::ok();
 }
 
+namespace {
+
+// The gRPC stream as a sink: Write blocks until gRPC has taken the message.
+class GrpcSink final : public StreamSink {
+ public:
+  GrpcSink(grpc::ServerContext& context,
+           grpc::ServerReaderWriter<v1::ServerMessage, v1::ClientEvent>& stream,
+           const std::atomic<bool>& readerDone)
+      : m_context(context), m_stream(stream), m_readerDone(readerDone) {}
+  bool write(const v1::ServerMessage& message) override { return m_stream.Write(message); }
+  bool open() const override { return !m_readerDone && !m_context.IsCancelled(); }
+
+ private:
+  grpc::ServerContext& m_context;
+  grpc::ServerReaderWriter<v1::ServerMessage, v1::ClientEvent>& m_stream;
+  const std::atomic<bool>& m_readerDone;
+};
+
+}  // namespace
+
+Result<std::shared_ptr<Session>> RenderServiceImpl::attachStream(const Caller& caller,
+                                                                 const v1::ClientEvent& first,
+                                                                 AccessRecord& record) {
+  if (first.event_case() != v1::ClientEvent::kAttachSessionId) {
+    return invalidArgument(
+        "the first message of a stream attaches to a session (attach_session_id)");
+  }
+  auto found = m_sessions.find(first.attach_session_id(), caller);
+  if (found) {
+    record.file = (*found)->info().file;
+  }
+  return found;
+}
+
+void RenderServiceImpl::applyEvent(Session& session, const v1::ClientEvent& event) const {
+  auto converted = toSessionEvent(event);
+  Status valid = converted.status();
+  if (converted) {
+    valid = checkEvent(*converted, m_config.limits);  // before it is queued
+  }
+  if (valid) {
+    session.post(std::move(converted).value());
+  } else {
+    session.reportEventError(event.event_id(), valid);
+  }
+}
+
 Status RenderServiceImpl::runStream(
     grpc::ServerContext* context,
     grpc::ServerReaderWriter<v1::ServerMessage, v1::ClientEvent>* stream, const Caller& caller,
@@ -255,16 +324,11 @@ Status RenderServiceImpl::runStream(
                           m_attaching.seconds()))
                     : unavailable("the stream ended before attaching to a session");
   }
-  if (first.event_case() != v1::ClientEvent::kAttachSessionId) {
-    return invalidArgument(
-        "the first message of a stream attaches to a session (attach_session_id)");
-  }
-  auto found = m_sessions.find(first.attach_session_id(), caller);
+  auto found = attachStream(caller, first, record);
   if (!found) {
     return found.status();
   }
   std::shared_ptr<Session> session = std::move(found).value();
-  record.file = session->info().file;
   const std::uint64_t attachment = session->attach();
   std::atomic<bool> readerDone{false};
   std::thread reader([&] {
@@ -272,16 +336,7 @@ Status RenderServiceImpl::runStream(
     const Status read = rpc::guarded(kProgram, record, [&] {
       v1::ClientEvent event;
       while (stream->Read(&event)) {
-        auto converted = toSessionEvent(event);
-        Status valid = converted.status();
-        if (converted) {
-          valid = checkEvent(*converted, m_config.limits);  // before it is queued
-        }
-        if (valid) {
-          session->post(std::move(converted).value());
-        } else {
-          session->reportEventError(event.event_id(), valid);
-        }
+        applyEvent(*session, event);
       }
       return Status::ok();
     });
@@ -290,14 +345,26 @@ Status RenderServiceImpl::runStream(
     }
     readerDone = true;
   });
+  GrpcSink sink(*context, *stream, readerDone);
+  const Status ended = pumpStream(*session, attachment, sink, record);
+  session->detach(attachment);
+  if (!readerDone) {
+    context->TryCancel();  // ends the reader's blocking Read
+  }
+  reader.join();
+  return ended;
+}
+
+Status RenderServiceImpl::pumpStream(Session& session, std::uint64_t attachment, StreamSink& sink,
+                                     AccessRecord& record) {
   StreamEncoder encoder;
   Status ended = Status::ok();
   bool open = true;
-  while (open && !readerDone && !context->IsCancelled()) {
+  while (open && sink.open()) {
     RenderedFrame frame;
     SessionNotice notice;
     v1::ServerMessage message;
-    switch (session->next(attachment, std::chrono::milliseconds(100), frame, notice)) {
+    switch (session.next(attachment, std::chrono::milliseconds(100), frame, notice)) {
       case Session::Next::kFrame: {
         auto encoded = encoder.encode(frame);
         if (!encoded) {
@@ -307,50 +374,45 @@ Status RenderServiceImpl::runStream(
         }
         record.bytes += encoded->h264().size();
         *message.mutable_frame() = std::move(encoded).value();
-        open = stream->Write(message);
+        open = sink.write(message);
         break;
       }
       case Session::Next::kNotice:
-        open = stream->Write(toMessage(notice));
+        open = sink.write(toMessage(notice));
         break;
       case Session::Next::kTimeout:
         break;
       case Session::Next::kSuperseded:
-        ended = unavailable(fmt::format("session {}: another stream attached", session->id()));
+        ended = unavailable(fmt::format("session {}: another stream attached", session.id()));
         open = false;
         continue;
       case Session::Next::kClosed: {
-        const std::string reason = session->closeReason();
+        const std::string reason = session.closeReason();
         ended = unavailable(
-            fmt::format("session {} closed{}", session->id(), reason.empty() ? "" : ": " + reason));
+            fmt::format("session {} closed{}", session.id(), reason.empty() ? "" : ": " + reason));
         open = false;
         continue;
       }
     }
-    if (auto stats = encoder.stats(session->framesDropped())) {
+    if (auto stats = encoder.stats(session.framesDropped())) {
       v1::ServerMessage statsMessage;
       *statsMessage.mutable_stats() = *stats;
-      open = open && stream->Write(statsMessage);
+      open = open && sink.write(statsMessage);
     }
   }
-  session->detach(attachment);
-  if (!readerDone) {
-    context->TryCancel();  // ends the reader's blocking Read
-  }
-  reader.join();
   return ended;
 }
 
-Status RenderServiceImpl::snapshot(const grpc::ServerContext& context, const Caller& caller,
-                                   const v1::SnapshotRequest& request,
-                                   v1::SnapshotResponse& response, AccessRecord& record) {
+Status RenderServiceImpl::snapshot(const Caller& caller, const v1::SnapshotRequest& request,
+                                   v1::SnapshotResponse& response, AccessRecord& record,
+                                   Deadline deadline) {
   auto session = m_sessions.find(request.session_id(), caller);
   if (!session) {
     return session.status();
   }
   record.file = (*session)->info().file;
   // Checked again: a link may have been changed since the session opened.
-  CRACKVIS_RETURN_IF_ERROR(checkAccess(m_data, caller, record.file, context.deadline()));
+  CRACKVIS_RETURN_IF_ERROR(checkAccess(m_data, caller, record.file, deadline));
   int step = 0;
   const std::optional<int> atStep =
       request.has_step() ? std::optional<int>(request.step()) : std::nullopt;

@@ -22,8 +22,22 @@ namespace crackvis::service {
 // The program's name in log lines, the access log and the health service.
 inline constexpr const char* kProgram = "crackvis-render";
 
+// Where a session's stream writes its messages: the gRPC stream, or the web
+// page's WebSocket. The one writer loop (RenderServiceImpl::pumpStream)
+// serves both front doors.
+class StreamSink {
+ public:
+  virtual ~StreamSink() = default;
+  // Blocks until the message is handed to the transport (back-pressure: a
+  // slow client holds up only its own stream); false when the client is gone.
+  virtual bool write(const v1::ServerMessage& message) = 0;
+  // False once the client has gone or its events can no longer be read.
+  virtual bool open() const = 0;
+};
+
 class RenderServiceImpl final : public v1::RenderService::Service {
  public:
+  using Deadline = dataservice::DataClient::Deadline;
   // `data`: the one channel to crackvis-data, for the handlers and (copied
   // into each opener) the sessions' step sources.
   RenderServiceImpl(const RenderServerConfig& config, dataservice::DataClient data,
@@ -37,6 +51,9 @@ class RenderServiceImpl final : public v1::RenderService::Service {
 
   SessionRegistry& sessions() { return m_sessions; }
   AttachWatch& attaching() { return m_attaching; }
+  const rpc::Authenticator& authenticator() const { return m_authenticator; }
+  rpc::AccessLog& accessLog() { return m_log; }
+  const RenderServerConfig& config() const { return m_config; }
 
   grpc::Status OpenSession(grpc::ServerContext* context, const v1::OpenSessionRequest* request,
                            v1::OpenSessionResponse* response) override;
@@ -54,21 +71,42 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   grpc::Status StepHistory(grpc::ServerContext* context, const v1::StepHistoryRequest* request,
                            v1::StepHistoryResponse* response) override;
 
+  // The calls' bodies, without a transport: the gRPC handlers below and the
+  // web front door (web_front_door.cpp) both run these, so the two doors
+  // share the sessions, limits, folder rules and access log.
+  Status listFiles(const rpc::Caller& caller, const v1::ListFilesRequest& request,
+                   v1::ListFilesResponse& response, rpc::AccessRecord& record, Deadline deadline);
+  Status describe(const rpc::Caller& caller, const v1::DescribeRequest& request,
+                  v1::DescribeResponse& response, rpc::AccessRecord& record, Deadline deadline);
+  Status stepHistory(const rpc::Caller& caller, const v1::StepHistoryRequest& request,
+                     v1::StepHistoryResponse& response, rpc::AccessRecord& record,
+                     Deadline deadline);
+  Status openSession(const rpc::Caller& caller, const v1::OpenSessionRequest& request,
+                     v1::OpenSessionResponse& response, rpc::AccessRecord& record);
+  Status snapshot(const rpc::Caller& caller, const v1::SnapshotRequest& request,
+                  v1::SnapshotResponse& response, rpc::AccessRecord& record, Deadline deadline);
+  Status closeSession(const rpc::Caller& caller, const v1::CloseSessionRequest& request);
+
+  // A stream's parts: the session its first message attaches to, each later
+  // event applied (converted and checked before it is queued; a bad one is
+  // answered by an EventError), and the writer loop until the session
+  // closes, another stream attaches, or the sink closes.
+  Result<std::shared_ptr<Session>> attachStream(const rpc::Caller& caller,
+                                                const v1::ClientEvent& first,
+                                                rpc::AccessRecord& record);
+  void applyEvent(Session& session, const v1::ClientEvent& event) const;
+  Status pumpStream(Session& session, std::uint64_t attachment, StreamSink& sink,
+                    rpc::AccessRecord& record);
+
  private:
   // Every handler: authenticate, run the body at the handler boundary (an
   // exception fails only this call), write the access-log line, answer.
   template <typename Body>
   grpc::Status handle(grpc::ServerContext* context, const char* method, Body&& body);
   Session::SourceOpener opener(const rpc::Caller& caller) const;
-  Status openSession(const grpc::ServerContext& /*context*/, const rpc::Caller& caller,
-                     const v1::OpenSessionRequest& request, v1::OpenSessionResponse& response,
-                     rpc::AccessRecord& record);
   Status runStream(grpc::ServerContext* context,
                    grpc::ServerReaderWriter<v1::ServerMessage, v1::ClientEvent>* stream,
                    const rpc::Caller& caller, rpc::AccessRecord& record);
-  Status snapshot(const grpc::ServerContext& context, const rpc::Caller& caller,
-                  const v1::SnapshotRequest& request, v1::SnapshotResponse& response,
-                  rpc::AccessRecord& record);
 
   const RenderServerConfig& m_config;
   rpc::Authenticator m_authenticator;

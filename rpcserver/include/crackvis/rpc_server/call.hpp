@@ -25,9 +25,12 @@ using CallClock = std::chrono::steady_clock;
 Result<Caller> authenticateCall(const Authenticator& authenticator,
                                 const grpc::ServerContextBase& context, AccessRecord& record);
 
-// Fills the record's time and status, writes its line (before the client
-// sees the status, so a client's calls appear in the order it made them) and
-// returns the status for gRPC.
+// Fills the record's time and status and writes its line (before the client
+// sees the status, so a client's calls appear in the order it made them):
+// the end of a call through any front door (gRPC, the web page's).
+void recordCall(AccessLog& log, AccessRecord& record, CallClock::time_point start,
+                const Status& status);
+// recordCall, then the status for gRPC.
 grpc::Status finishCall(AccessLog& log, AccessRecord& record, CallClock::time_point start,
                         const Status& status);
 

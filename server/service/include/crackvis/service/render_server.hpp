@@ -20,6 +20,19 @@ namespace crackvis::service {
 // localhost:50051 with certs/generated/crackvis-render.pem and .key.
 dataservice::ClientOptions defaultDataOptions();
 
+// The web front door (docs/protocol.md, "The browser page"): one HTTPS port
+// that serves the page and its calls, and a WebSocket per session stream,
+// onto the same sessions, limits, users and access log as the gRPC service.
+struct WebConfig {
+  std::string listen;  // host:port; empty: no web front door
+  // The page's folder (index.html, app.js, app.css); empty: the installed
+  // page (share/crackvis/web beside the program), else the build tree's.
+  std::string root;
+  // Origins besides the page's own whose pages may call (a reverse proxy's
+  // public name: "https://viz.example.org").
+  std::vector<std::string> origins;
+};
+
 struct RenderServerConfig {
   std::string listen = "127.0.0.1:50052";  // host:port; port 0 lets the OS choose
   tls::TlsFiles tls = tls::defaultTlsFiles("server", "--", "tls.");
@@ -33,6 +46,7 @@ struct RenderServerConfig {
   double attachSeconds = 10.0;        // a stream must attach to a session within this time
   SessionLimits limits;
   std::string accessLog = "-";  // "-": stderr; "": none
+  WebConfig web;
 };
 
 // Reads a JSON configuration (deploy/config/render.json shows one): listen,
@@ -41,7 +55,7 @@ struct RenderServerConfig {
 // insecure, server_name}, limits {max_sessions, max_sessions_per_user,
 // session_grace_seconds, attach_seconds, refine_after_ms,
 // interactive_frame_ms, max_width, max_height, max_particles, max_bonds},
-// access_log.
+// access_log, web {listen, root, origins}.
 // Unknown keys are errors; values are range-checked by
 // validateRenderServerConfig once flags are applied.
 Result<RenderServerConfig> loadRenderServerConfig(const std::string& path);
@@ -65,6 +79,9 @@ class RenderServer {
 
   const std::string& address() const;
   int port() const;
+  // The web front door's address and port ("" and 0 without one).
+  std::string webAddress() const;
+  int webPort() const;
   int sessionCount() const;
 
   // Closes every session, ends the streams, stops serving (NOT_SERVING
