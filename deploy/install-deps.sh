@@ -29,6 +29,10 @@ readonly PACKAGES=(
   libegl-dev libegl-mesa0 libgl1-mesa-dri libgles-dev libopengl-dev
   libxml2-dev libxml2-utils
   libavcodec-dev libavformat-dev libavutil-dev libswscale-dev libx264-dev ffmpeg
+  # server/service: the web front door (Boost.Beast, header-only);
+  # tests/web: the browser page driven in headless Chromium. node and npm
+  # (web/'s build) are added below unless a node with npm is installed.
+  libboost-dev chromium
   # client/: Qt6 thin client, headless screenshots
   qt6-base-dev qt6-base-dev-tools libqt6opengl6-dev xvfb
   # tests and benchmark plots
@@ -95,6 +99,12 @@ missing=()
 for package in "${selected[@]}"; do
   is_installed "$package" || missing+=("$package")
 done
+# web/ is built by npm from its lockfile. Debian's nodejs 18 and npm 9 do;
+# a machine that already has a node with npm (NodeSource's nodejs, which
+# conflicts with Debian's npm package) keeps its own.
+if [[ "${selected[*]}" == "${PACKAGES[*]}" ]] && ! { command -v node && command -v npm; } >/dev/null; then
+  missing+=(nodejs npm)
+fi
 
 # Debian's ParaView, unpacked into a private prefix for the plugin's build
 # and tests (it conflicts with libvtk9-dev's python3-vtk9: never installed).

@@ -12,7 +12,7 @@
 #   deploy/run-demo.sh [OUT_DIR]          # default: demo-out/ (demo.mp4, demo.png, logs)
 #   DEMO_SCALE=0.3 deploy/run-demo.sh     # a smaller specimen (default: full size)
 #   DEMO_HEADLESS=1 deploy/run-demo.sh    # the scripted session even with a display
-#   DEMO_PORT=50051 (data; render = +1; 0: ports the OS chooses)
+#   DEMO_PORT=50051 (data; render = +1; the browser page = +2; 0: ports the OS chooses)
 #   DEMO_DATA=demo-data                   # where the simulated file is kept
 #   DEMO_SKIP_INSTALL=1                   # skip deploy/install-deps.sh (tests)
 #   DEMO_BUILD=DIR                        # use this build tree as it is (tests)
@@ -23,6 +23,7 @@ data_dir="${DEMO_DATA:-demo-data}"
 scale="${DEMO_SCALE:-1}"
 data_port="${DEMO_PORT:-50051}"
 render_port=$((data_port == 0 ? 0 : data_port + 1))
+web_port=$((data_port == 0 ? 0 : data_port + 2))
 build="${DEMO_BUILD:-build/release}"
 
 say() { echo "run-demo: $*"; }
@@ -34,7 +35,8 @@ if [[ -z "${DEMO_SKIP_INSTALL:-}" ]]; then
 fi
 if [[ -z "${DEMO_BUILD:-}" ]]; then
   cmake --preset release >/dev/null
-  cmake --build --preset release --target crackvis crackvis-data crackvis-render crackvis-client
+  cmake --build --preset release --target crackvis crackvis-data crackvis-render crackvis-client \
+    crackvis-web
 fi
 
 mkdir -p "$data_dir" "$out_dir"
@@ -46,6 +48,27 @@ fi
 certs=certs/generated
 if [[ ! -f "$certs/crackvis-render.pem" || ! -f "$certs/client.pem" ]]; then
   bash certs/make-dev-certs.sh --client crackvis-render
+fi
+
+# The browser page signs in as a user: "demo", with a password made once
+# and kept in $out_dir/web-password (mode 0600). The Qt client keeps its
+# certificate (CN crackvis-client), a user of its own here.
+users="$out_dir/render-users.json"
+if [[ ! -s "$out_dir/web-password" || ! -s "$users" ]]; then
+  (umask 077; "$build/dataservice/crackvis-data" new-token | awk '/^token /{print substr($2, 1, 16)}' >"$out_dir/web-password")
+  hash=$(tr -d '\n' <"$out_dir/web-password" | "$build/dataservice/crackvis-data" hash-secret)
+  cat >"$users" <<EOF
+{"users": [
+  {"name": "demo", "password_hash": "$hash", "folders": ["*"]},
+  {"name": "client", "certificate_name": "crackvis-client", "folders": ["*"]}
+]}
+EOF
+fi
+
+# The page, where this build tree has it (the CMake option CRACKVIS_WEB).
+web=()
+if [[ -f "$build/web/dist/index.html" ]]; then
+  web=(--users-from "$users" --web-listen "127.0.0.1:$web_port" --web-root "$build/web/dist")
 fi
 
 pids=()
@@ -75,11 +98,13 @@ data_port=$(port_of "$out_dir/crackvis-data.log")
   --ca "$certs/ca.pem" --cert "$certs/server.pem" --key "$certs/server.key" \
   --data-server "localhost:$data_port" --data-ca "$certs/ca.pem" \
   --data-cert "$certs/crackvis-render.pem" --data-key "$certs/crackvis-render.key" \
-  --access-log "$out_dir/render-access.log" >"$out_dir/crackvis-render.log" 2>&1 &
+  "${web[@]}" --access-log "$out_dir/render-access.log" >"$out_dir/crackvis-render.log" 2>&1 &
 pids+=($!)
 await "$out_dir/crackvis-render.log" crackvis-render
 render_port=$(port_of "$out_dir/crackvis-render.log")
+web_url=$(grep -o 'event=web_serving .*url="[^"]*' "$out_dir/crackvis-render.log" | sed 's/.*url="//' || true)
 say "services on 127.0.0.1:$data_port (data) and 127.0.0.1:$render_port (render); logs in $out_dir/"
+[[ -z "$web_url" ]] || say "in a browser: $web_url  (user demo, password in $out_dir/web-password; certificate: the development CA's)"
 head -1 "$out_dir/crackvis-render.log"
 
 client=("$build/client/app/crackvis-client" --connect "localhost:$render_port"
