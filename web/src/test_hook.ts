@@ -1,0 +1,75 @@
+// window.crackvisTest: what the browser test (tests/web/browser.test.mjs)
+// reads of the page, and the few faults it injects. The page only writes
+// it; nothing the page does depends on it.
+
+export interface FrameSeen {
+  step: number;
+  width: number;
+  height: number;
+  lastEventId: number;
+  frameId: number;
+  keyframe: boolean;
+  fullResolution: boolean;
+}
+
+export interface StateSeen {
+  step: number;
+  stepCount: number;
+  width: number;
+  height: number;
+  playing: boolean;
+  pipelineXml: string;
+}
+
+export interface CrackvisTest {
+  framesPainted: number;
+  lastFrame: FrameSeen | null;
+  lastPick: { kind: string; index: number; text: string } | null;
+  lastError: string;
+  latencies: number[]; // ms, event sent -> first frame reflecting it painted
+  decodeMs: number[];
+  readonly sessionId: string;
+  readonly attaches: number; // streams attached in this session (1 + reconnects)
+  lastEventId: number; // of the last event the page sent
+  state: StateSeen | null;
+  // The stream's connection closes as if the network dropped it.
+  dropConnection(): void;
+  // A ClientEvent of `bytes` bytes or more, straight onto the stream.
+  sendOversized(bytes: number): boolean;
+  // The view's Snapshot PNG, as the Screenshot button gets it.
+  snapshotPng(): Promise<Blob>;
+}
+
+// Kept short: a long run must not grow the page's memory.
+const kKept = 1000;
+
+export function keep(list: number[], value: number): void {
+  list.push(value);
+  if (list.length > kKept) list.shift();
+}
+
+// What the page answers when asked (the session it holds now).
+type Live = Pick<CrackvisTest, "sessionId" | "attaches">;
+type Faults = Pick<CrackvisTest, "dropConnection" | "sendOversized" | "snapshotPng">;
+
+export function installTestHook(live: () => Live, faults: Faults): CrackvisTest {
+  const hook: CrackvisTest = {
+    framesPainted: 0,
+    lastFrame: null,
+    lastPick: null,
+    lastError: "",
+    latencies: [],
+    decodeMs: [],
+    lastEventId: 0,
+    state: null,
+    get sessionId() {
+      return live().sessionId;
+    },
+    get attaches() {
+      return live().attaches;
+    },
+    ...faults,
+  };
+  (window as unknown as { crackvisTest: CrackvisTest }).crackvisTest = hook;
+  return hook;
+}
