@@ -70,6 +70,7 @@ nlohmann::json summaryJson(const std::vector<double>& values) {
           {"mean", mean(values)},
           {"p50", percentile(values, 50)},
           {"p90", percentile(values, 90)},
+          {"p95", percentile(values, 95)},
           {"p99", percentile(values, 99)}};
 }
 

@@ -123,6 +123,8 @@ class App {
       dropConnection: () => this.session?.dropConnection(),
       sendOversized: (bytes) => this.sendOversized(bytes),
       snapshotPng: () => this.snapshotPng(),
+      stillCamera: (kind, dx, dy) =>
+        this.send({ case: "camera", value: { kind, dx, dy, still: true } }),
     },
   );
   private stats: StreamStats | null = null;
@@ -306,7 +308,14 @@ class App {
         painted: (frame, latencies) => this.painted(frame, latencies),
         pick: (result) => this.picked(result),
         eventError: (error) => this.eventFailed(error),
-        stats: (stats) => (this.stats = stats),
+        stats: (stats) => {
+          this.stats = stats;
+          this.test.stats = {
+            fps: stats.fps,
+            bitrateBps: stats.bitrateBps,
+            framesDropped: Number(stats.framesDropped),
+          };
+        },
         report: (message, severity) => this.report(message, severity),
         reopened: (opened) => this.reopened(opened),
         signedOut: (message) => this.signedOut(message),

@@ -38,6 +38,11 @@ export interface CrackvisTest {
   sendOversized(bytes: number): boolean;
   // The view's Snapshot PNG, as the Screenshot button gets it.
   snapshotPng(): Promise<Blob>;
+  // A camera move that is not part of a drag (CameraEvent.still: a scripted
+  // view), answered by a full-resolution frame: the benchmark's still move.
+  stillCamera(kind: number, dx: number, dy: number): void;
+  // The last StreamStats (fps, bitrate), as the status line shows them.
+  stats: { fps: number; bitrateBps: number; framesDropped: number } | null;
 }
 
 // Kept short: a long run must not grow the page's memory.
@@ -50,7 +55,10 @@ export function keep(list: number[], value: number): void {
 
 // What the page answers when asked (the session it holds now).
 type Live = Pick<CrackvisTest, "sessionId" | "attaches">;
-type Faults = Pick<CrackvisTest, "dropConnection" | "sendOversized" | "snapshotPng">;
+type Faults = Pick<
+  CrackvisTest,
+  "dropConnection" | "sendOversized" | "snapshotPng" | "stillCamera"
+>;
 
 export function installTestHook(live: () => Live, faults: Faults): CrackvisTest {
   const hook: CrackvisTest = {
@@ -62,6 +70,7 @@ export function installTestHook(live: () => Live, faults: Faults): CrackvisTest 
     decodeMs: [],
     lastEventId: 0,
     state: null,
+    stats: null,
     get sessionId() {
       return live().sessionId;
     },

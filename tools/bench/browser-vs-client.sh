@@ -1,0 +1,169 @@
+#!/usr/bin/env bash
+# The browser page against the C++ client on the same view, alternately: run k
+# of `crackvis bench render` (the gRPC client library crackvis-client is built
+# on: its event-to-frame latency, decoded with libavcodec), then run k of
+# tools/bench/browser_latency.mjs (headless Chromium through the web front
+# door: event-to-painted-frame latency, decoded with WebCodecs and drawn on the
+# canvas), for each k, with the load average beside every run; then the
+# medians side by side. Figures: docs/benchmarks.md, "The browser page".
+set -euo pipefail
+
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+root=$(cd "$here/../.." && pwd)
+readonly here root
+build=${CRACKVIS_BUILD:-$root/build/release}
+readonly build
+
+usage() {
+  cat <<EOF
+usage: tools/bench/browser-vs-client.sh DATA_ROOT FILE [--runs R] [--size WxH] [--seconds S]
+                                        [--stills N] [--out DIR]
+
+Alternates R runs (default 5) of 'crackvis bench render' and of the browser page in headless
+Chromium on DATA_ROOT/FILE's last step at WxH (default 1280x720): a drag of S seconds (default 5)
+with rotate moves at 60 Hz, then N (default 10) still camera moves answered at full resolution.
+Prints p50 and p95 of both latencies for both clients, the browser's first frame after choosing
+the file, its decode time, bitrate and Chromium's CPU time per frame.
+
+Starts its own crackvis-data and crackvis-render (with --web-listen and a user for the page) from
+$build (CRACKVIS_BUILD) on free loopback ports with the development certificates.
+EOF
+}
+
+die() {
+  echo "browser-vs-client.sh: $*" >&2
+  exit 1
+}
+
+runs=5
+size=1280x720
+seconds=5
+stills=10
+out=
+positional=()
+while (($#)); do
+  case $1 in
+    -h | --help) usage; exit 0 ;;
+    --runs) runs=${2:?--runs needs a value}; shift 2 ;;
+    --size) size=${2:?--size needs a value}; shift 2 ;;
+    --seconds) seconds=${2:?--seconds needs a value}; shift 2 ;;
+    --stills) stills=${2:?--stills needs a value}; shift 2 ;;
+    --out) out=${2:?--out needs a value}; shift 2 ;;
+    -*) die "unknown option $1 (see --help)" ;;
+    *) positional+=("$1"); shift ;;
+  esac
+done
+((${#positional[@]} == 2)) || { usage >&2; exit 2; }
+data_root=$(cd "${positional[0]}" && pwd) || die "no folder ${positional[0]}"
+file=${positional[1]}
+[[ -f $data_root/$file ]] || die "no file $data_root/$file"
+[[ $runs =~ ^[1-9][0-9]*$ ]] || die "--runs $runs: expected a positive integer"
+for binary in tools/crackvis dataservice/crackvis-data server/app/crackvis-render web/dist/index.html \
+  web/node_modules/playwright-core/package.json; do
+  [[ -e $build/$binary ]] || die "$build/$binary is missing: build the project (and crackvis-web) first"
+done
+
+cd "$root"
+[[ -f certs/generated/crackvis-render.pem ]] || bash certs/make-dev-certs.sh --client crackvis-render >&2
+out_is_temp=
+if [[ -z $out ]]; then
+  out=$(mktemp -d)
+  out_is_temp=1
+fi
+mkdir -p "$out"
+
+free_port() {
+  python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
+}
+
+# The page's user, and the C++ client's certificate as a user of its own.
+password=$(openssl rand -hex 12)
+hash=$(printf %s "$password" | "$build/dataservice/crackvis-data" hash-secret)
+cat >"$out/users.json" <<EOF
+{"users": [
+  {"name": "bench", "password_hash": "$hash", "folders": ["*"]},
+  {"name": "client", "certificate_name": "crackvis-client", "folders": ["*"]}
+]}
+EOF
+
+pids=()
+cleanup() {
+  for pid in "${pids[@]}"; do
+    kill "$pid" 2>/dev/null || true
+  done
+  wait 2>/dev/null || true
+}
+trap 'cleanup; if [[ -n $out_is_temp ]]; then rm -rf "$out"; fi' EXIT
+
+data_port=$(free_port)
+render_port=$(free_port)
+web_port=$(free_port)
+"$build/dataservice/crackvis-data" --root "$data_root" --listen "127.0.0.1:$data_port" \
+  --access-log '' >"$out/crackvis-data.log" 2>&1 &
+pids+=($!)
+"$build/server/app/crackvis-render" --listen "127.0.0.1:$render_port" \
+  --data-server "localhost:$data_port" --users-from "$out/users.json" \
+  --web-listen "127.0.0.1:$web_port" --web-root "$build/web/dist" --access-log '' \
+  >"$out/crackvis-render.log" 2>&1 &
+pids+=($!)
+for _ in $(seq 50); do
+  "$build/tools/crackvis" health "localhost:$render_port" >/dev/null 2>&1 && break
+  sleep 0.2
+done
+"$build/tools/crackvis" health "localhost:$render_port" >/dev/null ||
+  die "crackvis-render did not start: $(tail -3 "$out/crackvis-render.log")"
+
+for k in $(seq "$runs"); do
+  echo "run $k of $runs: crackvis bench render (load $(cut -d' ' -f1-3 /proc/loadavg))" >&2
+  cut -d' ' -f1 /proc/loadavg >"$out/client-$k.load"
+  "$build/tools/crackvis" bench render --server "localhost:$render_port" --file "$file" \
+    --size "$size" --seconds "$seconds" --still-frames "$stills" --json \
+    >"$out/client-$k.json" 2>"$out/client-$k.log" ||
+    die "crackvis bench render failed: $(tail -3 "$out/client-$k.log")"
+  echo "run $k of $runs: browser (load $(cut -d' ' -f1-3 /proc/loadavg))" >&2
+  cut -d' ' -f1 /proc/loadavg >"$out/browser-$k.load"
+  CRACKVIS_WEB_URL="https://localhost:$web_port/" CRACKVIS_USER=bench \
+    CRACKVIS_PASSWORD="$password" CRACKVIS_FILE="$file" \
+    CRACKVIS_NODE_MODULES="$build/web/node_modules" BENCH_SIZE="$size" \
+    BENCH_SECONDS="$seconds" BENCH_STILLS="$stills" \
+    node "$here/browser_latency.mjs" >"$out/browser-$k.json" 2>"$out/browser-$k.log" ||
+    die "browser_latency.mjs failed: $(tail -3 "$out/browser-$k.log")"
+done
+
+python3 - "$out" "$runs" <<'EOF'
+import json, statistics, sys
+out, runs = sys.argv[1], int(sys.argv[2])
+client = [json.load(open(f"{out}/client-{k}.json")) for k in range(1, runs + 1)]
+page = [json.load(open(f"{out}/browser-{k}.json")) for k in range(1, runs + 1)]
+load = lambda kind: [float(open(f"{out}/{kind}-{k}.load").read()) for k in range(1, runs + 1)]
+med = lambda values: statistics.median(v for v in values if v is not None)
+rows = [
+    ("drag: event to frame, p50 ms", med(c["event_to_frame_ms"]["p50"] for c in client),
+     med(p["drag_event_to_paint_ms"]["p50"] for p in page)),
+    ("drag: event to frame, p95 ms", med(c["event_to_frame_ms"]["p95"] for c in client),
+     med(p["drag_event_to_paint_ms"]["p95"] for p in page)),
+    ("still move: event to full-resolution frame, p50 ms",
+     med(c["full_resolution_event_to_frame_ms"]["p50"] for c in client),
+     med(p["still_event_to_paint_ms"]["p50"] for p in page)),
+    ("still move: event to full-resolution frame, p95 ms",
+     med(c["full_resolution_event_to_frame_ms"]["p95"] for c in client),
+     med(p["still_event_to_paint_ms"]["p95"] for p in page)),
+    ("decode p50 ms", med(c["client_decode_ms"]["p50"] for c in client), med(p["decode_ms"]["p50"] for p in page)),
+]
+print(f"browser page vs crackvis bench render (the C++ client library), {page[0]['size']}, "
+      f"medians of {runs} alternating runs ({page[0]['chromium']})")
+print(f"  {'':<52} {'C++ client':>11} {'browser':>9} {'browser - client':>17}")
+for name, c, p in rows:
+    print(f"  {name:<52} {c:11.1f} {p:9.1f} {p - c:17.1f}")
+print(f"  browser: first frame after choosing the file     {med(p['first_frame_ms'] for p in page):9.0f} ms"
+      f"  (runs: {[p['first_frame_ms'] for p in page]})")
+print(f"  browser: frames per second while dragging        {med(p['drag_fps'] for p in page):9.1f}")
+print(f"  browser: bitrate while dragging                  {med(p['bitrate_mbps'] for p in page):9.2f} Mbit/s")
+print(f"  browser: Chromium's CPU time per painted frame   {med(p['browser_cpu_ms_per_frame'] for p in page):9.2f} ms (all its processes)")
+print(f"  load before each run (1 min): client {load('client')}, browser {load('browser')}")
+goal = rows[0][2] <= rows[0][1] + 5 and rows[2][2] <= rows[2][1] + 5
+print(f"  goal browser p50 <= client p50 + 5 ms (drag and still): {'met' if goal else 'NOT met'}; "
+      f"first frame <= 1 s: {'met' if med(p['first_frame_ms'] for p in page) <= 1000 else 'NOT met'}")
+json.dump({"client": client, "browser": page, "load": {"client": load("client"), "browser": load("browser")}},
+          open(f"{out}/summary.json", "w"), indent=1)
+EOF

@@ -1,0 +1,154 @@
+// One run of the browser page's latency benchmark (tools/bench/browser-vs-client.sh runs it
+// alternately with `crackvis bench render`): headless Chromium signs in, chooses FILE (timing
+// the first painted frame), sizes the page so that the view is exactly WIDTHxHEIGHT, drags the
+// camera with rotate moves at RATE Hz for SECONDS, then makes STILLS isolated still camera moves
+// (CameraEvent.still, answered by a full-resolution frame). Latencies are the page's own:
+// performance.now() when the event is sent, and when the first frame reflecting it is painted
+// on the canvas (after WebCodecs decoded it). Prints one JSON object.
+//
+// Environment: CRACKVIS_WEB_URL, CRACKVIS_USER, CRACKVIS_PASSWORD, CRACKVIS_FILE,
+// CRACKVIS_NODE_MODULES (where playwright-core is: the build tree's web/node_modules),
+// CRACKVIS_CHROMIUM (default /usr/bin/chromium); BENCH_SIZE (1280x720), BENCH_SECONDS (5),
+// BENCH_RATE (60), BENCH_STILLS (10).
+import { createRequire } from "node:module";
+import path from "node:path";
+
+const env = (name, fallback) => {
+  const value = process.env[name] ?? fallback;
+  if (value === undefined) throw new Error(`${name} is not set`);
+  return value;
+};
+const require = createRequire(path.join(env("CRACKVIS_NODE_MODULES"), "noop.js"));
+const { chromium } = require("playwright-core");
+
+const [width, height] = env("BENCH_SIZE", "1280x720").split("x").map(Number);
+const seconds = Number(env("BENCH_SECONDS", "5"));
+const rate = Number(env("BENCH_RATE", "60"));
+const stills = Number(env("BENCH_STILLS", "10"));
+
+function percentile(values, p) {
+  if (values.length === 0) return null;
+  const sorted = [...values].sort((a, b) => a - b);
+  return sorted[Math.min(sorted.length - 1, Math.floor((p / 100) * sorted.length))];
+}
+const summary = (values) => ({
+  n: values.length,
+  p50: percentile(values, 50),
+  p95: percentile(values, 95),
+});
+const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
+
+// CPU time of every Chromium process (browser, renderer, GPU, utility), in ms.
+async function browserCpuMs(cdp) {
+  const { processInfo } = await cdp.send("SystemInfo.getProcessInfo");
+  return processInfo.reduce((sum, p) => sum + p.cpuTime * 1000, 0);
+}
+
+const browser = await chromium.launch({
+  executablePath: env("CRACKVIS_CHROMIUM", "/usr/bin/chromium"),
+  // BENCH_CHROMIUM_ARGS: extra flags, space-separated (to compare settings).
+  args: ["--no-sandbox", ...(process.env.BENCH_CHROMIUM_ARGS ?? "").split(" ").filter(Boolean)],
+});
+try {
+  const context = await browser.newContext({
+    ignoreHTTPSErrors: true,
+    viewport: { width: 1280, height: 720 },
+  });
+  const page = await context.newPage();
+  const cdp = await browser.newBrowserCDPSession();
+  const hook = (body, arg) => page.evaluate(body, arg);
+
+  await page.goto(env("CRACKVIS_WEB_URL"));
+  await page.fill("#sign-in-user", env("CRACKVIS_USER"));
+  await page.fill("#sign-in-password", env("CRACKVIS_PASSWORD"));
+  await page.press("#sign-in-password", "Enter");
+  const file = env("CRACKVIS_FILE");
+  const entry = page.locator(`.file[data-path="${file}"]`);
+  await entry.waitFor();
+  // The view (the canvas's box) gets exactly width x height: the window
+  // grows by what the page's panels take.
+  const box = await page.locator("#view").boundingBox();
+  await page.setViewportSize({
+    width: Math.round(1280 + width - box.width),
+    height: Math.round(720 + height - box.height),
+  });
+
+  // A first frame within 1 s of choosing a file (the goal): from the
+  // double click that opens it to its first frame painted.
+  const chosen = Date.now();
+  await entry.dblclick();
+  await page.waitForFunction(() => window.crackvisTest?.framesPainted > 0, null, {
+    timeout: 60000,
+  });
+  const firstFrameMs = Date.now() - chosen;
+  await page.waitForFunction(
+    ([w, h]) => {
+      const f = window.crackvisTest.lastFrame;
+      return f && f.width === w && f.height === h && f.fullResolution;
+    },
+    [width, height],
+    { timeout: 30000 },
+  );
+  await sleep(1000);
+
+  // The drag: rotate moves at `rate` Hz, as `crackvis bench render` sends them.
+  const view = await page.locator("#view").boundingBox();
+  const cx = view.x + view.width / 2;
+  const cy = view.y + view.height / 2;
+  await hook(() => {
+    window.crackvisTest.latencies.length = 0;
+  });
+  const cpuBefore = await browserCpuMs(cdp);
+  const framesBefore = await hook(() => window.crackvisTest.framesPainted);
+  await page.mouse.move(cx, cy);
+  await page.mouse.down();
+  const moves = Math.round(seconds * rate);
+  const start = Date.now();
+  for (let i = 1; i <= moves; ++i) {
+    const angle = (2 * Math.PI * i) / (rate * 2);
+    await page.mouse.move(cx + 0.2 * view.width * Math.sin(angle), cy + 0.1 * view.height * Math.sin(2 * angle));
+    const wait = start + (i * 1000) / rate - Date.now();
+    if (wait > 0) await sleep(wait);
+  }
+  await page.mouse.up();
+  await sleep(500);
+  const dragMs = Date.now() - start;
+  const dragged = await hook(() => ({
+    latencies: [...window.crackvisTest.latencies],
+    frames: window.crackvisTest.framesPainted,
+    stats: window.crackvisTest.stats,
+    decodeMs: [...window.crackvisTest.decodeMs],
+  }));
+  const cpuAfter = await browserCpuMs(cdp);
+  const dragFrames = dragged.frames - framesBefore;
+
+  // Still moves: one at a time, each waiting for its full-resolution frame.
+  await sleep(500);
+  await hook(() => {
+    window.crackvisTest.latencies.length = 0;
+  });
+  for (let i = 0; i < stills; ++i) {
+    const before = await hook(() => window.crackvisTest.latencies.length);
+    await hook(() => window.crackvisTest.stillCamera(1, 0.05, 0));
+    await page.waitForFunction((n) => window.crackvisTest.latencies.length > n, before, {
+      timeout: 30000,
+    });
+    await sleep(200);
+  }
+  const still = await hook(() => [...window.crackvisTest.latencies]);
+
+  const result = {
+    size: `${width}x${height}`,
+    first_frame_ms: firstFrameMs,
+    drag_event_to_paint_ms: summary(dragged.latencies),
+    still_event_to_paint_ms: summary(still),
+    drag_fps: (dragFrames * 1000) / dragMs,
+    decode_ms: summary(dragged.decodeMs),
+    bitrate_mbps: dragged.stats ? dragged.stats.bitrateBps / 1e6 : null,
+    browser_cpu_ms_per_frame: dragFrames > 0 ? (cpuAfter - cpuBefore) / dragFrames : null,
+    chromium: browser.version(),
+  };
+  console.log(JSON.stringify(result));
+} finally {
+  await browser.close();
+}
