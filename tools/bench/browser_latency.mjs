@@ -145,6 +145,7 @@ try {
     drag_fps: (dragFrames * 1000) / dragMs,
     decode_ms: summary(dragged.decodeMs),
     bitrate_mbps: dragged.stats ? dragged.stats.bitrateBps / 1e6 : null,
+    server_frames_dropped: dragged.stats ? dragged.stats.framesDropped : null,
     browser_cpu_ms_per_frame: dragFrames > 0 ? (cpuAfter - cpuBefore) / dragFrames : null,
     chromium: browser.version(),
   };

@@ -783,6 +783,10 @@ void WebFrontDoor::Impl::accept() {
       return;
     }
     beast::error_code ignored;
+    // Frames go out as soon as they are written: with Nagle's algorithm a
+    // frame's last segment would wait for the browser's delayed ACK (up to
+    // 40 ms), as gRPC avoids by setting the same option.
+    socket.set_option(tcp::no_delay(true), ignored);
     const tcp::endpoint remote = socket.remote_endpoint(ignored);
     const std::string peer = peerName(remote);
     if (!connections.take(peer.substr(0, peer.rfind(':')))) {
