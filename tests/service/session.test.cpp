@@ -238,4 +238,60 @@ TEST_CASE("camera moves queued back to back add up into one", "[session][render]
   CHECK(stats.events <= 1);
 }
 
+TEST_CASE("a drag whose moves come in bunches is not broken up by full-resolution frames",
+          "[session][render]") {
+  const Fixture fixture;
+  service::SessionLimits limits;
+  limits.refineAfterMs = 50.0;
+  limits.maxReduction = 4;
+  // A budget no frame meets: every move is drawn reduced, so the only
+  // full-resolution frames are the refinements after a pause.
+  limits.interactiveFrameMs = 1.0;
+  pipeline::PipelineDescription view = smallView(0);
+  view.view.width = 320;
+  view.view.height = 240;
+  auto opened = Session::open("s6", view, fixture.opener(-1), limits);
+  REQUIRE(opened);
+  Session& session = **opened;
+  const std::uint64_t attachment = session.attach();
+  int full = 0;
+  int reduced = 0;
+  // Takes every frame published until `until`, counting how each was drawn.
+  auto drain = [&](service::Clock::time_point until) {
+    service::RenderedFrame frame;
+    SessionNotice notice;
+    while (service::Clock::now() < until) {
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(until - service::Clock::now());
+      const auto next =
+          session.next(attachment, std::max(left, std::chrono::milliseconds(1)), frame, notice);
+      if (next == Session::Next::kFrame) {
+        (frame.fullResolution ? full : reduced)++;
+      }
+    }
+  };
+  drain(service::Clock::now() + std::chrono::milliseconds(500));  // the first frame
+  full = 0;
+  // A drag of 16 bunches: three moves 10 ms apart, then 120 ms without any,
+  // as a browser busy painting delivers them. Each gap is longer than
+  // refine_after_ms, so a fixed wait would refine in every one of them.
+  std::uint64_t id = 0;
+  for (int bunch = 0; bunch < 16; ++bunch) {
+    for (int move = 0; move < 3; ++move) {
+      session.post({++id, service::Clock::now(),
+                    service::CameraEvent{render::CameraMove::kRotate, 0.01, 0.0}});
+      drain(service::Clock::now() + std::chrono::milliseconds(10));
+    }
+    drain(service::Clock::now() + std::chrono::milliseconds(120));
+  }
+  INFO("full-resolution frames during the drag: " << full << ", reduced: " << reduced);
+  CHECK(reduced > 0);
+  CHECK(full <= 4);  // the wait grows past the gaps after a refinement or two
+  // At rest, the full-resolution frame still follows.
+  full = 0;
+  drain(service::Clock::now() + std::chrono::milliseconds(1500));
+  CHECK(full >= 1);
+  session.detach(attachment);
+}
+
 }  // namespace crackvis

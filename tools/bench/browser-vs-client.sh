@@ -17,13 +17,16 @@ readonly build
 usage() {
   cat <<EOF
 usage: tools/bench/browser-vs-client.sh DATA_ROOT FILE [--runs R] [--size WxH] [--seconds S]
-                                        [--stills N] [--out DIR]
+                                        [--stills N] [--pin] [--out DIR]
 
 Alternates R runs (default 5) of 'crackvis bench render' and of the browser page in headless
 Chromium on DATA_ROOT/FILE's last step at WxH (default 1280x720): a drag of S seconds (default 5)
 with rotate moves at 60 Hz, then N (default 10) still camera moves answered at full resolution.
 Prints p50 and p95 of both latencies for both clients, the browser's first frame after choosing
 the file, its decode time, bitrate and Chromium's CPU time per frame.
+
+--pin runs the services on CPU 0 and each client on CPU 1 (taskset), as a client on a machine of
+its own would leave the server's CPU alone; without it all share every CPU.
 
 Starts its own crackvis-data and crackvis-render (with --web-listen and a user for the page) from
 $build (CRACKVIS_BUILD) on free loopback ports with the development certificates.
@@ -40,6 +43,8 @@ size=1280x720
 seconds=5
 stills=10
 out=
+server_cpus=()
+client_cpus=()
 positional=()
 while (($#)); do
   case $1 in
@@ -49,6 +54,7 @@ while (($#)); do
     --seconds) seconds=${2:?--seconds needs a value}; shift 2 ;;
     --stills) stills=${2:?--stills needs a value}; shift 2 ;;
     --out) out=${2:?--out needs a value}; shift 2 ;;
+    --pin) server_cpus=(taskset -c 0); client_cpus=(taskset -c 1); shift ;;
     -*) die "unknown option $1 (see --help)" ;;
     *) positional+=("$1"); shift ;;
   esac
@@ -98,10 +104,10 @@ trap 'cleanup; if [[ -n $out_is_temp ]]; then rm -rf "$out"; fi' EXIT
 data_port=$(free_port)
 render_port=$(free_port)
 web_port=$(free_port)
-"$build/dataservice/crackvis-data" --root "$data_root" --listen "127.0.0.1:$data_port" \
+"${server_cpus[@]}" "$build/dataservice/crackvis-data" --root "$data_root" --listen "127.0.0.1:$data_port" \
   --access-log '' >"$out/crackvis-data.log" 2>&1 &
 pids+=($!)
-"$build/server/app/crackvis-render" --listen "127.0.0.1:$render_port" \
+"${server_cpus[@]}" "$build/server/app/crackvis-render" --listen "127.0.0.1:$render_port" \
   --data-server "localhost:$data_port" --users-from "$out/users.json" \
   --web-listen "127.0.0.1:$web_port" --web-root "$build/web/dist" --access-log '' \
   >"$out/crackvis-render.log" 2>&1 &
@@ -116,7 +122,7 @@ done
 for k in $(seq "$runs"); do
   echo "run $k of $runs: crackvis bench render (load $(cut -d' ' -f1-3 /proc/loadavg))" >&2
   cut -d' ' -f1 /proc/loadavg >"$out/client-$k.load"
-  "$build/tools/crackvis" bench render --server "localhost:$render_port" --file "$file" \
+  "${client_cpus[@]}" "$build/tools/crackvis" bench render --server "localhost:$render_port" --file "$file" \
     --size "$size" --seconds "$seconds" --still-frames "$stills" --json \
     >"$out/client-$k.json" 2>"$out/client-$k.log" ||
     die "crackvis bench render failed: $(tail -3 "$out/client-$k.log")"
@@ -126,7 +132,7 @@ for k in $(seq "$runs"); do
     CRACKVIS_PASSWORD="$password" CRACKVIS_FILE="$file" \
     CRACKVIS_NODE_MODULES="$build/web/node_modules" BENCH_SIZE="$size" \
     BENCH_SECONDS="$seconds" BENCH_STILLS="$stills" \
-    node "$here/browser_latency.mjs" >"$out/browser-$k.json" 2>"$out/browser-$k.log" ||
+    "${client_cpus[@]}" node "$here/browser_latency.mjs" >"$out/browser-$k.json" 2>"$out/browser-$k.log" ||
     die "browser_latency.mjs failed: $(tail -3 "$out/browser-$k.log")"
 done
 

@@ -55,6 +55,30 @@ try {
     viewport: { width: 1280, height: 720 },
   });
   const page = await context.newPage();
+  // Frames the server sent (ServerMessage.frame: field 1), counted as they
+  // arrive, beside the frames the page painted.
+  let framesReceived = 0;
+  const reductions = {};
+  page.on("websocket", (socket) =>
+    socket.on("framereceived", ({ payload }) => {
+      if (typeof payload === "string" || payload[0] !== 0x0a) return;
+      framesReceived++;
+      // Frame's leading varint fields (1..8); field 7 is the reduction.
+      let i = 1;
+      while (payload[i] & 0x80) i++;
+      i++;
+      while (i < payload.length && (payload[i] & 7) === 0 && payload[i] >> 3 <= 8) {
+        const tag = payload[i++] >> 3;
+        let value = 0;
+        for (let shift = 0; ; shift += 7) {
+          const b = payload[i++];
+          value += (b & 0x7f) * 2 ** shift;
+          if (!(b & 0x80)) break;
+        }
+        if (tag === 7) reductions[value] = (reductions[value] ?? 0) + 1;
+      }
+    }),
+  );
   const cdp = await browser.newBrowserCDPSession();
   const hook = (body, arg) => page.evaluate(body, arg);
 
@@ -99,6 +123,7 @@ try {
     window.crackvisTest.latencies.length = 0;
   });
   const cpuBefore = await browserCpuMs(cdp);
+  const receivedBefore = framesReceived;
   const framesBefore = await hook(() => window.crackvisTest.framesPainted);
   await page.mouse.move(cx, cy);
   await page.mouse.down();
@@ -120,6 +145,7 @@ try {
     decodeMs: [...window.crackvisTest.decodeMs],
   }));
   const cpuAfter = await browserCpuMs(cdp);
+  const dragReceived = framesReceived - receivedBefore;
   const dragFrames = dragged.frames - framesBefore;
 
   // Still moves: one at a time, each waiting for its full-resolution frame.
@@ -143,6 +169,8 @@ try {
     drag_event_to_paint_ms: summary(dragged.latencies),
     still_event_to_paint_ms: summary(still),
     drag_fps: (dragFrames * 1000) / dragMs,
+    drag_fps_received: (dragReceived * 1000) / dragMs,
+    reductions_received: reductions,
     decode_ms: summary(dragged.decodeMs),
     bitrate_mbps: dragged.stats ? dragged.stats.bitrateBps / 1e6 : null,
     server_frames_dropped: dragged.stats ? dragged.stats.framesDropped : null,

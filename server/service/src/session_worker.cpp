@@ -126,7 +126,28 @@ std::string Session::Worker::viewXml() const {
   return pipeline::toXml(d);
 }
 
+// Input that arrives in bunches (a browser whose main thread is busy
+// painting, a network that holds packets back) leaves gaps longer than
+// refine_after_ms inside one drag. A full-resolution frame started in such a
+// gap holds the next move up for its whole render time, and a drag then
+// alternates between reduced and full frames. So a refinement that a move
+// follows within kPrematureRefine was premature: the wait doubles, up to 8
+// times the configured one. A move after a second's rest starts a new drag
+// with the configured wait.
+namespace {
+constexpr auto kPrematureRefine = std::chrono::milliseconds(250);
+constexpr auto kNewDrag = std::chrono::seconds(1);
+constexpr double kMaxRefineStretch = 8.0;
+}  // namespace
+
 void Session::Worker::interacted(const SessionEvent& event) {
+  const double configured = session.m_limits.refineAfterMs;
+  if (event.received - lastInteraction > kNewDrag) {
+    refineDelayMs = configured;
+  } else if (refinedAt && event.received - *refinedAt < kPrematureRefine) {
+    refineDelayMs = std::min(2.0 * refineDelayMs, kMaxRefineStretch * configured);
+  }
+  refinedAt.reset();
   lastInteraction = event.received;
   lastEventReceived = event.received;
   dirty = true;
@@ -294,6 +315,7 @@ void Session::Worker::renderIfDirty() {
   const auto now = Clock::now();
   if (refineAt && now >= *refineAt) {
     refineAt.reset();
+    refinedAt = now;
     forceFull = true;
     dirty = true;
   }
@@ -301,8 +323,8 @@ void Session::Worker::renderIfDirty() {
     return;
   }
   const bool interacting =
-      playing || std::chrono::duration<double, std::milli>(now - lastInteraction).count() <
-                     session.m_limits.refineAfterMs;
+      playing ||
+      std::chrono::duration<double, std::milli>(now - lastInteraction).count() < refineDelayMs;
   const int factor = interacting && !forceFull ? reduction.factor() : 1;
   RenderedFrame frame;
   frame.step = scene->step();
@@ -331,9 +353,8 @@ void Session::Worker::renderIfDirty() {
   frame.particles = particleDrawing();
   if (factor > 1) {
     render::resample(image, width, height, frame.image);
-    refineAt = lastInteraction +
-               std::chrono::duration_cast<Clock::duration>(
-                   std::chrono::duration<double, std::milli>(session.m_limits.refineAfterMs));
+    refineAt = lastInteraction + std::chrono::duration_cast<Clock::duration>(
+                                     std::chrono::duration<double, std::milli>(refineDelayMs));
   } else {
     frame.image = std::move(image);
   }

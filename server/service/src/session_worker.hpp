@@ -41,6 +41,11 @@ struct Session::Worker {
   bool forceFull = true;
   bool keyframe = true;
   std::optional<Clock::time_point> refineAt;
+  // The wait for the full-resolution frame after the last move, adapted to
+  // the client's input (refineDelay() in session_worker.cpp): from the
+  // configured refine_after_ms up to 8 times it.
+  double refineDelayMs = 0.0;
+  std::optional<Clock::time_point> refinedAt;  // the last refinement the wait led to
   Clock::time_point lastInteraction = Clock::now() - std::chrono::hours(1);
   ReductionPolicy reduction;  // of the frames rendered while interacting or playing
   std::uint64_t lastEventId = 0;
@@ -51,7 +56,8 @@ struct Session::Worker {
   // camera fitted to a newly opened file is known only after a render).
   bool stateDue = false;
 
-  explicit Worker(Session& owner) : session(owner), reduction(owner.m_limits) {}
+  explicit Worker(Session& owner)
+      : session(owner), reduction(owner.m_limits), refineDelayMs(owner.m_limits.refineAfterMs) {}
 
   int stepCount() const { return scene->stepCount(); }
   const pipeline::PipelineDescription& description() const { return scene->description(); }

@@ -660,10 +660,9 @@ Response WebFrontDoor::Impl::signIn(const Request& request, const std::string& p
   const auto start = rpc::CallClock::now();
   auto caller = service.authenticator().authenticate(
       std::string(request[http::field::authorization]), "", peer);
-  Result<std::string> cookie = caller.status();
+  Result<std::string> cookie = caller ? signIns.add(*caller) : Result<std::string>(caller.status());
   if (caller) {
     record.user = caller->name;
-    cookie = signIns.add(*caller);
   }
   rpc::recordCall(service.accessLog(), record, start, cookie.status());
   if (!cookie) {
