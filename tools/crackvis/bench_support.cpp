@@ -66,12 +66,9 @@ double mean(const std::vector<double>& values) {
 }
 
 nlohmann::json summaryJson(const std::vector<double>& values) {
-  return {{"count", values.size()},
-          {"mean", mean(values)},
-          {"p50", percentile(values, 50)},
-          {"p90", percentile(values, 90)},
-          {"p95", percentile(values, 95)},
-          {"p99", percentile(values, 99)}};
+  return {{"count", values.size()},        {"mean", mean(values)},
+          {"p50", percentile(values, 50)}, {"p90", percentile(values, 90)},
+          {"p95", percentile(values, 95)}, {"p99", percentile(values, 99)}};
 }
 
 }  // namespace crackvis::cli
