@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The browser page against the C++ client on the same view, alternately: run k
-# of `crackvis bench render` (the gRPC client library crackvis-client is built
-# on: its event-to-frame latency, decoded with libavcodec), then run k of
+# of `crackvis bench render` (a C++ gRPC client decoding with crackvis-client's
+# decoder, libavcodec: its event-to-frame latency), then run k of
 # tools/bench/browser_latency.mjs (headless Chromium through the web front
 # door: event-to-painted-frame latency, decoded with WebCodecs and drawn on the
 # canvas), for each k, with the load average beside every run; then the
@@ -156,7 +156,7 @@ rows = [
      med(p["still_event_to_paint_ms"]["p95"] for p in page)),
     ("decode p50 ms", med(c["client_decode_ms"]["p50"] for c in client), med(p["decode_ms"]["p50"] for p in page)),
 ]
-print(f"browser page vs crackvis bench render (the C++ client library), {page[0]['size']}, "
+print(f"browser page vs crackvis bench render (C++ gRPC client), {page[0]['size']}, "
       f"medians of {runs} alternating runs ({page[0]['chromium']})")
 print(f"  {'':<52} {'C++ client':>11} {'browser':>9} {'browser - client':>17}")
 for name, c, p in rows:
