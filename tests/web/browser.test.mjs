@@ -396,6 +396,34 @@ await check("another user's folder is refused with a message; the server goes on
   await waitFor(`Describe of ${file} afterwards`, ownFile, file);
 });
 
+await check("a file name with markup in it is shown as text, never parsed", async () => {
+  const markupFile = env("CRACKVIS_MARKUP_FILE");
+  await page.fill("#file-path", "alice");
+  await page.click("#list-path");
+  const listed = (name) =>
+    [...document.querySelectorAll("#files .file")].some((e) => e.dataset.path === name);
+  await waitFor("the file with markup in its name listed", listed, markupFile);
+  const seen = await page.evaluate((name) => {
+    const entry = [...document.querySelectorAll("#files .file")].find((e) => e.dataset.path === name);
+    return {
+      text: entry.textContent,
+      images: document.querySelectorAll("#files img, #description img").length,
+      pwned: window.crackvisPwned === 1,
+    };
+  }, markupFile);
+  if (!seen.text.includes(markupFile)) fail(`the entry reads '${seen.text}', not the name`);
+  if (seen.images !== 0 || seen.pwned) fail("the name was parsed as HTML");
+  await page.fill("#file-path", markupFile);
+  await page.click("#describe-path");
+  const described = (name) => document.getElementById("description").textContent.startsWith(name);
+  await waitFor("Describe of the file with markup in its name", described, markupFile);
+  const after = await page.evaluate(() => ({
+    images: document.querySelectorAll("img").length,
+    pwned: window.crackvisPwned === 1,
+  }));
+  if (after.images !== 0 || after.pwned) fail("the description parsed the name as HTML");
+});
+
 await check("a foreign Origin is refused (403) for sign-in and the stream's upgrade", async () => {
   const origin = url.origin;
   const evil = "https://evil.example";

@@ -59,6 +59,9 @@ root=$work/data
 mkdir -p "$root/alice" "$root/bob"
 "$crackvis" sim cuboid3d --set A --scale 0.3 --quiet -o "$root/alice/cuboidA.h5"
 cp "$root/alice/cuboidA.h5" "$root/bob/cuboidB.h5"
+# A name with markup in it: the page must show it as text.
+markup_name='<img src=x onerror="window.crackvisPwned=1">.h5'
+cp "$root/alice/cuboidA.h5" "$root/alice/$markup_name"
 
 alice_password=$(openssl rand -hex 12)
 bob_password=$(openssl rand -hex 12)
@@ -114,6 +117,7 @@ CRACKVIS_USER=alice \
 CRACKVIS_PASSWORD="$alice_password" \
 CRACKVIS_FILE=alice/cuboidA.h5 \
 CRACKVIS_FOREIGN_FILE=bob/cuboidB.h5 \
+CRACKVIS_MARKUP_FILE="alice/$markup_name" \
 CRACKVIS_ARTEFACTS="$artefacts" \
 CRACKVIS_NODE_MODULES="$node_modules" \
 CRACKVIS_CHROMIUM="$chromium" \
