@@ -463,6 +463,44 @@ TEST_CASE("the web front door needs users and its page", "[web]") {
   CHECK(noPage.status().message().find("no index.html") != std::string::npos);
 }
 
+TEST_CASE("a plaintext web front door serves loopback only, without HSTS or Secure cookies",
+          "[web]") {
+  auto services = crackvis::testing::startServices();
+  auto config = crackvis::testing::renderConfig(*services.data);
+  config.users = {user("alice", "alice-pw")};
+  config.insecure = true;
+  config.web.root = pageRoot().path().string();
+  config.web.listen = "0.0.0.0:0";
+  auto exposed = crackvis::service::RenderServer::start(config);
+  REQUIRE_FALSE(exposed);
+  CHECK(exposed.status().message().find("loopback") != std::string::npos);
+
+  config.web.listen = "127.0.0.1:0";
+  auto render = crackvis::service::RenderServer::start(config);
+  REQUIRE(render);
+  const int port = (*render)->webPort();
+  net::io_context io;
+  beast::tcp_stream stream(io);
+  tcp::resolver resolver(io);
+  stream.connect(resolver.resolve("127.0.0.1", std::to_string(port)));
+  http::request<http::string_body> login{http::verb::post, "/api/login", 11};
+  login.set(http::field::host, fmt::format("localhost:{}", port));
+  login.set(http::field::origin, fmt::format("http://localhost:{}", port));
+  login.set(http::field::authorization, basic("alice", "alice-pw"));
+  login.prepare_payload();
+  http::write(stream, login);
+  beast::flat_buffer buffer;
+  Response response;
+  http::read(stream, buffer, response);
+  CHECK(response.result() == http::status::ok);
+  const std::string cookie(response[http::field::set_cookie]);
+  CHECK(cookie.find("HttpOnly") != std::string::npos);
+  CHECK(cookie.find("Secure") == std::string::npos);  // no TLS to keep it to
+  CHECK(response["Strict-Transport-Security"].empty());
+  CHECK(std::string(response["Content-Security-Policy"]).find("script-src 'self'") !=
+        std::string::npos);
+}
+
 TEST_CASE("web sign-ins expire, are bounded, and cookies and origins parse strictly", "[web]") {
   using crackvis::service::WebSignIns;
   WebSignIns::Limits limits;
