@@ -315,6 +315,9 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection<Stream
   void upgrade(Request request);
 
   void send(Response response, bool close) {
+    // A fresh time limit: the request's may have run out while a slow call
+    // (OpenSession of a large file) was answered on the worker pool.
+    beast::get_lowest_layer(m_stream).expires_after(kRequestTimeout);
     auto held = std::make_shared<Response>(std::move(response));
     held->keep_alive(!close && held->keep_alive());
     http::async_write(
