@@ -7,6 +7,8 @@
 #include <fstream>
 #include <optional>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <boost/asio/connect.hpp>
 #include <boost/asio/ssl.hpp>
@@ -461,6 +463,53 @@ TEST_CASE("the web front door needs users and its page", "[web]") {
   auto noPage = crackvis::service::RenderServer::start(config);
   REQUIRE_FALSE(noPage);
   CHECK(noPage.status().message().find("no index.html") != std::string::npos);
+}
+
+TEST_CASE("one user's slow web calls hold at most their share of the call workers", "[web]") {
+  // A data service that takes connections and never answers: every call
+  // that asks it waits for the data client's time limit.
+  net::io_context io;
+  tcp::acceptor silent(io, tcp::endpoint(net::ip::make_address("127.0.0.1"), 0));
+  auto services = crackvis::testing::startServices();
+  auto config = crackvis::testing::renderConfig(*services.data);
+  config.data.target = fmt::format("localhost:{}", silent.local_endpoint().port());
+  config.data.timeoutSeconds = 3.0;
+  config.users = {user("alice", "alice-pw"), user("bob", "bob-pw")};
+  config.web.listen = "127.0.0.1:0";
+  config.web.root = pageRoot().path().string();
+  auto render = crackvis::service::RenderServer::start(config);
+  REQUIRE(render);
+  WebServices web;
+  web.port = (*render)->webPort();
+  WebConnection connection(web.port);
+  const std::string alice = signIn(connection, web.origin(), "alice", "alice-pw");
+  const std::string bob = signIn(connection, web.origin(), "bob", "bob-pw");
+  auto listFiles = [&](const std::string& cookie, const std::string& folder) {
+    WebConnection own(web.port);
+    crackvis::v1::ListFilesRequest request;
+    request.set_folder(folder);
+    return own.request(http::verb::post, call("ListFiles"), request.SerializeAsString(),
+                       web.origin(), "", cookie);
+  };
+  std::vector<std::thread> waiting;
+  std::vector<http::status> ended(4);
+  for (std::size_t i = 0; i < ended.size(); ++i) {
+    waiting.emplace_back([&, i] { ended[i] = listFiles(alice, "alice").result(); });
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const Response refused = listFiles(alice, "alice");
+  CHECK(refused.result() == http::status::too_many_requests);
+  CHECK(refused.body().find("user 'alice' already has 4 calls waiting or running") !=
+        std::string::npos);
+  // Bob's call is taken (it then waits for the silent data service too).
+  CHECK(listFiles(bob, "bob").result() != http::status::too_many_requests);
+  for (auto& thread : waiting) {
+    thread.join();
+  }
+  for (const http::status status : ended) {
+    CHECK(status != http::status::too_many_requests);
+    CHECK(status != http::status::ok);
+  }
 }
 
 TEST_CASE("a plaintext web front door serves loopback only, without HSTS or Secure cookies",

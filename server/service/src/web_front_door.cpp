@@ -60,6 +60,10 @@ constexpr std::uint32_t kMaxHeaderBytes = 16 * 1024;
 constexpr int kMaxConnections = 1024;
 constexpr int kMaxConnectionsPerAddress = 64;
 constexpr int kCallWorkers = 8;
+// Of the calls waiting for or running on those workers, one caller's: a user
+// who floods slow calls (OpenSession of a large file) holds at most half the
+// workers, and the others' calls still run.
+constexpr int kMaxCallsPerCaller = 4;
 constexpr std::size_t kMaxPageBytes = 32 * 1024 * 1024;
 constexpr auto kRequestTimeout = std::chrono::seconds(30);
 constexpr auto kCallDeadline = std::chrono::seconds(60);
@@ -170,6 +174,31 @@ std::string closeReason(const std::string& message) {
   return message.substr(0, end);
 }
 
+// Calls waiting or running on the worker pool, per caller (a user, or an
+// address for sign-ins).
+class CallSlots {
+ public:
+  bool take(const std::string& caller) {
+    std::lock_guard lock(m_mutex);
+    int& held = m_held[caller];
+    if (held >= kMaxCallsPerCaller) {
+      return false;
+    }
+    ++held;
+    return true;
+  }
+  void give(const std::string& caller) {
+    std::lock_guard lock(m_mutex);
+    if (--m_held[caller] <= 0) {
+      m_held.erase(caller);
+    }
+  }
+
+ private:
+  std::mutex m_mutex;
+  std::map<std::string, int> m_held;
+};
+
 // Connections, counted in total and per address: one address cannot hold
 // every socket the process may open.
 class ConnectionCount {
@@ -209,6 +238,7 @@ struct WebFrontDoor::Impl {
   Page page;
   WebSignIns signIns;
   ConnectionCount connections;
+  CallSlots callSlots;
   // Before the io_context: its pending handlers, destroyed with it, may
   // still hold TLS streams of this context.
   ssl::context sslContext{ssl::context::tls_server};
@@ -304,8 +334,20 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection<Stream
     }
     // Calls and sign-ins block (crackvis-data, PBKDF2): on the worker pool,
     // the response handed back to this connection's strand.
-    net::post(m_door.workers, [self = this->shared_from_this(), request = std::move(request)] {
+    const auto caller = m_door.signedIn(request);
+    std::string slot = caller ? "user " + caller->name : "address " + address();
+    if (!m_door.callSlots.take(slot)) {
+      return send(m_door.error(request, resourceExhausted(fmt::format(
+                                            "{} already has {} calls waiting or running at the "
+                                            "web front door, the limit per caller; retry later",
+                                            caller ? "user '" + caller->name + "'" : m_peer,
+                                            kMaxCallsPerCaller))),
+                  false);
+    }
+    net::post(m_door.workers, [self = this->shared_from_this(), request = std::move(request),
+                               slot = std::move(slot)] {
       Response response = self->m_door.answer(request, self->m_peer);
+      self->m_door.callSlots.give(slot);
       net::post(self->m_stream.get_executor(), [self, response = std::move(response)]() mutable {
         self->send(std::move(response), false);
       });
