@@ -498,6 +498,13 @@ await check("without WebCodecs the page says so in one sentence", async () => {
   await bare.close();
 });
 
+// The policy the server sends (script-src 'self', no inline code) held the
+// whole run: a violation would mean the page needs something it forbids.
+await check("the page broke no Content-Security-Policy rule in any case", async () => {
+  const violations = consoleLines.filter((l) => /Content Security Policy/i.test(l));
+  if (violations.length > 0) fail(`the console says:\n     ${violations.join("\n     ")}`);
+});
+
 // What the cases provoke: 401 before signing in and for the wrong password,
 // 403 and 404 for bob's file and folder.
 const expected = /HTTP 401 .*\/api\/(whoami|login)$|HTTP 40[34] .*\/(Describe|ListFiles)$/;
