@@ -255,11 +255,14 @@ struct WebFrontDoor::Impl {
   int pumps = 0;
 
   void accept();
-  Response answer(const Request& request, const std::string& peer);
+  // `caller`: the request's sign-in, looked up once when it arrived.
+  Response answer(const Request& request, const std::string& peer,
+                  const std::optional<rpc::Caller>& caller);
   Response signIn(const Request& request, const std::string& peer);
   Response signOut(const Request& request);
-  Response whoAmI(const Request& request);
-  Response call(const Request& request, const std::string& peer, const std::string& method);
+  Response whoAmI(const Request& request, const std::optional<rpc::Caller>& caller);
+  Response call(const Request& request, const std::string& peer, const std::string& method,
+                const std::optional<rpc::Caller>& caller);
   std::optional<rpc::Caller> signedIn(const Request& request);
   bool sameOrigin(const Request& request) const;
   Response respond(const Request& request, http::status status, std::string body,
@@ -330,11 +333,11 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection<Stream
       return upgrade(std::move(request));
     }
     if (request.method() == http::verb::get && request.target().rfind("/api/", 0) != 0) {
-      return send(m_door.answer(request, m_peer), false);  // the page: from memory, at once
+      return send(m_door.answer(request, m_peer, std::nullopt), false);  // the page, from memory
     }
     // Calls and sign-ins block (crackvis-data, PBKDF2): on the worker pool,
     // the response handed back to this connection's strand.
-    const auto caller = m_door.signedIn(request);
+    auto caller = m_door.signedIn(request);
     std::string slot = caller ? "user " + caller->name : "address " + address();
     if (!m_door.callSlots.take(slot)) {
       return send(m_door.error(request, resourceExhausted(fmt::format(
@@ -345,8 +348,8 @@ class HttpConnection : public std::enable_shared_from_this<HttpConnection<Stream
                   false);
     }
     net::post(m_door.workers, [self = this->shared_from_this(), request = std::move(request),
-                               slot = std::move(slot)] {
-      Response response = self->m_door.answer(request, self->m_peer);
+                               slot = std::move(slot), caller = std::move(caller)] {
+      Response response = self->m_door.answer(request, self->m_peer, caller);
       self->m_door.callSlots.give(slot);
       net::post(self->m_stream.get_executor(), [self, response = std::move(response)]() mutable {
         self->send(std::move(response), false);
@@ -418,7 +421,7 @@ class StreamConnection : public std::enable_shared_from_this<StreamConnection<St
     m_ws.binary(true);
     m_ws.async_accept(request, [self = this->shared_from_this()](beast::error_code error) {
       if (error) {
-        return self->finish(unavailable("the WebSocket handshake failed: " + error.message()));
+        return self->logOnce(unavailable("the WebSocket handshake failed: " + error.message()));
       }
       self->watchAttach();
       self->read();
@@ -484,9 +487,9 @@ class StreamConnection : public std::enable_shared_from_this<StreamConnection<St
             resourceExhausted(fmt::format("a stream message is over {} bytes", kMaxStreamMessage));
       }
       if (!m_session) {
-        finish(m_readEnd ? unavailable(fmt::format("the stream ended before attaching: {}",
-                                                   error.message()))
-                         : m_readEnd);
+        logOnce(m_readEnd ? unavailable(fmt::format("the stream ended before attaching: {}",
+                                                    error.message()))
+                          : m_readEnd);
       }
       return;
     }
@@ -567,8 +570,6 @@ class StreamConnection : public std::enable_shared_from_this<StreamConnection<St
                   closeReason(status.message()));
     m_ws.async_close(reason, [self = this->shared_from_this()](beast::error_code) {});
   }
-
-  void finish(const Status& status) { logOnce(status); }
 
   void logOnce(const Status& status) {
     if (m_logged) {
@@ -665,11 +666,12 @@ Response WebFrontDoor::Impl::error(const Request& request, const Status& status)
                  "application/json");
 }
 
-Response WebFrontDoor::Impl::answer(const Request& request, const std::string& peer) {
+Response WebFrontDoor::Impl::answer(const Request& request, const std::string& peer,
+                                    const std::optional<rpc::Caller>& caller) {
   const std::string target(request.target());
   if (request.method() == http::verb::get) {
     if (target == "/api/whoami") {
-      return whoAmI(request);
+      return whoAmI(request, caller);
     }
     const std::string name = target == "/" ? "index.html" : target.substr(1);
     const auto file = page.find(name);
@@ -693,7 +695,7 @@ Response WebFrontDoor::Impl::answer(const Request& request, const std::string& p
     return signOut(request);
   }
   if (target.rfind(kWebCallPrefix, 0) == 0) {
-    return call(request, peer, target.substr(std::string_view(kWebCallPrefix).size()));
+    return call(request, peer, target.substr(std::string_view(kWebCallPrefix).size()), caller);
   }
   return error(request, notFound(fmt::format("no call at '{}'", echoed(target))));
 }
@@ -731,8 +733,8 @@ Response WebFrontDoor::Impl::signOut(const Request& request) {
   return response;
 }
 
-Response WebFrontDoor::Impl::whoAmI(const Request& request) {
-  const auto caller = signedIn(request);
+Response WebFrontDoor::Impl::whoAmI(const Request& request,
+                                    const std::optional<rpc::Caller>& caller) {
   if (!caller) {
     return error(request, unauthenticated("not signed in"));
   }
@@ -760,7 +762,8 @@ Result<std::string> unaryCall(const std::string& bytes, Body&& body) {
 }  // namespace
 
 Response WebFrontDoor::Impl::call(const Request& request, const std::string& peer,
-                                  const std::string& method) {
+                                  const std::string& method,
+                                  const std::optional<rpc::Caller>& caller) {
   rpc::AccessRecord record;
   record.method = "web/" + echoed(method);
   record.peer = peer;
@@ -768,7 +771,6 @@ Response WebFrontDoor::Impl::call(const Request& request, const std::string& pee
   const auto deadline = std::chrono::system_clock::now() + kCallDeadline;
   Result<std::string> answered = unauthenticated("not signed in (POST /api/login first)");
   const Status status = rpc::guarded(kProgram, record, [&]() -> Status {
-    const auto caller = signedIn(request);
     if (!caller) {
       return answered.status();
     }
