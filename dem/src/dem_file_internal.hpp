@@ -5,12 +5,15 @@
 #include <string>
 
 #include <crackvis/dem/model.hpp>
+#include <crackvis/dem_layout/layout.hpp>
 
 namespace crackvis::dem::detail {
 
 // "particles" or "bonds": the folder under extra/ that holds an owner's arrays.
 const char* ownerFolder(ExtraOwner owner);
-// The extra/{particles,bonds} group of the root (constant arrays) or of a step.
-std::string extraFolder(ExtraOwner owner, bool perStep, int step);
+// The extra/{particles,bonds} group of the root (constant arrays), of a step
+// group, or of /steps in an appendable file.
+std::string extraFolder(ExtraOwner owner, bool perStep, int step,
+                        StepLayout layout = StepLayout::kGroups);
 
 }  // namespace crackvis::dem::detail

@@ -1,5 +1,6 @@
 // DemFileReader: opens a DEM file, checks its structure and reads it.
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <limits>
 
@@ -72,7 +73,7 @@ Result<DemFileReader> DemFileReader::open(const std::string& path) {
   DemFileReader reader;
   reader.m_path = path;
   reader.m_info.path = path;
-  reader.m_file = h5::fileHandle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
+  reader.m_file = h5::fileHandle(H5Fopen(path.c_str(), h5::readFlags(), H5P_DEFAULT));
   if (!reader.m_file.valid()) {
     return failedPrecondition(fmt::format("{}: cannot open: file is truncated or corrupt ({})",
                                           path, h5::lastHdf5Error()));
@@ -112,16 +113,17 @@ Result<DemFileReader::OpenedDataset> DemFileReader::openInFile(const std::string
 }
 
 Result<Handle> DemFileReader::openChecked(DemDataset id, int step) const {
-  const std::string path = datasetPath(id, step);
-  auto opened = openInFile(path);
+  const bool row = datasetSpec(id).perStep && m_info.stepLayout == StepLayout::kAppendable;
+  const std::string path = row ? appendablePath(id) : datasetPath(id, step);
+  auto opened = row ? openStepAxis(path, step) : openInFile(path);
   if (!opened) {
     return opened.status();
   }
   const h5::DatasetShape* shape = &opened->shape;
   Handle dataset = std::move(opened->dataset);
   const LayoutSizes sizes{m_info.particleCount, m_info.bondCount};
-  if (Status valid =
-          checkDatasetHeader(id, path, {shape->type, shape->typeName, shape->dims}, sizes);
+  if (Status valid = checkDatasetHeader(id, row ? fmt::format("{} (step {})", path, step) : path,
+                                        {shape->type, shape->typeName, shape->dims}, sizes);
       !valid) {
     return fail(valid);
   }
@@ -253,6 +255,16 @@ Status DemFileReader::readProvenance() {
   if (auto files = h5::readStringAttribute(root, "source_files")) {
     m_info.sourceFiles = splitLines(*files);
   }
+  if (H5Aexists(root, kStepLayoutAttribute) > 0) {
+    auto layout = h5::readStringAttribute(root, kStepLayoutAttribute);
+    if (!layout || *layout != kAppendableName) {
+      return fail(failedPrecondition(fmt::format(
+          "root attribute '{}' is {}, expected '{}' (or absent: a group per step)",
+          kStepLayoutAttribute, layout ? "'" + echoed(*layout) + "'" : std::string("not a string"),
+          kAppendableName)));
+    }
+    m_info.stepLayout = StepLayout::kAppendable;
+  }
   if (H5Aexists(root, kTimeUnitAttribute) > 0) {
     auto unit = h5::readStringAttribute(root, kTimeUnitAttribute);
     if (!unit || (*unit != "s" && *unit != kTimeInIterations)) {
@@ -275,7 +287,7 @@ Status DemFileReader::listExtras() {
       continue;
     }
     for (ExtraOwner owner : {ExtraOwner::kParticles, ExtraOwner::kBonds}) {
-      const std::string folder = extraFolder(owner, perStep, 0);
+      const std::string folder = extraFolder(owner, perStep, 0, m_info.stepLayout);
       auto resolved = h5::resolveInFile(m_file.get(), folder);
       if (!resolved) {
         if (resolved.status().code() == StatusCode::kNotFound) {
@@ -304,8 +316,8 @@ Status DemFileReader::listExtras() {
         if (!dataset) {
           return dataset.status();
         }
-        auto shape = h5::describeDataset(dataset->get());
-        extra.components = shape->dims.size() == 2 ? static_cast<int>(shape->dims[1]) : 1;
+        const auto& dims = dataset->shape.dims;
+        extra.components = dims.size() == 2 ? static_cast<int>(dims[1]) : 1;
         m_info.extras.push_back(extra);
       }
     }
@@ -313,14 +325,15 @@ Status DemFileReader::listExtras() {
   return Status::ok();
 }
 
-Result<Handle> DemFileReader::openExtra(const ExtraInfo& extra, int step) const {
-  const std::string path = extraPath(extra, step);
-  auto opened = openInFile(path);
+Result<DemFileReader::OpenedDataset> DemFileReader::openExtra(const ExtraInfo& extra,
+                                                              int step) const {
+  const std::string path = extraPath(extra, step, m_info.stepLayout);
+  const bool row = extra.perStep && m_info.stepLayout == StepLayout::kAppendable;
+  auto opened = row ? openStepAxis(path, step) : openInFile(path);
   if (!opened) {
     return opened.status();
   }
   const h5::DatasetShape* shape = &opened->shape;
-  Handle dataset = std::move(opened->dataset);
   const std::int64_t rows =
       extra.owner == ExtraOwner::kParticles ? m_info.particleCount : m_info.bondCount;
   const bool rowsMatch = !shape->dims.empty() && shape->dims[0] == static_cast<std::uint64_t>(rows);
@@ -332,7 +345,7 @@ Result<Handle> DemFileReader::openExtra(const ExtraInfo& extra, int step) const 
                     shape->typeName, h5::formatDims(shape->dims), rows, rows,
                     extra.owner == ExtraOwner::kParticles ? "N" : "M", rows)));
   }
-  return dataset;
+  return opened;
 }
 
 Result<ExtraArray> DemFileReader::readExtra(const ExtraInfo& extra, int step) const {
@@ -340,14 +353,18 @@ Result<ExtraArray> DemFileReader::readExtra(const ExtraInfo& extra, int step) co
   if (!dataset) {
     return dataset.status();
   }
-  auto shape = h5::describeDataset(dataset->get());
-  ExtraArray array{
-      extra.name, extra.owner, shape->dims.size() == 2 ? static_cast<int>(shape->dims[1]) : 1, {}};
-  array.values.resize(shape->dims[0] * static_cast<std::uint64_t>(array.components));
-  if (Status read = h5::readDataset(dataset->get(), ElementType::kFloat64, array.values.data());
-      !read) {
-    return fail(
-        Status(read.code(), fmt::format("dataset {}: {}", extraPath(extra, step), read.message())));
+  const auto& dims = dataset->shape.dims;
+  ExtraArray array{extra.name, extra.owner, dims.size() == 2 ? static_cast<int>(dims[1]) : 1, {}};
+  array.values.resize(dims[0] * static_cast<std::uint64_t>(array.components));
+  const hid_t id = dataset->dataset.get();
+  const Status read = extra.perStep && m_info.stepLayout == StepLayout::kAppendable
+                          ? h5::readRow(id, ElementType::kFloat64, static_cast<std::uint64_t>(step),
+                                        array.values.data())
+                          : h5::readDataset(id, ElementType::kFloat64, array.values.data());
+  if (!read) {
+    return fail(Status(
+        read.code(),
+        fmt::format("dataset {}: {}", extraPath(extra, step, m_info.stepLayout), read.message())));
   }
   return array;
 }
@@ -386,15 +403,38 @@ Status DemFileReader::readSteps() {
     return fail(failedPrecondition(
         fmt::format("/steps is not a readable group ({})", h5::lastHdf5Error())));
   }
-  auto count = h5::readIntAttribute(steps.get(), "count");
-  if (!count) {
-    return fail(failedPrecondition(fmt::format("group /steps: {}", count.status().message())));
-  }
   if (auto planned = h5::readIntAttribute(steps.get(), kPlannedStepsAttribute)) {
     m_info.plannedSteps = *planned;
   }
+  m_info.steps.clear();
+  m_info.scalarNames.clear();
+  return m_info.stepLayout == StepLayout::kAppendable ? readAppendableSteps()
+                                                      : readGroupSteps(steps.get());
+}
+
+Status DemFileReader::refreshSteps() {
+  const std::vector<StepInfo> before = m_info.steps;
+  CRACKVIS_RETURN_IF_ERROR(readSteps());
+  if (m_info.steps.size() < before.size()) {
+    // Steps are committed for good; fewer now means another file.
+    return fail(failedPrecondition(
+        fmt::format("had {} complete steps, now {}: the file was replaced while it was read",
+                    before.size(), m_info.steps.size())));
+  }
+  if (before.empty() && !m_info.steps.empty()) {
+    m_info.extras.clear();  // per-step extras are listed from step 0, now there
+    return listExtras();
+  }
+  return Status::ok();
+}
+
+Status DemFileReader::readGroupSteps(hid_t steps) {
+  auto count = h5::readIntAttribute(steps, "count");
+  if (!count) {
+    return fail(failedPrecondition(fmt::format("group /steps: {}", count.status().message())));
+  }
   StepNames names;
-  if (H5Literate(steps.get(), H5_INDEX_NAME, H5_ITER_INC, nullptr, collectStepName, &names) < 0) {
+  if (H5Literate(steps, H5_INDEX_NAME, H5_ITER_INC, nullptr, collectStepName, &names) < 0) {
     return fail(failedPrecondition(
         fmt::format("cannot list /steps: file is truncated or corrupt ({})", h5::lastHdf5Error())));
   }
@@ -439,6 +479,146 @@ Status DemFileReader::readSteps() {
   return Status::ok();
 }
 
+// The appendable layout: the length of /steps/time is the number of
+// complete steps (the writer grows it last, after every other array of the
+// step is on disk); longer per-step arrays hold an unfinished step.
+Status DemFileReader::readAppendableSteps() {
+  auto time = openInFile(kStepTimePath);
+  if (!time) {
+    return time.status();
+  }
+  CRACKVIS_RETURN_IF_ERROR(refreshed(kStepTimePath, time->dataset.get()));
+  auto shape = h5::describeDataset(time->dataset.get());
+  if (!shape || shape->type != ElementType::kFloat64 || shape->dims.size() != 1) {
+    return fail(failedPrecondition(fmt::format(
+        "dataset {} is {} {}, expected float64 [K]", kStepTimePath,
+        shape ? shape->typeName : "unreadable", shape ? h5::formatDims(shape->dims) : "")));
+  }
+  constexpr std::uint64_t kMaxSteps = 1'000'000;
+  const std::uint64_t count = shape->dims[0];
+  if (count > kMaxSteps) {
+    return fail(failedPrecondition(
+        fmt::format("dataset {} holds {} steps, more than {}", kStepTimePath, count, kMaxSteps)));
+  }
+  std::vector<double> times(count);
+  if (Status read =
+          h5::readLeading(time->dataset.get(), ElementType::kFloat64, count, times.data());
+      !read) {
+    return fail(Status(read.code(), fmt::format("dataset {}: {}", kStepTimePath, read.message())));
+  }
+  for (std::uint64_t k = 0; k < count; ++k) {
+    m_info.steps.push_back({static_cast<int>(k), times[k], {}});
+  }
+  CRACKVIS_RETURN_IF_ERROR(readAppendableScalars(count));
+  m_info.incompleteSteps = 0;
+  if (h5::linkExists(m_file.get(), appendablePath(DemDataset::kPositions))) {
+    if (auto positions = openInFile(appendablePath(DemDataset::kPositions))) {
+      CRACKVIS_RETURN_IF_ERROR(
+          refreshed(appendablePath(DemDataset::kPositions), positions->dataset.get()));
+      if (auto rows = h5::describeDataset(positions->dataset.get());
+          rows && !rows->dims.empty() && rows->dims[0] > count) {
+        m_info.incompleteSteps = static_cast<int>(rows->dims[0] - count);
+      }
+    }
+  } else if (count > 0) {
+    return fail(missingDataset(appendablePath(DemDataset::kPositions)));
+  }
+  m_info.beingWritten = false;
+  if (h5::linkExists(m_file.get(), kStepsWritingPath)) {
+    if (auto writing = openInFile(kStepsWritingPath)) {
+      CRACKVIS_RETURN_IF_ERROR(refreshed(kStepsWritingPath, writing->dataset.get()));
+      std::int32_t flag = 0;
+      if (writing->shape.dims.empty() &&
+          h5::readDataset(writing->dataset.get(), ElementType::kInt32, &flag)) {
+        m_info.beingWritten = flag != 0;
+      }
+    }
+  }
+  return Status::ok();
+}
+
+// /steps/scalars/NAME, float64 [>= K]: a NaN is a step without that scalar.
+Status DemFileReader::readAppendableScalars(std::uint64_t count) {
+  if (!h5::linkExists(m_file.get(), kStepScalarsPath)) {
+    return Status::ok();
+  }
+  Handle group = h5::groupHandle(H5Gopen2(m_file.get(), kStepScalarsPath, H5P_DEFAULT));
+  auto names = group.valid() ? h5::memberNames(group.get())
+                             : Result<std::vector<std::string>>(failedPrecondition(
+                                   fmt::format("{} is not a readable group", kStepScalarsPath)));
+  if (!names) {
+    return fail(names.status());
+  }
+  for (const std::string& name : *names) {
+    const std::string path = fmt::format("{}/{}", kStepScalarsPath, name);
+    if (Status valid = validateName("step scalar", name); !valid) {
+      return fail(failedPrecondition(fmt::format("{}: {}", path, valid.message())));
+    }
+    auto dataset = openInFile(path);
+    if (!dataset) {
+      return dataset.status();
+    }
+    CRACKVIS_RETURN_IF_ERROR(refreshed(path, dataset->dataset.get()));
+    auto shape = h5::describeDataset(dataset->dataset.get());
+    if (!shape || shape->type != ElementType::kFloat64 || shape->dims.size() != 1 ||
+        shape->dims[0] < count) {
+      return fail(
+          failedPrecondition(fmt::format("dataset {} is {} {}, expected float64 [{}] or longer",
+                                         path, shape ? shape->typeName : "unreadable",
+                                         shape ? h5::formatDims(shape->dims) : "", count)));
+    }
+    std::vector<double> values(count);
+    if (Status read =
+            h5::readLeading(dataset->dataset.get(), ElementType::kFloat64, count, values.data());
+        !read) {
+      return fail(Status(read.code(), fmt::format("dataset {}: {}", path, read.message())));
+    }
+    m_info.scalarNames.push_back(name);
+    for (std::uint64_t k = 0; k < count; ++k) {
+      if (!std::isnan(values[k])) {
+        m_info.steps[k].scalars.push_back({name, values[k]});
+      }
+    }
+  }
+  return Status::ok();
+}
+
+Status DemFileReader::refreshed(const std::string& path, hid_t dataset) const {
+  if (Status status = h5::refreshDataset(dataset); !status) {
+    return fail(failedPrecondition(fmt::format("dataset {}: {}", path, status.message())));
+  }
+  return Status::ok();
+}
+
+std::string DemFileReader::stepDatasetPath(DemDataset id, int step) const {
+  return m_info.stepLayout == StepLayout::kAppendable ? appendablePath(id) : datasetPath(id, step);
+}
+
+Result<DemFileReader::OpenedDataset> DemFileReader::openStepAxis(const std::string& path,
+                                                                 int step) const {
+  auto opened = openInFile(path);
+  if (!opened) {
+    return opened;
+  }
+  const auto row = static_cast<std::uint64_t>(step);
+  if (opened->shape.dims.empty() || opened->shape.dims[0] <= row) {
+    // This process may hold the dataset's metadata from before the writer
+    // added the row.
+    CRACKVIS_RETURN_IF_ERROR(refreshed(path, opened->dataset.get()));
+    auto shape = h5::describeDataset(opened->dataset.get());
+    if (!shape) {
+      return fail(shape.status());
+    }
+    opened->shape = std::move(*shape);
+  }
+  if (opened->shape.dims.empty() || opened->shape.dims[0] <= row) {
+    return fail(failedPrecondition(fmt::format("dataset {} has shape {}, without a row for step {}",
+                                               path, h5::formatDims(opened->shape.dims), step)));
+  }
+  opened->shape.dims.erase(opened->shape.dims.begin());  // the shape of one step's row
+  return opened;
+}
+
 Result<Lattice> DemFileReader::readLattice() const {
   Lattice lattice;
   lattice.dimension = m_info.dimension;
@@ -474,9 +654,13 @@ Status DemFileReader::readWhole(DemDataset id, int step, void* out) const {
     return dataset.status();
   }
   const DatasetSpec& spec = datasetSpec(id);
-  if (Status read = h5::readDataset(dataset->get(), spec.type, out); !read) {
-    return fail(
-        Status(read.code(), fmt::format("dataset {}: {}", datasetPath(id, step), read.message())));
+  const Status read =
+      spec.perStep && m_info.stepLayout == StepLayout::kAppendable
+          ? h5::readRow(dataset->get(), spec.type, static_cast<std::uint64_t>(step), out)
+          : h5::readDataset(dataset->get(), spec.type, out);
+  if (!read) {
+    return fail(Status(read.code(),
+                       fmt::format("dataset {}: {}", stepDatasetPath(id, step), read.message())));
   }
   return Status::ok();
 }
@@ -517,11 +701,11 @@ Result<StepState> DemFileReader::readStep(int step) const {
   state.bondState.resize(m);
   CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kPositions, step, state.positions.data()));
   CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondState, step, state.bondState.data()));
-  if (h5::linkExists(m_file.get(), datasetPath(DemDataset::kVelocities, step))) {
+  if (h5::linkExists(m_file.get(), stepDatasetPath(DemDataset::kVelocities, step))) {
     state.velocities.resize(n);
     CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kVelocities, step, state.velocities.data()));
   }
-  if (h5::linkExists(m_file.get(), datasetPath(DemDataset::kBondForce, step))) {
+  if (h5::linkExists(m_file.get(), stepDatasetPath(DemDataset::kBondForce, step))) {
     state.bondForce.resize(m);
     CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondForce, step, state.bondForce.data()));
   }
@@ -557,7 +741,7 @@ Status DemFileReader::checkStepHeaders(int step) const {
   for (DemDataset id : {DemDataset::kPositions, DemDataset::kBondState, DemDataset::kVelocities,
                         DemDataset::kBondForce}) {
     const bool optional = id == DemDataset::kVelocities || id == DemDataset::kBondForce;
-    if (optional && !h5::linkExists(m_file.get(), datasetPath(id, step))) {
+    if (optional && !h5::linkExists(m_file.get(), stepDatasetPath(id, step))) {
       continue;
     }
     if (auto opened = openChecked(id, step); !opened) {

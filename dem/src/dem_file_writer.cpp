@@ -1,5 +1,7 @@
 // DemFileWriter: creates a DEM file and appends steps to it.
 #include <algorithm>
+#include <limits>
+#include <random>
 
 #include <fmt/format.h>
 
@@ -7,10 +9,56 @@
 #include <crackvis/dem/dem_file.hpp>
 
 namespace crackvis::dem {
+
+using h5::Handle;
+
+// The open step-axis datasets of an appendable file.
+struct DemFileWriter::StepAxis {
+  struct Named {
+    std::string name;
+    ExtraOwner owner = ExtraOwner::kParticles;
+    int components = 1;
+    Handle dataset;
+  };
+  Handle time;
+  Handle positions;
+  Handle bondState;
+  Handle velocities;  // absent unless the first step had them
+  Handle bondForce;
+  Handle breakStep;
+  Handle writing;
+  std::vector<Named> scalars;
+  std::vector<Named> extras;
+  // Gives every id up without closing it: after a failed write nothing more
+  // may reach the file.
+  void abandon() {
+    for (Handle* handle :
+         {&time, &positions, &bondState, &velocities, &bondForce, &breakStep, &writing}) {
+      handle->release();
+    }
+    for (auto* list : {&scalars, &extras}) {
+      for (Named& named : *list) {
+        named.dataset.release();
+      }
+    }
+  }
+};
+
 namespace {
 
 using detail::ownerFolder;
 using h5::Handle;
+
+// 128 random bits in hex: the root attribute run_id, by which a reader
+// following a live file tells that another run replaced it under its name.
+std::string newRunId() {
+  std::random_device random;
+  std::string id;
+  for (int part = 0; part < 4; ++part) {
+    id += fmt::format("{:08x}", static_cast<std::uint32_t>(random()));
+  }
+  return id;
+}
 
 std::string joinLines(const std::vector<std::string>& lines) {
   return fmt::format("{}", fmt::join(lines, "\n"));
@@ -28,7 +76,14 @@ Result<DemFileWriter> DemFileWriter::create(const std::string& path, const Latti
   writer.m_path = path;
   // The default (earliest) file format keeps no "open for writing" flag in
   // the superblock, so a file whose writer was killed still opens.
-  writer.m_file = h5::fileHandle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  // An appendable (live) file needs the v1.10 format: SWMR's checksummed
+  // metadata and extensible chunk indices; readers need libhdf5 >= 1.10.
+  writer.m_layout = metadata.stepLayout;
+  Handle access = h5::propertyListHandle(H5Pcreate(H5P_FILE_ACCESS));
+  if (writer.m_layout == StepLayout::kAppendable) {
+    H5Pset_libver_bounds(access.get(), H5F_LIBVER_V110, H5F_LIBVER_V110);
+  }
+  writer.m_file = h5::fileHandle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access.get()));
   if (!writer.m_file.valid()) {
     return failedPrecondition(
         fmt::format("{}: cannot create file ({})", path, h5::lastHdf5Error()));
@@ -55,6 +110,7 @@ Status DemFileWriter::writeTimeIndependent(const DemMetadata& metadata) {
   CRACKVIS_RETURN_IF_ERROR(h5::writeStringAttribute(root, "units", metadata.units));
   CRACKVIS_RETURN_IF_ERROR(h5::writeStringAttribute(root, "source", metadata.source));
   CRACKVIS_RETURN_IF_ERROR(h5::writeIntAttribute(root, "version_minor", kFormatMinorVersion));
+  CRACKVIS_RETURN_IF_ERROR(h5::writeStringAttribute(root, kRunIdAttribute, newRunId()));
   if (!metadata.sourceCode.empty()) {
     CRACKVIS_RETURN_IF_ERROR(h5::writeStringAttribute(root, "source_code", metadata.sourceCode));
   }
@@ -65,6 +121,10 @@ Status DemFileWriter::writeTimeIndependent(const DemMetadata& metadata) {
   if (!metadata.sourceFiles.empty()) {
     CRACKVIS_RETURN_IF_ERROR(
         h5::writeStringAttribute(root, "source_files", joinLines(metadata.sourceFiles)));
+  }
+  if (m_layout == StepLayout::kAppendable) {
+    CRACKVIS_RETURN_IF_ERROR(
+        h5::writeStringAttribute(root, kStepLayoutAttribute, std::string(kAppendableName)));
   }
   if (metadata.timeUnit != "s") {
     CRACKVIS_RETURN_IF_ERROR(h5::writeStringAttribute(root, kTimeUnitAttribute, metadata.timeUnit));
@@ -106,7 +166,9 @@ Status DemFileWriter::writeTimeIndependent(const DemMetadata& metadata) {
   CRACKVIS_RETURN_IF_ERROR(
       h5::writeDataset(root, "/bonds/break_step", ElementType::kInt32, {m}, m_breakStep.data()));
   Handle steps = h5::groupHandle(H5Gopen2(root, "/steps", H5P_DEFAULT));
-  CRACKVIS_RETURN_IF_ERROR(h5::writeIntAttribute(steps.get(), "count", 0));
+  if (m_layout == StepLayout::kGroups) {
+    CRACKVIS_RETURN_IF_ERROR(h5::writeIntAttribute(steps.get(), "count", 0));
+  }
   if (metadata.plannedSteps > 0) {
     CRACKVIS_RETURN_IF_ERROR(
         h5::writeIntAttribute(steps.get(), kPlannedStepsAttribute, metadata.plannedSteps));
@@ -146,6 +208,9 @@ Status DemFileWriter::appendStep(const StepState& step) {
     return Status(valid.code(),
                   fmt::format("{}: step {}: {}", m_path, m_stepCount, valid.message()));
   }
+  if (m_axis) {
+    CRACKVIS_RETURN_IF_ERROR(checkLikeFirst(step));
+  }
   std::vector<std::int32_t> previous = m_breakStep;
   bool breaksChanged = false;
   if (Status breaks = recordBreaks(step, breaksChanged); !breaks) {
@@ -156,16 +221,27 @@ Status DemFileWriter::appendStep(const StepState& step) {
   // The step's data first, flushed; only then the commit mark, flushed
   // again. A write that fails (a full disk) leaves the file as the last
   // commit mark describes it, and the writer closed.
-  Status written = writeStepData(step, breaksChanged);
-  if (written) {
-    written = flush();
-  }
-  if (written) {
-    Handle steps = h5::groupHandle(H5Gopen2(m_file.get(), "/steps", H5P_DEFAULT));
-    written = h5::writeIntAttribute(steps.get(), "count", m_stepCount + 1);
-  }
-  if (written) {
-    written = flush();
+  Status written;
+  if (m_layout == StepLayout::kAppendable) {
+    written = m_axis ? Status::ok() : startStepAxis(step);
+    if (written) {
+      written = writeStepRows(step, breaksChanged);
+    }
+    if (written) {
+      written = commitStepRow(step.time);
+    }
+  } else {
+    written = writeStepData(step, breaksChanged);
+    if (written) {
+      written = flush();
+    }
+    if (written) {
+      Handle steps = h5::groupHandle(H5Gopen2(m_file.get(), "/steps", H5P_DEFAULT));
+      written = h5::writeIntAttribute(steps.get(), "count", m_stepCount + 1);
+    }
+    if (written) {
+      written = flush();
+    }
   }
   if (!written) {
     m_breakStep = std::move(previous);
@@ -258,6 +334,10 @@ Status DemFileWriter::flush() {
 void DemFileWriter::abandon() {
   // What HDF5 still holds of the failed step cannot reach the disk either;
   // the close reports that, and the file stays as its last flush left it.
+  if (m_axis) {
+    m_axis->abandon();
+    m_axis.reset();
+  }
   m_file.release();
   h5::lastHdf5Error();
 }
@@ -266,10 +346,185 @@ Status DemFileWriter::close() {
   if (!m_file.valid()) {
     return Status::ok();
   }
+  if (m_axis) {
+    // Readers learn the run ended: /steps/writing drops to 0.
+    const std::int32_t done = 0;
+    if (H5Dwrite(m_axis->writing.get(), H5T_NATIVE_INT32, H5S_ALL, H5S_ALL, H5P_DEFAULT, &done) <
+            0 ||
+        H5Dflush(m_axis->writing.get()) < 0) {
+      abandon();
+      return internalError(fmt::format("{}: close failed ({})", m_path, h5::lastHdf5Error()));
+    }
+    m_axis.reset();
+  }
   if (m_file.reset() < 0) {
     return internalError(fmt::format("{}: close failed ({})", m_path, h5::lastHdf5Error()));
   }
   return Status::ok();
+}
+
+}  // namespace crackvis::dem
+
+namespace crackvis::dem {
+
+// Creates the step-axis datasets the first step needs, then switches the
+// file to SWMR writing: from here on datasets only grow, and a reader that
+// opens the file (h5::readFlags()) sees the steps committed so far.
+Status DemFileWriter::startStepAxis(const StepState& first) {
+  const hid_t root = m_file.get();
+  const auto n = static_cast<std::uint64_t>(m_lattice.particleCount());
+  const auto m = static_cast<std::uint64_t>(m_lattice.bondCount());
+  auto axis = std::make_shared<StepAxis>();
+  auto create = [&](hid_t location, const std::string& name, ElementType type,
+                    std::vector<std::uint64_t> row, Handle& into) -> Status {
+    auto made = h5::createStepAxisDataset(location, name, type, row, m_storage);
+    if (!made) {
+      return made.status();
+    }
+    into = std::move(*made);
+    return Status::ok();
+  };
+  CRACKVIS_RETURN_IF_ERROR(create(root, kStepTimePath, ElementType::kFloat64, {}, axis->time));
+  CRACKVIS_RETURN_IF_ERROR(create(root, appendablePath(DemDataset::kPositions),
+                                  ElementType::kFloat64, {n, 3}, axis->positions));
+  CRACKVIS_RETURN_IF_ERROR(create(root, appendablePath(DemDataset::kBondState), ElementType::kUInt8,
+                                  {m}, axis->bondState));
+  if (!first.velocities.empty()) {
+    CRACKVIS_RETURN_IF_ERROR(create(root, appendablePath(DemDataset::kVelocities),
+                                    ElementType::kFloat32, {n, 3}, axis->velocities));
+  }
+  if (!first.bondForce.empty()) {
+    CRACKVIS_RETURN_IF_ERROR(create(root, appendablePath(DemDataset::kBondForce),
+                                    ElementType::kFloat32, {m}, axis->bondForce));
+  }
+  for (const StepScalar& scalar : first.scalars) {
+    if (axis->scalars.empty()) {
+      Handle group = h5::groupHandle(
+          H5Gcreate2(root, kStepScalarsPath, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    }
+    StepAxis::Named named{scalar.name, ExtraOwner::kParticles, 1, {}};
+    CRACKVIS_RETURN_IF_ERROR(create(root, fmt::format("{}/{}", kStepScalarsPath, scalar.name),
+                                    ElementType::kFloat64, {}, named.dataset));
+    axis->scalars.push_back(std::move(named));
+  }
+  for (const ExtraArray& extra : first.extras) {
+    for (const char* group : {"/steps/extra", "/steps/extra/particles", "/steps/extra/bonds"}) {
+      if (!h5::linkExists(root, group)) {
+        Handle made =
+            h5::groupHandle(H5Gcreate2(root, group, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+      }
+    }
+    StepAxis::Named named{extra.name, extra.owner, extra.components, {}};
+    std::vector<std::uint64_t> row{extra.rows()};
+    if (extra.components > 1) {
+      row.push_back(static_cast<std::uint64_t>(extra.components));
+    }
+    const ExtraInfo info{extra.name, extra.owner, extra.components, true};
+    CRACKVIS_RETURN_IF_ERROR(create(root, extraPath(info, 0, StepLayout::kAppendable),
+                                    ElementType::kFloat64, row, named.dataset));
+    axis->extras.push_back(std::move(named));
+  }
+  // Set while a writer has the file open; close() clears it.
+  const std::int32_t writing = 1;
+  CRACKVIS_RETURN_IF_ERROR(
+      h5::writeDataset(root, kStepsWritingPath, ElementType::kInt32, {}, &writing));
+  axis->writing = h5::datasetHandle(H5Dopen2(root, kStepsWritingPath, H5P_DEFAULT));
+  axis->breakStep =
+      h5::datasetHandle(H5Dopen2(root, datasetPath(DemDataset::kBreakStep).c_str(), H5P_DEFAULT));
+  if (!axis->writing.valid() || !axis->breakStep.valid()) {
+    return internalError(fmt::format("cannot open the step datasets ({})", h5::lastHdf5Error()));
+  }
+  CRACKVIS_RETURN_IF_ERROR(flush());
+  if (H5Fstart_swmr_write(root) < 0) {
+    return internalError(
+        fmt::format("cannot start SWMR writing for live readers ({})", h5::lastHdf5Error()));
+  }
+  m_axis = std::move(axis);
+  return Status::ok();
+}
+
+// Every step of an appendable file has the arrays of its first: its
+// datasets were fixed when SWMR writing began.
+Status DemFileWriter::checkLikeFirst(const StepState& step) const {
+  auto refuse = [&](const std::string& what) {
+    return invalidArgument(fmt::format(
+        "{}: step {}: {} (every step of a live file carries the arrays and scalars of its first)",
+        m_path, m_stepCount, what));
+  };
+  if (step.velocities.empty() == m_axis->velocities.valid()) {
+    return refuse(step.velocities.empty() ? "no velocities" : "velocities the first step lacked");
+  }
+  if (step.bondForce.empty() == m_axis->bondForce.valid()) {
+    return refuse(step.bondForce.empty() ? "no bond forces" : "bond forces the first step lacked");
+  }
+  for (const StepScalar& scalar : step.scalars) {
+    if (std::none_of(m_axis->scalars.begin(), m_axis->scalars.end(),
+                     [&](const StepAxis::Named& named) { return named.name == scalar.name; })) {
+      return refuse(fmt::format("scalar '{}' the first step lacked", scalar.name));
+    }
+  }
+  if (step.extras.size() != m_axis->extras.size()) {
+    return refuse(fmt::format("{} extra arrays, the first step had {}", step.extras.size(),
+                              m_axis->extras.size()));
+  }
+  for (size_t i = 0; i < step.extras.size(); ++i) {
+    const ExtraArray& extra = step.extras[i];
+    const StepAxis::Named& named = m_axis->extras[i];
+    if (extra.name != named.name || extra.owner != named.owner ||
+        extra.components != named.components) {
+      return refuse(
+          fmt::format("extra array '{}' where the first step had '{}'", extra.name, named.name));
+    }
+  }
+  return Status::ok();
+}
+
+// Row m_stepCount of every step-axis dataset but /steps/time, each flushed,
+// and /bonds/break_step; the step is not committed yet.
+Status DemFileWriter::writeStepRows(const StepState& step, bool breaksChanged) {
+  const auto row = static_cast<std::uint64_t>(m_stepCount);
+  CRACKVIS_RETURN_IF_ERROR(
+      h5::appendRow(m_axis->positions.get(), ElementType::kFloat64, row, step.positions.data()));
+  CRACKVIS_RETURN_IF_ERROR(
+      h5::appendRow(m_axis->bondState.get(), ElementType::kUInt8, row, step.bondState.data()));
+  if (m_axis->velocities.valid()) {
+    CRACKVIS_RETURN_IF_ERROR(h5::appendRow(m_axis->velocities.get(), ElementType::kFloat32, row,
+                                           step.velocities.data()));
+  }
+  if (m_axis->bondForce.valid()) {
+    CRACKVIS_RETURN_IF_ERROR(
+        h5::appendRow(m_axis->bondForce.get(), ElementType::kFloat32, row, step.bondForce.data()));
+  }
+  for (const StepAxis::Named& named : m_axis->scalars) {
+    // A step without one of the first step's scalars stores NaN: "none".
+    double value = std::numeric_limits<double>::quiet_NaN();
+    for (const StepScalar& scalar : step.scalars) {
+      value = scalar.name == named.name ? scalar.value : value;
+    }
+    CRACKVIS_RETURN_IF_ERROR(
+        h5::appendRow(named.dataset.get(), ElementType::kFloat64, row, &value));
+  }
+  for (size_t i = 0; i < m_axis->extras.size(); ++i) {
+    CRACKVIS_RETURN_IF_ERROR(h5::appendRow(m_axis->extras[i].dataset.get(), ElementType::kFloat64,
+                                           row, step.extras[i].values.data()));
+  }
+  if (breaksChanged) {
+    if (H5Dwrite(m_axis->breakStep.get(), H5T_NATIVE_INT32, H5S_ALL, H5S_ALL, H5P_DEFAULT,
+                 m_breakStep.data()) < 0 ||
+        H5Dflush(m_axis->breakStep.get()) < 0) {
+      return internalError(
+          fmt::format("cannot write dataset /bonds/break_step ({})", h5::lastHdf5Error()));
+    }
+  }
+  return flush();
+}
+
+// The commit mark of an appendable file: /steps/time grows by the step's
+// time only after every other array of the step is on disk.
+Status DemFileWriter::commitStepRow(double time) {
+  CRACKVIS_RETURN_IF_ERROR(h5::appendRow(m_axis->time.get(), ElementType::kFloat64,
+                                         static_cast<std::uint64_t>(m_stepCount), &time));
+  return flush();
 }
 
 }  // namespace crackvis::dem

@@ -480,6 +480,142 @@ Status readDataset(hid_t dataset, ElementType type, void* out) {
 }
 
 namespace {
+
+// The selection of row `row` of a dataset whose first axis counts steps,
+// and a memory space of the row's shape.
+struct RowSelection {
+  Handle file;
+  Handle memory;
+};
+Result<RowSelection> selectRow(hid_t dataset, std::uint64_t row) {
+  Handle space = dataspaceHandle(H5Dget_space(dataset));
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  if (rank < 1) {
+    return failedPrecondition("has no step axis");
+  }
+  std::vector<hsize_t> dims(static_cast<size_t>(rank));
+  H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  if (row >= dims[0]) {
+    return outOfRange(fmt::format("has {} rows, row {} asked for", dims[0], row));
+  }
+  std::vector<hsize_t> start(dims.size(), 0);
+  std::vector<hsize_t> count(dims);
+  start[0] = row;
+  count[0] = 1;
+  if (H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(),
+                          nullptr) < 0) {
+    return internalError(fmt::format("cannot select row {} ({})", row, lastHdf5Error()));
+  }
+  Handle memory =
+      dataspaceHandle(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr));
+  return RowSelection{std::move(space), std::move(memory)};
+}
+
+}  // namespace
+
+Result<Handle> createStepAxisDataset(hid_t location, const std::string& name, ElementType type,
+                                     const std::vector<std::uint64_t>& rowDims,
+                                     const Storage& storage) {
+  constexpr hsize_t kScalarStepsPerChunk = 256;
+  std::vector<hsize_t> dims{0};
+  std::vector<hsize_t> maxDims{H5S_UNLIMITED};
+  std::vector<hsize_t> chunk{rowDims.empty() ? kScalarStepsPerChunk : 1};
+  std::uint64_t rowValues = 1;
+  for (size_t i = 1; i < rowDims.size(); ++i) {
+    rowValues *= std::max<std::uint64_t>(1, rowDims[i]);
+  }
+  for (size_t i = 0; i < rowDims.size(); ++i) {
+    dims.push_back(rowDims[i]);
+    // HDF5 wants every chunk extent at least 1 and within a fixed axis; an
+    // empty axis (a lattice without bonds) is left unlimited instead.
+    maxDims.push_back(rowDims[i] == 0 ? H5S_UNLIMITED : rowDims[i]);
+    const std::uint64_t along =
+        i == 0 ? std::min<std::uint64_t>(rowDims[i], storage.chunkValues / rowValues) : rowDims[i];
+    chunk.push_back(std::max<hsize_t>(1, along));
+  }
+  Handle space =
+      dataspaceHandle(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), maxDims.data()));
+  Handle properties = propertyListHandle(H5Pcreate(H5P_DATASET_CREATE));
+  if (H5Pset_chunk(properties.get(), static_cast<int>(chunk.size()), chunk.data()) < 0 ||
+      (storage.compressed() &&
+       (H5Pset_shuffle(properties.get()) < 0 ||
+        H5Pset_deflate(properties.get(), static_cast<unsigned>(storage.deflateLevel)) < 0))) {
+    return internalError(fmt::format("cannot set up the chunks of {} ({})", name, lastHdf5Error()));
+  }
+  Handle dataset = datasetHandle(H5Dcreate2(location, name.c_str(), fileType(type), space.get(),
+                                            H5P_DEFAULT, properties.get(), H5P_DEFAULT));
+  if (!dataset.valid()) {
+    return internalError(fmt::format("cannot create dataset {} ({})", name, lastHdf5Error()));
+  }
+  return dataset;
+}
+
+Status appendRow(hid_t dataset, ElementType type, std::uint64_t row, const void* data) {
+  Handle space = dataspaceHandle(H5Dget_space(dataset));
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  std::vector<hsize_t> dims(static_cast<size_t>(std::max(rank, 1)));
+  H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  dims[0] = std::max<hsize_t>(dims[0], row + 1);
+  if (H5Dset_extent(dataset, dims.data()) < 0) {
+    return internalError(fmt::format("cannot grow to {} rows ({})", row + 1, lastHdf5Error()));
+  }
+  auto selection = selectRow(dataset, row);
+  if (!selection) {
+    return selection.status();
+  }
+  if (H5Sget_select_npoints(selection->file.get()) > 0 &&
+      H5Dwrite(dataset, nativeType(type), selection->memory.get(), selection->file.get(),
+               H5P_DEFAULT, data) < 0) {
+    return internalError(fmt::format("cannot write row {} ({})", row, lastHdf5Error()));
+  }
+  if (H5Dflush(dataset) < 0) {
+    return internalError(fmt::format("cannot flush row {} ({})", row, lastHdf5Error()));
+  }
+  return Status::ok();
+}
+
+Status readRow(hid_t dataset, ElementType type, std::uint64_t row, void* out) {
+  auto selection = selectRow(dataset, row);
+  if (!selection) {
+    return selection.status();
+  }
+  if (H5Sget_select_npoints(selection->file.get()) == 0) {
+    return Status::ok();
+  }
+  if (H5Dread(dataset, nativeType(type), selection->memory.get(), selection->file.get(),
+              H5P_DEFAULT, out) < 0) {
+    return failedPrecondition(
+        fmt::format("read failed, the file may be truncated or corrupt ({})", lastHdf5Error()));
+  }
+  return Status::ok();
+}
+
+Status readLeading(hid_t dataset, ElementType type, std::uint64_t count, void* out) {
+  if (count == 0) {
+    return Status::ok();
+  }
+  Handle space = dataspaceHandle(H5Dget_space(dataset));
+  const hsize_t start = 0;
+  const hsize_t wanted = count;
+  Handle memory = dataspaceHandle(H5Screate_simple(1, &wanted, nullptr));
+  if (H5Sget_simple_extent_ndims(space.get()) != 1 ||
+      H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, &start, nullptr, &wanted, nullptr) < 0 ||
+      H5Dread(dataset, nativeType(type), memory.get(), space.get(), H5P_DEFAULT, out) < 0) {
+    return failedPrecondition(
+        fmt::format("read failed, the file may be truncated or corrupt ({})", lastHdf5Error()));
+  }
+  return Status::ok();
+}
+
+Status refreshDataset(hid_t dataset) {
+  if (H5Drefresh(dataset) < 0) {
+    return failedPrecondition(
+        fmt::format("cannot reload the dataset's metadata ({})", lastHdf5Error()));
+  }
+  return Status::ok();
+}
+
+namespace {
 herr_t collectAttributeName(hid_t, const char* name, const H5A_info_t*, void* data) {
   static_cast<std::vector<std::string>*>(data)->emplace_back(name);
   return 0;

@@ -1,13 +1,19 @@
 #include <algorithm>
+#include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <numeric>
 #include <optional>
+#include <thread>
 #include <unordered_map>
 
 #include <fmt/format.h>
+#include <signal.h>
+#include <sys/stat.h>
 
 #include "scalar_table.hpp"
+#include <crackvis/common/pending_file.hpp>
 #include <crackvis/common/progress.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/step_range.hpp>
@@ -655,6 +661,192 @@ std::string formatSummary(const ImportSummary& s, const ImportOptions& options) 
                        error ? 0.0 : static_cast<double>(bytes) / 1e6);
   }
   return out;
+}
+
+}  // namespace crackvis::importers
+
+namespace crackvis::importers {
+namespace {
+
+using FollowClock = std::chrono::steady_clock;
+
+double secondsSince(FollowClock::time_point start) {
+  return std::chrono::duration<double>(FollowClock::now() - start).count();
+}
+
+// What the source's files are now: names, sizes and modification times. A
+// step is complete once this has not changed for a while.
+std::string filesFingerprint(const SourceDescription& source) {
+  std::string print;
+  for (const std::string& file : source.files) {
+    struct stat info {};
+    if (::stat(file.c_str(), &info) == 0) {
+      print += fmt::format("{}:{}:{}.{};", file, info.st_size, info.st_mtim.tv_sec,
+                           info.st_mtim.tv_nsec);
+    } else {
+      print += file + ":gone;";
+    }
+  }
+  return print;
+}
+
+bool processEnded(int pid) {
+  return pid > 0 && ::kill(pid, 0) != 0 && errno == ESRCH;
+}
+
+// The live file a follow writes: created with the first step, which gives
+// it the output's name.
+class LiveOutput {
+ public:
+  LiveOutput(const ImportOptions& options, const SourceDescription& source)
+      : m_options(options), m_source(source), m_file(options.output) {}
+
+  bool started() const { return m_writer.has_value(); }
+  int steps() const { return m_writer ? m_writer->stepCount() : 0; }
+
+  Status append(SeriesConverter& converter, const SourceStep& step, ImportSummary& summary) {
+    if (!m_writer) {
+      CRACKVIS_RETURN_IF_ERROR(converter.begin(step));
+    }
+    auto state = converter.convert(step);
+    if (!state) {
+      return state.status();
+    }
+    if (!m_writer) {
+      CRACKVIS_RETURN_IF_ERROR(create(converter, step, summary));
+      describeArrays(*state, summary);
+      summary.brokenFirst = brokenCount(*state);
+    }
+    CRACKVIS_RETURN_IF_ERROR(m_file.named(m_writer->appendStep(*state)));
+    if (!m_published) {
+      CRACKVIS_RETURN_IF_ERROR(m_file.named(m_file.commit()));
+      m_published = true;
+    }
+    summary.brokenLast = brokenCount(*state);
+    summary.stepsWritten = m_writer->stepCount();
+    summary.lastSourceStep = step.sourceStep;
+    return Status::ok();
+  }
+
+  Status close() { return m_writer ? m_file.named(m_writer->close()) : Status::ok(); }
+
+ private:
+  Status create(const SeriesConverter& converter, const SourceStep& first, ImportSummary& summary) {
+    const dem::Lattice& lattice = converter.lattice();
+    summary.dimension = lattice.dimension;
+    summary.particles = lattice.particleCount();
+    summary.bonds = lattice.bondCount();
+    summary.withGroups = !lattice.particleGroup.empty();
+    summary.firstSourceStep = first.sourceStep;
+    summary.cutAtStart = static_cast<std::size_t>(
+        std::count_if(lattice.bondFlags.begin(), lattice.bondFlags.end(),
+                      [](std::uint8_t f) { return (f & dem::kBondCutAtStart) != 0; }));
+    dem::DemMetadata metadata;
+    metadata.source = m_options.invocation;
+    metadata.sourceCode = m_source.code;
+    metadata.sourceVersion = m_source.version;
+    metadata.sourceFiles = m_source.files;
+    metadata.storage = m_options.storage;
+    metadata.stepLayout = dem::StepLayout::kAppendable;
+    if (!converter.timeKnown(first) && !(m_options.timestep > 0.0)) {
+      metadata.timeUnit = dem::kTimeInIterations;
+    }
+    auto writer = dem::DemFileWriter::create(m_file.path(), lattice, metadata);
+    if (!writer) {
+      return m_file.named(writer.status());
+    }
+    m_writer.emplace(std::move(writer).value());
+    return Status::ok();
+  }
+
+  const ImportOptions& m_options;
+  SourceDescription m_source;
+  PendingFile m_file;
+  std::optional<dem::DemFileWriter> m_writer;
+  bool m_published = false;
+};
+
+Status refuseWithFollow(const ImportOptions& options) {
+  if (!options.steps.empty()) {
+    return invalidArgument("--steps cannot be combined with --follow (it follows every step)");
+  }
+  if (!options.scalarsTable.empty()) {
+    return invalidArgument(
+        "--scalars cannot be combined with --follow (the table is read once, before the run "
+        "has written it): import the finished run again with it");
+  }
+  if (options.dryRun) {
+    return invalidArgument("--dry-run cannot be combined with --follow");
+  }
+  if (options.output.empty()) {
+    return invalidArgument("--follow needs the output file: -o FILE.h5");
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+Result<ImportSummary> followSeries(const SourceOpener& open, const ImportOptions& options,
+                                   const FollowOptions& follow) {
+  CRACKVIS_RETURN_IF_ERROR(refuseWithFollow(options));
+  ImportSummary summary;
+  std::optional<SeriesConverter> converter;
+  std::optional<LiveOutput> output;
+  Status lastProblem = failedPrecondition("the source has written nothing yet");
+  std::string fingerprint;
+  auto unchangedSince = FollowClock::now();
+  auto lastStepAt = FollowClock::now();
+  const auto pause = std::chrono::duration<double>(follow.poll);
+  while (true) {
+    // Asked before the look: the look after the code ended takes every step.
+    const bool ending = (follow.stopRequested && follow.stopRequested()) ||
+                        processEnded(follow.pid) ||
+                        (follow.untilIdle > 0.0 && secondsSince(lastStepAt) >= follow.untilIdle);
+    auto source = open();
+    if (!source) {
+      lastProblem = source.status();  // not written yet, or a file half written
+    } else {
+      if (!converter) {
+        summary.source = (*source)->description();
+        converter.emplace(summary.source, options.timestep, nullptr);
+        output.emplace(options, summary.source);
+      }
+      const std::string now = filesFingerprint((*source)->description());
+      if (now != fingerprint) {
+        fingerprint = now;
+        unchangedSince = FollowClock::now();
+      }
+      const int listed = (*source)->stepCount();
+      summary.sourceSteps = listed;
+      const bool settled = secondsSince(unchangedSince) >= follow.settle;
+      const int complete = ending || settled ? listed : listed - 1;
+      for (int k = output->steps(); k < complete; ++k) {
+        auto step = readChecked(**source, k);
+        if (!step) {
+          lastProblem = step.status();
+          break;  // read again at the next look
+        }
+        CRACKVIS_RETURN_IF_ERROR(output->append(*converter, *step, summary));
+        summary.selected.push_back(k);
+        lastStepAt = FollowClock::now();
+        if (follow.appended) {
+          follow.appended(k, step->sourceStep, summary.brokenLast);
+        }
+      }
+    }
+    if (ending) {
+      break;
+    }
+    std::this_thread::sleep_for(pause);
+  }
+  if (!output || !output->started()) {
+    return failedPrecondition(fmt::format("no complete step appeared before the follow ended ({})",
+                                          lastProblem.message()));
+  }
+  CRACKVIS_RETURN_IF_ERROR(output->close());
+  summary.reappeared = converter->reappeared();
+  summary.timesFromSource = converter->timesFromSource();
+  return summary;
 }
 
 }  // namespace crackvis::importers

@@ -5,6 +5,8 @@
 #include <fstream>
 
 #include <catch2/catch.hpp>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <vtkCallbackCommand.h>
 #include <vtkCellAttributeCrackFilter.h>
 #include <vtkCellCentreCrackFilter.h>
@@ -376,4 +378,67 @@ TEST_CASE("the crack filters pass an empty piece through without an error", "[cr
   check(centre);
   check(attribute);
   CHECK(counter.errors == 0);
+}
+
+TEST_CASE("the crackvis-dem reader shows a live file's new steps on the next update",
+          "[cracks][vtk][live]") {
+  // The writer runs in a child, as a simulation beside ParaView would: HDF5
+  // shares one open file between the opens of a process.
+  const auto crack = sampleCrack();
+  testing::TempDir dir;
+  const std::string path = dir.file("live.h5");
+  int go[2];
+  int done[2];
+  REQUIRE(pipe(go) == 0);
+  REQUIRE(pipe(done) == 0);
+  const pid_t writer = fork();
+  if (writer == 0) {
+    dem::DemMetadata metadata = dem::metadataFrom("vtk_filters test");
+    metadata.stepLayout = dem::StepLayout::kAppendable;
+    auto file = dem::DemFileWriter::create(path, crack.block.lattice, metadata);
+    dem::StepState step;
+    step.positions = crack.block.positions;
+    step.bondState.assign(crack.state.size(), 0);
+    char byte = 0;
+    for (int k = 0; k < 3 && file; ++k) {
+      step.time = 0.5 + k;
+      if (k == 2) {
+        step.bondState = crack.state;
+      }
+      if (!file->appendStep(step) || write(done[1], "s", 1) != 1 || read(go[0], &byte, 1) != 1) {
+        _exit(1);
+      }
+    }
+    _exit(file && file->close() ? 0 : 1);
+  }
+  REQUIRE(writer > 0);
+  char byte = 0;
+  auto nextStep = [&] {
+    REQUIRE(write(go[1], "g", 1) == 1);
+    REQUIRE(read(done[0], &byte, 1) == 1);
+  };
+  REQUIRE(read(done[0], &byte, 1) == 1);  // step 0 is in
+  nextStep();                             // and step 1
+  vtkNew<vtkCrackvisDemReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->UpdateInformation();
+  vtkInformation* info = reader->GetOutputInformation(0);
+  CHECK(info->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) == 2);
+  nextStep();  // step 2, the cracked one
+  // ParaView's Reload Files: the reader is modified, its information asked again.
+  reader->Modified();
+  reader->UpdateInformation();
+  REQUIRE(info->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) == 3);
+  CHECK(info->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS())[2] == 2.5);
+  reader->UpdateTimeStep(2.5);
+  vtkPolyData* cracked = reader->GetOutput();
+  CHECK(vtkIntArray::SafeDownCast(cracked->GetFieldData()->GetArray("step"))->GetValue(0) == 2);
+  CHECK(cracked->GetCellData()->GetArray("bond_state")->GetRange()[1] == 1.0);
+  REQUIRE(write(go[1], "g", 1) == 1);
+  int status = 0;
+  REQUIRE(waitpid(writer, &status, 0) == writer);
+  CHECK((WIFEXITED(status) && WEXITSTATUS(status) == 0));
+  for (int fd : {go[0], go[1], done[0], done[1]}) {
+    close(fd);
+  }
 }

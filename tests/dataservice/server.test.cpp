@@ -4,6 +4,7 @@
 // gives; every bad input gets a status that names the input, and the server
 // keeps answering afterwards.
 #include <chrono>
+#include <ctime>
 #include <stdexcept>
 #include <string_view>
 #include <thread>
@@ -191,6 +192,10 @@ TEST_CASE("Describe answers an unchanged file from its held answer and walks a c
   const std::string path = (root.path() / "live.h5").string();
   const SampleData sample = makeSample(3, 2);
   writeSample(path, sample);
+  // Answers are held only for files that settled (modified two seconds or
+  // more ago): this one was, an hour ago.
+  const struct timespec anHourAgo[2] = {{::time(nullptr) - 3600, 0}, {::time(nullptr) - 3600, 0}};
+  REQUIRE(::utimensat(AT_FDCWD, path.c_str(), anHourAgo, 0) == 0);
   auto config = baseConfig();
   config.dataRoot = root.path().string();
   auto server = startServer(config);
@@ -210,6 +215,15 @@ TEST_CASE("Describe answers an unchanged file from its held answer and walks a c
     auto grown = client.describe("live.h5");
     REQUIRE(grown.isOk());
     CHECK(grown->steps.size() == 4);
+  }
+  SECTION("a file modified in the last two seconds is walked every time") {
+    // The file system's clock is coarse: a second write within its tick
+    // would keep the stamp, so a file still being written is never held.
+    const struct timespec now[2] = {{0, UTIME_NOW}, {0, UTIME_NOW}};
+    REQUIRE(::utimensat(AT_FDCWD, path.c_str(), now, 0) == 0);
+    CHECK(firstTime(client.describe("live.h5")) == t0);
+    rewriteKeepingStamp(path, sample, 3.0);
+    CHECK(firstTime(client.describe("live.h5")) == t0 + 3.0);
   }
   SECTION("a removed file is NOT_FOUND, not its held answer") {
     std::filesystem::remove(path);

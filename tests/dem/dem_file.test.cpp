@@ -13,17 +13,9 @@
 using namespace crackvis;
 using namespace crackvis::dem;
 using crackvis::testing::makeSample;
+using crackvis::testing::sameBytes;
 using crackvis::testing::SampleData;
 using crackvis::testing::TempDir;
-
-namespace {
-
-template <typename T>
-bool sameBytes(const std::vector<T>& a, const std::vector<T>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
-}
-
-}  // namespace
 
 TEST_CASE("write/read round trip is bit-exact in 2D and 3D", "[dem][h5]") {
   const int dimension = GENERATE(2, 3);

@@ -63,7 +63,7 @@ TEST_CASE("crackvis-dem v1.1 round-trips ids, groups, notch flags, scalars and e
   REQUIRE(reader);
   const auto& info = reader->info();
   CHECK(info.version == 1);
-  CHECK(info.minorVersion == 1);
+  CHECK(info.minorVersion == dem::kFormatMinorVersion);
   CHECK_FALSE(info.hasStrength);
   CHECK(info.sourceCode == "LAMMPS");
   CHECK(info.sourceVersion == "29 Sep 2021");

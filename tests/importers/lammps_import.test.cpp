@@ -71,7 +71,7 @@ TEST_CASE("a LAMMPS notched bar imports with LAMMPS's own count of breaks", "[im
   auto reader = dem::DemFileReader::open(out);
   REQUIRE(reader);
   const auto& info = reader->info();
-  CHECK(info.minorVersion == 1);
+  CHECK(info.minorVersion == dem::kFormatMinorVersion);
   CHECK(info.sourceCode == "LAMMPS");
   CHECK(info.particleCount == 468);
   CHECK(info.bondCount == 2150);

@@ -23,11 +23,12 @@ std::string fileText(const std::string& path) {
   return buffer.str();
 }
 
-ProcessResult runProcess(const std::vector<std::string>& argv) {
-  // Files rather than pipes: no deadlock however much the child prints.
-  TempDir dir;
-  const std::string outPath = dir.file("stdout");
-  const std::string errPath = dir.file("stderr");
+namespace {
+
+// posix_spawn (safe in a threaded test process) with stdin on /dev/null and
+// stdout and stderr into the named files ("/dev/null" to drop them).
+pid_t spawn(const std::vector<std::string>& argv, const std::string& outPath,
+            const std::string& errPath) {
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
@@ -46,14 +47,32 @@ ProcessResult runProcess(const std::vector<std::string>& argv) {
   if (spawned != 0) {
     throw std::runtime_error("cannot start " + argv.at(0));
   }
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0) {
-  }
+  return pid;
+}
+
+}  // namespace
+
+ProcessResult runProcess(const std::vector<std::string>& argv) {
+  // Files rather than pipes: no deadlock however much the child prints.
+  TempDir dir;
+  const std::string outPath = dir.file("stdout");
+  const std::string errPath = dir.file("stderr");
   ProcessResult result;
-  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  result.exitCode = waitProcess(spawn(argv, outPath, errPath));
   result.out = fileText(outPath);
   result.err = fileText(errPath);
   return result;
+}
+
+pid_t startProcess(const std::vector<std::string>& argv, const std::string& errPath) {
+  return spawn(argv, "/dev/null", errPath.empty() ? "/dev/null" : errPath);
+}
+
+int waitProcess(pid_t pid) {
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 std::vector<std::string> lines(const std::string& text) {

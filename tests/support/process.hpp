@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/types.h>
+
 namespace crackvis::testing {
 
 struct ProcessResult {
@@ -16,6 +18,13 @@ struct ProcessResult {
 };
 
 ProcessResult runProcess(const std::vector<std::string>& argv);
+
+// Starts a program in the background (posix_spawn: safe in a threaded test
+// process), its stdin, stdout and stderr on /dev/null unless `errPath`
+// names a file for stderr. The caller ends it (waitProcess, kill).
+pid_t startProcess(const std::vector<std::string>& argv, const std::string& errPath = "");
+// Waits for a started program: its exit status, or 128 + signal.
+int waitProcess(pid_t pid);
 
 // This process's resident memory and thread count (/proc/self), for tests
 // that show a hostile input does not make a server grow.

@@ -2,6 +2,7 @@
 // few steps in which bonds break progressively, as a fracture run would.
 #pragma once
 
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,13 @@ void writeSample(const std::string& path, const SampleData& sample);
 // the other bonds broken at random (dem::PlantedCrack), written to `path`;
 // throws on failure.
 void writePlantedRandomPacking(const std::string& path, int steps, double scatter = 0.002);
+
+// Whether two arrays hold the same bytes (NaN payloads and -0.0 included):
+// what a round trip through a file must keep.
+template <typename T>
+bool sameBytes(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
 
 // Shorthand: makeSample + writeSample.
 SampleData writeSampleFile(const std::string& path, int dimension = 3, int steps = 3);

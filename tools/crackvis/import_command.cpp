@@ -1,5 +1,9 @@
 // crackvis import: reads what a DEM code wrote (LAMMPS, ESyS-Particle, Yade,
-// or a plain CSV/NumPy folder) into a crackvis-dem v1.1 file, step by step.
+// or a plain CSV/NumPy folder) into a crackvis-dem file, step by step (a live
+// one with --follow, beside a run that is still writing).
+#include <atomic>
+#include <csignal>
+
 #include <fmt/format.h>
 
 #include "commands.hpp"
@@ -14,7 +18,46 @@ struct ImportCommandOptions {
   importers::ImportOptions import;
   int compress = 0;
   bool quiet = false;
+  bool follow = false;
+  importers::FollowOptions following;
 };
+
+Result<std::unique_ptr<importers::StepSource>> openSource(const ImportCommandOptions& options);
+
+// SIGINT or SIGTERM during --follow: the import ends after its next look,
+// with every complete step written and the live file closed.
+std::atomic<bool> g_stopFollowing{false};
+extern "C" void stopFollowing(int) {
+  g_stopFollowing = true;
+}
+
+int runFollow(ImportCommandOptions& options) {
+  if (options.following.untilIdle <= 0.0 && options.following.pid <= 0) {
+    std::fprintf(stderr,
+                 "crackvis import: following until interrupted (Ctrl-C, SIGTERM); --until-idle "
+                 "SECONDS or --pid PID end it by themselves\n");
+  }
+  std::signal(SIGINT, stopFollowing);
+  std::signal(SIGTERM, stopFollowing);
+  options.following.stopRequested = [] { return g_stopFollowing.load(); };
+  if (!options.quiet) {
+    options.following.appended = [&](int index, std::int64_t codeStep, std::size_t broken) {
+      std::fprintf(stderr, "\rimport: step %d (code step %lld), broken %zu   ", index,
+                   static_cast<long long>(codeStep), broken);
+    };
+  }
+  auto summary = importers::followSeries([&] { return openSource(options); }, options.import,
+                                         options.following);
+  if (!options.quiet) {
+    std::fputc('\n', stderr);
+  }
+  if (!summary) {
+    printError("import", summary.status().message());
+    return kExitFailure;
+  }
+  std::fputs(importers::formatSummary(*summary, options.import).c_str(), stdout);
+  return kExitOk;
+}
 
 Result<std::unique_ptr<importers::StepSource>> openSource(const ImportCommandOptions& options) {
   if (options.code == "lammps") {
@@ -37,6 +80,13 @@ int runImport(ImportCommandOptions& options) {
   options.import.invocation = invocation();
   options.import.progress = !options.quiet;
   options.import.storage.deflateLevel = options.compress;
+  if (!options.follow && (options.following.untilIdle > 0.0 || options.following.pid > 0)) {
+    printError("import", "--until-idle and --pid go with --follow");
+    return kExitUsage;
+  }
+  if (options.follow) {
+    return runFollow(options);
+  }
   auto source = openSource(options);
   if (!source) {
     printError("import", source.status().message());
@@ -96,6 +146,32 @@ Command addImportCommand(CLI::App& parent) {
                     "Read the first and last step, print what an import would write, write "
                     "nothing");
   command->add_flag("-q,--quiet", options->quiet, "No progress bar");
+  const char* live = "Following a run that is still writing";
+  command
+      ->add_flag("--follow", options->follow,
+                 "Follow a run that is still writing: look at SOURCE again and again, and "
+                 "append each step to a live file (readable while it grows: crackvis-client "
+                 "and the browser page show each step as it lands) as soon as its files are "
+                 "complete. Ends on --until-idle, --pid, Ctrl-C or SIGTERM, with every step "
+                 "written")
+      ->group(live);
+  command
+      ->add_option("--until-idle", options->following.untilIdle,
+                   "With --follow: end after this many seconds without a new step")
+      ->check(CLI::PositiveNumber)
+      ->group(live);
+  command
+      ->add_option("--pid", options->following.pid,
+                   "With --follow: end once the DEM code's process PID has ended")
+      ->check(CLI::PositiveNumber)
+      ->group(live);
+  command
+      ->add_option("--settle", options->following.settle,
+                   "With --follow: seconds the files must rest before the newest step counts "
+                   "as complete (a later step always completes it)")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str()
+      ->group(live);
   return {command, [options] { return runImport(*options); }};
 }
 

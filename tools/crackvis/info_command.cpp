@@ -186,6 +186,8 @@ nlohmann::json toJson(const FileSummary& summary, bool perStep) {
       {"incomplete_steps", info.incompleteSteps},
       {"planned_steps", info.plannedSteps > 0 ? nlohmann::json(info.plannedSteps) : nullptr},
       {"stopped_early", info.stoppedEarly()},
+      {"step_layout", info.stepLayout == dem::StepLayout::kAppendable ? "appendable" : "groups"},
+      {"being_written", info.beingWritten},
   };
   if (summary.rows.empty()) {
     out["time"] = nullptr;
@@ -242,6 +244,13 @@ void printText(const FileSummary& summary, bool perStep) {
                summary.cutAtStart > 0
                    ? fmt::format("; {} of them by load", last.broken - summary.cutAtStart)
                    : std::string());
+  }
+  if (info.stepLayout == dem::StepLayout::kAppendable) {
+    fmt::print("live file     {}\n",
+               info.beingWritten
+                   ? "being written: steps appear as the writer commits them (a writer that "
+                     "was killed leaves this too)"
+                   : "the writer closed it: the run ended");
   }
   if (info.stoppedEarly()) {
     fmt::print("stopped early the run wrote {} of {} planned steps\n", info.steps.size(),

@@ -35,6 +35,8 @@ struct SimOptions {
   int compress = 0;  // deflate level of the per-step arrays; 0 contiguous
   bool noVelocities = false;
   bool noBondForce = false;
+  bool live = false;
+  double pace = 0.0;
   // Material overrides; unset keeps the calibrated default.
   std::optional<double> youngsModulus;
   std::optional<double> strainThreshold;
@@ -141,6 +143,8 @@ int runSim(const SimOptions& options, bool setGiven) {
   run.savedSteps = preset->savedSteps;
   run.writeVelocities = !options.noVelocities;
   run.writeBondForce = !options.noBondForce;
+  run.live = options.live;
+  run.pace = options.pace;
   // The header waits for the first saved step, so that a run that cannot
   // start (unwritable output) prints nothing but its error line.
   run.onSaved = [&](const sim::RunProgress& at) {
@@ -229,6 +233,16 @@ Command addSimCommand(CLI::App& parent) {
                     "Do not write the optional per-step velocities");
   command->add_flag("--no-bond-force", options->noBondForce,
                     "Do not write the optional per-step bond forces");
+  command->add_flag(
+      "--live", options->live,
+      "Write a live file that clients can follow while the run goes on: OUTPUT is replaced "
+      "once the first step is complete, and each later step is visible to readers as soon as "
+      "it is written (HDF5 SWMR, docs/data-format.md \"Live files\")");
+  command
+      ->add_option("--pace", options->pace,
+                   "Write saved steps at least SECONDS apart in wall time, so that a small "
+                   "--live run can be watched as it grows (demos, tests)")
+      ->check(CLI::Range(0.0, 3600.0));
   command->add_flag("-q,--quiet", options->quiet, "No progress bar and no summary");
   command
       ->add_option("--compress", options->compress,

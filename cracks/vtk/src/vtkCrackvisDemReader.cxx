@@ -448,6 +448,18 @@ int vtkCrackvisDemReader::RequestInformation(vtkInformation*, vtkInformationVect
     }
     cache.reader.emplace(std::move(*reader));
     cache.fileName = this->FileName;
+  } else if (cache.reader->info().stepLayout == crackvis::dem::StepLayout::kAppendable &&
+             cache.reader->info().beingWritten) {
+    // A live file: the steps its writer committed since (ParaView's Reload
+    // Files, or any update of the pipeline's information).
+    if (crackvis::Status refreshed = cache.reader->refreshSteps(); !refreshed) {
+      vtkErrorMacro(<< refreshed.message());
+      return 0;
+    }
+    cache.times.clear();
+    for (const crackvis::dem::StepInfo& step : cache.reader->info().steps) {
+      cache.times.push_back(step.time);
+    }
   }
   vtkInformation* out = outputVector->GetInformationObject(0);
   out->Set(vtkStreamingDemandDrivenPipeline::TIME_STEPS(), cache.times.data(),

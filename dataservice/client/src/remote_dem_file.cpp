@@ -1,5 +1,7 @@
 #include <algorithm>
 #include <cstdint>
+#include <limits>
+#include <map>
 #include <optional>
 #include <span>
 #include <tuple>
@@ -18,7 +20,7 @@ namespace {
 // layout says.
 Result<bool> optionalDataset(const FileDescription& description, dem::DemDataset id, int step,
                              const dem::LayoutSizes& sizes) {
-  if (description.findDataset(dem::datasetPath(id, step)) == nullptr) {
+  if (description.findDataset(demStepDatasetPath(description, id, step)) == nullptr) {
     return false;
   }
   CRACKVIS_RETURN_IF_ERROR(checkDemDataset(description, id, step, sizes));
@@ -30,21 +32,25 @@ Result<bool> optionalDataset(const FileDescription& description, dem::DemDataset
 struct ExtraSlab {
   std::string path;
   int components = 1;
-  bool matrix = false;  // stored [rows, k] rather than [rows]
+  bool matrix = false;    // stored [rows, k] rather than [rows]
+  bool stepAxis = false;  // an appendable file's: one row per step
 };
 
 // `owner` is "particles" or "bonds"; `n` the rows (N or M).
 Result<ExtraSlab> extraSlab(const FileDescription& description, const std::string& file,
                             const char* owner, const std::string& name, int step, std::uint64_t n) {
-  const std::string perStep = fmt::format("{}/extra/{}/{}", dem::stepGroupPath(step), owner, name);
+  const bool appendable = isAppendable(description);
+  const std::string stepFolder = appendable ? std::string("/steps") : dem::stepGroupPath(step);
+  const std::string perStep = fmt::format("{}/extra/{}/{}", stepFolder, owner, name);
   const std::string constant = fmt::format("/extra/{}/{}", owner, name);
   const DatasetInfo* dataset = description.findDataset(perStep);
+  const bool stepAxis = appendable && dataset != nullptr;
   if (dataset == nullptr) {
     dataset = description.findDataset(constant);
   }
   if (dataset == nullptr) {
     std::vector<std::string> known;
-    const std::string prefix = fmt::format("{}/extra/{}/", dem::stepGroupPath(step), owner);
+    const std::string prefix = fmt::format("{}/extra/{}/", stepFolder, owner);
     for (const DatasetInfo& info : description.datasets) {
       for (const std::string& folder : {prefix, fmt::format("/extra/{}/", owner)}) {
         if (info.path.rfind(folder, 0) == 0) {
@@ -57,25 +63,24 @@ Result<ExtraSlab> extraSlab(const FileDescription& description, const std::strin
         std::string_view(owner) == "bonds" ? "bond" : "particle", name, step,
         known.empty() ? std::string("none") : fmt::format("{}", fmt::join(known, ", "))));
   }
+  std::vector<std::uint64_t> shape = dataset->shape;
+  if (stepAxis) {
+    if (shape.empty() || shape[0] <= static_cast<std::uint64_t>(step)) {
+      return failedPrecondition(
+          fmt::format("{}: dataset {} has shape {}, without a row for step {}", file, dataset->path,
+                      dem::h5::formatDims(shape), step));
+    }
+    shape.erase(shape.begin());
+  }
   const bool widthValid =
-      dataset->shape.size() == 1 ||
-      (dataset->shape.size() == 2 && (dataset->shape[1] == 1 || dataset->shape[1] == 3));
-  if (dataset->dtype != DataType::kFloat64 || dataset->shape.empty() || dataset->shape[0] != n ||
-      !widthValid) {
+      shape.size() == 1 || (shape.size() == 2 && (shape[1] == 1 || shape[1] == 3));
+  if (dataset->dtype != DataType::kFloat64 || shape.empty() || shape[0] != n || !widthValid) {
     return failedPrecondition(
         fmt::format("{}: dataset {} is {} {}, expected float64 [{}] or [{},3]", file, dataset->path,
                     dataset->dtypeName, dem::h5::formatDims(dataset->shape), n, n));
   }
-  return ExtraSlab{dataset->path,
-                   dataset->shape.size() == 2 ? static_cast<int>(dataset->shape[1]) : 1,
-                   dataset->shape.size() == 2};
-}
-
-std::string positionsPath(int step) {
-  return dem::datasetPath(dem::DemDataset::kPositions, step);
-}
-std::string bondStatePath(int step) {
-  return dem::datasetPath(dem::DemDataset::kBondState, step);
+  return ExtraSlab{dataset->path, shape.size() == 2 ? static_cast<int>(shape[1]) : 1,
+                   shape.size() == 2, stepAxis};
 }
 
 // Every bond must join two existing particles (dem::checkBondEnds); `first`
@@ -139,6 +144,7 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   remote.m_client = client;
   remote.m_file = file;
   remote.m_dimension = *dimension;
+  remote.m_appendable = isAppendable(*description);
   if (const GroupInfo* root = description->findGroup("/")) {
     if (const AttributeInfo* unit = root->findAttribute(dem::kTimeUnitAttribute)) {
       const auto* text = std::get_if<std::string>(&unit->value);
@@ -163,6 +169,7 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   remote.m_bonds = sizes.bonds;
   remote.m_description = std::make_shared<const FileDescription>(std::move(*description));
   remote.m_prefetchedBonds = std::move(bonds);
+  CRACKVIS_RETURN_IF_ERROR(remote.readWritingFlag());
   return remote;
 }
 
@@ -323,8 +330,11 @@ Result<RemoteStep> RemoteDemFile::readStepOnce(int step, StepExtras extras) {
       return withForce.status();
     }
   }
-  std::vector<Hyperslab> slabs = {Hyperslab::whole(positionsPath(step)),
-                                  Hyperslab::whole(bondStatePath(step))};
+  const std::string& positionsPath =
+      demStepDatasetPath(*m_description, dem::DemDataset::kPositions, step);
+  std::vector<Hyperslab> slabs = {
+      stepSlab(positionsPath, step, {n, 3}),
+      stepSlab(demStepDatasetPath(*m_description, dem::DemDataset::kBondState, step), step, {m})};
   const bool withBonds = !m_bondList && !m_prefetchedBonds;
   const std::size_t bondsSlab = withBonds ? slabs.size() : SIZE_MAX;
   if (withBonds) {
@@ -333,10 +343,12 @@ Result<RemoteStep> RemoteDemFile::readStepOnce(int step, StepExtras extras) {
   const bool readVelocities = *withVelocities;
   const bool readForce = *withForce;
   if (readVelocities) {
-    slabs.push_back(Hyperslab::whole(dem::datasetPath(dem::DemDataset::kVelocities, step)));
+    slabs.push_back(stepSlab(demStepDatasetPath(*m_description, dem::DemDataset::kVelocities, step),
+                             step, {n, 3}));
   }
   if (readForce) {
-    slabs.push_back(Hyperslab::whole(dem::datasetPath(dem::DemDataset::kBondForce, step)));
+    slabs.push_back(
+        stepSlab(demStepDatasetPath(*m_description, dem::DemDataset::kBondForce, step), step, {m}));
   }
   // Extra arrays, per particle then per bond: (slab, rows, output).
   struct ExtraRead {
@@ -360,7 +372,12 @@ Result<RemoteStep> RemoteDemFile::readStepOnce(int step, StepExtras extras) {
       return found.status();
     }
     extraReads.push_back({*found, rows, values, components});
-    slabs.push_back(Hyperslab::whole(found->path));
+    std::vector<std::uint64_t> row{rows};
+    if (found->matrix) {
+      row.push_back(static_cast<std::uint64_t>(found->components));
+    }
+    slabs.push_back(found->stepAxis ? stepSlab(found->path, step, row)
+                                    : Hyperslab::whole(found->path));
   }
   // The request goes out first: the arrays below are allocated (3.5 MB for
   // cuboid A, page faults and zeroing included) while the server opens the
@@ -379,23 +396,30 @@ Result<RemoteStep> RemoteDemFile::readStepOnce(int step, StepExtras extras) {
     DataType dtype;
     std::vector<std::uint64_t> shape;
     std::byte* data;
-    std::uint64_t elements() const { return shape[0] * (shape.size() > 1 ? shape[1] : 1); }
+    std::uint64_t elements() const {
+      std::uint64_t count = 1;
+      for (const std::uint64_t extent : shape) {
+        count *= extent;
+      }
+      return count;
+    }
   };
   std::vector<Expected> expected = {
-      {DataType::kFloat64, {n, 3}, reinterpret_cast<std::byte*>(result.positions.data())},
-      {DataType::kUInt8, {m}, reinterpret_cast<std::byte*>(result.bondState.data())}};
+      {DataType::kFloat64, stepShape({n, 3}),
+       reinterpret_cast<std::byte*>(result.positions.data())},
+      {DataType::kUInt8, stepShape({m}), reinterpret_cast<std::byte*>(result.bondState.data())}};
   if (withBonds) {
     expected.push_back({DataType::kInt32, {m, 2}, reinterpret_cast<std::byte*>(bonds.data())});
   }
   if (readVelocities) {
     result.velocities.resize(n);
-    expected.push_back(
-        {DataType::kFloat32, {n, 3}, reinterpret_cast<std::byte*>(result.velocities.data())});
+    expected.push_back({DataType::kFloat32, stepShape({n, 3}),
+                        reinterpret_cast<std::byte*>(result.velocities.data())});
   }
   if (readForce) {
     result.bondForce.resize(m);
-    expected.push_back(
-        {DataType::kFloat32, {m}, reinterpret_cast<std::byte*>(result.bondForce.data())});
+    expected.push_back({DataType::kFloat32, stepShape({m}),
+                        reinterpret_cast<std::byte*>(result.bondForce.data())});
   }
   for (const ExtraRead& read : extraReads) {
     const auto width = static_cast<std::uint64_t>(read.slab.components);
@@ -404,6 +428,9 @@ Result<RemoteStep> RemoteDemFile::readStepOnce(int step, StepExtras extras) {
     std::vector<std::uint64_t> shape{read.rows};
     if (read.slab.matrix) {
       shape.push_back(width);
+    }
+    if (read.slab.stepAxis) {
+      shape = stepShape(std::move(shape));
     }
     expected.push_back(
         {DataType::kFloat64, shape, reinterpret_cast<std::byte*>(read.values->data())});
@@ -441,7 +468,10 @@ Result<RemoteStep> RemoteDemFile::readStepOnce(int step, StepExtras extras) {
 
 Result<std::vector<dem::Vec3>> RemoteDemFile::positions(int step) const {
   CRACKVIS_RETURN_IF_ERROR(checkStep(step));
-  auto arrays = m_client->read(m_file, {Hyperslab::whole(positionsPath(step))});
+  const auto n = static_cast<std::uint64_t>(m_particles);
+  auto arrays = m_client->read(
+      m_file, {stepSlab(demStepDatasetPath(*m_description, dem::DemDataset::kPositions, step), step,
+                        {n, 3})});
   if (!arrays) {
     return arrays.status();
   }
@@ -451,7 +481,12 @@ Result<std::vector<dem::Vec3>> RemoteDemFile::positions(int step) const {
 Result<std::vector<dem::Vec3>> RemoteDemFile::positions(int step, std::int64_t first,
                                                         std::int64_t count) const {
   CRACKVIS_RETURN_IF_ERROR(checkStep(step));
-  auto arrays = m_client->read(m_file, {{positionsPath(step), {first, 0}, {count, 3}}});
+  const std::string path = demStepDatasetPath(*m_description, dem::DemDataset::kPositions, step);
+  Hyperslab slab{path, {first, 0}, {count, 3}};
+  if (m_appendable) {
+    slab = {path, {step, first, 0}, {1, count, 3}};
+  }
+  auto arrays = m_client->read(m_file, {slab});
   if (!arrays) {
     return arrays.status();
   }
@@ -460,11 +495,172 @@ Result<std::vector<dem::Vec3>> RemoteDemFile::positions(int step, std::int64_t f
 
 Result<std::vector<std::uint8_t>> RemoteDemFile::bondState(int step) const {
   CRACKVIS_RETURN_IF_ERROR(checkStep(step));
-  auto arrays = m_client->read(m_file, {Hyperslab::whole(bondStatePath(step))});
+  auto arrays = m_client->read(
+      m_file, {stepSlab(demStepDatasetPath(*m_description, dem::DemDataset::kBondState, step), step,
+                        {static_cast<std::uint64_t>(m_bonds)})});
   if (!arrays) {
     return arrays.status();
   }
   return toBondState(arrays->front());
+}
+
+}  // namespace crackvis::dataservice
+
+namespace crackvis::dataservice {
+
+Hyperslab RemoteDemFile::stepSlab(const std::string& path, int step,
+                                  const std::vector<std::uint64_t>& rowShape) const {
+  if (!m_appendable) {
+    return Hyperslab::whole(path);
+  }
+  Hyperslab slab{path, {step}, {1}};
+  for (const std::uint64_t extent : rowShape) {
+    slab.start.push_back(0);
+    slab.count.push_back(static_cast<std::int64_t>(extent));
+  }
+  return slab;
+}
+
+std::vector<std::uint64_t> RemoteDemFile::stepShape(std::vector<std::uint64_t> rowShape) const {
+  if (m_appendable) {
+    rowShape.insert(rowShape.begin(), 1);
+  }
+  return rowShape;
+}
+
+}  // namespace crackvis::dataservice
+
+namespace crackvis::dataservice {
+namespace {
+
+std::string runIdOf(const FileDescription& description) {
+  const GroupInfo* root = description.findGroup("/");
+  const AttributeInfo* id = root != nullptr ? root->findAttribute(dem::kRunIdAttribute) : nullptr;
+  const auto* text = id != nullptr ? std::get_if<std::string>(&id->value) : nullptr;
+  return text != nullptr ? *text : std::string();
+}
+
+std::uint64_t rowsOf(const FileDescription& description, const char* dataset) {
+  const DatasetInfo* info = description.findDataset(dataset);
+  return info != nullptr && !info->shape.empty() ? info->shape[0] : 0;
+}
+
+}  // namespace
+
+Result<bool> RemoteDemFile::refresh() {
+  auto description = m_client->describe(m_file);
+  if (!description) {
+    return description.status();
+  }
+  const FileDescription& before = *m_description;
+  const bool sameFile =
+      runIdOf(*description) == runIdOf(before) && isAppendable(*description) == m_appendable &&
+      rowsOf(*description, "/particles/radius") == static_cast<std::uint64_t>(m_particles) &&
+      rowsOf(*description, "/bonds/pairs") == static_cast<std::uint64_t>(m_bonds) &&
+      description->steps.size() >= before.steps.size() &&
+      (before.steps.empty() || description->steps.front().time == before.steps.front().time);
+  if (!sameFile) {
+    return failedPrecondition(fmt::format(
+        "{}: the file was replaced while it was open (another run under the same name); open it "
+        "again",
+        m_file));
+  }
+  const dem::LayoutSizes layoutSizes = sizes();
+  for (std::size_t k = before.steps.size(); k < description->steps.size(); ++k) {
+    for (dem::DemDataset id : {dem::DemDataset::kPositions, dem::DemDataset::kBondState}) {
+      if (Status valid = checkDemDataset(*description, id, static_cast<int>(k), layoutSizes);
+          !valid) {
+        return Status(valid.code(), fmt::format("{}: {}", m_file, valid.message()));
+      }
+    }
+  }
+  const bool grew = description->steps.size() > before.steps.size();
+  m_description = std::make_shared<const FileDescription>(std::move(*description));
+  CRACKVIS_RETURN_IF_ERROR(readWritingFlag());
+  return grew;
+}
+
+Status RemoteDemFile::readWritingFlag() {
+  m_beingWritten = false;
+  if (!m_appendable || m_description->findDataset(dem::kStepsWritingPath) == nullptr) {
+    return Status::ok();
+  }
+  auto arrays = m_client->read(m_file, {Hyperslab::whole(dem::kStepsWritingPath)});
+  if (!arrays) {
+    return arrays.status();
+  }
+  auto flag = arrays->front().values<std::int32_t>();
+  if (!flag || flag->size() != 1) {
+    return failedPrecondition(
+        fmt::format("{}: {} is not one int32", m_file, dem::kStepsWritingPath));
+  }
+  m_beingWritten = flag->front() != 0;
+  return Status::ok();
+}
+
+}  // namespace crackvis::dataservice
+
+namespace crackvis::dataservice {
+
+Result<std::vector<RemoteDemFile::ScalarSeries>> RemoteDemFile::stepScalars() const {
+  const auto steps = static_cast<std::size_t>(stepCount());
+  std::vector<ScalarSeries> series;
+  if (!m_appendable) {
+    std::map<std::string, std::size_t> index;  // name -> position in series
+    for (std::size_t k = 0; k < steps; ++k) {
+      const GroupInfo* group = m_description->findGroup(m_description->steps[k].group);
+      if (group == nullptr) {
+        continue;
+      }
+      for (const AttributeInfo& attribute : group->attributes) {
+        const auto value = group->floatAttribute(attribute.name);
+        if (attribute.name == "time" || !value) {
+          continue;
+        }
+        auto [at, added] = index.try_emplace(attribute.name, series.size());
+        if (added) {
+          series.push_back({attribute.name,
+                            std::vector<double>(steps, std::numeric_limits<double>::quiet_NaN())});
+        }
+        series[at->second].values[k] = *value;
+      }
+    }
+    return series;
+  }
+  const std::string prefix = std::string(dem::kStepScalarsPath) + "/";
+  std::vector<Hyperslab> slabs;
+  for (const DatasetInfo& dataset : m_description->datasets) {
+    if (dataset.path.rfind(prefix, 0) != 0 ||
+        dataset.path.find('/', prefix.size()) != std::string::npos) {
+      continue;
+    }
+    if (dataset.dtype != DataType::kFloat64 || dataset.shape.size() != 1 ||
+        dataset.shape[0] < steps) {
+      return failedPrecondition(
+          fmt::format("{}: dataset {} is {} {}, expected float64 [{}] or longer", m_file,
+                      dataset.path, dataset.dtypeName, dem::h5::formatDims(dataset.shape), steps));
+    }
+    series.push_back({dataset.path.substr(prefix.size()), {}});
+    slabs.push_back({dataset.path, {0}, {static_cast<std::int64_t>(steps)}});
+  }
+  if (slabs.empty() || steps == 0) {
+    for (ScalarSeries& s : series) {
+      s.values.clear();
+    }
+    return series;
+  }
+  auto arrays = m_client->read(m_file, slabs);
+  if (!arrays) {
+    return arrays.status();
+  }
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    auto values = (*arrays)[i].values<double>();
+    if (!values) {
+      return values.status();
+    }
+    series[i].values = std::move(values).value();
+  }
+  return series;
 }
 
 }  // namespace crackvis::dataservice

@@ -206,9 +206,35 @@ herr_t visitLink(hid_t root, const char* name, const H5L_info_t* link, void* dat
   return 0;
 }
 
+// An appendable (live) file's complete steps: the values of /steps/time,
+// whose length is the commit mark (docs/data-format.md "Live files").
+void fillAppendableSteps(FileDescription& description, hid_t file) {
+  const DatasetInfo* time = description.findDataset(dem::kStepTimePath);
+  if (time == nullptr || time->dtype != DataType::kFloat64 || time->shape.size() != 1) {
+    return;
+  }
+  constexpr std::uint64_t kMaxSteps = 1'000'000;
+  const std::uint64_t count = std::min(time->shape[0], kMaxSteps);
+  auto resolved = h5::resolveInFile(file, dem::kStepTimePath);
+  if (!resolved) {
+    return;
+  }
+  h5::Handle access = h5::noExternalLinks();
+  h5::Handle dataset = h5::datasetHandle(H5Dopen2(file, resolved->c_str(), access.get()));
+  std::vector<double> times(count);
+  if (!dataset.valid() ||
+      !h5::readLeading(dataset.get(), h5::ElementType::kFloat64, count, times.data())) {
+    h5::lastHdf5Error();
+    return;  // a damaged file: no steps reported, the reader says why
+  }
+  for (std::uint64_t k = 0; k < count; ++k) {
+    description.steps.push_back({static_cast<int>(k), times[k], ""});
+  }
+}
+
 // The format, version and complete steps of a crackvis-dem file, taken from
-// the attributes already collected.
-void fillDemSummary(FileDescription& description) {
+// the attributes already collected (and an appendable file's step times).
+void fillDemSummary(FileDescription& description, hid_t file) {
   const GroupInfo* root = description.findGroup("/");
   if (root == nullptr) {
     return;
@@ -219,6 +245,13 @@ void fillDemSummary(FileDescription& description) {
   }
   description.formatVersion = static_cast<int>(attributes.version.isOk() ? *attributes.version : 0);
   if (description.format != dem::kFormatName) {
+    return;
+  }
+  if (const AttributeInfo* layout = root->findAttribute(dem::kStepLayoutAttribute)) {
+    const auto* name = std::get_if<std::string>(&layout->value);
+    if (name != nullptr && *name == dem::kAppendableName) {
+      fillAppendableSteps(description, file);
+    }
     return;
   }
   const GroupInfo* steps = description.findGroup("/steps");
@@ -275,7 +308,7 @@ Result<FileDescription> Catalogue::describe(const ResolvedPath& file,
         fmt::format("{}: cannot walk the file's tree ({})", file.requested, h5::lastHdf5Error()));
   }
   description.buildIndex();
-  fillDemSummary(description);
+  fillDemSummary(description, handle->get());
   return description;
 }
 

@@ -183,12 +183,35 @@ dem::RootAttributes demRootAttributes(const FileDescription& description) {
   return root;
 }
 
+bool isAppendable(const FileDescription& description) {
+  const GroupInfo* root = description.findGroup("/");
+  const AttributeInfo* layout =
+      root != nullptr ? root->findAttribute(dem::kStepLayoutAttribute) : nullptr;
+  const auto* name = layout != nullptr ? std::get_if<std::string>(&layout->value) : nullptr;
+  return name != nullptr && *name == dem::kAppendableName;
+}
+
+std::string demStepDatasetPath(const FileDescription& description, dem::DemDataset id, int step) {
+  return isAppendable(description) ? dem::appendablePath(id) : dem::datasetPath(id, step);
+}
+
 Status checkDemDataset(const FileDescription& description, dem::DemDataset id, int step,
                        const dem::LayoutSizes& sizes) {
-  const std::string path = dem::datasetPath(id, step);
+  const bool row = dem::datasetSpec(id).perStep && isAppendable(description);
+  const std::string path = demStepDatasetPath(description, id, step);
   const DatasetInfo* dataset = description.findDataset(path);
   if (dataset == nullptr) {
     return dem::missingDataset(path);
+  }
+  std::vector<std::uint64_t> dims = dataset->shape;
+  if (row) {
+    // An appendable dataset holds every step along its first axis; the
+    // layout's shape is that of one row.
+    if (dims.empty() || dims[0] <= static_cast<std::uint64_t>(step)) {
+      return failedPrecondition(fmt::format("dataset {} has shape {}, without a row for step {}",
+                                            path, dem::formatDims(dims), step));
+    }
+    dims.erase(dims.begin());
   }
   // The element types the layout uses; any other stays kOther.
   static constexpr std::pair<DataType, dem::ElementType> kLayoutTypes[] = {
@@ -203,8 +226,9 @@ Status checkDemDataset(const FileDescription& description, dem::DemDataset id, i
     }
   }
   header.typeName = dataset->dtypeName;
-  header.dims = dataset->shape;
-  return dem::checkDatasetHeader(id, path, header, sizes);
+  header.dims = std::move(dims);
+  return dem::checkDatasetHeader(id, row ? fmt::format("{} (step {})", path, step) : path, header,
+                                 sizes);
 }
 
 }  // namespace crackvis::dataservice

@@ -199,7 +199,7 @@ Status DataServiceImpl::walk(grpc::CallbackServerContext* context, const Caller&
     return internalError(fmt::format("Describe of {}: an HDF5 worker sent an unreadable answer",
                                      echoed(resolved.requested)));
   }
-  if (stamp) {
+  if (stamp && settled(*stamp)) {
     m_descriptions.store(key, *stamp, *described);
   }
   record.bytes = described->size();

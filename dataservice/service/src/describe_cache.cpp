@@ -1,5 +1,7 @@
 #include "describe_cache.hpp"
 
+#include <chrono>
+
 #include <sys/stat.h>
 
 namespace crackvis::dataservice {
@@ -13,6 +15,14 @@ std::optional<FileStamp> stampOf(const std::string& path) {
       static_cast<std::uint64_t>(status.st_dev), static_cast<std::uint64_t>(status.st_ino),
       static_cast<std::uint64_t>(status.st_size),
       static_cast<std::int64_t>(status.st_mtim.tv_sec) * 1'000'000'000 + status.st_mtim.tv_nsec};
+}
+
+bool settled(const FileStamp& stamp) {
+  constexpr std::int64_t kSettledNanoseconds = 2'000'000'000;
+  const std::int64_t now = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                               std::chrono::system_clock::now().time_since_epoch())
+                               .count();
+  return now - stamp.modifiedNanoseconds >= kSettledNanoseconds;
 }
 
 std::optional<std::string> DescribeCache::find(const std::string& key, const FileStamp& stamp) {

@@ -27,6 +27,12 @@ struct FileStamp {
 
 // The file's stamp now; nullopt when it cannot be read.
 std::optional<FileStamp> stampOf(const std::string& path);
+// Whether the file was last modified at least two seconds ago. The file
+// system's clock is coarse (a few milliseconds): a write in the same tick
+// after the stamp was taken leaves the stamp as it was, so answers are kept
+// only for files that have settled. A live file being written is walked
+// afresh for every Describe, which therefore sees every committed step.
+bool settled(const FileStamp& stamp);
 
 class DescribeCache {
  public:

@@ -82,6 +82,11 @@ std::string datasetPath(DemDataset id, int step) {
                       : std::string(spec.name);
 }
 
+std::string appendablePath(DemDataset id) {
+  const DatasetSpec& spec = datasetSpec(id);
+  return spec.perStep ? fmt::format("/steps/{}", spec.name) : std::string(spec.name);
+}
+
 Status missingDataset(const std::string& path) {
   return failedPrecondition(fmt::format("missing dataset {}", path));
 }

@@ -1,4 +1,5 @@
 #include <chrono>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -15,14 +16,14 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 // A run that stops part way (a full disk) keeps its complete steps in the
 // partial file, readable, and says where; the output's name still holds
 // what it held before.
-Status keptSteps(PendingFile& output, int steps, const Status& failure) {
+Status keptSteps(PendingFile& output, int steps, bool published, const Status& failure) {
   const Status named = output.named(failure);
   if (steps == 0) {
     return named;
   }
   output.keep();
   return {named.code(), fmt::format("{} (the {} complete steps are in {})", named.message(), steps,
-                                    output.path())};
+                                    published ? output.target() : output.path())};
 }
 
 }  // namespace
@@ -41,6 +42,9 @@ Result<RunSummary> runToFile(SimulationSetup setup, const RunOptions& options) {
   }
   dem::DemMetadata metadata = options.metadata;
   metadata.plannedSteps = options.savedSteps;
+  if (options.live) {
+    metadata.stepLayout = dem::StepLayout::kAppendable;
+  }
   // Written beside the output and renamed over it at the end: an existing
   // file stays as it was until the run is complete (a killed run leaves its
   // complete steps readable in OUTPUT.partial).
@@ -49,6 +53,9 @@ Result<RunSummary> runToFile(SimulationSetup setup, const RunOptions& options) {
   if (!writer) {
     return output.named(writer.status());
   }
+  // A live file takes the output's name once its first step is complete, so
+  // readers can follow it; until then the old file stays.
+  bool published = false;
   RunSummary summary;
   summary.particles = simulator->particleCount();
   summary.bonds = simulator->bondCount();
@@ -60,7 +67,16 @@ Result<RunSummary> runToFile(SimulationSetup setup, const RunOptions& options) {
     if (Status written = writer->appendStep(
             simulator->snapshot(options.writeVelocities, options.writeBondForce));
         !written) {
-      return keptSteps(output, writer->stepCount(), written);
+      return keptSteps(output, writer->stepCount(), published, written);
+    }
+    if (options.pace > 0.0) {
+      std::this_thread::sleep_until(start +
+                                    std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                        std::chrono::duration<double>(options.pace * (saved + 1))));
+    }
+    if (options.live && !published) {
+      CRACKVIS_RETURN_IF_ERROR(output.named(output.commit()));
+      published = true;
     }
     summary.writeSeconds += secondsSince(writeStart);
     summary.brokenPerSavedStep.push_back(simulator->brokenBondCount());
@@ -70,7 +86,9 @@ Result<RunSummary> runToFile(SimulationSetup setup, const RunOptions& options) {
     }
   }
   CRACKVIS_RETURN_IF_ERROR(output.named(writer->close()));
-  CRACKVIS_RETURN_IF_ERROR(output.named(output.commit()));
+  if (!published) {
+    CRACKVIS_RETURN_IF_ERROR(output.named(output.commit()));
+  }
   summary.savedSteps = options.savedSteps;
   summary.steps = simulator->stepIndex();
   summary.simulatedTime = simulator->time();

@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -28,6 +29,9 @@ inline constexpr const char* kPlannedStepsAttribute = "planned";
 // none was given, so `time` holds the code's step (iteration) number.
 inline constexpr const char* kTimeUnitAttribute = "time_unit";
 inline constexpr const char* kTimeInIterations = "iteration";
+// The root attribute (v1.2, optional) naming one written file: 32 random
+// hex digits, new for every file a writer creates.
+inline constexpr const char* kRunIdAttribute = "run_id";
 
 // Free-form provenance stored in root attributes.
 struct DemMetadata {
@@ -40,6 +44,10 @@ struct DemMetadata {
   std::vector<std::string> sourceFiles;  // the input files, as given
   h5::Storage storage;                   // per-step datasets: contiguous or compressed
   std::string timeUnit = "s";            // "s" or kTimeInIterations
+  // kAppendable: a live file, steps along an extendible axis, readable
+  // while it grows (HDF5 SWMR); every step then carries the optional arrays,
+  // extras and scalar names of the first.
+  StepLayout stepLayout = StepLayout::kGroups;
 };
 
 // Metadata naming only what produced the file.
@@ -62,8 +70,13 @@ struct ExtraInfo {
   int components = 1;
   bool perStep = false;  // under each step group (seen in step 0), else constant
 };
-// "/extra/particles/NAME", or "/steps/000042/extra/bonds/NAME" per step.
-std::string extraPath(const ExtraInfo& extra, int step = 0);
+// "/extra/particles/NAME", or "/steps/000042/extra/bonds/NAME" per step
+// ("/steps/extra/bonds/NAME", row 42, in an appendable file).
+std::string extraPath(const ExtraInfo& extra, int step = 0,
+                      StepLayout layout = StepLayout::kGroups);
+// The appendable layout's writer flag, int32 scalar: 1 while a live writer
+// has the file open, 0 once it closed it (a killed writer leaves 1).
+inline constexpr const char* kStepsWritingPath = "/steps/writing";
 
 // What a file holds, read from its attributes and dataset headers only.
 struct DemFileInfo {
@@ -82,7 +95,11 @@ struct DemFileInfo {
   std::string sourceCode;          // v1.1 provenance; empty when not recorded
   std::string sourceVersion;
   std::vector<std::string> sourceFiles;
-  std::string timeUnit = "s";            // "s", or kTimeInIterations: `time` is the code's step
+  std::string timeUnit = "s";  // "s", or kTimeInIterations: `time` is the code's step
+  StepLayout stepLayout = StepLayout::kGroups;
+  // Appendable files: whether the writer still had the file open when it
+  // was read (/steps/writing; a killed writer leaves it set).
+  bool beingWritten = false;
   bool hasStrength = false;              // /bonds/strength present (required before v1.1)
   std::vector<std::string> scalarNames;  // step scalars of any step, in first-seen order
   std::vector<ExtraInfo> extras;         // constant ones, then per-step ones (of step 0)
@@ -107,6 +124,9 @@ class DemFileReader {
       const std::string& path, std::chrono::milliseconds limit = std::chrono::minutes(5));
 
   const DemFileInfo& info() const { return m_info; }
+  // Reads the list of steps again: a live file's writer may have added
+  // some since open(). Each complete step is read once as it was written.
+  Status refreshSteps();
   int stepCount() const { return static_cast<int>(m_info.steps.size()); }
 
   // Radii, bonds, strengths and the optional v1.1 arrays (ids, groups, bond
@@ -131,12 +151,22 @@ class DemFileReader {
   Status fail(const Status& status) const;
   Status readStructure();
   Status readSteps();
+  Status readGroupSteps(hid_t steps);
+  Status readAppendableSteps();
+  Status readAppendableScalars(std::uint64_t count);
+  // Where step `step` of a per-step dataset lives in this file's layout.
+  std::string stepDatasetPath(DemDataset id, int step) const;
   struct OpenedDataset {
     h5::Handle dataset;
     h5::DatasetShape shape;
   };
   // Opens a dataset by links inside the file only, with its shape.
   Result<OpenedDataset> openInFile(const std::string& path) const;
+  // An appendable per-step dataset, checked to hold row `step` (its metadata
+  // reloaded when this process saw fewer rows); its shape is the row's.
+  Result<OpenedDataset> openStepAxis(const std::string& path, int step) const;
+  // h5::refreshDataset, its failure naming the file and the dataset.
+  Status refreshed(const std::string& path, hid_t dataset) const;
   Result<h5::Handle> openChecked(DemDataset id, int step = 0) const;
   Status readWhole(DemDataset id, int step, void* out) const;
   template <typename T>
@@ -145,7 +175,7 @@ class DemFileReader {
   Status checkIndexable() const;
   Status checkStored(DemDataset id, std::int64_t rows) const;
   Status listExtras();
-  Result<h5::Handle> openExtra(const ExtraInfo& extra, int step) const;
+  Result<OpenedDataset> openExtra(const ExtraInfo& extra, int step) const;
   Result<ExtraArray> readExtra(const ExtraInfo& extra, int step) const;
   Result<std::vector<StepScalar>> readScalars(hid_t stepGroup, int step) const;
 
@@ -184,12 +214,23 @@ class DemFileWriter {
   Status flush();
   void abandon();
 
+  // The appendable layout: the step-axis datasets, created for the first
+  // step (which fixes the optional arrays, extras and scalar names of all),
+  // after which the file is switched to HDF5's SWMR write mode.
+  struct StepAxis;
+  Status startStepAxis(const StepState& first);
+  Status checkLikeFirst(const StepState& step) const;
+  Status writeStepRows(const StepState& step, bool breaksChanged);
+  Status commitStepRow(double time);
+
   std::string m_path;
   h5::Handle m_file;
   Lattice m_lattice;
   h5::Storage m_storage;
   std::vector<std::int32_t> m_breakStep;
   int m_stepCount = 0;
+  StepLayout m_layout = StepLayout::kGroups;
+  std::shared_ptr<StepAxis> m_axis;  // appendable, from the first step on
 };
 
 }  // namespace crackvis::dem

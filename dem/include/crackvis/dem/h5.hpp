@@ -175,4 +175,33 @@ Status overwriteDataset(hid_t location, const std::string& name, ElementType typ
 // native type.
 Status readDataset(hid_t dataset, ElementType type, void* out);
 
+// Datasets with a leading step axis (the appendable layout, crackvis-dem
+// v1.2, docs/data-format.md): created empty, [0, rowDims...] up to
+// [unlimited, rowDims...], chunked one step row at a time (at most
+// storage.chunkValues values per chunk; 1-D ones 256 steps per chunk), with
+// shuffle + deflate when storage asks for it. HDF5's SWMR mode can grow
+// such datasets while readers have the file open.
+Result<Handle> createStepAxisDataset(hid_t location, const std::string& name, ElementType type,
+                                     const std::vector<std::uint64_t>& rowDims,
+                                     const Storage& storage);
+// Grows a step-axis dataset to `row` + 1 rows, writes `data` as row `row`
+// and flushes the dataset to the file (its data, then its metadata).
+Status appendRow(hid_t dataset, ElementType type, std::uint64_t row, const void* data);
+// Reads row `row` of a dataset whose first axis counts steps (the rest of
+// its shape) into `out`.
+Status readRow(hid_t dataset, ElementType type, std::uint64_t row, void* out);
+// Reads the first `count` values of a 1-D dataset.
+Status readLeading(hid_t dataset, ElementType type, std::uint64_t count, void* out);
+// Reloads what this process holds of a dataset's metadata (its extent and
+// chunk index) from the file: a file a writer is still growing (SWMR)
+// shows new rows only after this.
+Status refreshDataset(hid_t dataset);
+// How every crackvis reader opens a file: read-only, and in SWMR read mode,
+// so a file a live writer is growing (or one whose live writer was killed,
+// which leaves the superblock marked as open for SWMR writing) opens too; a
+// file of the default format is read as without the flag.
+inline unsigned readFlags() {
+  return H5F_ACC_RDONLY | H5F_ACC_SWMR_READ;
+}
+
 }  // namespace crackvis::dem::h5

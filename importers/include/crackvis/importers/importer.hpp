@@ -10,6 +10,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -58,6 +60,31 @@ struct ImportSummary {
 };
 
 Result<ImportSummary> importSeries(StepSource& source, const ImportOptions& options);
+
+// `crackvis import --follow`: a run that is still writing. The source is
+// opened again every `poll` (the code adds files, or steps to a file), and
+// each step is appended to a live crackvis-dem file (the appendable layout,
+// docs/data-format.md "Live files") as soon as it is complete: a step is
+// complete once a later step has appeared, or once the source's files have
+// not changed for `settle` (the code finished writing it). The output takes
+// its name after the first step; readers see each step as it lands.
+struct FollowOptions {
+  double untilIdle = 0.0;  // s without a new step after which the import ends; 0: no limit
+  double settle = 1.0;     // s the files must rest before the newest step counts as complete
+  double poll = 0.5;       // s between looks
+  int pid = 0;             // the code's process: the import ends after it ends; 0: none
+  // Asked between looks: true ends the import (a signal).
+  std::function<bool()> stopRequested;
+  // After each appended step: its index, the code's step number, broken bonds.
+  std::function<void(int, std::int64_t, std::size_t)> appended;
+};
+// Opens the source as it is now (its files listed again).
+using SourceOpener = std::function<Result<std::unique_ptr<StepSource>>()>;
+// Ends when asked (stopRequested, the process `pid` gone, `untilIdle`),
+// after appending every step the source then lists (the code is done, so
+// the newest step is complete too). Refused: --steps, --scalars, --dry-run.
+Result<ImportSummary> followSeries(const SourceOpener& open, const ImportOptions& options,
+                                   const FollowOptions& follow);
 
 // The lines `crackvis import` prints at the end (or for --dry-run).
 std::string formatSummary(const ImportSummary& summary, const ImportOptions& options);

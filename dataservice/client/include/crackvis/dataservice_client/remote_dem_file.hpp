@@ -76,6 +76,16 @@ class RemoteDemFile {
   // The root attribute time_unit is "iteration": steps' times are the code's
   // step numbers (it wrote no time).
   bool timeInIterations() const { return m_timeInIterations; }
+  // Whether the file is a live one (crackvis-dem v1.2's appendable layout).
+  bool appendable() const { return m_appendable; }
+  // A live file whose writer still had it open when last described
+  // (/steps/writing; a killed writer leaves it set).
+  bool beingWritten() const { return m_beingWritten; }
+  // Describes the file again: a live file's writer may have committed steps
+  // since. True when there are more steps now. FAILED_PRECONDITION when the
+  // name now holds another file (another run_id, other N or M, fewer steps,
+  // another first step): a reader never mixes two files' steps.
+  Result<bool> refresh();
   std::int64_t particleCount() const { return m_particles; }
   std::int64_t bondCount() const { return m_bonds; }
   int stepCount() const { return static_cast<int>(m_description->steps.size()); }
@@ -98,6 +108,14 @@ class RemoteDemFile {
   // Particles [first, first + count) of a step: a spatial block's share.
   Result<std::vector<dem::Vec3>> positions(int step, std::int64_t first, std::int64_t count) const;
   Result<std::vector<std::uint8_t>> bondState(int step) const;
+  // The step scalars (load, displacement, ...): one value per step each, NaN
+  // where a step has none; in name order. Attributes of the step groups, or
+  // an appendable file's /steps/scalars/NAME datasets (one Read).
+  struct ScalarSeries {
+    std::string name;
+    std::vector<double> values;
+  };
+  Result<std::vector<ScalarSeries>> stepScalars() const;
 
  private:
   RemoteDemFile() = default;
@@ -110,12 +128,22 @@ class RemoteDemFile {
   // cut stream leaves the list to be read again.
   Status takePrefetchedBonds();
   Result<RemoteStep> readStepOnce(int step, StepExtras extras);
+  // The slab of step `step` of a per-step dataset whose one step has
+  // `rowShape`, and the shape it arrives in: the whole dataset of a step
+  // group, or row `step` of an appendable file's dataset ([1, rowShape...]).
+  Hyperslab stepSlab(const std::string& path, int step,
+                     const std::vector<std::uint64_t>& rowShape) const;
+  std::vector<std::uint64_t> stepShape(std::vector<std::uint64_t> rowShape) const;
+  // A live file's /steps/writing flag, read into m_beingWritten.
+  Status readWritingFlag();
 
   std::optional<DataClient> m_client;
   std::string m_file;
   std::shared_ptr<const FileDescription> m_description;
   int m_dimension = 0;
   bool m_timeInIterations = false;
+  bool m_appendable = false;  // a live file: steps along an extendible axis
+  bool m_beingWritten = false;
   std::int64_t m_particles = 0;
   std::int64_t m_bonds = 0;
   std::shared_ptr<const std::vector<dem::Bond>> m_bondList;

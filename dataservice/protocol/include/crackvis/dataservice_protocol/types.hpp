@@ -187,6 +187,12 @@ struct Hyperslab {
 // against the layout table (FAILED_PRECONDITION "missing dataset P" or the
 // dtype/shape message).
 dem::RootAttributes demRootAttributes(const FileDescription& description);
+// Whether the file stores its steps along an extendible axis (a live file,
+// crackvis-dem v1.2's appendable layout) rather than a group per step.
+bool isAppendable(const FileDescription& description);
+// Where step `step` of a per-step dataset lives: "/steps/000042/positions",
+// or "/steps/positions" (row 42) in an appendable file.
+std::string demStepDatasetPath(const FileDescription& description, dem::DemDataset id, int step);
 Status checkDemDataset(const FileDescription& description, dem::DemDataset id, int step,
                        const dem::LayoutSizes& sizes);
 

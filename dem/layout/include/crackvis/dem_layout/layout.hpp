@@ -24,7 +24,23 @@ inline constexpr std::string_view kFormatName = "crackvis-dem";
 // The major version: a reader refuses any other. The minor version (root
 // attribute `version_minor`, absent in v1.0 files) only adds optional parts.
 inline constexpr int kFormatVersion = 1;
-inline constexpr int kFormatMinorVersion = 1;
+inline constexpr int kFormatMinorVersion = 2;
+
+// How a file stores its steps (v1.2). kGroups: a group per step,
+// /steps/NNNNNN, committed by /steps@count (every file before v1.2, and
+// what a writer makes by default). kAppendable: one dataset per array with a
+// leading step axis, /steps/positions [K, N, 3], committed by the length of
+// /steps/time; what a live writer makes, since HDF5's SWMR mode can grow
+// datasets while readers watch but cannot add groups.
+enum class StepLayout { kGroups, kAppendable };
+// The root attribute that names an appendable file's layout (absent: groups).
+inline constexpr const char* kStepLayoutAttribute = "step_layout";
+inline constexpr std::string_view kAppendableName = "appendable";
+// The appendable layout's commit mark: its length is the number of complete
+// steps K, and it holds their times.
+inline constexpr const char* kStepTimePath = "/steps/time";
+// The appendable layout's step scalars: /steps/scalars/NAME, float64 [K].
+inline constexpr const char* kStepScalarsPath = "/steps/scalars";
 
 // "/steps/000042": the group that holds step 42.
 std::string stepGroupPath(int step);
@@ -68,6 +84,9 @@ std::span<const DatasetSpec> demLayout();
 const DatasetSpec& datasetSpec(DemDataset id);
 // "/particles/radius", or "/steps/000042/positions" for a per-step dataset.
 std::string datasetPath(DemDataset id, int step = 0);
+// "/steps/positions": where an appendable file keeps a per-step dataset
+// (step k is row k of its first axis); datasetPath() for the others.
+std::string appendablePath(DemDataset id);
 
 // N and M where known (-1: not yet, any extent accepted).
 struct LayoutSizes {

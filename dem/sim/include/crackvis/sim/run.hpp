@@ -30,6 +30,13 @@ struct RunOptions {
   int savedSteps = 1;  // including the initial state, saved step 0
   bool writeVelocities = true;
   bool writeBondForce = true;
+  // Write a live file (the appendable layout, docs/data-format.md): it takes
+  // the output's name after its first step, and readers see each step as it
+  // is committed.
+  bool live = false;
+  // Saved steps at least this many seconds apart in wall time (0: as fast as
+  // the solver goes): a small run that a viewer can watch grow.
+  double pace = 0.0;
   std::function<void(const RunProgress&)> onSaved;  // called after each saved step
 };
 
