@@ -8,7 +8,9 @@
 #include <QComboBox>
 #include <QDoubleSpinBox>
 #include <QFile>
+#include <QLabel>
 #include <QLineEdit>
+#include <QPushButton>
 #include <QSignalSpy>
 #include <QSlider>
 #include <QTest>
@@ -580,4 +582,55 @@ TEST_CASE("the step plot shows the broken bonds of every step and goes to a clic
   // A scalar the file lacks is not drawn (the simulator's files have none).
   CHECK_FALSE(window.stepPlot().setScalar(QStringLiteral("load")));
   CHECK(window.plotScalarBox().count() == 1 + history.scalarNames.size());
+}
+
+TEST_CASE("the window follows a live file: the slider and plot grow, Follow latest, run ended",
+          "[client][ui][integration][live]") {
+  application();
+  auto services = startServices();
+  const std::string path = crackRoot().file("client-live.h5");
+  std::filesystem::remove(path);
+  constexpr int kSteps = 40;
+  const pid_t writer =
+      startProcess({CRACKVIS_CLI, "sim", "plate2d", "--scale", "0.3", "--steps",
+                    std::to_string(kSteps), "--pace", "0.2", "--live", "-q", "-o", path});
+  REQUIRE(spinUntil([&] { return std::filesystem::exists(path); }));
+  client::MainWindow window;
+  window.resize(900, 600);
+  window.show();
+  REQUIRE(window.connectTo(settingsFor(*services.render)));
+  REQUIRE(window.openFile(QStringLiteral("client-live.h5")));
+  // Opened at its last step, a live file is followed.
+  REQUIRE(spinUntil([&] { return window.followButton().isChecked(); }, 10000));
+  CHECK(window.followButton().isEnabled());
+  const int first = window.stepSlider().maximum();
+  REQUIRE(spinUntil([&] { return window.stepSlider().maximum() >= first + 3; }, 20000));
+  CHECK(window.liveLabel().text().startsWith(QStringLiteral("live")));
+  CHECK(window.stepSlider().value() == window.stepSlider().maximum());  // the newest step
+  CHECK(spinUntil(
+      [&] { return static_cast<int>(window.stepPlot().history().time.size()) > first + 1; },
+      10000));  // the Steps plot grew too
+
+  // Stepping back leaves follow mode; Follow latest returns to the newest step.
+  window.stepSlider().setValue(1);
+  REQUIRE(spinUntil([&] { return !window.followButton().isChecked(); }, 10000));
+  const int held = window.stepSlider().maximum();
+  REQUIRE(spinUntil([&] { return window.stepSlider().maximum() > held; }, 20000));
+  CHECK(window.stepSlider().value() == 1);
+  QTest::mouseClick(&window.followButton(), Qt::LeftButton);
+  REQUIRE(spinUntil(
+      [&] {
+        return window.followButton().isChecked() &&
+               window.stepSlider().value() == window.stepSlider().maximum();
+      },
+      10000));
+
+  REQUIRE(
+      spinUntil([&] { return window.liveLabel().text() == QStringLiteral("run ended"); }, 30000));
+  CHECK(waitProcess(writer) == 0);
+  CHECK(window.stepSlider().maximum() == kSteps - 1);
+  CHECK(window.stepSlider().value() == kSteps - 1);
+  CHECK_FALSE(window.followButton().isEnabled());
+  window.client().closeSession();
+  std::filesystem::remove(path);
 }

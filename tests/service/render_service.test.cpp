@@ -9,11 +9,13 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <set>
 #include <thread>
 
 #include <catch2/catch.hpp>
 #include <grpcpp/grpcpp.h>
 #include <nlohmann/json.hpp>
+#include <signal.h>
 
 #include "crackvis/v1/render.grpc.pb.h"
 #include "dataservice/service_fixture.hpp"
@@ -1267,4 +1269,108 @@ TEST_CASE("a session at the largest view stays within its memory bound, and clos
       perSessionMiB, leftMiB);
   CHECK(perSessionMiB < 512.0);
   CHECK(leftMiB < 256.0);
+}
+
+TEST_CASE("a session follows a live file as the writer adds steps",
+          "[render][service][integration][live]") {
+  auto services = startServices();
+  auto stub = connect(*services.render);
+  const std::string name = "following.h5";
+  const std::string path = crackRoot().file(name);
+  std::filesystem::remove(path);
+  constexpr int kSteps = 60;
+  pid_t writer =
+      startProcess({CRACKVIS_CLI, "sim", "plate2d", "--scale", "0.3", "--steps",
+                    std::to_string(kSteps), "--pace", "0.15", "--live", "-q", "-o", path});
+  REQUIRE(writer > 0);
+  REQUIRE(waitUntil([&] { return std::filesystem::exists(path); }, 60.0));
+  auto view = crackView();
+  view.file = name;
+  view.step = -1;  // the last step of a live file: the session follows it
+  const std::string id = openSession(*stub, view);
+  StreamClient stream(*stub, id);
+  auto lastState = [&] {
+    const auto states = stream.states();
+    return states.empty() ? v1::SessionState() : states.back();
+  };
+
+  SECTION("each new step is told and shown, in order, until the run ends") {
+    REQUIRE(waitUntil([&] { return lastState().run_ended(); }, 120.0));
+    CHECK(waitProcess(writer) == 0);
+    const auto states = stream.states();
+    std::set<int> counts;
+    int previousCount = 0;
+    int followedLive = 0;
+    for (const v1::SessionState& state : states) {
+      CHECK(state.step_count() >= previousCount);  // steps are never taken back
+      previousCount = state.step_count();
+      counts.insert(state.step_count());
+      if (state.live() && state.following()) {
+        ++followedLive;
+        CHECK(state.step() == state.step_count() - 1);  // following shows the newest
+      }
+    }
+    CHECK(counts.size() >= 3);  // the stream heard of new steps while the run went on
+    CHECK(followedLive >= 2);
+    const v1::SessionState last = states.back();
+    CHECK(last.step_count() == kSteps);
+    CHECK(last.step() == kSteps - 1);
+    CHECK_FALSE(last.live());
+    REQUIRE(stream.waitFor([&](const auto& frames, const auto&) {
+      return !frames.empty() && frames.back().frame.step() == kSteps - 1;
+    }));
+    const auto frames = stream.frames();
+    for (std::size_t k = 1; k < frames.size(); ++k) {
+      CHECK(frames[k].frame.step() >= frames[k - 1].frame.step());
+    }
+    CHECK(stream.errors().empty());
+  }
+
+  SECTION("stepping back leaves follow mode, and follow returns to the newest step") {
+    REQUIRE(waitUntil([&] { return lastState().step_count() >= 5; }, 60.0));
+    stream.setStep(1);
+    REQUIRE(waitUntil([&] { return !lastState().following() && lastState().step() == 1; }, 30.0));
+    const int seen = lastState().step_count();
+    REQUIRE(waitUntil([&] { return lastState().step_count() > seen; }, 60.0));
+    CHECK(lastState().step() == 1);  // new steps are told, the view stays
+    v1::ClientEvent follow;
+    follow.mutable_set_step()->set_follow(true);
+    stream.send(follow);
+    REQUIRE(waitUntil(
+        [&] {
+          const auto state = lastState();
+          return state.following() && state.step() == state.step_count() - 1;
+        },
+        30.0));
+    kill(writer, SIGTERM);
+    waitProcess(writer);
+  }
+
+  SECTION("a writer killed mid-run leaves the session at its last complete step") {
+    REQUIRE(waitUntil([&] { return lastState().step_count() >= 4; }, 60.0));
+    kill(writer, SIGKILL);
+    waitProcess(writer);
+    const auto count = [&] { return lastState().step_count(); };
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    const int settled = count();
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    CHECK(count() == settled);
+    CHECK(lastState().live());  // the writer never said it ended
+    const auto event = stream.setStep(-1);
+    REQUIRE(stream.waitFor([&](const auto& frames, const auto&) {
+      return !frames.empty() && frames.back().frame.last_event_id() == event &&
+             frames.back().frame.full_resolution();
+    }));
+    CHECK(stream.frames().back().frame.step() == settled - 1);
+
+    SECTION("and a new run under the same name is refused, never mixed in") {
+      const pid_t again = startProcess({CRACKVIS_CLI, "sim", "plate2d", "--scale", "0.3", "--steps",
+                                        "3", "--live", "-q", "-o", path});
+      REQUIRE(waitProcess(again) == 0);
+      REQUIRE(stream.waitFor([](const auto&, const auto& errors) { return !errors.empty(); }));
+      CHECK(stream.errors().back().message().find("was replaced") != std::string::npos);
+      CHECK(lastState().step_count() == settled);  // the session kept the first run
+    }
+  }
+  std::filesystem::remove(path);
 }

@@ -12,8 +12,9 @@
 //   CRACKVIS_ARTEFACTS      where screenshots go
 //   CRACKVIS_NODE_MODULES   the build tree's web/node_modules (playwright-core)
 //   CRACKVIS_CHROMIUM       the browser (default /usr/bin/chromium)
+import { spawn } from "node:child_process";
 import { randomBytes } from "node:crypto";
-import { mkdirSync, readFileSync, writeFileSync } from "node:fs";
+import { existsSync, mkdirSync, readFileSync, writeFileSync } from "node:fs";
 import { request as httpsRequest } from "node:https";
 import { join } from "node:path";
 import { pathToFileURL } from "node:url";
@@ -496,6 +497,54 @@ await check("without WebCodecs the page says so in one sentence", async () => {
     fail(`the note says '${text}'`);
   }
   await bare.close();
+});
+
+await check("a live file is followed while a run writes it, and its end is said", async () => {
+  // The page plays the user who opens a run still being written: a paced
+  // crackvis sim --live into alice's folder.
+  const name = "alice/live.h5";
+  const writer = spawn(env("CRACKVIS_CLI"), ["sim", "plate2d", "--scale", "0.3", "--steps", "60",
+    "--pace", "0.15", "--live", "--quiet", "-o", join(env("CRACKVIS_DATA_ROOT"), name)],
+  { stdio: "ignore" });
+  const ended = new Promise((resolve) => writer.on("exit", resolve));
+  try {
+    // The live file takes its name once its first step is in.
+    const path = join(env("CRACKVIS_DATA_ROOT"), name);
+    const deadline = Date.now() + kWaitMs;
+    while (!existsSync(path) && Date.now() < deadline) {
+      await new Promise((resolve) => setTimeout(resolve, 100));
+    }
+    await page.fill("#file-path", name);
+    await page.click("#open-path");
+    await waitFor("Follow latest available", () => !document.getElementById("follow").disabled);
+    const pressed = () => page.locator("#follow").getAttribute("aria-pressed");
+    if ((await pressed()) !== "true") fail("a live file opened at its last step is not followed");
+    const count = () => window.crackvisTest.state?.stepCount ?? 0;
+    const first = await page.evaluate(count);
+    await waitFor("three more steps", (n) => (window.crackvisTest.state?.stepCount ?? 0) >= n + 3,
+      first);
+    const live = await page.locator("#live").innerText();
+    if (!live.startsWith("live")) fail(`the live indicator says '${live}'`);
+    // Stepping back leaves follow mode; Follow latest returns to the newest step.
+    await page.locator("#step").fill("0");
+    await waitFor("follow mode left", () =>
+      document.getElementById("follow").getAttribute("aria-pressed") === "false");
+    await page.click("#follow");
+    await waitFor("the newest step followed again", () => {
+      const s = window.crackvisTest.state;
+      return document.getElementById("follow").getAttribute("aria-pressed") === "true" &&
+        s !== null && s.step === s.stepCount - 1;
+    });
+    await waitFor("run ended", () => document.getElementById("live").textContent === "run ended");
+    const last = await page.evaluate(() => window.crackvisTest.state);
+    if (last.stepCount !== 60 || last.step !== 59) {
+      fail(`after the run the page shows step ${last.step} of ${last.stepCount}`);
+    }
+    console.log(`     followed ${first} .. ${last.stepCount} steps; '${live}'`);
+  } finally {
+    writer.kill();
+    await ended;
+  }
 });
 
 // The policy the server sends (script-src 'self', no inline code) held the

@@ -119,6 +119,8 @@ CRACKVIS_FILE=alice/cuboidA.h5 \
 CRACKVIS_FOREIGN_FILE=bob/cuboidB.h5 \
 CRACKVIS_MARKUP_FILE="alice/$markup_name" \
 CRACKVIS_ARTEFACTS="$artefacts" \
+CRACKVIS_CLI="$crackvis" \
+CRACKVIS_DATA_ROOT="$root" \
 CRACKVIS_NODE_MODULES="$node_modules" \
 CRACKVIS_CHROMIUM="$chromium" \
   node "$source/tests/web/browser.test.mjs"

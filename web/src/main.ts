@@ -58,6 +58,8 @@ const ui = {
   play: byId("play", HTMLButtonElement),
   step: byId("step", HTMLInputElement),
   stepLabel: byId("step-label", HTMLElement),
+  follow: byId("follow", HTMLButtonElement),
+  live: byId("live", HTMLElement),
   stepsPerSecond: byId("steps-per-second", HTMLInputElement),
   screenshot: byId("screenshot", HTMLButtonElement),
   saveView: byId("save-view", HTMLButtonElement),
@@ -135,6 +137,9 @@ class App {
   private sentSize = { width: 0, height: 0 };
   private resizeTimer = 0;
   private sliderHeld = false;
+  // A live file: whether it is one, how many steps it had, when the last
+  // came, and when the Steps plot was last read again.
+  private live = { live: false, following: false, ended: false, steps: 0, lastStepAt: 0, plotAt: 0 };
 
   start(): void {
     if (!hasWebCodecs()) {
@@ -333,6 +338,7 @@ class App {
     ui.view.height = size.height;
     const info = this.session.info;
     const first = Number(layer(doc, "data")?.getAttribute("step") ?? "0");
+    this.live = { live: false, following: false, ended: false, steps: info.stepCount, lastStepAt: 0, plotAt: 0 };
     this.setStepRange(info.stepCount, first < 0 ? info.stepCount - 1 : first);
     ui.viewNote.hidden = true;
     document.title = `crackvis - ${file}`;
@@ -387,6 +393,7 @@ class App {
       ui.view.width = state.width;
       ui.view.height = state.height;
     }
+    this.noteLive(state);
     this.setStepRange(state.stepCount, state.step);
     ui.play.textContent = state.playing ? "Pause" : "Play";
     this.showDescription(state.pipelineXml);
@@ -496,7 +503,49 @@ class App {
     ui.step.addEventListener("pointerdown", () => (this.sliderHeld = true));
     ui.step.addEventListener("change", () => (this.sliderHeld = false));
     ui.step.addEventListener("input", () => this.setStep(Number(ui.step.value)));
+    ui.follow.addEventListener("click", () => {
+      if (this.live.following) {
+        this.setStep(Number(ui.step.value));  // any step of one's own stops following
+      } else {
+        this.send({ case: "setStep", value: { step: -1, follow: true } });
+      }
+    });
     ui.plotScalar.addEventListener("change", () => this.plot.setScalar(ui.plotScalar.value));
+  }
+
+  // A live file's step count grew: when, and the Steps plot with the new
+  // steps (read again at most every two seconds while steps pour in).
+  private noteLive(state: SessionState): void {
+    const now = performance.now();
+    if (state.stepCount > this.live.steps && this.live.steps > 0) {
+      this.live.lastStepAt = now;
+      if (now - this.live.plotAt >= 2000 && this.file) {
+        this.live.plotAt = now;
+        void this.showHistory(this.file);
+      }
+    }
+    this.live = {
+      ...this.live,
+      live: state.live,
+      following: state.live && state.following,
+      ended: state.runEnded,
+      steps: state.stepCount,
+    };
+    ui.follow.disabled = !state.live;
+    ui.follow.setAttribute("aria-pressed", String(this.live.following));
+    this.showLive();
+  }
+
+  private showLive(): void {
+    const { live, ended, lastStepAt } = this.live;
+    if (live) {
+      ui.live.textContent =
+        lastStepAt > 0
+          ? `live: last step ${Math.floor((performance.now() - lastStepAt) / 1000)} s ago`
+          : "live";
+    } else {
+      ui.live.textContent = ended ? "run ended" : "";
+    }
   }
 
   private setStepRange(stepCount: number, step: number): void {
@@ -607,6 +656,7 @@ class App {
   // --- the status line
 
   private showStatus(): void {
+    this.showLive();
     if (!this.session) {
       ui.status.textContent = "";
       return;

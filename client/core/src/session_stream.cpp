@@ -166,9 +166,11 @@ void RenderClient::Impl::handle(const v1::ServerMessage& message, std::uint64_t 
     QMetaObject::invokeMethod(
         owner,
         [o = owner, s = state.step(), n = state.step_count(), p = state.playing(),
-         f = state.mapped_fraction(), w = QString::fromStdString(state.crack_warning())] {
+         f = state.mapped_fraction(), w = QString::fromStdString(state.crack_warning()),
+         live = state.live(), following = state.following(), ended = state.run_ended()] {
           emit o->stateChanged(s, n, p);
           emit o->crackMappingChanged(f, w);
+          emit o->liveChanged(live, following, ended);
         },
         Qt::QueuedConnection);
   } else if (message.has_pick()) {
@@ -407,6 +409,11 @@ quint64 RenderClient::resetCamera() {
 quint64 RenderClient::setStep(int step) {
   v1::ClientEvent event;
   event.mutable_set_step()->set_step(step);
+  return m_impl->queue(event);
+}
+quint64 RenderClient::follow() {
+  v1::ClientEvent event;
+  event.mutable_set_step()->set_follow(true);
   return m_impl->queue(event);
 }
 quint64 RenderClient::play(bool playing, double fps) {

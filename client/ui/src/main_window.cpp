@@ -115,6 +115,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
 
   connect(&m_client, &RenderClient::frameReady, m_viewport, &Viewport::showFrame);
   connect(&m_client, &RenderClient::stateChanged, this, [this](int step, int steps, bool playing) {
+    noteStepCount(steps);
     const QSignalBlocker blocker(m_slider);
     m_slider->setRange(0, std::max(0, steps - 1));
     m_slider->setValue(step);
@@ -122,6 +123,15 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
     m_play->setText(playing ? tr("Pause") : tr("Play"));
     m_plot->setCurrentStep(step);
   });
+  connect(&m_client, &RenderClient::liveChanged, this,
+          [this](bool live, bool following, bool runEnded) {
+            m_isLive = live;
+            m_runEnded = runEnded;
+            const QSignalBlocker blocker(m_follow);
+            m_follow->setEnabled(live);
+            m_follow->setChecked(live && following);
+            updateLive();
+          });
   connect(&m_client, &RenderClient::eventFailed, this,
           [this](quint64, const QString& message) { report(message); });
   connect(&m_client, &RenderClient::picked, this,
@@ -213,6 +223,28 @@ void MainWindow::showHistory(const QString& file) {
   m_plot->setCurrentStep(m_slider->value());
 }
 
+// A live file's step count grew: when, and the Steps plot with the new
+// steps (read again at most every two seconds while steps pour in).
+void MainWindow::noteStepCount(int steps) {
+  if (steps > m_knownSteps && m_knownSteps > 0) {
+    m_sinceLastStep.restart();
+    if (!m_sincePlot.isValid() || m_sincePlot.elapsed() >= 2000) {
+      m_sincePlot.restart();
+      showHistory(m_file);
+    }
+  }
+  m_knownSteps = steps;
+}
+
+void MainWindow::updateLive() {
+  if (m_isLive) {
+    const qint64 ago = m_sinceLastStep.isValid() ? m_sinceLastStep.elapsed() / 1000 : -1;
+    m_live->setText(ago < 0 ? tr("live") : tr("live: last step %1 s ago").arg(ago));
+  } else {
+    m_live->setText(m_runEnded ? tr("run ended") : QString());
+  }
+}
+
 QWidget* MainWindow::buildTimeBar() {
   auto* bar = new QWidget;
   auto* layout = new QHBoxLayout(bar);
@@ -224,11 +256,32 @@ QWidget* MainWindow::buildTimeBar() {
   m_fps->setValue(10.0);
   m_fps->setSuffix(tr(" steps/s"));
   m_stepLabel = new QLabel(tr("no session"));
+  m_follow = new QPushButton(tr("Follow latest"));
+  m_follow->setObjectName(QStringLiteral("follow"));
+  m_follow->setCheckable(true);
+  m_follow->setEnabled(false);
+  m_follow->setToolTip(
+      tr("A live file (a run still writing it): show each new step as it "
+         "arrives. Moving the slider or playing stops following."));
+  m_live = new QLabel;
+  m_live->setObjectName(QStringLiteral("live"));
   layout->addWidget(m_play);
   layout->addWidget(m_slider, 1);
   layout->addWidget(m_stepLabel);
+  layout->addWidget(m_follow);
+  layout->addWidget(m_live);
   layout->addWidget(m_fps);
   connect(m_play, &QPushButton::clicked, this, &MainWindow::togglePlay);
+  connect(m_follow, &QPushButton::toggled, this, [this](bool on) {
+    if (!m_client.hasSession()) {
+      return;
+    }
+    if (on) {
+      m_client.follow();
+    } else {
+      m_client.setStep(m_slider->value());
+    }
+  });
   connect(m_slider, &QSlider::valueChanged, this, [this](int step) {
     if (m_client.hasSession()) {
       m_client.setStep(step);
@@ -360,6 +413,8 @@ bool MainWindow::openView(const pipeline::PipelineDescription& view) {
     return false;
   }
   m_file = file;
+  m_knownSteps = m_client.stepCount();
+  m_sinceLastStep.invalidate();
   const QSignalBlocker blocker(m_slider);
   m_slider->setRange(0, std::max(0, m_client.stepCount() - 1));
   m_slider->setValue(d.step >= 0 ? static_cast<int>(d.step) : m_client.stepCount() - 1);
@@ -647,6 +702,7 @@ void MainWindow::togglePlay() {
 }
 
 void MainWindow::updateStatus() {
+  updateLive();
   const StreamStatistics stats = m_client.statistics();
   m_stats->setText(tr("%1 fps   latency %2 ms   %3 Mbit/s%4")
                        .arg(stats.fps, 0, 'f', 0)

@@ -43,6 +43,15 @@ class GuardedSource final : public source::StepSource {
   int stepCount() const override { return m_inner->stepCount(); }
   const std::vector<std::int32_t>& breakSteps() const override { return m_inner->breakSteps(); }
   bool timeInIterations() const override { return m_inner->timeInIterations(); }
+  bool appendable() const override { return m_inner->appendable(); }
+  bool beingWritten() const override { return m_inner->beingWritten(); }
+  Result<bool> refresh() override {
+    return guardedCall([&] { return m_inner->refresh(); },
+                       [&](std::string_view detail) {
+                         return failedOnException(fmt::format("{}: looking for new steps", file()),
+                                                  detail);
+                       });
+  }
   Status setExtraArrays(const source::ExtraArrays& extras) override {
     return guardedCall([&] { return m_inner->setExtraArrays(extras); },
                        [&](std::string_view detail) {
@@ -416,6 +425,10 @@ void ScenePipeline::prefetch(int step) {
 void ScenePipeline::setViewSize(int width, int height) {
   m_state.description.view.width = width;
   m_state.description.view.height = height;
+}
+
+Result<bool> ScenePipeline::refreshSteps() {
+  return m_state.cache->refresh();
 }
 
 int ScenePipeline::stepCount() const {

@@ -36,7 +36,7 @@ Result<SessionEvent> toSessionEvent(const v1::ClientEvent& in) {
       out.what = ResizeEvent{in.resize().width(), in.resize().height()};
       return out;
     case v1::ClientEvent::kSetStep:
-      out.what = SetStepEvent{in.set_step().step()};
+      out.what = SetStepEvent{in.set_step().step(), in.set_step().follow()};
       return out;
     case v1::ClientEvent::kPlay:
       out.what = PlayEvent{in.play().playing(), in.play().fps(), in.play().loop()};

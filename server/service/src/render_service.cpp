@@ -50,37 +50,29 @@ Status checkAccess(const dataservice::DataClient& data, const Caller& caller,
   return rpc::checkResolvedPath(caller, *normalized, *resolved);
 }
 
-// Times, broken bonds and step scalars per step: every attribute of a step
-// group but its time is a named scalar (docs/data-format.md).
-void fillStepHistory(const dataservice::RemoteDemFile& file,
-                     const std::vector<std::int32_t>& breaks, v1::StepHistoryResponse& response) {
+// Times, broken bonds and step scalars per step (docs/data-format.md: the
+// attributes of a step group but its time, or an appendable file's
+// /steps/scalars datasets).
+Status fillStepHistory(const dataservice::RemoteDemFile& file,
+                       const std::vector<std::int32_t>& breaks, v1::StepHistoryResponse& response) {
   const int steps = file.stepCount();
   for (const std::int64_t broken : dem::brokenBondsPerStep(breaks, steps)) {
     response.add_broken_bonds(broken);
   }
   response.set_bond_count(file.bondCount());
-  std::map<std::string, int> series;  // name -> index in response.scalars
-  for (int k = 0; k < steps; ++k) {
-    const dataservice::StepEntry& entry = file.steps()[static_cast<std::size_t>(k)];
+  for (const dataservice::StepEntry& entry : file.steps()) {
     response.add_time(entry.time);
-    const dataservice::GroupInfo* group = file.description().findGroup(entry.group);
-    if (group == nullptr) {
-      continue;
-    }
-    for (const dataservice::AttributeInfo& attribute : group->attributes) {
-      const auto value = group->floatAttribute(attribute.name);
-      if (attribute.name == "time" || !value) {
-        continue;
-      }
-      auto [at, added] = series.try_emplace(attribute.name, response.scalars_size());
-      if (added) {
-        auto* s = response.add_scalars();
-        s->set_name(attribute.name);
-        s->mutable_values()->Resize(steps, std::numeric_limits<double>::quiet_NaN());
-      }
-      response.mutable_scalars(at->second)->set_values(k, *value);
-    }
   }
+  auto scalars = file.stepScalars();
+  if (!scalars) {
+    return scalars.status();
+  }
+  for (const auto& series : *scalars) {
+    auto* s = response.add_scalars();
+    s->set_name(series.name);
+    s->mutable_values()->Add(series.values.begin(), series.values.end());
+  }
+  return Status::ok();
 }
 
 }  // namespace
@@ -207,7 +199,7 @@ Status RenderServiceImpl::stepHistory(const Caller& caller, const v1::StepHistor
   if (!breakSteps) {
     return breakSteps.status();
   }
-  fillStepHistory(*file, *breakSteps, response);
+  CRACKVIS_RETURN_IF_ERROR(fillStepHistory(*file, *breakSteps, response));
   record.bytes = breakSteps->size() * sizeof(std::int32_t);
   return Status::ok();
 }

@@ -121,10 +121,16 @@ Status Session::serve(Worker& worker) {
     for (auto& task : tasks) {
       task(worker);  // guards itself: it owns the promise to answer
     }
-    Status status = guarded(m_id, "playing", [&] {
-      worker.tick();
+    Status status = guarded(m_id, "following", [&] {
+      worker.follow();
       return Status::ok();
     });
+    if (status) {
+      status = guarded(m_id, "playing", [&] {
+        worker.tick();
+        return Status::ok();
+      });
+    }
     if (status && attached) {
       status = guarded(m_id, "rendering", [&] {
         worker.renderIfDirty();

@@ -106,13 +106,58 @@ Status Session::Worker::start() {
   session.m_info.bondCount = static_cast<std::int64_t>(lattice.bondCount());
   session.m_info.backend = renderer->backend();
   session.m_info.file = d.file;
+  // Opening a live file at its last step follows it.
+  following = scene->source().beingWritten() && d.step == -1;
+  scheduleLook();
   return Status::ok();
+}
+
+void Session::Worker::scheduleLook() {
+  const source::StepSource& source = scene->source();
+  if (source.appendable() && source.beingWritten()) {
+    nextLook = Clock::now() + kLookEvery;
+  } else {
+    nextLook.reset();
+    following = false;
+  }
+}
+
+void Session::Worker::follow() {
+  if (!nextLook || Clock::now() < *nextLook) {
+    return;
+  }
+  auto grew = scene->refreshSteps();
+  if (!grew) {
+    // Replaced under its name, or unreadable: the session keeps what it
+    // shows and stops looking; the stream hears why.
+    nextLook.reset();
+    following = false;
+    session.notify({0, grew.status(), state()});
+    return;
+  }
+  const bool ended = !scene->source().beingWritten();
+  if (*grew && following && !playing) {
+    if (Status status = showStep(stepCount() - 1); !status) {
+      following = false;
+      session.notify({0, status, state()});
+      return;
+    }
+  }
+  scheduleLook();  // after the last step is shown: a run that ended stops the following
+  if (*grew || ended) {
+    session.notify({0, Status::ok(), state()});
+  }
 }
 
 SessionState Session::Worker::state() const {
   const scene::ScenePipeline::CrackMapping& mapping = scene->crackMapping();
-  return {scene->step(), stepCount(), playing,          width,
-          height,        viewXml(),   mapping.fraction, mapping.warning};
+  const source::StepSource& source = scene->source();
+  SessionState out{scene->step(), stepCount(), playing,          width,
+                   height,        viewXml(),   mapping.fraction, mapping.warning};
+  out.live = source.appendable() && source.beingWritten();
+  out.following = following;
+  out.runEnded = source.appendable() && !source.beingWritten();
+  return out;
 }
 
 std::string Session::Worker::viewXml() const {
@@ -193,7 +238,8 @@ void Session::Worker::handle(const SessionEvent& event, const ResizeEvent& resiz
 }
 
 void Session::Worker::handle(const SessionEvent& event, const SetStepEvent& set) {
-  const int step = set.step == -1 ? stepCount() - 1 : set.step;
+  following = set.follow && nextLook.has_value();
+  const int step = set.step == -1 || set.follow ? stepCount() - 1 : set.step;
   if (Status status = showStep(step); !status) {
     reject(event, status);
     return;
@@ -204,6 +250,7 @@ void Session::Worker::handle(const SessionEvent& event, const SetStepEvent& set)
 }
 
 void Session::Worker::handle(const SessionEvent& event, const PlayEvent& play) {
+  following = false;
   playing = play.playing;
   loop = play.loop;
   playFps = play.fps > 0.0 ? play.fps : description().stream.fps;
@@ -254,6 +301,10 @@ Status Session::Worker::replaceDescription(pipeline::PipelineDescription next) {
   scene->commit();
   width = description().view.width;
   height = description().view.height;
+  if (newFile) {
+    following = scene->source().beingWritten() && description().step == -1;
+    scheduleLook();
+  }
   if (cameraGiven) {
     renderer->setCamera(*description().view.camera);
   } else if (newFile) {
@@ -394,6 +445,7 @@ Result<render::Image> Session::Worker::snapshot(int w, int h, int& step,
   if (atStep) {
     const int shown = *atStep == -1 ? stepCount() - 1 : *atStep;
     CRACKVIS_RETURN_IF_ERROR(dem::checkStepInRange(description().file, shown, stepCount()));
+    following = following && *atStep == -1;
     if (shown != scene->step()) {
       CRACKVIS_RETURN_IF_ERROR(showStep(shown));
       scene->prefetch(shown + 1);
@@ -421,6 +473,9 @@ std::optional<Clock::time_point> Session::Worker::wakeTime() const {
   std::optional<Clock::time_point> at = refineAt;
   if (playing && (!at || nextTick < *at)) {
     at = nextTick;
+  }
+  if (nextLook && (!at || *nextLook < *at)) {
+    at = nextLook;
   }
   return at;
 }

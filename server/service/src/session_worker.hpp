@@ -55,6 +55,11 @@ struct Session::Worker {
   // camera moved since the last one, or a new stream has not had one (the
   // camera fitted to a newly opened file is known only after a render).
   bool stateDue = false;
+  // A live file: the session looks for new steps every kLookEvery while its
+  // writer has it open, and shows each as it arrives while following.
+  static constexpr std::chrono::milliseconds kLookEvery{250};
+  bool following = false;
+  std::optional<Clock::time_point> nextLook;
 
   explicit Worker(Session& owner)
       : session(owner), reduction(owner.m_limits), refineDelayMs(owner.m_limits.refineAfterMs) {}
@@ -70,6 +75,11 @@ struct Session::Worker {
   Status buildScene(bool resetCamera);
   Status showStep(int step);
   Status start();
+  // Looks for a live file's new steps when due; shows the last while
+  // following, and tells the stream of every change.
+  void follow();
+  // When the next look is due: never for a file that cannot grow.
+  void scheduleLook();
 
   SessionState state() const;
   // The description in force as a saved view holds it: the step shown, the

@@ -117,6 +117,9 @@ v1::ServerMessage toMessage(const SessionNotice& notice) {
     state->set_pipeline_xml(notice.state->pipelineXml);
     state->set_mapped_fraction(notice.state->mappedFraction);
     state->set_crack_warning(notice.state->crackWarning);
+    state->set_live(notice.state->live);
+    state->set_following(notice.state->following);
+    state->set_run_ended(notice.state->runEnded);
   }
   return message;
 }

@@ -65,6 +65,14 @@ Result<SourceStep> StepCache::readAside(int step) {
   return m_source->read(step);
 }
 
+Result<bool> StepCache::refresh() {
+  // Between reads, and with prefetch()'s range check held off: the source's
+  // list of steps changes.
+  std::lock_guard reading(m_readMutex);
+  std::lock_guard lock(m_mutex);
+  return m_source->refresh();
+}
+
 void StepCache::prefetch(int step) {
   {
     std::lock_guard lock(m_mutex);

@@ -62,15 +62,16 @@ class FileSource : public StepSource {
 
   Status setExtraArrays(const ExtraArrays& extras) final {
     m_extras = extras;
-    m_breakSteps.clear();
-    if (extras.breakStep) {
-      auto breakSteps = readBreakSteps();
-      if (!breakSteps) {
-        return breakSteps.status();
-      }
-      m_breakSteps = std::move(breakSteps).value();
+    return loadBreakSteps();
+  }
+
+  Result<bool> refresh() final {
+    auto grew = refreshSteps();
+    if (grew && *grew) {
+      // New steps' breaks: the writer updates /bonds/break_step with each.
+      CRACKVIS_RETURN_IF_ERROR(loadBreakSteps());
     }
-    return Status::ok();
+    return grew;
   }
 
   Result<SourceStep> read(int step) final {
@@ -104,6 +105,7 @@ class FileSource : public StepSource {
 
  protected:
   virtual Result<std::vector<std::int32_t>> readBreakSteps() = 0;
+  virtual Result<bool> refreshSteps() = 0;
   // A step checked by the rules of dem::validateStep, with the extra arrays
   // the view colours by among its extras (or the lattice's constant ones).
   virtual Result<dem::StepState> readState(int step) = 0;
@@ -139,6 +141,18 @@ class FileSource : public StepSource {
         known.empty() ? std::string("none") : fmt::format("{}", fmt::join(known, ", "))));
   }
 
+  Status loadBreakSteps() {
+    m_breakSteps.clear();
+    if (m_extras.breakStep) {
+      auto breakSteps = readBreakSteps();
+      if (!breakSteps) {
+        return breakSteps.status();
+      }
+      m_breakSteps = std::move(breakSteps).value();
+    }
+    return Status::ok();
+  }
+
   ExtraArrays m_extras;
   std::vector<std::int32_t> m_breakSteps;
 };
@@ -169,9 +183,12 @@ class RemoteSource final : public FileSource {
   const std::string& file() const override { return m_remote.file(); }
   int stepCount() const override { return m_remote.stepCount(); }
   bool timeInIterations() const override { return m_remote.timeInIterations(); }
+  bool appendable() const override { return m_remote.appendable(); }
+  bool beingWritten() const override { return m_remote.beingWritten(); }
 
  private:
   Result<std::vector<std::int32_t>> readBreakSteps() override { return m_remote.breakSteps(); }
+  Result<bool> refreshSteps() override { return m_remote.refresh(); }
 
   // Only what the view uses crosses the network: the extras are asked for.
   Result<dem::StepState> readState(int step) override {
@@ -226,9 +243,21 @@ class LocalSource final : public FileSource {
   bool timeInIterations() const override {
     return m_reader.info().timeUnit == dem::kTimeInIterations;
   }
+  bool appendable() const override {
+    return m_reader.info().stepLayout == dem::StepLayout::kAppendable;
+  }
+  bool beingWritten() const override { return m_reader.info().beingWritten; }
 
  private:
   Result<std::vector<std::int32_t>> readBreakSteps() override { return m_reader.readBreakSteps(); }
+  Result<bool> refreshSteps() override {
+    if (!appendable()) {
+      return false;
+    }
+    const int before = m_reader.stepCount();
+    CRACKVIS_RETURN_IF_ERROR(m_reader.refreshSteps());
+    return m_reader.stepCount() > before;
+  }
   Result<dem::StepState> readState(int step) override { return m_reader.readStep(step); }
 
   std::string m_path;

@@ -123,6 +123,9 @@ class RenderClient : public QObject {
   quint64 zoom(double amount);
   quint64 resetCamera();
   quint64 setStep(int step);
+  // Follow a live file: its newest step now and each new one as it comes
+  // (any setStep or play ends following).
+  quint64 follow();
   quint64 play(bool playing, double fps = 0.0);
   quint64 resize(int width, int height);
   quint64 replacePipeline(const QString& xml);
@@ -160,6 +163,9 @@ class RenderClient : public QObject {
  signals:
   void frameReady(const QImage& image, const crackvis::client::FrameInfo& info);
   void stateChanged(int step, int stepCount, bool playing);
+  // A live file (its writer has it open: steps keep coming), whether the
+  // session follows its newest step, and whether the writer closed it.
+  void liveChanged(bool live, bool following, bool runEnded);
   // The shown step's broken bonds that became crack surface elements, and
   // the server's warning when fewer than 95 % did (empty otherwise).
   void crackMappingChanged(double mappedFraction, const QString& warning);

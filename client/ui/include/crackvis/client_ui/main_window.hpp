@@ -12,6 +12,7 @@
 #pragma once
 
 #include <QDialog>
+#include <QElapsedTimer>
 #include <QMainWindow>
 #include <QSize>
 #include <QTimer>
@@ -62,6 +63,9 @@ class MainWindow : public QMainWindow {
   PipelinePanel& pipelinePanel() { return *m_panel; }
   QTreeWidget& fileTree() { return *m_files; }
   QSlider& stepSlider() { return *m_slider; }
+  // A live file's "Follow latest" and its "live: last step N s ago" / "run ended".
+  QPushButton& followButton() { return *m_follow; }
+  QLabel& liveLabel() { return *m_live; }
   StepPlot& stepPlot() { return *m_plot; }
   // The step scalar drawn beside the broken bonds ("none" and the file's).
   QComboBox& plotScalarBox() { return *m_plotScalar; }
@@ -109,6 +113,8 @@ class MainWindow : public QMainWindow {
   void showHistory(const QString& file);
   void report(const QString& message);
   void updateStatus();
+  void noteStepCount(int steps);
+  void updateLive();
   void togglePlay();
 
   RenderClient m_client;
@@ -123,6 +129,14 @@ class MainWindow : public QMainWindow {
   QPushButton* m_play;
   QDoubleSpinBox* m_fps;
   QLabel* m_stepLabel;
+  // A live file: "Follow latest", and how long ago its last step came.
+  QPushButton* m_follow;
+  QLabel* m_live;
+  bool m_isLive = false;
+  bool m_runEnded = false;
+  int m_knownSteps = 0;
+  QElapsedTimer m_sinceLastStep;
+  QElapsedTimer m_sincePlot;  // the Steps plot is read again at most every 2 s
   QLabel* m_stats;
   QTimer m_statusTimer;
   QString m_file;

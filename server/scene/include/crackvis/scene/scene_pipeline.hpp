@@ -80,6 +80,10 @@ class ScenePipeline {
   // The view size the description records (a resized session's).
   void setViewSize(int width, int height);
   int stepCount() const;
+  // Looks for new steps of a live file (StepSource::refresh): true when
+  // there are more now. Showing one extracts cracks incrementally from the
+  // step shown, as any step change does.
+  Result<bool> refreshSteps();
   int step() const;  // the step shown
   const source::StepSource& source() const;
   const source::StepCache& cache() const { return *m_state.cache; }

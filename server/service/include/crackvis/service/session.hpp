@@ -71,6 +71,9 @@ struct SessionState {
   std::string pipelineXml;
   double mappedFraction = 1.0;  // of the step's broken bonds, as surface elements
   std::string crackWarning;     // when below 95 %, naming the likely cause
+  bool live = false;            // a live file: steps may be added
+  bool following = false;       // showing each new step as it arrives
+  bool runEnded = false;        // a live file whose writer closed it
 };
 
 // What a stream sends besides frames: an event the session could not apply,

@@ -45,7 +45,8 @@ struct ResizeEvent {
   int height = 0;
 };
 struct SetStepEvent {
-  int step = 0;  // -1: the last
+  int step = 0;         // -1: the last
+  bool follow = false;  // the last step, then each new one of a live file
 };
 struct PlayEvent {
   bool playing = false;

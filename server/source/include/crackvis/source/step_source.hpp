@@ -76,6 +76,14 @@ class StepSource {
   // Whether steps' times are the code's step numbers (the file's
   // time_unit is "iteration": the code wrote no time).
   virtual bool timeInIterations() const { return false; }
+  // A live file (crackvis-dem v1.2's appendable layout): one that may grow.
+  virtual bool appendable() const { return false; }
+  // A live file whose writer had it open when last looked at.
+  virtual bool beingWritten() const { return false; }
+  // Looks at the file again: true when it has more steps now (the break
+  // steps, when asked for, are read again). FAILED_PRECONDITION when the
+  // file was replaced by another. A file that cannot grow answers false.
+  virtual Result<bool> refresh() { return false; }
 };
 
 // `file` relative to the data service's root. A file declaring more
@@ -116,6 +124,8 @@ class StepCache {
   // Reads `step` now without keeping it: a scan over the whole series must
   // not push the steps a session shows out of the cache.
   Result<SourceStep> readAside(int step);
+  // StepSource::refresh, between reads (the prefetch thread's included).
+  Result<bool> refresh();
 
   struct Stats {
     std::uint64_t hits = 0;
