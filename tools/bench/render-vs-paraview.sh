@@ -73,43 +73,19 @@ for binary in tools/crackvis dataservice/crackvis-data server/app/crackvis-rende
   [[ -x $build/$binary ]] || die "$build/$binary is missing: build the project first"
 done
 
+# shellcheck source=tools/bench/bench_services.sh
+source "$here/bench_services.sh"
 cd "$root"
-[[ -f certs/generated/crackvis-render.pem ]] || bash certs/make-dev-certs.sh --client crackvis-render >&2
-out_is_temp=
-if [[ -z $out ]]; then
-  out=$(mktemp -d)
-  out_is_temp=1
-fi
-mkdir -p "$out"
+bench_output "$out"
 
-free_port() {
-  python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
-}
-
-pids=()
-cleanup() {
-  for pid in "${pids[@]}"; do
-    kill "$pid" 2>/dev/null || true
-  done
-  wait 2>/dev/null || true
-}
-trap 'cleanup; if [[ -n $out_is_temp ]]; then rm -rf "$out"; fi' EXIT
-
-data_port=$(free_port)
-render_port=$(free_port)
-"$build/dataservice/crackvis-data" --root "$data_root" --listen "127.0.0.1:$data_port" \
-  --access-log '' >"$out/crackvis-data.log" 2>&1 &
-pids+=($!)
-"$build/server/app/crackvis-render" --listen "127.0.0.1:$render_port" \
+data_port=$(bench_free_port)
+render_port=$(bench_free_port)
+bench_background "$build/dataservice/crackvis-data" --root "$data_root" \
+  --listen "127.0.0.1:$data_port" --access-log '' >"$out/crackvis-data.log" 2>&1
+bench_background "$build/server/app/crackvis-render" --listen "127.0.0.1:$render_port" \
   --data-server "localhost:$data_port" --max-reduction "$max_reduction" --access-log '' \
-  >"$out/crackvis-render.log" 2>&1 &
-pids+=($!)
-for _ in $(seq 50); do
-  "$build/tools/crackvis" health "localhost:$render_port" >/dev/null 2>&1 && break
-  sleep 0.2
-done
-"$build/tools/crackvis" health "localhost:$render_port" >/dev/null ||
-  die "crackvis-render did not start: $(tail -3 "$out/crackvis-render.log")"
+  >"$out/crackvis-render.log" 2>&1
+bench_wait_render "$render_port" "$out/crackvis-render.log"
 
 for k in $(seq "$runs"); do
   echo "run $k of $runs: crackvis (load $(cut -d' ' -f1-3 /proc/loadavg))" >&2

@@ -48,5 +48,6 @@ Command addExportCommand(CLI::App& parent);
 // every command.
 Command addBenchTransferCommand(CLI::App& bench);
 Command addBenchRenderCommand(CLI::App& bench);
+Command addBenchFollowCommand(CLI::App& bench);
 
 }  // namespace crackvis::cli

@@ -109,6 +109,7 @@ int main(int argc, char** argv) {
   commands.push_back(addBenchMethodsCommand(*bench));
   commands.push_back(addBenchTransferCommand(*bench));
   commands.push_back(addBenchRenderCommand(*bench));
+  commands.push_back(addBenchFollowCommand(*bench));
   commands.push_back(addSimCommand(app));
   commands.push_back(addHealthCommand(app));
 

@@ -3,6 +3,8 @@
 // from crackvis generate) with a notch, and writes the crackvis-dem file as
 // it goes.
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
 #include <memory>
 #include <optional>
 
@@ -37,6 +39,7 @@ struct SimOptions {
   bool noBondForce = false;
   bool live = false;
   double pace = 0.0;
+  std::string stepLog;  // a line per committed step: index, wall-clock time
   // Material overrides; unset keeps the calibrated default.
   std::optional<double> youngsModulus;
   std::optional<double> strainThreshold;
@@ -147,7 +150,23 @@ int runSim(const SimOptions& options, bool setGiven) {
   run.pace = options.pace;
   // The header waits for the first saved step, so that a run that cannot
   // start (unwritable output) prints nothing but its error line.
+  std::FILE* stepLog = nullptr;
+  if (!options.stepLog.empty()) {
+    stepLog = std::fopen(options.stepLog.c_str(), "w");
+    if (stepLog == nullptr) {
+      printError("sim", fmt::format("cannot write the step log {}", options.stepLog));
+      return kExitFailure;
+    }
+  }
+  const std::unique_ptr<std::FILE, int (*)(std::FILE*)> closeLog(
+      stepLog, [](std::FILE* f) { return f != nullptr ? std::fclose(f) : 0; });
   run.onSaved = [&](const sim::RunProgress& at) {
+    if (stepLog != nullptr) {
+      // After the step's commit: when a reader could first see it.
+      const auto now = std::chrono::system_clock::now().time_since_epoch();
+      std::fprintf(stepLog, "%d %.9f\n", at.savedStep, std::chrono::duration<double>(now).count());
+      std::fflush(stepLog);
+    }
     if (at.savedStep == 0 && !options.quiet) {
       std::fprintf(stderr,
                    "%s: %zu particles, %zu bonds, %zu pre-broken; dt %.4g s, %lld steps per save, "
@@ -243,6 +262,10 @@ Command addSimCommand(CLI::App& parent) {
                    "Write saved steps at least SECONDS apart in wall time, so that a small "
                    "--live run can be watched as it grows (demos, tests)")
       ->check(CLI::Range(0.0, 3600.0));
+  command->add_option("--step-log", options->stepLog,
+                      "Write a line per saved step as it is committed: its index and the "
+                      "wall-clock time (Unix seconds), for measuring how soon followers see it "
+                      "(tools/bench/live-follow.sh)");
   command->add_flag("-q,--quiet", options->quiet, "No progress bar and no summary");
   command
       ->add_option("--compress", options->compress,

@@ -214,7 +214,16 @@ void fillAppendableSteps(FileDescription& description, hid_t file) {
     return;
   }
   constexpr std::uint64_t kMaxSteps = 1'000'000;
-  const std::uint64_t count = std::min(time->shape[0], kMaxSteps);
+  std::uint64_t count = std::min(time->shape[0], kMaxSteps);
+  // The walk read the other step-axis datasets' headers before /steps/time
+  // (name order): a step committed in between has its time but not, in this
+  // description, its rows. Only steps with a row in every one are reported.
+  for (const DatasetInfo& dataset : description.datasets) {
+    if (dataset.path.starts_with("/steps/") && dataset.path != dem::kStepTimePath &&
+        dataset.path != dem::kStepsWritingPath && !dataset.shape.empty()) {
+      count = std::min(count, dataset.shape[0]);
+    }
+  }
   auto resolved = h5::resolveInFile(file, dem::kStepTimePath);
   if (!resolved) {
     return;
