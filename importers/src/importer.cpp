@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <numeric>
 #include <optional>
 #include <thread>
@@ -690,8 +691,19 @@ std::string filesFingerprint(const SourceDescription& source) {
   return print;
 }
 
+// Gone, or a zombie its parent has not reaped yet (the run is over either way).
 bool processEnded(int pid) {
-  return pid > 0 && ::kill(pid, 0) != 0 && errno == ESRCH;
+  if (pid <= 0) {
+    return false;
+  }
+  if (::kill(pid, 0) != 0 && errno == ESRCH) {
+    return true;
+  }
+  std::ifstream stat(fmt::format("/proc/{}/stat", pid));
+  std::string line;
+  std::getline(stat, line);
+  const std::size_t close = line.rfind(')');  // the name may hold spaces and parentheses
+  return close != std::string::npos && close + 2 < line.size() && line[close + 2] == 'Z';
 }
 
 // The live file a follow writes: created with the first step, which gives

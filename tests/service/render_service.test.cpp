@@ -1324,6 +1324,18 @@ TEST_CASE("a session follows a live file as the writer adds steps",
       CHECK(frames[k].frame.step() >= frames[k - 1].frame.step());
     }
     CHECK(stream.errors().empty());
+    // A screenshot of the live file's session, at a step of one's own (as a
+    // movie takes them): the PNG comes, and the session stops following.
+    grpc::ClientContext snapshotContext;
+    v1::SnapshotRequest request;
+    request.set_session_id(id);
+    request.set_step(kSteps / 2);
+    v1::SnapshotResponse png;
+    const grpc::Status snapshot = stub->Snapshot(&snapshotContext, request, &png);
+    INFO(snapshot.error_message());
+    REQUIRE(snapshot.ok());
+    CHECK(png.png().size() > 100);
+    CHECK(png.step() == kSteps / 2);
   }
 
   SECTION("stepping back leaves follow mode, and follow returns to the newest step") {

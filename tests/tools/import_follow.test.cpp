@@ -161,3 +161,33 @@ TEST_CASE("import --follow ends on SIGTERM with every complete step written",
     CHECK(idleAlone.err.find("go with --follow") != std::string::npos);
   }
 }
+
+TEST_CASE("import --follow --pid ends when the code's process has ended", "[cli][import][live]") {
+  TempDir dir;
+  const fs::path run = fs::path(kData) / "lammps" / "notched_bar";
+  const fs::path writing = dir.path() / "run";
+  fs::create_directory(writing);
+  int stepsCopied = 0;
+  for (const auto& [number, files] : filesByStep(run)) {
+    if (number >= 0 && stepsCopied == 2) {
+      break;
+    }
+    for (const fs::path& file : files) {
+      fs::copy_file(file, writing / file.filename());
+    }
+    stepsCopied += number >= 0 ? 1 : 0;
+  }
+  // The "code": a process that ends by itself after two seconds.
+  const pid_t code = startProcess({"sleep", "2"});
+  const std::string followed = dir.file("followed.h5");
+  const auto started = std::chrono::steady_clock::now();
+  const pid_t follow = startProcess({kCli, "import", "lammps", writing.string(), "--follow",
+                                     "--pid", std::to_string(code), "-q", "-o", followed});
+  CHECK(waitProcess(code) == 0);
+  REQUIRE(waitProcess(follow) == 0);
+  CHECK(std::chrono::steady_clock::now() - started >= std::chrono::milliseconds(1500));
+  auto reader = crackvis::dem::DemFileReader::open(followed);
+  REQUIRE(reader.isOk());
+  CHECK(reader->stepCount() == 2);
+  CHECK_FALSE(reader->info().beingWritten);
+}

@@ -83,6 +83,19 @@ TEST_CASE("crackvis sim --live: info follows the run, and a killed run keeps its
   INFO(extracted.err);
   CHECK(extracted.exitCode == 0);
   CHECK(std::filesystem::file_size(cracks) > 0);
+  // A movie and a snapshot of the live file, as of its complete steps.
+  const std::string movie = dir.file("live.mp4");
+  const auto movieRun = runProcess(
+      {kCli, "movie", output, "-s", "0:-1", "--size", "96x64", "--frames", "4", "-q", "-o", movie});
+  INFO(movieRun.err);
+  CHECK(movieRun.exitCode == 0);
+  CHECK(std::filesystem::file_size(movie) > 0);
+  const std::string png = dir.file("live.png");
+  const auto snapshot = runProcess(
+      {kCli, "snapshot", output, "-s", "-1", "--width", "96", "--height", "64", "-q", "-o", png});
+  INFO(snapshot.err);
+  CHECK(snapshot.exitCode == 0);
+  CHECK(std::filesystem::file_size(png) > 0);
   // No partial file is left beside it: the live file took the name.
   CHECK_FALSE(std::filesystem::exists(output + ".partial"));
 }
