@@ -73,7 +73,7 @@ Result<DemFileReader> DemFileReader::open(const std::string& path) {
   DemFileReader reader;
   reader.m_path = path;
   reader.m_info.path = path;
-  reader.m_file = h5::fileHandle(H5Fopen(path.c_str(), h5::readFlags(), H5P_DEFAULT));
+  reader.m_file = h5::openReadOnly(path);
   if (!reader.m_file.valid()) {
     return failedPrecondition(fmt::format("{}: cannot open: file is truncated or corrupt ({})",
                                           path, h5::lastHdf5Error()));

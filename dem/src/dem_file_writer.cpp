@@ -369,7 +369,7 @@ namespace crackvis::dem {
 
 // Creates the step-axis datasets the first step needs, then switches the
 // file to SWMR writing: from here on datasets only grow, and a reader that
-// opens the file (h5::readFlags()) sees the steps committed so far.
+// opens the file (h5::openReadOnly) sees the steps committed so far.
 Status DemFileWriter::startStepAxis(const StepState& first) {
   const hid_t root = m_file.get();
   const auto n = static_cast<std::uint64_t>(m_lattice.particleCount());

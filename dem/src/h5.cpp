@@ -607,6 +607,23 @@ Status readLeading(hid_t dataset, ElementType type, std::uint64_t count, void* o
   return Status::ok();
 }
 
+Handle openReadOnly(const std::string& path, hid_t access) {
+  Handle file = fileHandle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, access));
+  if (file.valid()) {
+    return file;
+  }
+  const std::string refusal = lastHdf5Error();
+  file = fileHandle(H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, access));
+  if (!file.valid()) {
+    // The plain open's reason is the one to give (a truncated file...): put
+    // it back on the stack for the caller's lastHdf5Error().
+    lastHdf5Error();
+    H5Epush2(H5E_DEFAULT, __FILE__, __func__, __LINE__, H5E_ERR_CLS, H5E_FILE, H5E_CANTOPENFILE,
+             "%s", refusal.c_str());
+  }
+  return file;
+}
+
 Status refreshDataset(hid_t dataset) {
   if (H5Drefresh(dataset) < 0) {
     return failedPrecondition(

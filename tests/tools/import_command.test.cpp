@@ -213,12 +213,24 @@ TEST_CASE("Every local reader refuses every file the fuzzers kept, with one line
 
 TEST_CASE("A libhdf5 fault while opening is one line naming the file and the signal",
           "[cli][info]") {
+  // libhdf5 overflows its heap in H5Aexists on this file. Whether that
+  // faults depends on the heap's layout, which any change of the program
+  // moves: it faulted in every build until the live-file reader's (issue 32),
+  // whose libhdf5 reads a wrong attribute list instead. Either way the
+  // answer is one line naming the file and exit 1; a fault names its signal.
   const std::string path = kData + "/../fuzz/crashes/dem_reader-hdf5-H5Aexists-heap-overflow.h5";
   auto info = runProcess({kCli, "info", path});
   INFO(info.err);
   CHECK(info.exitCode == 1);
-  CHECK_THAT(info.err, Catch::StartsWith("crackvis info: " + path +
-                                         ": libhdf5 faulted reading the "
-                                         "file's structure (killed by SIG") &&
-                           Catch::Contains("the file is probably corrupt"));
+  CHECK(crackvis::testing::lines(info.err).size() == 1);
+  const bool faulted = info.err.find("libhdf5 faulted") != std::string::npos;
+  if (faulted) {
+    CHECK_THAT(info.err, Catch::StartsWith("crackvis info: " + path +
+                                           ": libhdf5 faulted reading the "
+                                           "file's structure (killed by SIG") &&
+                             Catch::Contains("the file is probably corrupt"));
+  } else {
+    CHECK_THAT(info.err, Catch::StartsWith("crackvis info: " + path + ": ") &&
+                             Catch::Contains("crackvis-dem file without a version"));
+  }
 }

@@ -19,7 +19,7 @@ Result<h5::Handle> openHdf5(const ResolvedPath& file) {
   if (!hasHdf5Signature(file.absolute)) {
     return failedPrecondition(fmt::format("{}: not an HDF5 file", file.requested));
   }
-  h5::Handle handle = h5::fileHandle(H5Fopen(file.absolute.c_str(), h5::readFlags(), H5P_DEFAULT));
+  h5::Handle handle = h5::openReadOnly(file.absolute.string());
   if (!handle.valid()) {
     return failedPrecondition(fmt::format("{}: cannot open: file is truncated or corrupt ({})",
                                           file.requested, h5::lastHdf5Error()));
@@ -43,7 +43,7 @@ Result<h5::Handle> Catalogue::OpenFiles::open(const ResolvedPath& file) {
   const bool found = ::stat(path.c_str(), &info) == 0;
   if (auto kept = m_files.find(path); kept != m_files.end()) {
     if (found && kept->second.identity == identityOf(info)) {
-      h5::Handle handle = h5::fileHandle(H5Fopen(path.c_str(), h5::readFlags(), H5P_DEFAULT));
+      h5::Handle handle = h5::openReadOnly(path);
       if (handle.valid()) {
         kept->second.lastUsed = now;
         return handle;
@@ -61,7 +61,7 @@ Result<h5::Handle> Catalogue::OpenFiles::open(const ResolvedPath& file) {
         [](const auto& a, const auto& b) { return a.second.lastUsed < b.second.lastUsed; }));
   }
   // A second handle, kept: it shares the file the caller's handle opened.
-  h5::Handle kept = h5::fileHandle(H5Fopen(path.c_str(), h5::readFlags(), H5P_DEFAULT));
+  h5::Handle kept = h5::openReadOnly(path);
   if (kept.valid()) {
     m_files.emplace(path, File{std::move(kept), identityOf(info), now, {}});
   }

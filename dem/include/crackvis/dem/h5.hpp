@@ -196,12 +196,12 @@ Status readLeading(hid_t dataset, ElementType type, std::uint64_t count, void* o
 // chunk index) from the file: a file a writer is still growing (SWMR)
 // shows new rows only after this.
 Status refreshDataset(hid_t dataset);
-// How every crackvis reader opens a file: read-only, and in SWMR read mode,
-// so a file a live writer is growing (or one whose live writer was killed,
-// which leaves the superblock marked as open for SWMR writing) opens too; a
-// file of the default format is read as without the flag.
-inline unsigned readFlags() {
-  return H5F_ACC_RDONLY | H5F_ACC_SWMR_READ;
-}
+// How every crackvis reader opens a file: read-only; and when libhdf5
+// refuses that because a live writer is growing the file (or was killed,
+// which leaves the superblock marked as open for SWMR writing), again in
+// SWMR read mode. Files no writer holds open the plain way, as before live
+// files existed. An invalid handle when both fail, with the first refusal's
+// reason left for lastHdf5Error().
+Handle openReadOnly(const std::string& path, hid_t access = H5P_DEFAULT);
 
 }  // namespace crackvis::dem::h5
