@@ -35,8 +35,8 @@ readonly PACKAGES=(
   libboost-dev chromium
   # client/: Qt6 thin client, headless screenshots
   qt6-base-dev qt6-base-dev-tools libqt6opengl6-dev xvfb
-  # tests and benchmark plots
-  catch2 gnuplot-nox
+  # tests, benchmark and report plots; scipy counts fragments independently
+  catch2 gnuplot-nox python3-scipy
   # fuzzing (tests/fuzz/): clang with libFuzzer and the sanitizer runtimes
   clang libclang-rt-14-dev
   # paraview-plugin/: what building against Debian's ParaView (unpacked by

@@ -4,7 +4,7 @@
 
 #include <fmt/format.h>
 
-#include "surface_primitives.hpp"
+#include <crackvis/cracks/surface_primitives.hpp>
 #include <crackvis/cracks/bond_mapping.hpp>
 #include <crackvis/cracks/crack_components.hpp>
 

@@ -7,16 +7,12 @@
 #include <numeric>
 #include <utility>
 
-#include "surface_primitives.hpp"
 #include <crackvis/cracks/crack_components.hpp>
+#include <crackvis/cracks/surface_primitives.hpp>
 
 namespace crackvis::cracks {
-namespace {
 
-using Matrix3 = std::array<std::array<double, 3>, 3>;
-
-// Eigenvector of the smallest eigenvalue of a symmetric 3x3 matrix (cyclic
-// Jacobi rotations: a few sweeps reach machine precision at this size).
+// Cyclic Jacobi rotations: a few sweeps reach machine precision at this size.
 Vec3 smallestEigenvector(Matrix3 a) {
   Matrix3 v{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
   for (int sweep = 0; sweep < 32; ++sweep) {
@@ -63,6 +59,8 @@ Vec3 smallestEigenvector(Matrix3 a) {
   }
   return {v[0][smallest], v[1][smallest], v[2][smallest]};
 }
+
+namespace {
 
 // Area-weighted first and second moments of a component's surface.
 struct Moments {

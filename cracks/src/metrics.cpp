@@ -5,7 +5,7 @@
 
 #include <tbb/parallel_for.h>
 
-#include "surface_primitives.hpp"
+#include <crackvis/cracks/surface_primitives.hpp>
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/metrics.hpp>
 #include <crackvis/cracks/particle_grid.hpp>

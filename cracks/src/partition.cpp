@@ -2,7 +2,7 @@
 #include <cmath>
 #include <numeric>
 
-#include "surface_primitives.hpp"
+#include <crackvis/cracks/surface_primitives.hpp>
 #include <crackvis/cracks/partition.hpp>
 
 namespace crackvis::cracks {

@@ -1,4 +1,4 @@
-#include "surface_primitives.hpp"
+#include <crackvis/cracks/surface_primitives.hpp>
 
 #include <algorithm>
 #include <array>

@@ -29,7 +29,7 @@
 #include <fmt/format.h>
 
 #include "methods.hpp"
-#include "surface_primitives.hpp"
+#include <crackvis/cracks/surface_primitives.hpp>
 #include <crackvis/cracks/partition.hpp>
 #include <crackvis/cracks/triangulation.hpp>
 

@@ -27,6 +27,7 @@
 // through the gap, where it cuts no particle of the current step.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -35,6 +36,12 @@
 #include <crackvis/cracks/extractor.hpp>
 
 namespace crackvis::cracks {
+
+using Matrix3 = std::array<std::array<double, 3>, 3>;
+
+// Eigenvector of the smallest eigenvalue of a symmetric 3x3 matrix (unit
+// length). The largest one's is that of (trace * I - a).
+Vec3 smallestEigenvector(Matrix3 a);
 
 struct CrackComponent {
   std::size_t primitives = 0;

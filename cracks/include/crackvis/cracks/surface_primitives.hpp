@@ -1,5 +1,5 @@
 // The surface primitives of a crack mesh and the welding of its points:
-// what the metrics and the components of a crack share (internal to cracks/).
+// what the metrics, the components and the analyses of a crack share.
 #pragma once
 
 #include <cstdint>

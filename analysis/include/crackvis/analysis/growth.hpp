@@ -1,0 +1,87 @@
+// All analyses of one run, step by step, and the crack's growth.
+//
+// CrackAnalysis is fed each step's input and extracted crack mesh, in step
+// order (as the extractors are), and keeps what is incremental: fragments
+// are found again only when a bond broke, and each bond's mode is decided
+// the step it breaks.
+//
+// Growth per step: the total crack area, the main crack's (the largest
+// component's) area and bounding box, and its front (crackFront): the main
+// crack's extent along the in-plane axis it grew along most, and that
+// extent's rate of change in time.
+#pragma once
+
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <crackvis/analysis/fragments.hpp>
+#include <crackvis/analysis/opening.hpp>
+#include <crackvis/analysis/orientation.hpp>
+#include <crackvis/cracks/extractor.hpp>
+
+namespace crackvis::analysis {
+
+struct AnalysisOptions {
+  OpeningOptions opening;
+  std::size_t minFragment = 1;  // particles; smaller fragments are dust
+};
+
+struct StepAnalysis {
+  int step = 0;
+  double time = 0.0;
+  std::size_t broken = 0;
+  double totalArea = 0.0;  // all components, m^2 (2D: m)
+  std::size_t components = 0;
+  bool hasMain = false;
+  double mainArea = 0.0;
+  dem::Bounds mainBox;
+  Vec3 mainNormal;
+  OpeningSummary mainOpening;
+  OpeningSummary allOpening;
+  std::size_t fragments = 0;  // of at least minFragment particles
+  double largestFragmentShare = 0.0;
+  std::size_t tension = 0;  // bonds broken in tension up to this step
+  std::size_t shear = 0;
+};
+
+class CrackAnalysis {
+ public:
+  CrackAnalysis(const dem::Lattice& lattice, AnalysisOptions options);
+
+  // `reference`: the configuration openings are measured from (the file's
+  // first step); `bondForce` may be empty.
+  StepAnalysis analyse(int step, double time, const cracks::StepInput& input,
+                       std::span<const Vec3> reference, const CrackMesh& mesh);
+
+  const CrackComponents& components() const { return m_components; }
+  const ElementOpenings& openings() const { return m_openings; }
+  const Fragments& fragments() const { return m_fragments.current(); }
+  const FragmentTracker& fragmentTracker() const { return m_fragments; }
+  const BreakModeTracker& modes() const { return m_modes; }
+  const AnalysisOptions& options() const { return m_options; }
+
+ private:
+  const dem::Lattice& m_lattice;
+  AnalysisOptions m_options;
+  CrackComponents m_components;
+  ElementOpenings m_openings;
+  FragmentTracker m_fragments;
+  BreakModeTracker m_modes;
+};
+
+struct CrackFront {
+  int axis = -1;               // 0 x, 1 y, 2 z; -1: no main crack in any step
+  std::vector<double> extent;  // per step, m (0 without a main crack)
+  std::vector<double> speed;   // per step, m per unit of time (0 at the first)
+};
+
+// The in-plane axes are the world axes other than the one the last main
+// crack's normal is closest to (2D: and z); of those, the one along which
+// the main crack's extent grew most from its first step to its last.
+CrackFront crackFront(std::span<const StepAnalysis> steps, int dimension);
+
+std::string axisName(int axis);
+
+}  // namespace crackvis::analysis

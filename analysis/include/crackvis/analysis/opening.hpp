@@ -1,0 +1,111 @@
+// Crack opening: how far a crack surface has opened, and how far its sides
+// have slid, element by element.
+//
+// A surface element stands for one bond (local Voronoi, cell centre: cell
+// data bond_id) or for the bonds of its points (cell cut: point data
+// bond_id). Its displacement jump is the bond's current separation minus its
+// separation in the reference configuration, d - d0 with d = x_j - x_i,
+// averaged over the element's bonds. The jump splits along the crack's
+// normal there: opening = jump . n (positive when the sides move apart),
+// slip = |jump - opening n|.
+//
+// Which normal. A lattice's crack surface is made of the faces of single
+// bonds, which zig-zag around the crack's plane: on an FCC lattice the faces
+// of a crack along a cube plane lean 45 degrees away from it, and a pure
+// tension opening would read as half slip on each face; and a face's normal
+// in the current configuration leans over further as the crack opens. The
+// normal used is therefore the crack's local normal: the plane through the
+// centroids of the elements of the same component within `smoothingRadius`
+// (weighted by area times (1 - (r/R)^2)^2), or, where those make no plane
+// (a lone break, a thread of a few faces), the principal axis of their
+// bonds' reference directions. It is oriented along the element's bond
+// (n . d0 > 0). On a plane crack it is the plane's normal, on a curved one
+// it follows the curve on the scale of the radius.
+//
+// Elements that carry no bond of the file (cell attribute's cells, virtual
+// bonds of a triangulation, inconsistency marks) have no opening: NaN.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include <crackvis/cracks/crack_components.hpp>
+#include <crackvis/cracks/crack_mesh.hpp>
+#include <crackvis/cracks/surface_primitives.hpp>
+
+namespace crackvis::analysis {
+
+using cracks::CrackComponents;
+using cracks::CrackMesh;
+using dem::Vec3;
+
+struct OpeningOptions {
+  // Radius of the neighbourhood whose orientation gives an element's normal,
+  // m; 0: three times the mean reference length of the element bonds.
+  double smoothingRadius = 0.0;
+};
+
+// One entry per surface primitive (cracks::surfacePrimitives order).
+struct ElementOpenings {
+  std::vector<double> area;             // m^2 (2D: length, m)
+  std::vector<Vec3> centroid;           // m
+  std::vector<Vec3> normal;             // the crack's local unit normal, along the bond
+  std::vector<double> opening;          // m, NaN without a bond
+  std::vector<double> slip;             // m, NaN without a bond
+  std::vector<std::int32_t> component;  // CrackComponents index, -1 none
+  double smoothingRadius = 0.0;         // the radius used, m
+
+  std::size_t size() const { return area.size(); }
+};
+
+// `reference` and `current` are the particle centres [N]; `bonds` the
+// lattice's pairs [M].
+ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& components,
+                               std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
+                               std::span<const Vec3> current, const OpeningOptions& options = {});
+
+// Cell data "opening" and "slip" over all the mesh's primitives in VTK order
+// (NaN for those that are no surface element), appended to mesh.cellData.
+void appendOpeningArrays(CrackMesh& mesh, const ElementOpenings& openings);
+
+// Area-weighted statistics of one component (or of all: component < 0).
+struct OpeningSummary {
+  std::size_t elements = 0;  // with a bond
+  double area = 0.0;         // of those elements
+  double meanOpening = 0.0;  // area-weighted
+  double maxOpening = 0.0;
+  double meanSlip = 0.0;
+  double maxSlip = 0.0;
+};
+OpeningSummary summariseOpening(const ElementOpenings& openings, int component);
+
+// Area-weighted histogram of opening over [lo, hi) in `bins` bins: area per
+// bin (values outside the range go to the end bins).
+struct Histogram {
+  double lo = 0.0;
+  double hi = 0.0;
+  std::vector<double> weight;
+  double binWidth() const {
+    return weight.empty() ? 0.0 : (hi - lo) / static_cast<double>(weight.size());
+  }
+};
+Histogram openingHistogram(const ElementOpenings& openings, int component, double lo, double hi,
+                           int bins);
+
+// The opening profile along a component: its elements binned by position
+// along `axis` (a unit vector in the crack's plane), with the area-weighted
+// mean opening and slip per bin; bins without elements are left out.
+struct ProfileBin {
+  double position = 0.0;  // bin centre along the axis, m
+  double area = 0.0;
+  double opening = 0.0;
+  double slip = 0.0;
+};
+std::vector<ProfileBin> openingProfile(const ElementOpenings& openings, int component, Vec3 axis,
+                                       int bins);
+
+// The in-plane axis along which a component extends furthest: of the two
+// axes of its best-fit plane (2D: the line's direction).
+Vec3 longestAxis(const ElementOpenings& openings, int component, Vec3 planeNormal);
+
+}  // namespace crackvis::analysis

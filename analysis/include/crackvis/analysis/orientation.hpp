@@ -1,0 +1,95 @@
+// Which way cracks run, and how bonds broke.
+//
+// Orientation: the distribution of the crack's local normals (the smoothed
+// normals of opening.hpp: a lattice's single-bond faces zig-zag around the
+// crack, and their own normals would show the lattice, not the crack),
+// weighted by element area. Normals are axial (n and -n are one
+// orientation):
+//  - 2D: a rose diagram of the normal's angle from +x, in [0, 180) degrees;
+//  - 3D: a lower-hemisphere Lambert equal-area (Schmidt) projection of the
+//    poles, x = sqrt(1 + n_z) n_x / |n_xy| (same for y) with n_z <= 0, on a
+//    square grid over [-1, 1]^2; equal areas of the sphere map to equal
+//    areas of the disc, so a grid cell's weight is a density.
+//
+// Mode of a broken bond: the jump j = d - d0 of its ends' separation from
+// the reference configuration, at the first step it is seen broken, split
+// along the reference bond axis a = d0 / |d0| into stretch s = j . a and
+// shear t = |j - s a|. Tension when s > 0 and s >= t (the ends moved apart
+// within 45 degrees of the bond's axis), shear otherwise. Where the file has
+// bond forces (the normal force, positive in tension) and the bond was in
+// compression at the last step it was seen intact, it broke in shear: a
+// bond cannot fail in tension under compression.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include <crackvis/analysis/opening.hpp>
+
+namespace crackvis::analysis {
+
+struct RoseDiagram {
+  std::vector<double> weight;  // bin k: angles [k, k + 1) * 180 / bins degrees
+  double binDegrees() const {
+    return weight.empty() ? 0.0 : 180.0 / static_cast<double>(weight.size());
+  }
+};
+RoseDiagram roseDiagram(const ElementOpenings& elements, int component, int bins);
+
+struct Stereonet {
+  int size = 0;                // cells per side over [-1, 1]
+  std::vector<double> weight;  // [row y][column x], size * size
+  double cellCentre(int k) const { return -1.0 + (k + 0.5) * 2.0 / size; }
+};
+// The projected point of an axial direction (lower hemisphere).
+std::array<double, 2> equalAreaPoint(Vec3 n);
+Stereonet stereonet(const ElementOpenings& elements, int component, int size);
+
+// The area-weighted mean orientation (principal axis of sum(area n n^T)),
+// with z <= 0 in 3D and y >= 0 in 2D, and its strength: the principal
+// eigenvalue's share of the trace (1: all parallel).
+struct MeanOrientation {
+  Vec3 normal;
+  double strength = 0.0;
+};
+MeanOrientation meanOrientation(const ElementOpenings& elements, int component);
+
+enum class BreakMode : std::uint8_t { kTension, kShear };
+const char* toString(BreakMode mode);
+
+struct BondBreak {
+  std::int32_t bond = -1;
+  int step = 0;
+  BreakMode mode = BreakMode::kTension;
+  double stretch = 0.0;  // m
+  double shear = 0.0;    // m
+};
+
+// d0, d: the bond's separation (second end minus first) in the reference
+// and at its break; forceBefore: its normal force at the last step it was
+// intact, when the file has one.
+BondBreak classifyBreak(Vec3 d0, Vec3 d, std::optional<double> forceBefore);
+
+// Follows a run step by step and classifies each bond the step it is first
+// seen broken; bonds broken at the first step seen were broken before the
+// run and are not classified.
+class BreakModeTracker {
+ public:
+  // `bondForce` may be empty.
+  void update(int step, std::span<const dem::Bond> bonds, std::span<const std::uint8_t> bondState,
+              std::span<const Vec3> reference, std::span<const Vec3> current,
+              std::span<const float> bondForce);
+  const std::vector<BondBreak>& breaks() const { return m_breaks; }
+  std::size_t count(BreakMode mode) const;
+  std::size_t countUpTo(BreakMode mode, int step) const;
+
+ private:
+  std::vector<std::uint8_t> m_seen;  // bond state of the previous step
+  std::vector<float> m_lastForce;    // force at the last step seen intact
+  bool m_first = true;
+  std::vector<BondBreak> m_breaks;
+};
+
+}  // namespace crackvis::analysis

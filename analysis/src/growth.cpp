@@ -1,0 +1,95 @@
+#include <algorithm>
+#include <cmath>
+
+#include <crackvis/analysis/growth.hpp>
+
+namespace crackvis::analysis {
+
+CrackAnalysis::CrackAnalysis(const dem::Lattice& lattice, AnalysisOptions options)
+    : m_lattice(lattice), m_options(options) {}
+
+StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInput& input,
+                                    std::span<const Vec3> reference, const CrackMesh& mesh) {
+  StepAnalysis out;
+  out.step = step;
+  out.time = time;
+  out.broken = static_cast<std::size_t>(
+      std::count_if(input.bondState.begin(), input.bondState.end(), [](auto s) { return s != 0; }));
+  m_components = cracks::findComponents(mesh);
+  out.components = m_components.components.size();
+  for (const cracks::CrackComponent& c : m_components.components) {
+    out.totalArea += c.area;
+  }
+  if (!m_components.components.empty()) {
+    const cracks::CrackComponent& main = m_components.components.front();
+    out.hasMain = true;
+    out.mainArea = main.area;
+    out.mainBox = main.box;
+    out.mainNormal = main.normal;
+  }
+  m_openings = measureOpening(mesh, m_components, m_lattice.bonds, reference, input.positions,
+                              m_options.opening);
+  out.mainOpening = summariseOpening(m_openings, 0);
+  out.allOpening = summariseOpening(m_openings, -1);
+  const Fragments& fragments =
+      m_fragments.update(m_lattice.bonds, input.bondState, m_lattice.radius, mesh.dimension);
+  out.fragments = fragments.countAtLeast(m_options.minFragment);
+  out.largestFragmentShare = fragments.largestShare();
+  m_modes.update(step, m_lattice.bonds, input.bondState, reference, input.positions,
+                 input.bondForce);
+  out.tension = m_modes.count(BreakMode::kTension);
+  out.shear = m_modes.count(BreakMode::kShear);
+  return out;
+}
+
+namespace {
+
+double along(const dem::Vec3& v, int axis) {
+  return axis == 0 ? v.x : axis == 1 ? v.y : v.z;
+}
+
+double extentOf(const StepAnalysis& s, int axis) {
+  return s.hasMain ? along(s.mainBox.hi, axis) - along(s.mainBox.lo, axis) : 0.0;
+}
+
+}  // namespace
+
+CrackFront crackFront(std::span<const StepAnalysis> steps, int dimension) {
+  CrackFront front;
+  const auto first = std::find_if(steps.begin(), steps.end(), [](auto& s) { return s.hasMain; });
+  const auto last = std::find_if(steps.rbegin(), steps.rend(), [](auto& s) { return s.hasMain; });
+  if (first == steps.end()) {
+    front.extent.assign(steps.size(), 0.0);
+    front.speed.assign(steps.size(), 0.0);
+    return front;
+  }
+  int normalAxis = 0;
+  for (int axis = 1; axis < dimension; ++axis) {
+    if (std::abs(along(last->mainNormal, axis)) > std::abs(along(last->mainNormal, normalAxis))) {
+      normalAxis = axis;
+    }
+  }
+  double bestGrowth = -1.0;
+  for (int axis = 0; axis < dimension; ++axis) {
+    if (axis == normalAxis) {
+      continue;
+    }
+    const double growth = extentOf(*last, axis) - extentOf(*first, axis);
+    if (growth > bestGrowth) {
+      bestGrowth = growth;
+      front.axis = axis;
+    }
+  }
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    front.extent.push_back(extentOf(steps[k], front.axis));
+    const double dt = k > 0 ? steps[k].time - steps[k - 1].time : 0.0;
+    front.speed.push_back(dt > 0.0 ? (front.extent[k] - front.extent[k - 1]) / dt : 0.0);
+  }
+  return front;
+}
+
+std::string axisName(int axis) {
+  return axis == 0 ? "x" : axis == 1 ? "y" : axis == 2 ? "z" : "none";
+}
+
+}  // namespace crackvis::analysis

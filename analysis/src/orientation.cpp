@@ -1,0 +1,160 @@
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include <crackvis/analysis/orientation.hpp>
+#include <crackvis/analysis/tensor.hpp>
+
+namespace crackvis::analysis {
+
+namespace {
+
+bool counts(const ElementOpenings& elements, std::size_t e, int component) {
+  return dem::dot(elements.normal[e], elements.normal[e]) > 0.0 &&
+         (component < 0 || elements.component[e] == component);
+}
+
+}  // namespace
+
+RoseDiagram roseDiagram(const ElementOpenings& elements, int component, int bins) {
+  RoseDiagram rose;
+  rose.weight.assign(static_cast<std::size_t>(std::max(bins, 1)), 0.0);
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    if (!counts(elements, e, component)) {
+      continue;
+    }
+    double degrees =
+        std::atan2(elements.normal[e].y, elements.normal[e].x) * 180.0 / std::numbers::pi;
+    degrees = std::fmod(degrees + 360.0, 180.0);
+    const auto bin =
+        std::min(rose.weight.size() - 1, static_cast<std::size_t>(degrees / rose.binDegrees()));
+    rose.weight[bin] += elements.area[e];
+  }
+  return rose;
+}
+
+std::array<double, 2> equalAreaPoint(Vec3 n) {
+  if (n.z > 0.0) {
+    n = -1.0 * n;
+  }
+  const double horizontal = std::hypot(n.x, n.y);
+  if (horizontal == 0.0) {
+    return {0.0, 0.0};
+  }
+  const double r = std::sqrt(std::max(0.0, 1.0 + n.z / dem::norm(n)));
+  return {r * n.x / horizontal, r * n.y / horizontal};
+}
+
+Stereonet stereonet(const ElementOpenings& elements, int component, int size) {
+  Stereonet net;
+  net.size = std::max(size, 1);
+  net.weight.assign(static_cast<std::size_t>(net.size) * static_cast<std::size_t>(net.size), 0.0);
+  const auto cell = [&](double v) {
+    return std::clamp(static_cast<int>(std::floor((v + 1.0) * 0.5 * net.size)), 0, net.size - 1);
+  };
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    if (counts(elements, e, component)) {
+      const auto [x, y] = equalAreaPoint(elements.normal[e]);
+      net.weight[static_cast<std::size_t>(cell(y) * net.size + cell(x))] += elements.area[e];
+    }
+  }
+  return net;
+}
+
+MeanOrientation meanOrientation(const ElementOpenings& elements, int component) {
+  AxialTensor tensor;
+  double total = 0.0;
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    if (counts(elements, e, component)) {
+      tensor.add(elements.normal[e], elements.area[e]);
+      total += elements.area[e];
+    }
+  }
+  MeanOrientation mean;
+  mean.normal = tensor.principalAxis();
+  if (total > 0.0) {
+    double along = 0.0;
+    for (std::size_t e = 0; e < elements.size(); ++e) {
+      if (counts(elements, e, component)) {
+        const double c = dem::dot(elements.normal[e], mean.normal);
+        along += elements.area[e] * c * c;
+      }
+    }
+    mean.strength = along / total;
+  }
+  const bool flip = mean.normal.z > 0.0 || (mean.normal.z == 0.0 && mean.normal.y < 0.0);
+  if (flip) {
+    mean.normal = -1.0 * mean.normal;
+  }
+  return mean;
+}
+
+const char* toString(BreakMode mode) {
+  return mode == BreakMode::kTension ? "tension" : "shear";
+}
+
+BondBreak classifyBreak(Vec3 d0, Vec3 d, std::optional<double> forceBefore) {
+  BondBreak result;
+  const double length = dem::norm(d0);
+  const Vec3 axis = length > 0.0 ? (1.0 / length) * d0 : Vec3{};
+  const Vec3 jump = d - d0;
+  result.stretch = dem::dot(jump, axis);
+  result.shear = dem::norm(jump - result.stretch * axis);
+  const bool compressed = forceBefore && *forceBefore < 0.0;
+  // 45 degrees exactly (a lattice bond across a crack that opens straight)
+  // is tension, whatever the last bit of the rounding says.
+  const bool withinHalfRightAngle = result.stretch >= result.shear * (1.0 - 1e-9);
+  result.mode = !compressed && result.stretch > 0.0 && withinHalfRightAngle ? BreakMode::kTension
+                                                                            : BreakMode::kShear;
+  return result;
+}
+
+void BreakModeTracker::update(int step, std::span<const dem::Bond> bonds,
+                              std::span<const std::uint8_t> bondState,
+                              std::span<const Vec3> reference, std::span<const Vec3> current,
+                              std::span<const float> bondForce) {
+  const std::size_t m = std::min(bonds.size(), bondState.size());
+  const std::size_t n = std::min(reference.size(), current.size());
+  if (m_first || m_seen.size() != m) {
+    m_seen.assign(bondState.begin(), bondState.begin() + static_cast<std::ptrdiff_t>(m));
+    m_lastForce.assign(m, std::numeric_limits<float>::quiet_NaN());
+    m_first = false;
+  }
+  for (std::size_t b = 0; b < m; ++b) {
+    if (bondState[b] == 0) {
+      if (b < bondForce.size()) {
+        m_lastForce[b] = bondForce[b];
+      }
+      continue;
+    }
+    if (m_seen[b] != 0) {
+      continue;
+    }
+    m_seen[b] = 1;
+    const auto i = static_cast<std::size_t>(bonds[b].first);
+    const auto j = static_cast<std::size_t>(bonds[b].second);
+    if (i >= n || j >= n) {
+      continue;
+    }
+    const std::optional<double> force =
+        std::isnan(m_lastForce[b]) ? std::nullopt : std::optional<double>(m_lastForce[b]);
+    BondBreak found = classifyBreak(reference[j] - reference[i], current[j] - current[i], force);
+    found.bond = static_cast<std::int32_t>(b);
+    found.step = step;
+    m_breaks.push_back(found);
+  }
+}
+
+std::size_t BreakModeTracker::count(BreakMode mode) const {
+  return static_cast<std::size_t>(std::count_if(
+      m_breaks.begin(), m_breaks.end(), [&](const BondBreak& b) { return b.mode == mode; }));
+}
+
+std::size_t BreakModeTracker::countUpTo(BreakMode mode, int step) const {
+  return static_cast<std::size_t>(
+      std::count_if(m_breaks.begin(), m_breaks.end(),
+                    [&](const BondBreak& b) { return b.mode == mode && b.step <= step; }));
+}
+
+}  // namespace crackvis::analysis
