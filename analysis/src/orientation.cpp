@@ -99,14 +99,11 @@ BondBreak classifyBreak(Vec3 d0, Vec3 d, std::optional<double> forceBefore) {
   const double length = dem::norm(d0);
   const Vec3 axis = length > 0.0 ? (1.0 / length) * d0 : Vec3{};
   const Vec3 jump = d - d0;
-  result.stretch = dem::dot(jump, axis);
-  result.shear = dem::norm(jump - result.stretch * axis);
+  result.stretch = dem::norm(d) - length;
+  result.shear = dem::norm(jump - dem::dot(jump, axis) * axis);
   const bool compressed = forceBefore && *forceBefore < 0.0;
-  // 45 degrees exactly (a lattice bond across a crack that opens straight)
-  // is tension, whatever the last bit of the rounding says.
-  const bool withinHalfRightAngle = result.stretch >= result.shear * (1.0 - 1e-9);
-  result.mode = !compressed && result.stretch > 0.0 && withinHalfRightAngle ? BreakMode::kTension
-                                                                            : BreakMode::kShear;
+  result.mode = !compressed && result.stretch > kTensionShare * result.shear ? BreakMode::kTension
+                                                                             : BreakMode::kShear;
   return result;
 }
 

@@ -90,22 +90,26 @@ TEST_CASE("a planted crack's normals all point across its plane", "[analysis][or
         0.98 * total);
 }
 
-TEST_CASE("break modes: tension within 45 degrees of the bond, shear beyond or under compression",
+TEST_CASE("break modes: tension when the bond lengthened, shear when it slid or was compressed",
           "[analysis][modes]") {
   const Vec3 d0{1, 0, 0};
   CHECK(classifyBreak(d0, {1.2, 0, 0}, std::nullopt).mode == BreakMode::kTension);
-  CHECK(classifyBreak(d0, {1.0, 0.3, 0}, std::nullopt).mode == BreakMode::kShear);
   CHECK(classifyBreak(d0, {0.9, 0, 0}, std::nullopt).mode == BreakMode::kShear);
-  CHECK(classifyBreak(d0, {1.2, 0.1, 0}, std::nullopt).mode == BreakMode::kTension);
-  // 45 degrees exactly is tension.
-  const Vec3 diagonal{std::sqrt(0.5), std::sqrt(0.5), 0};
-  CHECK(classifyBreak(diagonal, diagonal + Vec3{0.2, 0, 0}, std::nullopt).mode ==
-        BreakMode::kTension);
+  // Slid sideways by 1 %: longer only to second order (5e-5), shear.
+  const BondBreak slid = classifyBreak(d0, {1.0, 0.01, 0}, std::nullopt);
+  CHECK(slid.mode == BreakMode::kShear);
+  CHECK(slid.stretch == Approx(0.5 * 0.01 * 0.01).epsilon(1e-3));
+  CHECK(slid.shear == Approx(0.01));
+  // Stretched and slid: tension once the stretch passes a twentieth of the slide.
+  CHECK(classifyBreak(d0, {1.006, 0.1, 0}, std::nullopt).mode == BreakMode::kTension);
+  CHECK(classifyBreak(d0, {0.996, 0.1, 0}, std::nullopt).mode == BreakMode::kShear);
+  // A rigid rotation of the pair is no stretch: shear, not tension.
+  const double turn = 0.3;
+  const Vec3 rotated{std::cos(turn) * 1.001, std::sin(turn) * 1.001, 0};
+  CHECK(classifyBreak(d0, rotated, std::nullopt).stretch == Approx(0.001));
   // Stretched, but the last force seen was compressive: shear.
   CHECK(classifyBreak(d0, {1.2, 0, 0}, -3.0).mode == BreakMode::kShear);
-  const BondBreak measured = classifyBreak(d0, {1.1, 0.2, 0}, 1.0);
-  CHECK(measured.stretch == Approx(0.1));
-  CHECK(measured.shear == Approx(0.2));
+  CHECK(classifyBreak(d0, {1.2, 0, 0}, 2.0).mode == BreakMode::kTension);
 
   // The tracker decides each bond the step it first appears broken.
   const std::vector<dem::Bond> bonds{{0, 1}, {1, 2}, {2, 3}};
@@ -117,7 +121,7 @@ TEST_CASE("break modes: tension within 45 degrees of the bond, shear beyond or u
   now[2] = {2.5, 0, 0};
   now[3] = {3.5, 0, 0};
   tracker.update(1, bonds, std::vector<std::uint8_t>{1, 1, 0}, reference, now, {});
-  now[3] = {3.5, 0.9, 0};
+  now[3] = {3.5, 0.02, 0};
   tracker.update(2, bonds, std::vector<std::uint8_t>{1, 1, 1}, reference, now, {});
   REQUIRE(tracker.breaks().size() == 2);
   CHECK(tracker.breaks()[0].bond == 1);

@@ -32,8 +32,8 @@ void printError(const char* command, const std::string& message);
 // with a port: gRPC would otherwise silently try port 443.
 Status checkHostPort(const std::string& what, const std::string& address);
 
-// Top level: crackvis generate | import | info | extract | export | snapshot |
-// movie | sim | health. addBenchMethodsCommand registers `crackvis bench methods`.
+// Top level: crackvis generate | import | info | extract | export | report |
+// snapshot | movie | sim | health. addBenchMethodsCommand registers `crackvis bench methods`.
 Command addGenerateCommand(CLI::App& parent);
 Command addInfoCommand(CLI::App& parent);
 Command addExtractCommand(CLI::App& parent);
@@ -44,6 +44,7 @@ Command addSimCommand(CLI::App& parent);
 Command addHealthCommand(CLI::App& parent);
 Command addImportCommand(CLI::App& parent);
 Command addExportCommand(CLI::App& parent);
+Command addReportCommand(CLI::App& parent);
 // Under `crackvis bench`: methods (above) | transfer | render. main.cpp wires
 // every command.
 Command addBenchTransferCommand(CLI::App& bench);

@@ -104,6 +104,7 @@ int main(int argc, char** argv) {
   commands.push_back(addInfoCommand(app));
   commands.push_back(addExtractCommand(app));
   commands.push_back(addExportCommand(app));
+  commands.push_back(addReportCommand(app));
   commands.push_back(addSnapshotCommand(app));
   commands.push_back(addMovieCommand(app));
   commands.push_back(addBenchMethodsCommand(*bench));
