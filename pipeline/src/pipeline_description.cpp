@@ -24,22 +24,25 @@ using Names = std::array<std::pair<E, const char*>, N>;
 constexpr Names<ParticleRepresentation, 2> kParticleRepresentations{
     {{ParticleRepresentation::kImpostors, "impostors"},
      {ParticleRepresentation::kPoints, "points"}}};
-constexpr Names<ParticleColourBy, 5> kParticleColourBy{
+constexpr Names<ParticleColourBy, 6> kParticleColourBy{
     {{ParticleColourBy::kSolid, "solid"},
      {ParticleColourBy::kRadius, "radius"},
      {ParticleColourBy::kDisplacement, "displacement"},
      {ParticleColourBy::kVelocity, "velocity"},
-     {ParticleColourBy::kDamage, "damage"}}};
+     {ParticleColourBy::kDamage, "damage"},
+     {ParticleColourBy::kFragment, "fragment"}}};
 constexpr Names<cracks::Decomposition, 3> kDecompositions{
     {{cracks::Decomposition::kAuto, "auto"},
      {cracks::Decomposition::kLattice, "lattice"},
      {cracks::Decomposition::kTriangulation, "triangulation"}}};
-constexpr Names<CrackColourBy, 6> kCrackColourBy{{{CrackColourBy::kSolid, "solid"},
+constexpr Names<CrackColourBy, 8> kCrackColourBy{{{CrackColourBy::kSolid, "solid"},
                                                   {CrackColourBy::kBondId, "bond-id"},
                                                   {CrackColourBy::kForce, "force"},
                                                   {CrackColourBy::kBreakStep, "break-step"},
                                                   {CrackColourBy::kState, "state"},
-                                                  {CrackColourBy::kComponent, "component"}}};
+                                                  {CrackColourBy::kComponent, "component"},
+                                                  {CrackColourBy::kOpening, "opening"},
+                                                  {CrackColourBy::kSlip, "slip"}}};
 constexpr Names<BondSelection, 3> kBondSelections{{{BondSelection::kNone, "none"},
                                                    {BondSelection::kBroken, "broken"},
                                                    {BondSelection::kAll, "all"}}};

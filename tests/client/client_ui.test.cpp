@@ -112,6 +112,35 @@ TEST_CASE("the panel's clip, threshold and colour range reach every layer", "[cl
   CHECK(other.particleControls().rangeMax->text() == QStringLiteral("0.002"));
 }
 
+TEST_CASE("the panel colours cracks by opening or slip and particles by fragment",
+          "[client][ui][analysis]") {
+  application();
+  client::PipelinePanel panel;
+  const auto& cracks = panel.crackControls();
+  cracks.thresholdBy->setCurrentIndex(cracks.thresholdBy->findText(QStringLiteral("opening")));
+  cracks.thresholdMin->setText(QStringLiteral("1e-4"));
+  cracks.threshold->setChecked(true);
+  const auto& particles = panel.particleControls();
+  particles.thresholdBy->setCurrentIndex(
+      particles.thresholdBy->findText(QStringLiteral("fragment")));
+  particles.thresholdMax->setText(QStringLiteral("3"));
+  particles.threshold->setChecked(true);
+  pipeline::PipelineDescription made = panel.description();
+  REQUIRE(made.cracks.threshold.has_value());
+  CHECK(made.cracks.threshold->by == pipeline::CrackColourBy::kOpening);
+  REQUIRE(made.particles.threshold.has_value());
+  CHECK(made.particles.threshold->by == pipeline::ParticleColourBy::kFragment);
+  made.file = "run.h5";
+  const std::string xml = pipeline::toXml(made);
+  CHECK_THAT(xml, Catch::Contains("by=\"opening\"") && Catch::Contains("by=\"fragment\""));
+  auto parsed = pipeline::parsePipeline(xml);
+  INFO(parsed.status().message());
+  REQUIRE(parsed.isOk());
+  CHECK(*parsed == made);
+  made.cracks.colourBy = pipeline::CrackColourBy::kSlip;
+  CHECK(pipeline::parsePipeline(pipeline::toXml(made)).isOk());
+}
+
 TEST_CASE("the step plot draws a chosen step scalar beside the broken bonds", "[client][ui]") {
   application();
   client::StepPlot plot;

@@ -32,6 +32,7 @@
 #include <vtkXMLUnstructuredGridReader.h>
 
 #include "crack_fixtures.hpp"
+#include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/cracks/mesh_writers.hpp>
 #include <crackvis/dem/dem_file.hpp>
@@ -441,4 +442,37 @@ TEST_CASE("the crackvis-dem reader shows a live file's new steps on the next upd
   for (int fd : {go[0], go[1], done[0], done[1]}) {
     close(fd);
   }
+}
+
+TEST_CASE("the crack filters give each surface element its opening and slip as cell data",
+          "[cracks][vtk][analysis]") {
+  testing::TempDir dir;
+  const std::string path = dir.file("planted.h5");
+  const auto sample = testing::writePlantedLattice(path, 8);
+  vtkNew<vtkCrackvisDemReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->UpdateInformation();
+  const double last = sample.steps.back().time;
+  vtkNew<vtkCellCentreCrackFilter> filter;
+  filter->SetInputConnection(reader->GetOutputPort());
+  filter->UpdateTimeStep(last);
+  vtkPolyData* out = vtkPolyData::SafeDownCast(filter->GetOutputDataObject(0));
+  REQUIRE(out != nullptr);
+  vtkDataArray* opening = out->GetCellData()->GetArray("opening");
+  vtkDataArray* slip = out->GetCellData()->GetArray("slip");
+  REQUIRE(opening != nullptr);
+  REQUIRE(slip != nullptr);
+  REQUIRE(opening->GetNumberOfTuples() == out->GetNumberOfCells());
+  double sum = 0.0;
+  vtkIdType counted = 0;
+  for (vtkIdType c = 0; c < opening->GetNumberOfTuples(); ++c) {
+    if (!std::isnan(opening->GetTuple1(c))) {
+      sum += opening->GetTuple1(c);
+      ++counted;
+      CHECK(slip->GetTuple1(c) < 2e-4);
+    }
+  }
+  REQUIRE(counted > 0);
+  // The right half moved one bond length, 2 mm, by the last step.
+  CHECK(sum / static_cast<double>(counted) == Approx(2e-3).epsilon(0.02));
 }

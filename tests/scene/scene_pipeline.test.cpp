@@ -354,3 +354,88 @@ TEST_CASE("cell attribute's cells carry the bond quantities crack colour-by name
 }
 
 }  // namespace crackvis
+
+namespace crackvis {
+
+TEST_CASE("a crack layer coloured by opening or slip carries them as cell data",
+          "[scene][analysis]") {
+  testing::TempDir dir;
+  testing::writePlantedLattice(dir.file("run.h5"), 8);
+  pipeline::PipelineDescription d;
+  d.file = "run.h5";
+  d.step = -1;
+  d.cracks.method = cracks::Method::kLocalVoronoi;
+  d.cracks.colourBy = pipeline::CrackColourBy::kOpening;
+  auto scene = scene::ScenePipeline::open(d, localOpener(dir));
+  REQUIRE(scene);
+  const auto mean = [](const cracks::AttributeArray* array, double& largest) {
+    REQUIRE(array != nullptr);
+    double sum = 0.0;
+    std::size_t counted = 0;
+    largest = 0.0;
+    for (double v : array->values) {
+      if (!std::isnan(v)) {
+        sum += v;
+        largest = std::max(largest, v);
+        ++counted;
+      }
+    }
+    REQUIRE(counted > 0);
+    return sum / static_cast<double>(counted);
+  };
+  double largest = 0.0;
+  // The right half moved one bond length (2 mm) by the last step.
+  CHECK(mean((*scene)->cracks().findCellData("opening"), largest) == Approx(2e-3).epsilon(0.02));
+  CHECK(largest == Approx(2e-3).epsilon(0.01));
+  CHECK(mean((*scene)->cracks().findCellData("slip"), largest) < 1e-4);
+  CHECK(scene::crackArrayName(d.cracks.colourBy, d.cracks.method) == std::string("opening"));
+
+  SECTION("back to solid colour: extracted again without them") {
+    auto next = d;
+    next.cracks.colourBy = pipeline::CrackColourBy::kSolid;
+    REQUIRE((*scene)->replace(next));
+    CHECK((*scene)->cracks().findCellData("opening") == nullptr);
+  }
+  SECTION("an earlier step opens less") {
+    auto next = d;
+    next.step = 4;
+    REQUIRE((*scene)->replace(next));
+    CHECK(mean((*scene)->cracks().findCellData("opening"), largest) == Approx(1e-3).epsilon(0.02));
+  }
+}
+
+TEST_CASE("particles coloured by fragment: the halves of a through crack", "[scene][analysis]") {
+  testing::TempDir dir;
+  const auto sample = testing::writePlantedLattice(dir.file("run.h5"), 8);
+  pipeline::PipelineDescription d;
+  d.file = "run.h5";
+  d.step = -1;
+  d.particles.colourBy = pipeline::ParticleColourBy::kFragment;
+  auto scene = scene::ScenePipeline::open(d, localOpener(dir));
+  REQUIRE(scene);
+  const std::vector<double> labels = scene::particleValues(d.particles, (*scene)->input());
+  REQUIRE(labels.size() == sample.lattice.particleCount());
+  CHECK(*std::max_element(labels.begin(), labels.end()) == 1.0);
+  // Every particle left of the cut is in one fragment, every one right of it
+  // in the other.
+  const auto& last = sample.steps.back().positions;
+  const auto& first = sample.steps.front().positions;
+  double leftLabel = -1.0;
+  double rightLabel = -1.0;
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    double& label = last[i].x > first[i].x + 1e-9 ? rightLabel : leftLabel;
+    if (label < 0.0) {
+      label = labels[i];
+    }
+    CHECK(labels[i] == label);
+  }
+  CHECK(leftLabel != rightLabel);
+  // Intact at step 0: one fragment.
+  auto intact = d;
+  intact.step = 0;
+  REQUIRE((*scene)->replace(intact));
+  const std::vector<double> whole = scene::particleValues(d.particles, (*scene)->input());
+  CHECK(*std::max_element(whole.begin(), whole.end()) == 0.0);
+}
+
+}  // namespace crackvis

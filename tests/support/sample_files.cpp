@@ -67,6 +67,26 @@ void writeSample(const std::string& path, const SampleData& sample) {
   }
 }
 
+namespace {
+
+SampleData plantCrack(const dem::Lattice& lattice, std::vector<dem::Vec3> positions, int steps,
+                      double scatter) {
+  dem::PlantedCrackSpec planted;
+  planted.steps = steps;
+  planted.scatter = scatter;
+  auto crack = dem::PlantedCrack::create(lattice, std::move(positions), planted);
+  if (!crack) {
+    throw std::runtime_error(crack.status().message());
+  }
+  SampleData sample{lattice, {}};
+  for (int k = 0; k < crack->stepCount(); ++k) {
+    sample.steps.push_back(crack->step(k));
+  }
+  return sample;
+}
+
+}  // namespace
+
 void writePlantedRandomPacking(const std::string& path, int steps, double scatter) {
   dem::RandomPackingSpec spec;
   spec.box = {0.008, 0.005, 0.005};
@@ -76,18 +96,19 @@ void writePlantedRandomPacking(const std::string& path, int steps, double scatte
   if (!packing) {
     throw std::runtime_error(packing.status().message());
   }
-  dem::PlantedCrackSpec planted;
-  planted.steps = steps;
-  planted.scatter = scatter;
-  auto crack = dem::PlantedCrack::create(packing->lattice, packing->positions, planted);
-  if (!crack) {
-    throw std::runtime_error(crack.status().message());
+  writeSample(path, plantCrack(packing->lattice, packing->positions, steps, scatter));
+}
+
+SampleData writePlantedLattice(const std::string& path, int steps, std::array<int, 3> sites) {
+  dem::BlockSpec spec;
+  spec.sites = sites;
+  auto block = dem::generateBlock(spec);
+  if (!block) {
+    throw std::runtime_error(block.status().message());
   }
-  SampleData sample{packing->lattice, {}};
-  for (int k = 0; k < crack->stepCount(); ++k) {
-    sample.steps.push_back(crack->step(k));
-  }
+  SampleData sample = plantCrack(block->lattice, block->positions, steps, 0.0);
   writeSample(path, sample);
+  return sample;
 }
 
 SampleData writeSampleFile(const std::string& path, int dimension, int steps) {

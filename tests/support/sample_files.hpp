@@ -2,6 +2,7 @@
 // few steps in which bonds break progressively, as a fracture run would.
 #pragma once
 
+#include <array>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -29,6 +30,12 @@ void writeSample(const std::string& path, const SampleData& sample);
 // the other bonds broken at random (dem::PlantedCrack), written to `path`;
 // throws on failure.
 void writePlantedRandomPacking(const std::string& path, int steps, double scatter = 0.002);
+
+// An FCC block (radius 1 mm, `sites` per axis) with a planted through crack
+// and no scattered damage: at the last step the right half has moved one
+// bond length (2 mm) along x. Written to `path`; throws on failure.
+SampleData writePlantedLattice(const std::string& path, int steps,
+                               std::array<int, 3> sites = {13, 9, 9});
 
 // Whether two arrays hold the same bytes (NaN payloads and -0.0 included):
 // what a round trip through a file must keep.

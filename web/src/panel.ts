@@ -64,6 +64,8 @@ const kCrackColourBy: Options = [
   ["break step", "break-step"],
   ["state", "state"],
   ["component", "component"],
+  ["opening", "opening"],
+  ["slip", "slip"],
 ];
 const kParticleColourBy: Options = [
   ["solid", "solid"],
@@ -71,6 +73,7 @@ const kParticleColourBy: Options = [
   ["displacement", "displacement"],
   ["velocity", "velocity"],
   ["damage", "damage"],
+  ["fragment", "fragment"],
 ];
 const kBondColourBy: Options = [
   ["state", "state"],

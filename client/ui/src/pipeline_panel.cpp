@@ -233,7 +233,9 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
                                         {"force", CrackColourBy::kForce},
                                         {"break step", CrackColourBy::kBreakStep},
                                         {"state", CrackColourBy::kState},
-                                        {"component", CrackColourBy::kComponent}});
+                                        {"component", CrackColourBy::kComponent},
+                                        {"opening", CrackColourBy::kOpening},
+                                        {"slip", CrackColourBy::kSlip}});
   m_crackOpacity = spin(0.0, 1.0, 0.1, 2);
   crackForm->addRow(m_cracksVisible);
   crackForm->addRow(tr("method"), m_method);
@@ -257,7 +259,8 @@ PipelinePanel::PipelinePanel(QWidget* parent) : QWidget(parent) {
                                               {"radius", ParticleColourBy::kRadius},
                                               {"displacement", ParticleColourBy::kDisplacement},
                                               {"velocity", ParticleColourBy::kVelocity},
-                                              {"damage", ParticleColourBy::kDamage}});
+                                              {"damage", ParticleColourBy::kDamage},
+                                              {"fragment", ParticleColourBy::kFragment}});
   m_particleOpacity = spin(0.0, 1.0, 0.1, 2);
   auto* clipRow = new QHBoxLayout;
   for (int k = 0; k < 3; ++k) {

@@ -19,6 +19,8 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 
+#include <crackvis/analysis/opening.hpp>
+#include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/partition.hpp>
 
 namespace crackvis::cracks::vtkadapter {
@@ -329,6 +331,13 @@ bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptio
   if (Status status = m_extractor->extract(step, mesh); !status) {
     error = status.message();
     return false;
+  }
+  // Opening and slip against the reference, as `crackvis report` measures
+  // them; a piece measures with its ghost layer, before it keeps its own.
+  if (!m_reference.empty()) {
+    analysis::appendOpeningArrays(
+        mesh,
+        analysis::measureOpening(mesh, findComponents(mesh), m_bonds, m_reference, m_positions));
   }
   if (piece) {
     toWholeSet(mesh);

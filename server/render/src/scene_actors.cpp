@@ -134,6 +134,8 @@ const char* particleArrayName(pipeline::ParticleColourBy by) {
       return "damage";
     case pipeline::ParticleColourBy::kExtra:
       return "extra";
+    case pipeline::ParticleColourBy::kFragment:
+      return "fragment";
     case pipeline::ParticleColourBy::kSolid:
       break;
   }

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <crackvis/analysis/fragments.hpp>
 #include <crackvis/cracks/lattice_cells.hpp>
 #include <crackvis/scene_model/scene_content.hpp>
 
@@ -112,6 +113,13 @@ std::vector<double> particleValues(pipeline::ParticleColourBy by, const SceneInp
       std::copy_n(input.particleExtra.begin(), std::min(n, input.particleExtra.size()),
                   values.begin());
       break;
+    case pipeline::ParticleColourBy::kFragment: {
+      const analysis::Fragments fragments = analysis::findFragments(
+          input.lattice->bonds, input.step.bondState, input.step.radius, input.lattice->dimension);
+      const std::vector<double> labels = analysis::fragmentLabels(fragments, 1);
+      std::copy_n(labels.begin(), std::min(n, labels.size()), values.begin());
+      break;
+    }
     case pipeline::ParticleColourBy::kSolid:
       break;
   }
@@ -263,6 +271,10 @@ const char* crackArrayName(pipeline::CrackColourBy by, cracks::Method method) {
       return "bond_state";
     case pipeline::CrackColourBy::kComponent:
       return "component";
+    case pipeline::CrackColourBy::kOpening:
+      return "opening";
+    case pipeline::CrackColourBy::kSlip:
+      return "slip";
     case pipeline::CrackColourBy::kSolid:
       break;
   }
@@ -281,6 +293,8 @@ Quantity particleQuantity(const pipeline::ParticlesDescription& particles) {
       return {"damage (broken bond share)"};
     case pipeline::ParticleColourBy::kExtra:
       return {particles.colourByExtra};  // the file names no unit
+    case pipeline::ParticleColourBy::kFragment:
+      return {"fragment (0 largest)", true};
     case pipeline::ParticleColourBy::kSolid:
       break;
   }
@@ -313,6 +327,10 @@ Quantity crackQuantity(pipeline::CrackColourBy by, cracks::Method method) {
       return {"bond state (1 broken)", true};
     case pipeline::CrackColourBy::kComponent:
       return {"crack component (0 largest)", true};
+    case pipeline::CrackColourBy::kOpening:
+      return {"crack opening [m]"};
+    case pipeline::CrackColourBy::kSlip:
+      return {"crack slip [m]"};
     case pipeline::CrackColourBy::kSolid:
       break;
   }

@@ -162,7 +162,7 @@ void addParticleValues(const pipeline::PipelineDescription& d, const SceneInput&
 }
 
 std::string unitOf(const std::string& array) {
-  return array.ends_with("force") ? "N" : "";
+  return array.ends_with("force") ? "N" : array == "opening" || array == "slip" ? "m" : "";
 }
 
 // The points of primitive `cell` (VTK order) of `layer`.

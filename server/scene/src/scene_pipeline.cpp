@@ -5,6 +5,7 @@
 
 #include <fmt/format.h>
 
+#include <crackvis/analysis/opening.hpp>
 #include <crackvis/common/exception_boundary.hpp>
 #include <crackvis/cracks/bond_graph.hpp>
 #include <crackvis/cracks/bond_mapping.hpp>
@@ -118,11 +119,34 @@ void selectComponents(const pipeline::CracksDescription& c, cracks::CrackMesh& m
   cracks::keepComponents(mesh, components, filter);
 }
 
+// Whether the crack layer is coloured or thresholded by opening or slip.
+bool usesOpening(const pipeline::CracksDescription& c) {
+  using pipeline::CrackColourBy;
+  const auto opening = [](CrackColourBy by) {
+    return by == CrackColourBy::kOpening || by == CrackColourBy::kSlip;
+  };
+  return opening(c.colourBy) || (c.threshold && opening(c.threshold->by));
+}
+
+// The "opening" and "slip" cell arrays, measured from the first step (the
+// reference) before a component filter drops primitives, so that every
+// element's normal comes from its whole neighbourhood.
+void addOpening(const pipeline::CracksDescription& c, const cracks::StepInput& step,
+                std::span<const dem::Bond> bonds, cracks::CrackMesh& mesh) {
+  if (!usesOpening(c)) {
+    return;
+  }
+  const cracks::CrackComponents components = cracks::findComponents(mesh);
+  analysis::appendOpeningArrays(
+      mesh,
+      analysis::measureOpening(mesh, components, bonds, step.referencePositions, step.positions));
+}
+
 // Whether two descriptions select or colour crack components differently.
 bool sameSelection(const pipeline::CracksDescription& a, const pipeline::CracksDescription& b) {
   using pipeline::CrackColourBy;
   return a.largest == b.largest && a.minComponent == b.minComponent &&
-         usesComponents(a) == usesComponents(b);
+         usesComponents(a) == usesComponents(b) && usesOpening(a) == usesOpening(b);
 }
 
 }  // namespace
@@ -296,6 +320,8 @@ std::optional<double> crackFaceValue(const pipeline::CracksDescription& c, std::
     case pipeline::CrackColourBy::kState:
       return 1.0;
     case pipeline::CrackColourBy::kComponent:
+    case pipeline::CrackColourBy::kOpening:
+    case pipeline::CrackColourBy::kSlip:
     case pipeline::CrackColourBy::kSolid:
       break;
   }
@@ -304,8 +330,8 @@ std::optional<double> crackFaceValue(const pipeline::CracksDescription& c, std::
 
 }  // namespace
 
-// Crack components would need every step extracted; their ranks keep the
-// step's range (docs/pipeline.md).
+// Crack components, openings and slips would need every step extracted;
+// they keep the step's range (docs/pipeline.md).
 Status ScenePipeline::scanSeries() {
   const pipeline::PipelineDescription& d = m_state.description;
   m_state.series = {};
@@ -411,6 +437,7 @@ Status ScenePipeline::extract(std::shared_ptr<const source::SourceStep> step) {
   const cracks::StepInput input = stepInput(*step);
   CRACKVIS_RETURN_IF_ERROR(m_state.extractor->extract(input, m_scratch));
   m_state.mapping = mappingOf(m_scratch, input);
+  addOpening(m_state.description.cracks, input, source().lattice().bonds, m_scratch);
   selectComponents(m_state.description.cracks, m_scratch);
   m_timings.extractMs = millisecondsSince(start);
   std::swap(m_scratch, m_state.mesh);

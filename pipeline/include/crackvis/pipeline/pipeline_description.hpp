@@ -31,8 +31,27 @@ struct Colour {
 
 enum class ParticleRepresentation { kImpostors, kPoints };
 // kExtra: a per-particle extra array of the file, named by colourByExtra.
-enum class ParticleColourBy { kSolid, kRadius, kDisplacement, kVelocity, kDamage, kExtra };
-enum class CrackColourBy { kSolid, kBondId, kForce, kBreakStep, kState, kComponent };
+// kFragment: the rank of the particle's fragment (0 the largest; analysis/).
+enum class ParticleColourBy {
+  kSolid,
+  kRadius,
+  kDisplacement,
+  kVelocity,
+  kDamage,
+  kExtra,
+  kFragment
+};
+// kOpening, kSlip: the crack's opening and slip per surface element (analysis/).
+enum class CrackColourBy {
+  kSolid,
+  kBondId,
+  kForce,
+  kBreakStep,
+  kState,
+  kComponent,
+  kOpening,
+  kSlip
+};
 enum class BondSelection { kNone, kBroken, kAll };
 enum class BondRepresentation { kLines, kTubes };
 // kExtra: a per-bond extra array of the file, named by colourByExtra.
