@@ -9,6 +9,7 @@
 
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "support/process.hpp"
 #include "support/temp_dir.hpp"
@@ -111,6 +112,27 @@ TEST_CASE("crackvis report measures a planted crack's opening, fragments and gro
   const Table orientation = readCsv(out + "/orientation.csv");
   CHECK(orientation.front().count("x") == 1);  // 3D: the equal-area net
 
+  SECTION("crackvis info --steps --cracks shows the same numbers beside the step scalars") {
+    const auto info =
+        runProcess({kCli, "info", data, "--steps", "--cracks", "local-voronoi", "--json"});
+    REQUIRE(info.exitCode == 0);
+    const auto json = nlohmann::json::parse(info.out);
+    const auto& last = json.at("per_step").back().at("cracks");
+    CHECK(last.at("fragments").get<double>() == number(growth.back(), "fragments"));
+    CHECK(last.at("main_area").get<double>() ==
+          Approx(number(growth.back(), "main_area")).epsilon(1e-6));
+    CHECK(last.at("front_axis") == "z");
+    const auto refused = runProcess({kCli, "info", data, "--cracks", "local-voronoi"});
+    CHECK(refused.exitCode == 2);
+    CHECK_THAT(refused.err, Catch::Contains("--steps"));
+    // And tools/plots/step_scalars.sh draws any of them against any other.
+    const auto plot = runProcess({"/usr/bin/env", "CRACKS=local-voronoi", "CRACKVIS=" + kCli,
+                                  std::string(CRACKVIS_SOURCE_DIR) + "/tools/plots/step_scalars.sh",
+                                  data, "time", "main_area", dir.file("area.png")});
+    INFO(plot.err);
+    CHECK(plot.exitCode == 0);
+    CHECK(isPng(dir.file("area.png")));
+  }
   SECTION("--at picks the step of the per-step tables, and refuses one not read") {
     const std::string early = dir.file("early");
     REQUIRE(

@@ -4,7 +4,9 @@
 // the same positions. Measured on equal terms: at 1 thread against one Voro++
 // container, and at N threads against N Voro++ containers over slabs; the
 // method passes and the baseline passes alternate, run after run, and every
-// figure is the median over the runs.
+// figure is the median over the runs. Beside them, the analyses of
+// analysis/ (opening, fragments, orientation and modes, growth) on local
+// Voronoi's crack, step by step as `crackvis report` runs them.
 #include <array>
 #include <chrono>
 #include <thread>
@@ -15,6 +17,7 @@
 
 #include "bench_support.hpp"
 #include "commands.hpp"
+#include <crackvis/analysis/growth.hpp>
 #include <crackvis/common/progress.hpp>
 #include <crackvis/cracks/bond_mapping.hpp>
 #include <crackvis/cracks/crack_components.hpp>
@@ -87,6 +90,7 @@ struct MethodFacts {
 // the baseline's (negative: the baseline was not run at that step).
 struct Pass {
   std::vector<std::array<double, 4>> methodMs;
+  std::vector<double> analysisMs;  // the analyses after local Voronoi
   std::vector<double> voroMs;
   std::vector<std::size_t> brokenBonds;  // per step, as the methods saw it
 };
@@ -114,11 +118,27 @@ struct Progress {
   void step(const std::string& what) { bar.update(++done, what); }
 };
 
+// The analyses of one step, as `crackvis report` runs them: opening,
+// fragments, modes and growth (analyse), and the orientation distribution.
+double timeAnalyses(analysis::CrackAnalysis& analyses, int step, const cracks::StepInput& input,
+                    const cracks::CrackMesh& mesh) {
+  const auto start = Clock::now();
+  analyses.analyse(step, 0.0, input, input.referencePositions, mesh);
+  const analysis::MeanOrientation mean = analysis::meanOrientation(analyses.openings(), 0);
+  const std::size_t cells = mesh.dimension == 2
+                                ? analysis::roseDiagram(analyses.openings(), -1, 36).weight.size()
+                                : analysis::stereonet(analyses.openings(), -1, 40).weight.size();
+  const double ms = milliseconds(Clock::now() - start);
+  // Both results are used, so that nothing is optimised away.
+  return cells > 0 && mean.strength >= 0.0 ? ms : -ms;
+}
+
 // One method through all steps, as a viewer runs it: reading is not timed,
 // the extractor keeps its incremental state from step to step.
 Status timeMethod(cracks::DemSeries& series, const std::vector<int>& steps, std::size_t m,
                   int threads, Pass& pass, MethodFacts* facts, Progress& progress) {
   auto extractor = cracks::makeExtractor(kMethods[m], series.graph(), series.lattice().dimension);
+  analysis::CrackAnalysis analyses(series.lattice(), {});
   cracks::CrackMesh mesh;
   for (std::size_t k = 0; k < steps.size(); ++k) {
     auto input = series.load(steps[k]);
@@ -128,6 +148,9 @@ Status timeMethod(cracks::DemSeries& series, const std::vector<int>& steps, std:
     const auto start = Clock::now();
     CRACKVIS_RETURN_IF_ERROR(extractor->extract(*input, mesh));
     pass.methodMs[k][m] = milliseconds(Clock::now() - start);
+    if (m == kLocalVoronoi) {
+      pass.analysisMs[k] = timeAnalyses(analyses, steps[k], *input, mesh);
+    }
     pass.brokenBonds[k] = series.state().brokenBondCount();
     progress.step(fmt::format("{}, {} thread{}, step {}", methodName(m), threads,
                               threads == 1 ? "" : "s", steps[k]));
@@ -189,6 +212,7 @@ Status measure(cracks::DemSeries& series, const BenchMethodsOptions& options,
                                       static_cast<std::size_t>(config.threads));
       Pass pass;
       pass.methodMs.assign(measurement.steps.size(), {});
+      pass.analysisMs.assign(measurement.steps.size(), 0.0);
       pass.voroMs.assign(measurement.steps.size(), -1.0);
       pass.brokenBonds.assign(measurement.steps.size(), 0);
       for (std::size_t m = 0; m < kMethods.size(); ++m) {
@@ -209,6 +233,7 @@ Status measure(cracks::DemSeries& series, const BenchMethodsOptions& options,
 // summaries over the steps.
 struct StepMedians {
   std::vector<std::array<double, 4>> methodMs;
+  std::vector<double> analysisMs;
   std::vector<double> voroMs;  // negative where not measured
 };
 
@@ -218,6 +243,11 @@ StepMedians medians(const Config& config) {
   out.methodMs.assign(steps, {});
   out.voroMs.assign(steps, -1.0);
   for (std::size_t k = 0; k < steps; ++k) {
+    std::vector<double> analysis;
+    for (const Pass& pass : config.runs) {
+      analysis.push_back(pass.analysisMs[k]);
+    }
+    out.analysisMs.push_back(median(analysis));
     for (std::size_t m = 0; m < kMethods.size(); ++m) {
       std::vector<double> values;
       for (const Pass& pass : config.runs) {
@@ -278,6 +308,27 @@ nlohmann::json configJson(const Measurement& measurement, const Config& config) 
          ratios.empty() ? nlohmann::json(nullptr)
                         : nlohmann::json(*std::max_element(ratios.begin(), ratios.end()))}};
   }
+  // The analyses against the method whose crack they measure, per step.
+  std::vector<double> analysisRatios;
+  for (std::size_t k = 0; k < med.analysisMs.size(); ++k) {
+    if (med.methodMs[k][kLocalVoronoi] > 0.0) {
+      analysisRatios.push_back(med.analysisMs[k] / med.methodMs[k][kLocalVoronoi]);
+    }
+  }
+  const double analysisMedian = median(med.analysisMs);
+  const double lvMedian = methods[methodName(kLocalVoronoi)].at("median_ms").get<double>();
+  const nlohmann::json analyses{
+      {"what",
+       "opening, fragments, break modes and growth (CrackAnalysis::analyse) and the "
+       "orientation distribution, on local Voronoi's crack of each step"},
+      {"median_ms", analysisMedian},
+      {"last_step_ms", med.analysisMs[last]},
+      {"max_ms", *std::max_element(med.analysisMs.begin(), med.analysisMs.end())},
+      {"over_local_voronoi_median_ms", lvMedian > 0.0 ? analysisMedian / lvMedian : 0.0},
+      {"over_local_voronoi_median_over_steps", median(analysisRatios)},
+      {"over_local_voronoi_max_over_steps",
+       analysisRatios.empty() ? 0.0
+                              : *std::max_element(analysisRatios.begin(), analysisRatios.end())}};
   std::vector<double> voro;
   for (double v : med.voroMs) {
     if (v >= 0.0) {
@@ -291,6 +342,7 @@ nlohmann::json configJson(const Measurement& measurement, const Config& config) 
       row[methodName(m) + "_ms"] = med.methodMs[k][m];
     }
     row["voro++_ms"] = med.voroMs[k] >= 0 ? nlohmann::json(med.voroMs[k]) : nlohmann::json(nullptr);
+    row["analyses_ms"] = med.analysisMs[k];
     perStep.push_back(row);
   }
   return {{"threads", config.threads},
@@ -306,6 +358,7 @@ nlohmann::json configJson(const Measurement& measurement, const Config& config) 
             {"exact", config.haloWallFaces == 0},
             {"cells_cut_by_a_slab_wall", config.haloWallFaces}}},
           {"methods", methods},
+          {"analyses", analyses},
           {"per_step", perStep}};
 }
 
@@ -387,6 +440,15 @@ void printConfig(const nlohmann::json& config) {
                 percentOrDash(s.at("over_voro++_last_step")).c_str(),
                 percentOrDash(s.at("over_voro++_median_over_steps")).c_str());
   }
+  const auto& analyses = config.at("analyses");
+  std::printf(
+      "analyses (opening, fragments, orientation and modes, growth) on local Voronoi's crack: "
+      "median %.3f ms/step, last step %.3f ms; %.2fx local Voronoi's median, per step median "
+      "%.2fx, max %.2fx (goal: <= 1x)\n",
+      analyses.at("median_ms").get<double>(), analyses.at("last_step_ms").get<double>(),
+      analyses.at("over_local_voronoi_median_ms").get<double>(),
+      analyses.at("over_local_voronoi_median_over_steps").get<double>(),
+      analyses.at("over_local_voronoi_max_over_steps").get<double>());
   const auto& voro = config.at("voro++");
   std::printf("voro++: median %.3f ms over %zu steps, last step %.3f ms; %s\n",
               voro.at("median_ms").get<double>(), voro.at("steps_measured").get<std::size_t>(),

@@ -8,7 +8,9 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
+#include <crackvis/analysis/growth.hpp>
 #include <crackvis/cracks/bond_graph.hpp>
+#include <crackvis/cracks/dem_series.hpp>
 #include <crackvis/cracks/extractor.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/lattice_generator.hpp>
@@ -20,6 +22,7 @@ struct InfoOptions {
   std::string file;
   bool perStep = false;
   bool json = false;
+  std::string cracks;  // a method: the per-step table gains the crack's numbers
 };
 
 struct StepRow {
@@ -38,6 +41,9 @@ struct FileSummary {
   // why: the lattice's, or a triangulation, Delaunay or regular.
   std::string cells;
   std::vector<StepRow> rows;  // first and last only, unless per-step was asked
+  // With --cracks: per step (all of them), the crack's analyses and front.
+  std::vector<analysis::StepAnalysis> cracks;
+  analysis::CrackFront front;
 };
 
 double percent(std::int64_t part, std::int64_t whole) {
@@ -160,6 +166,40 @@ double scalarOf(const dem::StepInfo& step, const std::string& name) {
   return std::nan("");
 }
 
+// Every step through the method and the analyses, in order (as `crackvis
+// report` does): the columns --cracks adds.
+Status analyseCracks(const InfoOptions& options, FileSummary& summary) {
+  auto method = cracks::parseMethod(options.cracks);
+  CRACKVIS_RETURN_IF_ERROR(method.status());
+  auto series = cracks::DemSeries::open(options.file);
+  CRACKVIS_RETURN_IF_ERROR(series.status());
+  const dem::Lattice& lattice = (*series)->lattice();
+  auto extractor = cracks::makeExtractor(*method, (*series)->graph(), lattice.dimension);
+  analysis::CrackAnalysis analyses(lattice, {});
+  cracks::CrackMesh mesh;
+  for (int step = 0; step < (*series)->stepCount(); ++step) {
+    auto input = (*series)->load(step);
+    CRACKVIS_RETURN_IF_ERROR(input.status());
+    CRACKVIS_RETURN_IF_ERROR(extractor->extract(*input, mesh));
+    const double time = summary.info.steps[static_cast<std::size_t>(step)].time;
+    summary.cracks.push_back(analyses.analyse(step, time, *input, input->referencePositions, mesh));
+  }
+  summary.front = analysis::crackFront(summary.cracks, lattice.dimension);
+  return Status::ok();
+}
+
+nlohmann::json crackJson(const FileSummary& summary, int step) {
+  const analysis::StepAnalysis& s = summary.cracks[static_cast<std::size_t>(step)];
+  return {{"area", s.totalArea},
+          {"main_area", s.mainArea},
+          {"front_extent", summary.front.extent[static_cast<std::size_t>(step)]},
+          {"front_axis", analysis::axisName(summary.front.axis)},
+          {"fragments", s.fragments},
+          {"largest_fragment_share", s.largestFragmentShare},
+          {"tension_breaks", s.tension},
+          {"shear_breaks", s.shear}};
+}
+
 nlohmann::json toJson(const FileSummary& summary, bool perStep) {
   const auto& info = summary.info;
   nlohmann::json out = {
@@ -205,6 +245,9 @@ nlohmann::json toJson(const FileSummary& summary, bool perStep) {
       const auto& stepInfo = info.steps[static_cast<std::size_t>(row.step)];
       for (const dem::StepScalar& scalar : stepInfo.scalars) {
         entry["scalars"][scalar.name] = scalar.value;
+      }
+      if (!summary.cracks.empty()) {
+        entry["cracks"] = crackJson(summary, row.step);
       }
       out["per_step"].push_back(entry);
     }
@@ -289,6 +332,11 @@ void printText(const FileSummary& summary, bool perStep) {
     for (const std::string& name : info.scalarNames) {
       fmt::print(" {:>14}", name.substr(0, 14));
     }
+    if (!summary.cracks.empty()) {
+      fmt::print(" {:>12} {:>12} {:>10} {:>9} {:>7} {:>7}", "crack area", "main area",
+                 "front " + analysis::axisName(summary.front.axis), "fragments", "tension",
+                 "shear");
+    }
     fmt::print("\n");
     for (const StepRow& row : summary.rows) {
       fmt::print("{:>8} {:>14.6g} {:>10} {:>9.3f} {:>8}", row.step, row.time, row.broken,
@@ -296,16 +344,32 @@ void printText(const FileSummary& summary, bool perStep) {
       for (const std::string& name : info.scalarNames) {
         fmt::print(" {:>14.6g}", scalarOf(info.steps[static_cast<std::size_t>(row.step)], name));
       }
+      if (!summary.cracks.empty()) {
+        const analysis::StepAnalysis& s = summary.cracks[static_cast<std::size_t>(row.step)];
+        fmt::print(" {:>12.6g} {:>12.6g} {:>10.4g} {:>9} {:>7} {:>7}", s.totalArea, s.mainArea,
+                   summary.front.extent[static_cast<std::size_t>(row.step)], s.fragments, s.tension,
+                   s.shear);
+      }
       fmt::print("\n");
     }
   }
 }
 
 int runInfo(const InfoOptions& options) {
+  if (!options.cracks.empty() && !options.perStep) {
+    printError("info", "--cracks adds columns to the per-step table: give --steps too");
+    return kExitUsage;
+  }
   auto summary = summarize(options);
   if (!summary) {
     printError("info", summary.status().message());
     return kExitFailure;
+  }
+  if (!options.cracks.empty()) {
+    if (Status status = analyseCracks(options, *summary); !status) {
+      printError("info", status.message());
+      return kExitFailure;
+    }
   }
   if (options.json) {
     std::printf("%s\n", toJson(*summary, options.perStep).dump(2).c_str());
@@ -331,6 +395,12 @@ Command addInfoCommand(CLI::App& parent) {
                     "Add a per-step table: time, broken bonds, newly broken bonds and the "
                     "file's step scalars (load, displacement...)");
   command->add_flag("--json", options->json, "Print JSON instead of text");
+  command
+      ->add_option("--cracks", options->cracks,
+                   "With --steps: extract every step with this method and add the crack's numbers "
+                   "(total and main crack area, the main crack's front, fragments, bonds broken in "
+                   "tension and shear) beside the step scalars, as `crackvis report` measures them")
+      ->check(CLI::IsMember({"cell-attribute", "cell-cut", "local-voronoi", "cell-centre"}));
   return {command, [options] { return runInfo(*options); }};
 }
 
