@@ -6,7 +6,9 @@
 namespace crackvis::analysis {
 
 CrackAnalysis::CrackAnalysis(const dem::Lattice& lattice, AnalysisOptions options)
-    : m_lattice(lattice), m_options(options) {}
+    : m_lattice(lattice),
+      m_options(options),
+      m_normals(lattice.dimension, options.opening.smoothingRadius) {}
 
 StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInput& input,
                                     std::span<const Vec3> reference, const CrackMesh& mesh) {
@@ -27,8 +29,9 @@ StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInp
     out.mainBox = main.box;
     out.mainNormal = main.normal;
   }
+  m_normals.update(m_lattice.bonds, input.bondState, reference);
   m_openings = measureOpening(mesh, m_components, m_lattice.bonds, reference, input.positions,
-                              m_options.opening);
+                              m_options.opening, &m_normals);
   out.mainOpening = summariseOpening(m_openings, 0);
   out.allOpening = summariseOpening(m_openings, -1);
   const Fragments& fragments =

@@ -2,9 +2,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <optional>
-#include <unordered_map>
 
+#include <crackvis/analysis/bond_normals.hpp>
 #include <crackvis/analysis/opening.hpp>
 #include <crackvis/analysis/tensor.hpp>
 
@@ -60,144 +59,36 @@ Vec3 centroidOf(const CrackMesh& mesh, const cracks::Primitive& primitive) {
   return (1.0 / static_cast<double>(std::max<std::size_t>(primitive.count, 1))) * sum;
 }
 
-// Element centroids hashed in cubes of the smoothing radius.
-class CentroidGrid {
- public:
-  CentroidGrid(const std::vector<Vec3>& centroids, double cell) : m_cell(cell) {
-    for (std::size_t e = 0; e < centroids.size(); ++e) {
-      m_cells[key(cellOf(centroids[e]))].push_back(e);
-    }
-  }
-  template <typename Visit>
-  void forNear(Vec3 p, Visit&& visit) const {
-    const std::array<std::int64_t, 3> c = cellOf(p);
-    for (std::int64_t dx = -1; dx <= 1; ++dx) {
-      for (std::int64_t dy = -1; dy <= 1; ++dy) {
-        for (std::int64_t dz = -1; dz <= 1; ++dz) {
-          const auto found = m_cells.find(key({c[0] + dx, c[1] + dy, c[2] + dz}));
-          if (found != m_cells.end()) {
-            for (std::size_t e : found->second) {
-              visit(e);
-            }
-          }
-        }
-      }
-    }
-  }
-
- private:
-  std::array<std::int64_t, 3> cellOf(Vec3 p) const {
-    return {static_cast<std::int64_t>(std::floor(p.x / m_cell)),
-            static_cast<std::int64_t>(std::floor(p.y / m_cell)),
-            static_cast<std::int64_t>(std::floor(p.z / m_cell))};
-  }
-  static std::uint64_t key(std::array<std::int64_t, 3> c) {
-    const auto part = [](std::int64_t v) { return static_cast<std::uint64_t>(v) & 0x1FFFFFu; };
-    return part(c[0]) | (part(c[1]) << 21) | (part(c[2]) << 42);
-  }
-  double m_cell;
-  std::unordered_map<std::uint64_t, std::vector<std::size_t>> m_cells;
-};
-
-// The normal of the local plane through the centroids of `near`: nullopt
-// when they make no plane (too few, or spread in every direction alike).
-std::optional<Vec3> centroidPlaneNormal(const ElementOpenings& out,
-                                        const std::vector<std::size_t>& near,
-                                        const std::vector<double>& kernel, bool flat) {
-  if (near.size() < (flat ? 2u : 3u)) {
-    return std::nullopt;
-  }
-  double weight = 0.0;
-  Vec3 mean{};
-  for (std::size_t k = 0; k < near.size(); ++k) {
-    weight += kernel[k];
-    mean = mean + kernel[k] * out.centroid[near[k]];
-  }
-  if (!(weight > 0.0)) {
-    return std::nullopt;
-  }
-  mean = (1.0 / weight) * mean;
-  AxialTensor spread;
-  for (std::size_t k = 0; k < near.size(); ++k) {
-    spread.add(out.centroid[near[k]] - mean, kernel[k]);
-  }
-  const double total = spread.trace();
-  if (flat) {
-    spread.addZ(total + 1.0);
-  }
-  const Vec3 normal = spread.smallestAxis();
-  const double across = spread.along(normal);
-  const double inPlane = flat ? total - across : (total - across) / 2.0;
-  // A plane: far less spread across it than along it.
-  if (!(across < 0.1 * inPlane)) {
-    return std::nullopt;
-  }
-  return normal;
-}
-
-// The crack's local normals (see the header), in place of the elements' own:
-// the plane through the centroids of the component's elements nearby (it
-// stays true at the crack's edges, where the neighbourhood is one-sided), or
-// where they make no plane, the mean axis of their bonds. Each neighbour
-// weighs its area times (1 - (r/R)^2)^2: a lattice crack zig-zags, and
-// neighbours that enter the window at its edge with full weight would tilt
-// the plane by whichever half zig-zag they bring.
-void smoothNormals(ElementOpenings& out, const std::vector<Vec3>& own, bool flat) {
-  if (out.smoothingRadius <= 0.0) {
-    return;
-  }
-  const CentroidGrid grid(out.centroid, out.smoothingRadius);
-  const double r2 = out.smoothingRadius * out.smoothingRadius;
-  std::vector<std::size_t> near;
-  std::vector<double> kernel;
-  for (std::size_t e = 0; e < out.size(); ++e) {
-    if (out.component[e] < 0) {
-      continue;
-    }
-    near.clear();
-    kernel.clear();
-    grid.forNear(out.centroid[e], [&](std::size_t f) {
-      const Vec3 d = out.centroid[f] - out.centroid[e];
-      const double q = dem::dot(d, d) / r2;
-      if (out.component[f] == out.component[e] && q < 1.0) {
-        near.push_back(f);
-        kernel.push_back(out.area[f] * (1.0 - q) * (1.0 - q));
-      }
-    });
-    Vec3 axis;
-    if (const auto plane = centroidPlaneNormal(out, near, kernel, flat)) {
-      axis = *plane;
-    } else {
-      AxialTensor bondAxes;
-      for (std::size_t k = 0; k < near.size(); ++k) {
-        bondAxes.add(own[near[k]], kernel[k]);
-      }
-      axis = bondAxes.principalAxis();
-    }
-    out.normal[e] = dem::dot(axis, own[e]) < 0.0 ? -1.0 * axis : axis;
-  }
-}
-
 }  // namespace
 
 ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& components,
                                std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
-                               std::span<const Vec3> current, const OpeningOptions& options) {
+                               std::span<const Vec3> current, const OpeningOptions& options,
+                               const BondNormals* normals) {
   const std::vector<cracks::Primitive> primitives = cracks::surfacePrimitives(mesh);
   const cracks::AttributeArray* cellIds = mesh.findCellData("bond_id");
   const cracks::AttributeArray* pointIds = cellIds ? nullptr : mesh.findPointData("bond_id");
   const std::size_t n = std::min(reference.size(), current.size());
+  // Without a caller's normals, those of the bonds this mesh carries.
+  BondNormals own(mesh.dimension, options.smoothingRadius);
+  if (normals == nullptr) {
+    std::vector<std::int32_t> carried;
+    for (const cracks::Primitive& primitive : primitives) {
+      forEachBond(mesh, primitive, bonds.size(), cellIds, pointIds,
+                  [&](std::size_t b) { carried.push_back(static_cast<std::int32_t>(b)); });
+    }
+    own.add(bonds, carried, reference.first(n));
+    normals = &own;
+  }
   ElementOpenings out;
   const std::size_t count = primitives.size();
+  out.smoothingRadius = normals->radius();
   out.area.resize(count);
   out.centroid.resize(count);
   out.normal.resize(count);
   out.component.assign(count, -1);
-  std::vector<Vec3> jump(count);
-  std::vector<Vec3> bondAxis(count);
-  std::vector<int> carried(count, 0);
-  double lengthSum = 0.0;
-  std::size_t lengthCount = 0;
+  out.opening.assign(count, kNaN);
+  out.slip.assign(count, kNaN);
   for (std::size_t e = 0; e < count; ++e) {
     const cracks::Primitive& primitive = primitives[e];
     out.area[e] = cracks::measure(mesh, primitive);
@@ -206,6 +97,13 @@ ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& com
     if (primitive.index < components.ofPrimitive.size()) {
       out.component[e] = components.ofPrimitive[primitive.index];
     }
+    // The bonds of one cell cut element may cross the crack either way
+    // round: each counts along the first one's normal (the normals of
+    // neighbouring bonds are nearly parallel; their axes need not be).
+    Vec3 jump{};
+    Vec3 firstNormal{};
+    Vec3 normal{};
+    int carried = 0;
     forEachBond(mesh, primitive, bonds.size(), cellIds, pointIds, [&](std::size_t b) {
       const auto i = static_cast<std::size_t>(bonds[b].first);
       const auto j = static_cast<std::size_t>(bonds[b].second);
@@ -213,38 +111,20 @@ ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& com
         return;
       }
       const Vec3 d0 = reference[j] - reference[i];
-      // The bonds of one cell cut element may be listed either way round:
-      // each counts along the element's first bond.
-      const double side = carried[e] > 0 && dem::dot(d0, bondAxis[e]) < 0.0 ? -1.0 : 1.0;
-      jump[e] = jump[e] + side * (current[j] - current[i] - d0);
-      bondAxis[e] = bondAxis[e] + side * d0;
-      lengthSum += dem::norm(d0);
-      ++lengthCount;
-      ++carried[e];
+      if (carried == 0) {
+        firstNormal = normals->normal(b);
+      }
+      const double side = dem::dot(normals->normal(b), firstNormal) < 0.0 ? -1.0 : 1.0;
+      jump = jump + side * (current[j] - current[i] - d0);
+      normal = normal + side * normals->normal(b);
+      ++carried;
     });
-  }
-  out.smoothingRadius = options.smoothingRadius > 0.0 ? options.smoothingRadius
-                        : lengthCount > 0 ? 3.0 * lengthSum / static_cast<double>(lengthCount)
-                                          : 0.0;
-  // An element's own direction is its bonds' reference axis: a face's
-  // normal in the current configuration leans over as the crack opens (the
-  // cells that straddle the gap stretch), the bond it stands for does not;
-  // local Voronoi's faces are normal to it in the reference.
-  for (std::size_t e = 0; e < count; ++e) {
-    const double length = dem::norm(bondAxis[e]);
-    if (carried[e] > 0 && length > 0.0) {
-      out.normal[e] = (1.0 / length) * bondAxis[e];
-    }
-  }
-  const std::vector<Vec3> own = out.normal;
-  smoothNormals(out, own, mesh.dimension == 2);
-  out.opening.assign(count, kNaN);
-  out.slip.assign(count, kNaN);
-  for (std::size_t e = 0; e < count; ++e) {
-    if (carried[e] == 0) {
+    const double length = dem::norm(normal);
+    if (carried == 0 || length == 0.0) {
       continue;
     }
-    const Vec3 meanJump = (1.0 / carried[e]) * jump[e];
+    out.normal[e] = (1.0 / length) * normal;
+    const Vec3 meanJump = (1.0 / carried) * jump;
     const double normalPart = dem::dot(meanJump, out.normal[e]);
     out.opening[e] = normalPart;
     out.slip[e] = dem::norm(meanJump - normalPart * out.normal[e]);

@@ -1,9 +1,9 @@
-#include <crackvis/cracks/surface_primitives.hpp>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <numeric>
+
+#include <crackvis/cracks/surface_primitives.hpp>
 
 namespace crackvis::cracks {
 
@@ -45,17 +45,31 @@ double measure(const CrackMesh& mesh, const Primitive& primitive) {
 // Welded point ids: points closer than `tolerance` (in a grid of that size)
 // share an id.
 std::vector<std::int32_t> weld(const std::vector<Vec3>& points, double tolerance) {
+  // Each point's grid cell, rounded once: the sort compares them
+  // n log n times (rounding in the comparison was most of a step's
+  // component search on a large crack).
+  std::vector<std::array<long long, 3>> keys(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3 p = points[i];
+    keys[i] = {std::llround(p.x / tolerance), std::llround(p.y / tolerance),
+               std::llround(p.z / tolerance)};
+  }
   std::vector<std::int32_t> order(points.size());
   std::iota(order.begin(), order.end(), 0);
-  auto key = [&](std::int32_t i) {
-    const Vec3 p = points[static_cast<std::size_t>(i)];
-    return std::array<long long, 3>{std::llround(p.x / tolerance), std::llround(p.y / tolerance),
-                                    std::llround(p.z / tolerance)};
+  const auto key = [&](std::int32_t i) -> const std::array<long long, 3>& {
+    return keys[static_cast<std::size_t>(i)];
   };
+  // Lexicographic by hand: std::array's operators compare through memcmp,
+  // which was most of the sort's time.
   std::sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
-    const auto ka = key(a);
-    const auto kb = key(b);
-    return ka != kb ? ka < kb : a < b;
+    const auto& ka = key(a);
+    const auto& kb = key(b);
+    for (int c = 0; c < 3; ++c) {
+      if (ka[c] != kb[c]) {
+        return ka[c] < kb[c];
+      }
+    }
+    return a < b;
   });
   std::vector<std::int32_t> id(points.size());
   std::int32_t next = -1;

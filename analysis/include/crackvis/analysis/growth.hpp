@@ -67,6 +67,7 @@ class CrackAnalysis {
   AnalysisOptions m_options;
   CrackComponents m_components;
   ElementOpenings m_openings;
+  BondNormals m_normals;
   FragmentTracker m_fragments;
   BreakModeTracker m_modes;
 };

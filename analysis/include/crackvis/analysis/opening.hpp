@@ -9,18 +9,11 @@
 // normal there: opening = jump . n (positive when the sides move apart),
 // slip = |jump - opening n|.
 //
-// Which normal. A lattice's crack surface is made of the faces of single
-// bonds, which zig-zag around the crack's plane: on an FCC lattice the faces
-// of a crack along a cube plane lean 45 degrees away from it, and a pure
-// tension opening would read as half slip on each face; and a face's normal
-// in the current configuration leans over further as the crack opens. The
-// normal used is therefore the crack's local normal: the plane through the
-// centroids of the elements of the same component within `smoothingRadius`
-// (weighted by area times (1 - (r/R)^2)^2), or, where those make no plane
-// (a lone break, a thread of a few faces), the principal axis of their
-// bonds' reference directions. It is oriented along the element's bond
-// (n . d0 > 0). On a plane crack it is the plane's normal, on a curved one
-// it follows the curve on the scale of the radius.
+// Which normal: the crack's local normal at the element's bonds
+// (bond_normals.hpp: the plane through the reference midpoints of the
+// broken bonds nearby), not the face's own, which zig-zags about the crack
+// and leans over as it opens. An element of several bonds (cell cut) takes
+// their mean.
 //
 // Elements that carry no bond of the file (cell attribute's cells, virtual
 // bonds of a triangulation, inconsistency marks) have no opening: NaN.
@@ -29,6 +22,7 @@
 #include <span>
 #include <vector>
 
+#include <crackvis/analysis/bond_normals.hpp>
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/crack_mesh.hpp>
 #include <crackvis/cracks/surface_primitives.hpp>
@@ -40,8 +34,8 @@ using cracks::CrackMesh;
 using dem::Vec3;
 
 struct OpeningOptions {
-  // Radius of the neighbourhood whose orientation gives an element's normal,
-  // m; 0: three times the mean reference length of the element bonds.
+  // Radius of the neighbourhood whose plane gives a bond's normal, m; 0:
+  // three times the mean reference length of the bonds.
   double smoothingRadius = 0.0;
 };
 
@@ -59,10 +53,13 @@ struct ElementOpenings {
 };
 
 // `reference` and `current` are the particle centres [N]; `bonds` the
-// lattice's pairs [M].
+// lattice's pairs [M]; `normals`, kept across steps by the caller, has every
+// bond the mesh carries (else the normals of those bonds are found here,
+// with options.smoothingRadius).
 ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& components,
                                std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
-                               std::span<const Vec3> current, const OpeningOptions& options = {});
+                               std::span<const Vec3> current, const OpeningOptions& options = {},
+                               const BondNormals* normals = nullptr);
 
 // Cell data "opening" and "slip" over all the mesh's primitives in VTK order
 // (NaN for those that are no surface element), appended to mesh.cellData.

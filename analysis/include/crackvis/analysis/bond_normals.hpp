@@ -1,0 +1,73 @@
+// The crack's local normal at each broken bond, in the reference
+// configuration, kept across steps.
+//
+// A lattice's crack surface is made of the faces of single bonds, which
+// zig-zag about the crack: on FCC the faces of a crack along a cube plane
+// lean 45 degrees off it, and a pure tension opening measured along them
+// would read as half slip; and the faces lean further as the crack opens.
+// The crack itself runs through the midpoints of its broken bonds (exactly,
+// on a lattice: a bond across a lattice plane has its midpoint on it). A
+// broken bond's normal is therefore the plane through the reference
+// midpoints of the broken bonds within R of its own, each weighted by
+// (1 - (r/R)^2)^2 so that the zig-zag entering the window at its edge does
+// not tilt it; where those make no plane (a lone break, a thread of a few),
+// the principal axis of their reference directions. It is oriented along the
+// bond (n . d0 > 0). R: three mean bond lengths unless given.
+//
+// Incremental: a step's new breaks get their normals, and the broken bonds
+// within R of a new one are found again while their window is sparse (fewer
+// than kSettledWindow midpoints); a bond that heals (a viewer stepping back)
+// starts the set over.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <unordered_map>
+#include <vector>
+
+#include <crackvis/dem/model.hpp>
+
+namespace crackvis::analysis {
+
+class BondNormals {
+ public:
+  // `radius` <= 0: three times the mean reference length of the bonds.
+  explicit BondNormals(int dimension, double radius = 0.0)
+      : m_flat(dimension == 2), m_radius(radius) {}
+
+  // Brings the set of broken bonds to `bondState` [M].
+  void update(std::span<const dem::Bond> bonds, std::span<const std::uint8_t> bondState,
+              std::span<const dem::Vec3> reference);
+  // Adds broken bonds (ids into `bonds`), finding their normals.
+  void add(std::span<const dem::Bond> bonds, std::span<const std::int32_t> broken,
+           std::span<const dem::Vec3> reference);
+
+  // The unit normal of a broken bond (zero for one not in the set).
+  dem::Vec3 normal(std::size_t bond) const {
+    return bond < m_normal.size() ? m_normal[bond] : dem::Vec3{};
+  }
+  double radius() const { return m_radius; }
+  // How many normals were found (again) in all: the incremental work.
+  std::size_t computed() const { return m_computed; }
+
+ private:
+  void reset(std::size_t bondCount);
+  std::uint64_t cellKey(dem::Vec3 p) const;
+  template <typename Visit>
+  void forNear(dem::Vec3 p, Visit&& visit) const;
+  // Also stores how many midpoints the bond's window held.
+  dem::Vec3 findNormal(std::size_t bond, std::uint32_t& window) const;
+  static constexpr std::uint32_t kSettledWindow = 24;
+
+  bool m_flat;
+  double m_radius;
+  std::vector<std::uint8_t> m_broken;   // [M]
+  std::vector<dem::Vec3> m_mid;         // [M] reference midpoints of broken bonds
+  std::vector<dem::Vec3> m_axis;        // [M] unit reference directions
+  std::vector<dem::Vec3> m_normal;      // [M]
+  std::vector<std::uint32_t> m_window;  // [M] midpoints in the window when last found
+  std::unordered_map<std::uint64_t, std::vector<std::int32_t>> m_cells;
+  std::size_t m_computed = 0;
+};
+
+}  // namespace crackvis::analysis
