@@ -155,6 +155,16 @@ TEST_CASE("crackvis report measures a planted crack's opening, fragments and gro
     CHECK(std::filesystem::exists(bare + "/growth.csv"));
     CHECK_THAT(fileText(bare + "/index.md"), Catch::Contains("Plots are missing"));
   }
+  SECTION("cell attribute's cells carry no bonds: no opening plot, the page says why") {
+    const std::string cells = dir.file("cells");
+    const auto run = runProcess({kCli, "report", data, "-o", cells, "-q", "-m", "cell-attribute"});
+    CHECK(run.exitCode == 0);
+    CHECK(run.err.empty());
+    CHECK_FALSE(std::filesystem::exists(cells + "/opening.png"));
+    CHECK(isPng(cells + "/growth.png"));
+    CHECK_THAT(fileText(cells + "/index.md"), Catch::Contains("Not drawn: opening.png"));
+    CHECK(readCsv(cells + "/opening_profile.csv").empty());
+  }
   SECTION("bad input: a missing file, an output that is a file") {
     const auto missing = runProcess({kCli, "report", dir.file("none.h5"), "-o", out, "-q"});
     CHECK(missing.exitCode == 1);

@@ -432,6 +432,9 @@ std::string indexPage(const ReportData& d, const ReportFiles& files) {
   if (!files.plotProblem.empty()) {
     page += fmt::format("Plots are missing: {}.\n\n", files.plotProblem);
   }
+  for (const std::string& reason : files.notDrawn) {
+    page += fmt::format("Not drawn: {}.\n\n", reason);
+  }
   page += "## Crack growth\n\n" + plotted("growth.png");
   for (const std::string& name : d.scalarNames) {
     page += plotted("growth-vs-" + safeName(name) + ".png");
@@ -489,29 +492,48 @@ Result<ReportFiles> writeReport(const ReportData& data, const std::string& folde
     CRACKVIS_RETURN_IF_ERROR(replaceFile((dir / name).string(), text));
     files.tables.push_back(name);
   }
-  std::vector<std::pair<std::string, std::string>> scripts = {
-      {"growth", growthScript(data)},
-      {"opening", openingScript(data)},
-      {"fragments", fragmentScript(data)},
-      {"orientation", orientationScript(data)},
+  // A plot whose tables hold nothing (no opening: cell attribute's cells
+  // carry no bond; no surface; every fragment dust) is not drawn: gnuplot
+  // fails on a table without points. The page says why.
+  const bool opened = analysis::summariseOpening(data.at.openings, -1).elements > 0;
+  const bool surface = data.at.openings.size() > 0;
+  const bool pieces = !keptFragments(data).empty();
+  struct Script {
+    std::string name;
+    std::string text;
+    const char* empty;  // why there is nothing to draw, or nullptr
+  };
+  std::vector<Script> scripts = {
+      {"growth", growthScript(data), nullptr},
+      {"opening", openingScript(data),
+       opened ? nullptr : "no element carries a bond (cell attribute's cells), so no opening"},
+      {"fragments", fragmentScript(data),
+       pieces ? nullptr : "every fragment is smaller than --min-fragment"},
+      {"orientation", orientationScript(data),
+       surface ? nullptr : "the crack has no surface elements at that step"},
   };
   for (std::size_t s = 0; s < data.scalarNames.size(); ++s) {
-    scripts.emplace_back("growth-vs-" + safeName(data.scalarNames[s]), scalarScript(data, s));
+    scripts.push_back(
+        {"growth-vs-" + safeName(data.scalarNames[s]), scalarScript(data, s), nullptr});
   }
-  for (const auto& [name, text] : scripts) {
-    CRACKVIS_RETURN_IF_ERROR(replaceFile((dir / (name + ".gp")).string(), text));
+  for (const Script& script : scripts) {
+    CRACKVIS_RETURN_IF_ERROR(replaceFile((dir / (script.name + ".gp")).string(), script.text));
   }
-  if (plots) {
-    fs::remove(dir / "gnuplot.log", error);
-    for (const auto& [name, text] : scripts) {
-      if (Status drawn = drawPlot(dir, name); !drawn) {
-        files.plotProblem = drawn.message();
-        break;
-      }
-      files.plots.push_back(name + ".png");
-    }
-  } else {
+  if (!plots) {
     files.plotProblem = "not drawn (--no-plots); run gnuplot on the .gp scripts";
+  } else {
+    fs::remove(dir / "gnuplot.log", error);
+    for (const Script& script : scripts) {
+      if (script.empty != nullptr) {
+        files.notDrawn.push_back(fmt::format("{}.png: {}", script.name, script.empty));
+        continue;
+      }
+      if (Status drawn = drawPlot(dir, script.name); !drawn) {
+        files.plotProblem = drawn.message();
+        break;  // gnuplot missing or broken: the next ones would fail alike
+      }
+      files.plots.push_back(script.name + ".png");
+    }
   }
   CRACKVIS_RETURN_IF_ERROR(replaceFile((dir / "index.md").string(), indexPage(data, files)));
   return files;

@@ -44,8 +44,9 @@ struct ReportData {
 
 struct ReportFiles {
   std::vector<std::string> tables;
-  std::vector<std::string> plots;  // PNGs drawn
-  std::string plotProblem;         // why plots are missing, if they are
+  std::vector<std::string> plots;     // PNGs drawn
+  std::string plotProblem;            // why plots are missing, if they are
+  std::vector<std::string> notDrawn;  // "NAME.png: why", plots with nothing to draw
 };
 
 // Writes the tables and the scripts, then runs gnuplot on each script
