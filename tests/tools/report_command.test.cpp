@@ -273,3 +273,34 @@ TEST_CASE(
     CHECK(row.at("mode") == (records[best].type == 1 ? "tension" : "shear"));
   }
 }
+
+TEST_CASE("crackvis report on ESyS-Particle's and LAMMPS's notched bars writes every table",
+          "[cli][report]") {
+  TempDir dir;
+  for (const std::string code : {"esys", "lammps"}) {
+    INFO(code);
+    const std::string data = dir.file(code + ".h5");
+    REQUIRE(runProcess({kCli, "import", code,
+                        std::string(CRACKVIS_TEST_DATA) + "/" + code + "/notched_bar", "-o", data,
+                        "-q"})
+                .exitCode == 0);
+    const std::string out = dir.file(code + "-report");
+    REQUIRE(runProcess({kCli, "report", data, "-o", out, "-q"}).exitCode == 0);
+    for (const char* table : kTables) {
+      CHECK(std::filesystem::exists(out + "/" + table));
+    }
+    const Table growth = readCsv(out + "/growth.csv");
+    REQUIRE(growth.size() > 2);
+    // Every bond that broke during the run has a mode; those broken at the
+    // first step (a notch) were broken before it.
+    const double during =
+        number(growth.back(), "broken_bonds") - number(growth.front(), "broken_bonds");
+    CHECK(number(growth.back(), "tension_breaks") + number(growth.back(), "shear_breaks") ==
+          during);
+    CHECK(readCsv(out + "/break_modes.csv").size() == static_cast<std::size_t>(during));
+    // The notched bars break in two.
+    CHECK(number(growth.back(), "fragments") == 2.0);
+    CHECK(number(growth.back(), "main_mean_opening") > 0.0);
+    CHECK(isPng(out + "/opening.png"));
+  }
+}
