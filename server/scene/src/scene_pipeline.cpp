@@ -129,17 +129,22 @@ bool usesOpening(const pipeline::CracksDescription& c) {
 }
 
 // The "opening" and "slip" cell arrays, measured from the first step (the
-// reference) before a component filter drops primitives, so that every
-// element's normal comes from its whole neighbourhood.
+// reference) before a component filter drops primitives, with the normals
+// kept across steps (made on first use): a step costs its new breaks.
 void addOpening(const pipeline::CracksDescription& c, const cracks::StepInput& step,
-                std::span<const dem::Bond> bonds, cracks::CrackMesh& mesh) {
+                std::span<const dem::Bond> bonds, std::shared_ptr<analysis::BondNormals>& normals,
+                cracks::CrackMesh& mesh) {
   if (!usesOpening(c)) {
     return;
   }
+  if (normals == nullptr) {
+    normals = std::make_shared<analysis::BondNormals>(mesh.dimension);
+  }
+  normals->update(bonds, step.bondState, step.referencePositions);
   const cracks::CrackComponents components = cracks::findComponents(mesh);
   analysis::appendOpeningArrays(
-      mesh,
-      analysis::measureOpening(mesh, components, bonds, step.referencePositions, step.positions));
+      mesh, analysis::measureOpening(mesh, components, bonds, step.referencePositions,
+                                     step.positions, {}, normals.get()));
 }
 
 // Whether two descriptions select or colour crack components differently.
@@ -269,6 +274,7 @@ Status ScenePipeline::apply(pipeline::PipelineDescription next) {
   const int target = newFile || stepChanged ? resolveStep(next.step, stepCount()) : shown;
   CRACKVIS_RETURN_IF_ERROR(source::checkStepInRange(next.file, target, stepCount()));
   if (newExtractor) {
+    m_state.normals.reset();  // another file or other bonds: found anew
     m_state.extractor = cracks::makeExtractor(next.cracks.method, *m_state.graph,
                                               source().lattice().dimension, extractOptions(next));
   }
@@ -437,7 +443,8 @@ Status ScenePipeline::extract(std::shared_ptr<const source::SourceStep> step) {
   const cracks::StepInput input = stepInput(*step);
   CRACKVIS_RETURN_IF_ERROR(m_state.extractor->extract(input, m_scratch));
   m_state.mapping = mappingOf(m_scratch, input);
-  addOpening(m_state.description.cracks, input, source().lattice().bonds, m_scratch);
+  addOpening(m_state.description.cracks, input, source().lattice().bonds, m_state.normals,
+             m_scratch);
   selectComponents(m_state.description.cracks, m_scratch);
   m_timings.extractMs = millisecondsSince(start);
   std::swap(m_scratch, m_state.mesh);

@@ -23,6 +23,10 @@
 #include <crackvis/scene_model/scene_input.hpp>
 #include <crackvis/source/step_source.hpp>
 
+namespace crackvis::analysis {
+class BondNormals;
+}  // namespace crackvis::analysis
+
 namespace crackvis::scene {
 
 // Opens the step source of a description's file: the render server's goes
@@ -115,6 +119,9 @@ class ScenePipeline {
     std::shared_ptr<cracks::CrackExtractor> extractor;
     std::shared_ptr<const source::SourceStep> initial;  // step 0: displacements
     std::shared_ptr<const source::SourceStep> current;
+    // The crack's normals at its broken bonds, for colours by opening or
+    // slip: kept across steps (only new breaks cost), like the extractor.
+    std::shared_ptr<analysis::BondNormals> normals;
     cracks::CrackMesh mesh;
     CrackMapping mapping;
     SeriesRanges series;
