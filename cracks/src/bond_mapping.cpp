@@ -4,9 +4,9 @@
 
 #include <fmt/format.h>
 
-#include <crackvis/cracks/surface_primitives.hpp>
 #include <crackvis/cracks/bond_mapping.hpp>
 #include <crackvis/cracks/crack_components.hpp>
+#include <crackvis/cracks/surface_primitives.hpp>
 
 namespace crackvis::cracks {
 

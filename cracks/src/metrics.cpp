@@ -5,10 +5,10 @@
 
 #include <tbb/parallel_for.h>
 
-#include <crackvis/cracks/surface_primitives.hpp>
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/metrics.hpp>
 #include <crackvis/cracks/particle_grid.hpp>
+#include <crackvis/cracks/surface_primitives.hpp>
 
 namespace crackvis::cracks {
 namespace {

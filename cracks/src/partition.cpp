@@ -2,8 +2,8 @@
 #include <cmath>
 #include <numeric>
 
-#include <crackvis/cracks/surface_primitives.hpp>
 #include <crackvis/cracks/partition.hpp>
+#include <crackvis/cracks/surface_primitives.hpp>
 
 namespace crackvis::cracks {
 namespace {

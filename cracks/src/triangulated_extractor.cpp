@@ -29,8 +29,8 @@
 #include <fmt/format.h>
 
 #include "methods.hpp"
-#include <crackvis/cracks/surface_primitives.hpp>
 #include <crackvis/cracks/partition.hpp>
+#include <crackvis/cracks/surface_primitives.hpp>
 #include <crackvis/cracks/triangulation.hpp>
 
 namespace crackvis::cracks {
