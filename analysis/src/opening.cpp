@@ -87,12 +87,14 @@ ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& com
   out.centroid.resize(count);
   out.normal.resize(count);
   out.component.assign(count, -1);
+  out.cell.resize(count);
   out.opening.assign(count, kNaN);
   out.slip.assign(count, kNaN);
   for (std::size_t e = 0; e < count; ++e) {
     const cracks::Primitive& primitive = primitives[e];
     out.area[e] = cracks::measure(mesh, primitive);
     out.centroid[e] = centroidOf(mesh, primitive);
+    out.cell[e] = surfaceBase(mesh) + primitive.index;
     out.normal[e] = elementNormal(mesh, primitive);
     if (primitive.index < components.ofPrimitive.size()) {
       out.component[e] = components.ofPrimitive[primitive.index];
@@ -133,16 +135,14 @@ ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& com
 }
 
 void appendOpeningArrays(CrackMesh& mesh, const ElementOpenings& openings) {
-  const std::vector<cracks::Primitive> primitives = cracks::surfacePrimitives(mesh);
   const std::size_t cells = mesh.primitiveCount();
   std::vector<double> openingSum(cells, 0.0);
   std::vector<double> slipSum(cells, 0.0);
   std::vector<int> counted(cells, 0);
-  const std::size_t base = surfaceBase(mesh);
   // A 2D line's segments share its cell: the line takes their mean.
-  for (std::size_t e = 0; e < primitives.size() && e < openings.size(); ++e) {
-    if (!std::isnan(openings.opening[e])) {
-      const std::size_t cell = base + primitives[e].index;
+  for (std::size_t e = 0; e < openings.cell.size() && e < openings.size(); ++e) {
+    const std::size_t cell = openings.cell[e];
+    if (!std::isnan(openings.opening[e]) && cell < cells) {
       openingSum[cell] += openings.opening[e];
       slipSum[cell] += openings.slip[e];
       ++counted[cell];

@@ -100,13 +100,13 @@ bool usesComponents(const pipeline::CracksDescription& c) {
 
 // The description's component filter, and the "component" cell array when
 // cracks are coloured by component (largest first: 0 is the main crack).
-void selectComponents(const pipeline::CracksDescription& c, cracks::CrackMesh& mesh) {
+void selectComponents(const pipeline::CracksDescription& c,
+                      const cracks::CrackComponents& components, cracks::CrackMesh& mesh) {
   const cracks::ComponentFilter filter{c.minComponent, c.largest};
   const bool colour = usesComponents(c);
   if (!filter.active() && !colour) {
     return;
   }
-  const cracks::CrackComponents components = cracks::findComponents(mesh);
   if (colour) {
     cracks::AttributeArray label{"component", cracks::AttributeType::kInt32, 1, {}};
     label.values.assign(mesh.primitiveCount(), -1.0);
@@ -132,8 +132,8 @@ bool usesOpening(const pipeline::CracksDescription& c) {
 // reference) before a component filter drops primitives, with the normals
 // kept across steps (made on first use): a step costs its new breaks.
 void addOpening(const pipeline::CracksDescription& c, const cracks::StepInput& step,
-                std::span<const dem::Bond> bonds, std::shared_ptr<analysis::BondNormals>& normals,
-                cracks::CrackMesh& mesh) {
+                std::span<const dem::Bond> bonds, const cracks::CrackComponents& components,
+                std::shared_ptr<analysis::BondNormals>& normals, cracks::CrackMesh& mesh) {
   if (!usesOpening(c)) {
     return;
   }
@@ -141,7 +141,6 @@ void addOpening(const pipeline::CracksDescription& c, const cracks::StepInput& s
     normals = std::make_shared<analysis::BondNormals>(mesh.dimension);
   }
   normals->update(bonds, step.bondState, step.referencePositions);
-  const cracks::CrackComponents components = cracks::findComponents(mesh);
   analysis::appendOpeningArrays(
       mesh, analysis::measureOpening(mesh, components, bonds, step.referencePositions,
                                      step.positions, {}, normals.get()));
@@ -443,9 +442,15 @@ Status ScenePipeline::extract(std::shared_ptr<const source::SourceStep> step) {
   const cracks::StepInput input = stepInput(*step);
   CRACKVIS_RETURN_IF_ERROR(m_state.extractor->extract(input, m_scratch));
   m_state.mapping = mappingOf(m_scratch, input);
-  addOpening(m_state.description.cracks, input, source().lattice().bonds, m_state.normals,
-             m_scratch);
-  selectComponents(m_state.description.cracks, m_scratch);
+  // The components, found once for the opening and the component colours
+  // and filter (cell data added in between leaves them valid).
+  const pipeline::CracksDescription& c = m_state.description.cracks;
+  const bool needed = usesOpening(c) || usesComponents(c) ||
+                      cracks::ComponentFilter{c.minComponent, c.largest}.active();
+  const cracks::CrackComponents components =
+      needed ? cracks::findComponents(m_scratch) : cracks::CrackComponents{};
+  addOpening(c, input, source().lattice().bonds, components, m_state.normals, m_scratch);
+  selectComponents(c, components, m_scratch);
   m_timings.extractMs = millisecondsSince(start);
   std::swap(m_scratch, m_state.mesh);
   m_state.current = std::move(step);

@@ -47,6 +47,7 @@ struct ElementOpenings {
   std::vector<double> opening;          // m, NaN without a bond
   std::vector<double> slip;             // m, NaN without a bond
   std::vector<std::int32_t> component;  // CrackComponents index, -1 none
+  std::vector<std::size_t> cell;        // the primitive among all, in VTK (cell data) order
   double smoothingRadius = 0.0;         // the radius used, m
 
   std::size_t size() const { return area.size(); }
