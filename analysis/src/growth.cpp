@@ -1,5 +1,7 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 #include <crackvis/analysis/growth.hpp>
 
@@ -93,6 +95,49 @@ CrackFront crackFront(std::span<const StepAnalysis> steps, int dimension) {
 
 std::string axisName(int axis) {
   return axis == 0 ? "x" : axis == 1 ? "y" : axis == 2 ? "z" : "none";
+}
+
+std::vector<NamedSeries> crackSeries(std::span<const StepAnalysis> steps, const CrackFront& front) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  using Pick = double (*)(const StepAnalysis&);
+  const std::pair<const char*, Pick> columns[] = {
+      {"total_area", [](const StepAnalysis& s) { return s.totalArea; }},
+      {"components", [](const StepAnalysis& s) { return static_cast<double>(s.components); }},
+      {"main_area", [](const StepAnalysis& s) { return s.mainArea; }},
+      {"main_mean_opening",
+       [](const StepAnalysis& s) {
+         return s.mainOpening.elements > 0 ? s.mainOpening.meanOpening
+                                           : std::numeric_limits<double>::quiet_NaN();
+       }},
+      {"main_max_opening",
+       [](const StepAnalysis& s) {
+         return s.mainOpening.elements > 0 ? s.mainOpening.maxOpening
+                                           : std::numeric_limits<double>::quiet_NaN();
+       }},
+      {"main_mean_slip",
+       [](const StepAnalysis& s) {
+         return s.mainOpening.elements > 0 ? s.mainOpening.meanSlip
+                                           : std::numeric_limits<double>::quiet_NaN();
+       }},
+      {"fragments", [](const StepAnalysis& s) { return static_cast<double>(s.fragments); }},
+      {"largest_fragment_share", [](const StepAnalysis& s) { return s.largestFragmentShare; }},
+      {"tension_breaks", [](const StepAnalysis& s) { return static_cast<double>(s.tension); }},
+      {"shear_breaks", [](const StepAnalysis& s) { return static_cast<double>(s.shear); }},
+  };
+  std::vector<NamedSeries> series;
+  for (const auto& [name, pick] : columns) {
+    NamedSeries& out = series.emplace_back(NamedSeries{name, {}});
+    out.values.reserve(steps.size());
+    for (const StepAnalysis& s : steps) {
+      out.values.push_back(pick(s));
+    }
+  }
+  const auto perStep = [&](const std::vector<double>& values) {
+    return values.size() == steps.size() ? values : std::vector<double>(steps.size(), nan);
+  };
+  series.insert(series.begin() + 3, {NamedSeries{"front_extent", perStep(front.extent)},
+                                     NamedSeries{"front_speed", perStep(front.speed)}});
+  return series;
 }
 
 }  // namespace crackvis::analysis

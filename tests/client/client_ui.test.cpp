@@ -178,6 +178,24 @@ TEST_CASE("the step plot draws a chosen step scalar beside the broken bonds", "[
   CHECK(pixelsOf(scalarColour) == 0);
   CHECK(plot.stepAt(plot.plotArea().right()) == 3);
   CHECK(plot.stepAt(-100) == 0);
+
+  // Against the load (5 at step 1, highest): its right end is step 1, its
+  // left end step 0 (load 0); step 2 has no load and is left out.
+  CHECK(plot.axisNames() == QStringList({QStringLiteral("step"), QStringLiteral("time"),
+                                         QStringLiteral("broken bonds"), QStringLiteral("load")}));
+  REQUIRE(plot.setAxis(QStringLiteral("load")));
+  CHECK(plot.axis() == QStringLiteral("load"));
+  CHECK(plot.stepAt(plot.plotArea().right()) == 1);
+  CHECK(plot.stepAt(plot.plotArea().left()) == 0);
+  const QRect area = plot.plotArea();
+  CHECK(plot.stepAt(area.left() + area.width() * 2 / 5) == 3);  // load 2
+  REQUIRE(plot.setScalar(QStringLiteral("load")));
+  CHECK(pixelsOf(scalarColour) > 50);
+  CHECK_FALSE(plot.setAxis(QStringLiteral("energy")));
+  CHECK(plot.axis() == QStringLiteral("step"));
+  // Against the broken bonds (0, 1, 3, 6): their range maps to the width.
+  REQUIRE(plot.setAxis(QStringLiteral("broken bonds")));
+  CHECK(plot.stepAt(area.left() + area.width() / 2) == 2);  // 3 of 6
 }
 
 TEST_CASE("crackvis-client without a display says what to run instead", "[client]") {

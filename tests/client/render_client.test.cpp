@@ -582,6 +582,29 @@ TEST_CASE("the step plot shows the broken bonds of every step and goes to a clic
   // A scalar the file lacks is not drawn (the simulator's files have none).
   CHECK_FALSE(window.stepPlot().setScalar(QStringLiteral("load")));
   CHECK(window.plotScalarBox().count() == 1 + history.scalarNames.size());
+
+  // The crack's numbers of the panel's method join the series: the crack
+  // area drawn against the broken bonds, which grow to the last step.
+  window.crackNumbersButton().click();
+  const client::StepHistory& withCracks = window.stepPlot().history();
+  const auto areaSeries = withCracks.scalarNames.indexOf(QStringLiteral("total_area"));
+  REQUIRE(areaSeries >= 0);
+  const std::vector<double>& crackArea = withCracks.scalars[static_cast<std::size_t>(areaSeries)];
+  REQUIRE(static_cast<int>(crackArea.size()) == steps);
+  CHECK(crackArea.back() > crackArea.front());
+  CHECK(window.plotScalarBox().findText(QStringLiteral("fragments")) > 0);
+  window.plotScalarBox().setCurrentIndex(
+      window.plotScalarBox().findText(QStringLiteral("total_area")));
+  const int brokenAxis = window.plotAxisBox().findText(QStringLiteral("broken bonds"));
+  REQUIRE(brokenAxis > 0);
+  window.plotAxisBox().setCurrentIndex(brokenAxis);
+  CHECK(window.stepPlot().axis() == QStringLiteral("broken bonds"));
+  CHECK(window.stepPlot().scalar() == QStringLiteral("total_area"));
+  CHECK(window.stepPlot().stepAt(area.left() + area.width()) ==
+        static_cast<int>(
+            std::max_element(withCracks.brokenBonds.begin(), withCracks.brokenBonds.end()) -
+            withCracks.brokenBonds.begin()));
+  CHECK(window.messages().contains(QStringLiteral("the Steps plot has the crack's numbers")));
 }
 
 TEST_CASE("the window follows a live file: the slider and plot grow, Follow latest, run ended",

@@ -706,6 +706,90 @@ TEST_CASE("snapshots, several sessions, close, and the data service passed throu
   CHECK(stub->CloseSession(&again, close, &closed).error_code() == grpc::StatusCode::NOT_FOUND);
 }
 
+// The series of a StepHistory answer by name; empty when it has none.
+std::vector<double> seriesOf(const v1::StepHistoryResponse& history, const std::string& name) {
+  for (const auto& series : history.scalars()) {
+    if (series.name() == name) {
+      return {series.values().begin(), series.values().end()};
+    }
+  }
+  return {};
+}
+
+TEST_CASE("StepHistory with a crack method adds the crack's numbers per step",
+          "[render][service][integration]") {
+  // A planted through crack: at the last step the right half has moved one
+  // bond length, 2 mm, away from the left.
+  const std::string file = "planted-history.h5";
+  testing::writePlantedLattice(crackRoot().file(file), 8);
+  auto services = startServices();
+  auto stub = connect(*services.render);
+  for (const char* method : {"local-voronoi", "cell-centre"}) {
+    INFO(method);
+    grpc::ClientContext context;
+    v1::StepHistoryRequest request;
+    request.set_file(file);
+    request.set_cracks(method);
+    v1::StepHistoryResponse history;
+    const grpc::Status status = stub->StepHistory(&context, request, &history);
+    INFO(status.error_message());
+    REQUIRE(status.ok());
+    const auto steps = static_cast<std::size_t>(history.broken_bonds_size());
+    REQUIRE(steps == 9);  // the intact block and 8 steps
+    for (const char* name :
+         {"total_area", "main_area", "front_extent", "front_speed", "main_mean_opening",
+          "fragments", "largest_fragment_share", "tension_breaks", "shear_breaks"}) {
+      INFO(name);
+      CHECK(seriesOf(history, name).size() == steps);
+    }
+    const auto area = seriesOf(history, "total_area");
+    const auto main = seriesOf(history, "main_area");
+    const auto fragments = seriesOf(history, "fragments");
+    const auto opening = seriesOf(history, "main_mean_opening");
+    const auto tension = seriesOf(history, "tension_breaks");
+    const auto shear = seriesOf(history, "shear_breaks");
+    REQUIRE((area.size() == steps && fragments.size() == steps && opening.size() == steps));
+    CHECK(area.front() == 0.0);
+    CHECK(area.back() > area[3]);
+    CHECK(main.back() <= area.back());
+    CHECK(fragments.front() == 1.0);
+    CHECK(fragments.back() == 2.0);
+    CHECK(opening.back() == Approx(2e-3).epsilon(0.01));
+    CHECK(tension.back() + shear.back() ==
+          static_cast<double>(history.broken_bonds(8) - history.broken_bonds(0)));
+  }
+
+  grpc::ClientContext badContext;
+  v1::StepHistoryRequest bad;
+  bad.set_file(file);
+  bad.set_cracks("voronoi-everywhere");
+  v1::StepHistoryResponse refused;
+  const grpc::Status status = stub->StepHistory(&badContext, bad, &refused);
+  CHECK(status.error_code() == grpc::StatusCode::INVALID_ARGUMENT);
+  CHECK_THAT(status.error_message(), Catch::Contains("voronoi-everywhere"));
+  // A deadline too short for the whole file: the server stops at its next
+  // step (the client has its DEADLINE_EXCEEDED already), and the user may
+  // then ask again: one at a time, not none.
+  grpc::ClientContext hurried;
+  hurried.set_deadline(std::chrono::system_clock::now() + std::chrono::milliseconds(1));
+  bad.set_cracks("local-voronoi");
+  const grpc::Status late = stub->StepHistory(&hurried, bad, &refused);
+  CHECK(late.error_code() == grpc::StatusCode::DEADLINE_EXCEEDED);
+  grpc::Status again;
+  for (int attempt = 0; attempt < 50; ++attempt) {
+    grpc::ClientContext context;
+    refused.Clear();
+    again = stub->StepHistory(&context, bad, &refused);
+    if (again.error_code() != grpc::StatusCode::RESOURCE_EXHAUSTED) {
+      break;
+    }
+    CHECK_THAT(again.error_message(), Catch::Contains("one at a time per user"));
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  INFO(again.error_message());
+  CHECK(again.ok());
+}
+
 TEST_CASE("crackvis-render --snapshot draws the cracks of a generated series",
           "[render][service][integration]") {
   testing::TempDir out;

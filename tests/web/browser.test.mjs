@@ -381,6 +381,30 @@ await check("a step chosen on the slider is shown; a double click picks a partic
   console.log(`     ${shown}`);
 });
 
+await check("Crack numbers join the Steps plot's series, drawn against any other", async () => {
+  await page.click("#crack-numbers");
+  await waitForMessage("the Steps plot has the crack's numbers");
+  const options = (id) =>
+    page.evaluate((i) => [...document.querySelectorAll(`#${i} option`)].map((o) => o.value), id);
+  const series = await options("plot-scalar");
+  for (const name of ["total_area", "main_area", "front_extent", "fragments", "tension_breaks"]) {
+    if (!series.includes(name)) fail(`no '${name}' to plot; offered: ${series.join(", ")}`);
+  }
+  const axes = await options("plot-axis");
+  if (!axes.includes("broken bonds") || !axes.includes("total_area")) {
+    fail(`the axis offers only ${axes.join(", ")}`);
+  }
+  await page.selectOption("#plot-scalar", "total_area");
+  await page.selectOption("#plot-axis", "broken bonds");
+  // The plot's right end, against the broken bonds, is a step with the most.
+  const box = await page.locator("#plot").boundingBox();
+  await page.mouse.click(box.x + box.width - 64, box.y + box.height / 2);
+  const most = (b) => b.length > 0 && Number(document.getElementById("step").value) >= 0 &&
+    b[Number(document.getElementById("step").value)] === Math.max(...b);
+  const broken = await page.evaluate(() => window.crackvisTest.brokenBonds);
+  await waitFor("the step with the most broken bonds on the slider", most, broken);
+});
+
 await check("another user's folder is refused with a message; the server goes on", async () => {
   await page.fill("#file-path", foreignFile);
   await page.click("#describe-path");

@@ -179,8 +179,10 @@ export function describe(file: string): Promise<DescribeResponse> {
   return call("Describe", DescribeRequestSchema, { file }, DescribeResponseSchema);
 }
 
-export function stepHistory(file: string): Promise<StepHistoryResponse> {
-  return call("StepHistory", StepHistoryRequestSchema, { file }, StepHistoryResponseSchema);
+// With a crack method, the scalars gain the crack's numbers per step (the
+// server runs the method over every step: seconds for a large file).
+export function stepHistory(file: string, cracks = ""): Promise<StepHistoryResponse> {
+  return call("StepHistory", StepHistoryRequestSchema, { file, cracks }, StepHistoryResponseSchema);
 }
 
 export function openSession(pipelineXml: string): Promise<OpenSessionResponse> {

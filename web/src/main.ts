@@ -68,6 +68,8 @@ const ui = {
   fit: byId("fit", HTMLButtonElement),
   plot: byId("plot", HTMLCanvasElement),
   plotScalar: byId("plot-scalar", HTMLSelectElement),
+  plotAxis: byId("plot-axis", HTMLSelectElement),
+  crackNumbers: byId("crack-numbers", HTMLButtonElement),
   panel: byId("panel", HTMLElement),
   messages: byId("messages", HTMLElement),
   latest: byId("latest-message", HTMLElement),
@@ -119,6 +121,9 @@ class App {
   private readonly log = new MessageLog(ui.messages, ui.latest);
   private readonly panel = new PipelinePanel(ui.panel, (doc) => this.panelChanged(doc));
   private readonly plot = new StepPlot(ui.plot, (step) => this.setStep(step));
+  // The crack method whose numbers the Steps plot shows ("" none); kept for
+  // the file's later reads (a live file), dropped when another file opens.
+  private historyCracks = "";
   private readonly test = installTestHook(
     () => ({ sessionId: this.session?.id ?? "", attaches: this.session?.attaches ?? 0 }),
     {
@@ -330,6 +335,7 @@ class App {
       this.report(`cannot open ${file}: ${messageOf(e)}`, "error");
       return;
     }
+    if (file !== this.file) this.historyCracks = "";
     this.file = file;
     this.sentSize = size;
     this.panel.show(doc);
@@ -358,16 +364,49 @@ class App {
     this.report(`opened the view again as a new session (${opened.stepCount} steps)`, "warning");
   }
 
+  // The series and the axis chosen stay chosen when the new history has them.
   private async showHistory(file: string): Promise<void> {
     try {
-      const names = this.plot.setHistory(await api.stepHistory(file));
+      const history = await api.stepHistory(file, this.historyCracks);
+      const names = this.plot.setHistory(history);
+      this.test.brokenBonds = history.brokenBonds.map((b) => Number(b));
       const chosen = ui.plotScalar.value;
       const entries = names.map((name) => new Option(name, name));
       ui.plotScalar.replaceChildren(new Option("none", ""), ...entries);
       ui.plotScalar.value = names.includes(chosen) ? chosen : "";
+      const against = ui.plotAxis.value;
+      const axes = this.plot.axisNames();
+      ui.plotAxis.replaceChildren(...axes.map((name) => new Option(name, name)));
+      ui.plotAxis.value = axes.includes(against) ? against : "step";
+      this.plot.setAxis(ui.plotAxis.value);
     } catch (e) {
       this.plot.setHistory(null);
       this.report(`no step plot for ${file}: ${messageOf(e)}`, "warning");
+    }
+  }
+
+  // The crack's numbers of the panel's method over the file's steps, added
+  // to the plot's series (the server computes them).
+  private async addCrackNumbers(): Promise<void> {
+    if (!this.file) {
+      this.report("open a file first: the crack's numbers are the file's", "warning");
+      return;
+    }
+    const method =
+      layer(this.panel.description(), "cracks")?.getAttribute("method") ?? "local-voronoi";
+    this.historyCracks = method;
+    this.report(`computing the crack's numbers (${method}) over the steps of ${this.file} ...`);
+    ui.crackNumbers.disabled = true;
+    try {
+      await this.showHistory(this.file);
+    } finally {
+      ui.crackNumbers.disabled = false;
+    }
+    if ([...ui.plotScalar.options].some((o) => o.value === "total_area")) {
+      this.report(
+        `the Steps plot has the crack's numbers (${method}): choose total_area, main_area, ` +
+          "front_extent, fragments, ... and what to draw them against",
+      );
     }
   }
 
@@ -511,6 +550,8 @@ class App {
       }
     });
     ui.plotScalar.addEventListener("change", () => this.plot.setScalar(ui.plotScalar.value));
+    ui.plotAxis.addEventListener("change", () => this.plot.setAxis(ui.plotAxis.value));
+    ui.crackNumbers.addEventListener("click", () => void this.addCrackNumbers());
   }
 
   // A live file's step count grew: when, and the Steps plot with the new

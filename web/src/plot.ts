@@ -1,7 +1,9 @@
 // The Steps plot, as the Qt client's step_plot.cpp draws it: broken bonds
-// over the steps (left axis), optionally one of the file's step scalars
-// (right axis), and the step shown as a dashed line. A click or drag on it
-// goes to that step.
+// on the left axis, optionally one series (a step scalar such as the load,
+// or a crack number such as total_area) on the right axis, against the
+// step or against any other series (the crack area against the load), and
+// the step shown as a dashed line. A click or drag on it goes to the step
+// nearest along the horizontal axis.
 import type { StepHistoryResponse } from "./gen/crackvis/v1/render_pb.js";
 
 const kBroken = "#ff9f1c";
@@ -39,9 +41,15 @@ function label(value: number): string {
   return value.toPrecision(4).replace(/\.?0+(e|$)/, "$1");
 }
 
+// The horizontal axis's names beside the series'.
+const kStepAxis = "step";
+const kTimeAxis = "time";
+const kBrokenAxis = "broken bonds";
+
 export class StepPlot {
   private history: StepHistoryResponse | null = null;
   private scalar = -1;
+  private axis = ""; // "" the step
   private step = -1;
   private readonly context: CanvasRenderingContext2D;
 
@@ -69,11 +77,49 @@ export class StepPlot {
   // Names of the file's step scalars, for the page's choice of the second curve.
   setHistory(history: StepHistoryResponse | null): string[] {
     const chosen = this.scalarName();
+    const against = this.axisName();
     this.history = history;
     this.scalar = -1;
     if (chosen) this.setScalar(chosen);
+    this.setAxis(against);
     this.draw();
     return history ? history.scalars.map((s) => s.name) : [];
+  }
+
+  // What the horizontal axis shows: "step", "time", "broken bonds" or a
+  // series' name; false (the step) for a name the history lacks.
+  setAxis(name: string): boolean {
+    const known = name !== kStepAxis && this.axisNames().includes(name);
+    this.axis = known ? name : "";
+    this.draw();
+    return known || name === "" || name === kStepAxis;
+  }
+
+  axisName(): string {
+    return this.axis || kStepAxis;
+  }
+
+  // The names setAxis() takes for the history shown.
+  axisNames(): string[] {
+    if (!this.history) return [kStepAxis];
+    const names = [kStepAxis];
+    if (this.history.time.length > 0) names.push(kTimeAxis);
+    names.push(kBrokenAxis, ...this.history.scalars.map((s) => s.name));
+    return names;
+  }
+
+  // Each step's value on the horizontal axis (NaN where it has none).
+  private axisValues(): number[] {
+    const h = this.history;
+    if (!h) return [];
+    const steps = this.steps();
+    const series = h.scalars.find((s) => s.name === this.axis);
+    return Array.from({ length: steps }, (_, k) => {
+      if (this.axis === "") return k;
+      if (this.axis === kTimeAxis) return k < h.time.length ? h.time[k] : NaN;
+      if (this.axis === kBrokenAxis) return Number(h.brokenBonds[k]);
+      return series && k < series.values.length ? series.values[k] : NaN;
+    });
   }
 
   setScalar(name: string): void {
@@ -104,18 +150,36 @@ export class StepPlot {
     };
   }
 
-  private xOf(step: number, area: Area): number {
-    const steps = this.steps();
-    return steps <= 1 ? area.left + area.width / 2 : area.left + (step * area.width) / (steps - 1);
+  // The x of each step (NaN where the axis has no value).
+  private xs(area: Area): number[] {
+    const values = this.axisValues();
+    const [lo, hi] = rangeOf(values);
+    return values.map((v) => area.left + ((v - lo) / (hi - lo)) * area.width);
   }
 
+  // The step nearest along the axis; of equally near ones (a load that
+  // falls back to a value it had), the one nearest the step shown.
   private stepAt(x: number): number {
     const steps = this.steps();
     if (steps === 0) return -1;
     const area = this.area();
     if (steps === 1 || area.width <= 0) return 0;
-    const at = Math.round(((x - area.left) * (steps - 1)) / area.width);
-    return Math.min(steps - 1, Math.max(0, at));
+    const values = this.axisValues();
+    const [lo, hi] = rangeOf(values);
+    const wanted = lo + Math.min(1, Math.max(0, (x - area.left) / area.width)) * (hi - lo);
+    let best = -1;
+    for (let k = 0; k < steps; k++) {
+      if (!Number.isFinite(values[k])) continue;
+      const distance = Math.abs(values[k] - wanted);
+      const bestDistance = best < 0 ? Infinity : Math.abs(values[best] - wanted);
+      if (
+        distance < bestDistance ||
+        (distance === bestDistance && Math.abs(k - this.step) < Math.abs(best - this.step))
+      ) {
+        best = k;
+      }
+    }
+    return Math.max(best, 0);
   }
 
   // The backing store follows the element's size and the screen's pixel
@@ -142,21 +206,22 @@ export class StepPlot {
     g.strokeStyle = kText;
     g.lineWidth = 1;
     g.strokeRect(area.left, area.top, area.width, area.height);
-    this.drawStepAxis(area, steps);
+    this.drawAxis(area, steps);
+    const xs = this.xs(area);
     const broken = this.history.brokenBonds.map((b) => Number(b));
-    this.curve(broken, kBroken, true, area);
+    this.curve(broken, kBroken, true, area, xs);
     g.fillStyle = kBroken;
     g.textAlign = "left";
     g.fillText(`broken bonds (of ${this.history.bondCount})`, area.left, 14);
     if (this.scalar >= 0) {
       const series = this.history.scalars[this.scalar];
-      this.curve(series.values, kScalar, false, area);
+      this.curve(series.values, kScalar, false, area, xs);
       g.fillStyle = kScalar;
       g.textAlign = "right";
       g.fillText(series.name, area.left + area.width, 14);
     }
-    if (this.step >= 0 && this.step < steps) {
-      const x = this.xOf(this.step, area);
+    if (this.step >= 0 && this.step < steps && Number.isFinite(xs[this.step])) {
+      const x = xs[this.step];
       g.strokeStyle = "#ffffff";
       g.setLineDash([4, 3]);
       g.beginPath();
@@ -167,27 +232,36 @@ export class StepPlot {
     }
   }
 
-  // The ends of the step axis with their simulated times.
-  private drawStepAxis(area: Area, steps: number): void {
+  // The ends of the step axis with their simulated times, or another
+  // axis's range and name.
+  private drawAxis(area: Area, steps: number): void {
     const g = this.context;
     const time = this.history!.time;
     const end = (step: number) =>
       step < time.length ? `${step} (t = ${label(time[step])} s)` : String(step);
+    const [lo, hi] = rangeOf(this.axisValues());
+    const ends = this.axis === "" ? [end(0), end(steps - 1)] : [label(lo), label(hi)];
     const y = area.top + area.height + 16;
     g.fillStyle = kText;
     g.textAlign = "left";
-    g.fillText(end(0), area.left, y);
+    g.fillText(ends[0], area.left, y);
     // The axis's name where the ends' labels leave room for it.
-    if (area.width > 360) {
+    if (area.width > 360 || this.axis !== "") {
       g.textAlign = "center";
-      g.fillText("step", area.left + area.width / 2, y);
+      g.fillText(this.axisName(), area.left + area.width / 2, y);
     }
     g.textAlign = "right";
-    g.fillText(end(steps - 1), area.left + area.width, y);
+    g.fillText(ends[1], area.left + area.width, y);
   }
 
   // A step without the value (NaN) breaks the line.
-  private curve(values: readonly number[], colour: string, left: boolean, area: Area): void {
+  private curve(
+    values: readonly number[],
+    colour: string,
+    left: boolean,
+    area: Area,
+    xs: readonly number[],
+  ): void {
     const g = this.context;
     const [lo, hi] = rangeOf(values);
     g.strokeStyle = colour;
@@ -197,11 +271,11 @@ export class StepPlot {
     const steps = Math.min(this.steps(), values.length);
     for (let k = 0; k < steps; k++) {
       const v = values[k];
-      if (!Number.isFinite(v)) {
+      if (!Number.isFinite(v) || !Number.isFinite(xs[k])) {
         open = false;
         continue;
       }
-      const x = this.xOf(k, area);
+      const x = xs[k];
       const y = area.top + area.height - ((v - lo) / (hi - lo)) * area.height;
       if (open) g.lineTo(x, y);
       else g.moveTo(x, y);

@@ -43,6 +43,8 @@ export interface CrackvisTest {
   stillCamera(kind: number, dx: number, dy: number): void;
   // The last StreamStats (fps, bitrate), as the status line shows them.
   stats: { fps: number; bitrateBps: number; framesDropped: number } | null;
+  // The Steps plot's broken bonds per step, as last read.
+  brokenBonds: number[];
 }
 
 // Kept short: a long run must not grow the page's memory.
@@ -71,6 +73,7 @@ export function installTestHook(live: () => Live, faults: Faults): CrackvisTest 
     lastEventId: 0,
     state: null,
     stats: null,
+    brokenBonds: [],
     get sessionId() {
       return live().sessionId;
     },

@@ -118,9 +118,10 @@ Result<std::vector<FileEntry>> RenderClient::listFiles() {
   return out;
 }
 
-Result<StepHistory> RenderClient::stepHistory(const QString& file) {
+Result<StepHistory> RenderClient::stepHistory(const QString& file, const QString& cracks) {
   v1::StepHistoryRequest request;
   request.set_file(file.toStdString());
+  request.set_cracks(cracks.toStdString());
   v1::StepHistoryResponse response;
   CRACKVIS_RETURN_IF_ERROR(
       m_impl->unary("StepHistory", response, [&](grpc::ClientContext& context, auto& out) {

@@ -1,4 +1,5 @@
 #include <QAction>
+#include <QApplication>
 #include <QComboBox>
 #include <QDataStream>
 #include <QDialogButtonBox>
@@ -29,6 +30,7 @@
 
 #include <crackvis/client_ui/main_window.hpp>
 #include <crackvis/common/pending_file.hpp>
+#include <crackvis/vocabulary/crack_method.hpp>
 
 namespace crackvis::client {
 
@@ -190,22 +192,43 @@ QWidget* MainWindow::buildStepDock() {
   auto* choice = new QHBoxLayout;
   m_plotScalar = new QComboBox;
   m_plotScalar->addItem(tr("none"));
+  m_plotAxis = new QComboBox;
+  m_plotAxis->addItem(tr("step"));
+  m_crackNumbers = new QPushButton(tr("Crack numbers"));
+  m_crackNumbers->setToolTip(
+      tr("Runs the panel's crack method over every step on the server and adds the crack area, "
+         "main crack area, front, opening, fragments and break modes to the series (as "
+         "crackvis report does): seconds for a large file"));
   choice->addWidget(new QLabel(tr("beside the broken bonds:")));
   choice->addWidget(m_plotScalar, 1);
+  choice->addWidget(new QLabel(tr("against:")));
+  choice->addWidget(m_plotAxis, 1);
+  choice->addWidget(m_crackNumbers);
   m_plot = new StepPlot;
   layout->addLayout(choice);
   layout->addWidget(m_plot, 1);
   connect(m_plotScalar, &QComboBox::currentIndexChanged, this, [this](int index) {
     m_plot->setScalar(index > 0 ? m_plotScalar->itemText(index) : QString());
   });
+  connect(m_plotAxis, &QComboBox::currentIndexChanged, this,
+          [this](int index) { m_plot->setAxis(m_plotAxis->itemText(index)); });
+  connect(m_crackNumbers, &QPushButton::clicked, this, &MainWindow::addCrackNumbers);
   connect(m_plot, &StepPlot::stepClicked, this, [this](int step) { m_slider->setValue(step); });
   return dock;
 }
 
-// The opened file's steps in the plot; the scalar chosen stays chosen when
-// the new file has it too.
+// The opened file's steps in the plot (with the crack's numbers when they
+// were asked for); the series and axis chosen stay chosen when the new
+// history has them too.
 void MainWindow::showHistory(const QString& file) {
-  auto history = m_client.stepHistory(file);
+  const bool slow = !m_historyCracks.isEmpty();
+  if (slow) {
+    QApplication::setOverrideCursor(Qt::WaitCursor);
+  }
+  auto history = m_client.stepHistory(file, m_historyCracks);
+  if (slow) {
+    QApplication::restoreOverrideCursor();
+  }
   if (!history) {
     report(tr("no step plot for %1: %2")
                .arg(file, QString::fromStdString(history.status().message())));
@@ -213,14 +236,39 @@ void MainWindow::showHistory(const QString& file) {
     return;
   }
   const QString chosen = m_plot->scalar();
+  const QString against = m_plot->axis();
   const QSignalBlocker blocker(m_plotScalar);
+  const QSignalBlocker axisBlocker(m_plotAxis);
   m_plotScalar->clear();
   m_plotScalar->addItem(tr("none"));
   m_plotScalar->addItems(history->scalarNames);
   m_plot->setHistory(*history);
   m_plotScalar->setCurrentIndex(std::max(0, static_cast<int>(m_plotScalar->findText(chosen))));
   m_plot->setScalar(m_plotScalar->currentIndex() > 0 ? chosen : QString());
+  m_plotAxis->clear();
+  m_plotAxis->addItems(m_plot->axisNames());
+  m_plotAxis->setCurrentIndex(std::max(0, static_cast<int>(m_plotAxis->findText(against))));
+  m_plot->setAxis(m_plotAxis->currentText());
   m_plot->setCurrentStep(m_slider->value());
+}
+
+// The crack's numbers of the panel's method over the file's steps, added
+// to the plot's series (the server computes them; the cursor waits).
+void MainWindow::addCrackNumbers() {
+  if (m_file.isEmpty()) {
+    report(tr("open a file first: the crack's numbers are the file's"));
+    return;
+  }
+  m_historyCracks =
+      QString::fromStdString(std::string(cracks::toString(m_panel->description().cracks.method)));
+  report(tr("computing the crack's numbers (%1) over the steps of %2 ...")
+             .arg(m_historyCracks, m_file));
+  showHistory(m_file);
+  if (m_plot->history().scalarNames.contains(QStringLiteral("total_area"))) {
+    report(tr("the Steps plot has the crack's numbers (%1): choose total_area, main_area, "
+              "front_extent, fragments, ... and what to draw them against")
+               .arg(m_historyCracks));
+  }
 }
 
 // A live file's step count grew: when, and the Steps plot with the new
@@ -411,6 +459,9 @@ bool MainWindow::openView(const pipeline::PipelineDescription& view) {
   if (Status status = m_client.openSession(QString::fromStdString(pipeline::toXml(d))); !status) {
     report(tr("cannot open %1: %2").arg(file, QString::fromStdString(status.message())));
     return false;
+  }
+  if (file != m_file) {
+    m_historyCracks.clear();  // another file's crack numbers are asked for anew
   }
   m_file = file;
   m_knownSteps = m_client.stepCount();

@@ -3,6 +3,7 @@
 #include <QPainterPath>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <crackvis/client_ui/step_plot.hpp>
 
@@ -11,6 +12,10 @@ namespace {
 
 const QColor kBrokenColour(0xff, 0x9f, 0x1c);
 const QColor kScalarColour(0x4c, 0xc9, 0xf0);
+// The horizontal axis's names beside the series'.
+const char* const kStepAxis = "step";
+const char* const kTimeAxis = "time";
+const char* const kBrokenAxis = "broken bonds";
 
 // The finite values' range (0..1 without any).
 std::pair<double, double> rangeOf(const std::vector<double>& values) {
@@ -45,11 +50,13 @@ StepPlot::StepPlot(QWidget* parent) : QWidget(parent) {
 
 void StepPlot::setHistory(const StepHistory& history) {
   const QString chosen = scalar();
+  const QString against = axis();
   m_history = history;
   m_scalar = -1;
   if (!chosen.isEmpty()) {
     setScalar(chosen);
   }
+  setAxis(against);
   update();
 }
 
@@ -68,14 +75,47 @@ QString StepPlot::scalar() const {
   return m_scalar >= 0 ? m_history.scalarNames.at(m_scalar) : QString();
 }
 
-QRect StepPlot::plotArea() const {
-  return rect().adjusted(64, 22, -64, -26);
+bool StepPlot::setAxis(const QString& name) {
+  const bool known = axisNames().contains(name) && name != kStepAxis;
+  m_axis = known ? name : QString();
+  update();
+  return known || name.isEmpty() || name == kStepAxis;
 }
 
-int StepPlot::xOf(int step) const {
-  const QRect area = plotArea();
-  const auto steps = static_cast<int>(m_history.brokenBonds.size());
-  return steps <= 1 ? area.center().x() : area.left() + step * area.width() / (steps - 1);
+QString StepPlot::axis() const {
+  return m_axis.isEmpty() ? QString(kStepAxis) : m_axis;
+}
+
+QStringList StepPlot::axisNames() const {
+  QStringList names{kStepAxis};
+  if (!m_history.time.empty()) {
+    names << kTimeAxis;
+  }
+  names << kBrokenAxis;
+  names << m_history.scalarNames;
+  return names;
+}
+
+std::vector<double> StepPlot::axisValues() const {
+  const std::size_t steps = m_history.brokenBonds.size();
+  std::vector<double> values(steps, std::nan(""));
+  const auto scalar = m_history.scalarNames.indexOf(m_axis);
+  for (std::size_t k = 0; k < steps; ++k) {
+    if (m_axis.isEmpty()) {
+      values[k] = static_cast<double>(k);
+    } else if (m_axis == kTimeAxis) {
+      values[k] = k < m_history.time.size() ? m_history.time[k] : values[k];
+    } else if (m_axis == kBrokenAxis) {
+      values[k] = static_cast<double>(m_history.brokenBonds[k]);
+    } else if (scalar >= 0 && k < m_history.scalars[static_cast<std::size_t>(scalar)].size()) {
+      values[k] = m_history.scalars[static_cast<std::size_t>(scalar)][k];
+    }
+  }
+  return values;
+}
+
+QRect StepPlot::plotArea() const {
+  return rect().adjusted(64, 22, -64, -26);
 }
 
 int StepPlot::stepAt(int x) const {
@@ -87,8 +127,28 @@ int StepPlot::stepAt(int x) const {
   if (steps == 1 || area.width() <= 0) {
     return 0;
   }
-  const double at = static_cast<double>(x - area.left()) * (steps - 1) / area.width();
-  return std::clamp(static_cast<int>(std::lround(at)), 0, steps - 1);
+  // The nearest step along the axis; of equally near ones (a load that
+  // falls back to a value it had), the one nearest the step shown.
+  const std::vector<double> values = axisValues();
+  const auto [lo, hi] = rangeOf(values);
+  const double wanted =
+      lo + std::clamp(static_cast<double>(x - area.left()) / area.width(), 0.0, 1.0) * (hi - lo);
+  int best = -1;
+  for (int k = 0; k < steps; ++k) {
+    const double v = values[static_cast<std::size_t>(k)];
+    if (!std::isfinite(v)) {
+      continue;
+    }
+    const double distance = std::abs(v - wanted);
+    const double bestDistance = best < 0
+                                    ? std::numeric_limits<double>::infinity()
+                                    : std::abs(values[static_cast<std::size_t>(best)] - wanted);
+    if (distance < bestDistance ||
+        (distance == bestDistance && std::abs(k - m_step) < std::abs(best - m_step))) {
+      best = k;
+    }
+  }
+  return std::max(best, 0);
 }
 
 void StepPlot::mousePressEvent(QMouseEvent* event) {
@@ -115,17 +175,15 @@ void StepPlot::paintEvent(QPaintEvent*) {
     return;
   }
   painter.drawRect(area);
-  // Axes: the step below, broken bonds on the left, the scalar on the right.
-  // The ends of the step axis with their simulated times.
-  const QRect below(area.left(), area.bottom() + 4, area.width(), 20);
-  auto end = [&](int step) {
-    const auto k = static_cast<std::size_t>(step);
-    return k < m_history.time.size() ? tr("%1 (t = %2 s)").arg(step).arg(label(m_history.time[k]))
-                                     : QString::number(step);
+  // Axes: the chosen one below, broken bonds on the left, the scalar on the
+  // right.
+  drawAxis(painter, area);
+  const std::vector<double> along = axisValues();
+  const auto [first, last] = rangeOf(along);
+  const auto xAt = [&](int k) {
+    return area.left() +
+           (along[static_cast<std::size_t>(k)] - first) / (last - first) * area.width();
   };
-  painter.drawText(below, Qt::AlignLeft, end(0));
-  painter.drawText(below, Qt::AlignCenter, tr("step"));
-  painter.drawText(below, Qt::AlignRight, end(steps - 1));
   std::vector<double> broken(m_history.brokenBonds.begin(), m_history.brokenBonds.end());
   auto curve = [&](const std::vector<double>& values, const QColor& colour, bool left) {
     const auto [lo, hi] = rangeOf(values);
@@ -133,11 +191,11 @@ void StepPlot::paintEvent(QPaintEvent*) {
     bool open = false;
     for (int k = 0; k < steps && k < static_cast<int>(values.size()); ++k) {
       const double v = values[static_cast<std::size_t>(k)];
-      if (!std::isfinite(v)) {
-        open = false;  // a step without the scalar breaks the line
+      if (!std::isfinite(v) || !std::isfinite(along[static_cast<std::size_t>(k)])) {
+        open = false;  // a step without the value breaks the line
         continue;
       }
-      const QPointF p(xOf(k), area.bottom() - (v - lo) / (hi - lo) * area.height());
+      const QPointF p(xAt(k), area.bottom() - (v - lo) / (hi - lo) * area.height());
       open ? path.lineTo(p) : path.moveTo(p);
       open = true;
     }
@@ -160,10 +218,33 @@ void StepPlot::paintEvent(QPaintEvent*) {
     painter.setPen(kScalarColour);
     painter.drawText(QRect(area.left(), 2, area.width(), 18), Qt::AlignRight, scalar());
   }
-  if (m_step >= 0 && m_step < steps) {
+  if (m_step >= 0 && m_step < steps && std::isfinite(along[static_cast<std::size_t>(m_step)])) {
     painter.setPen(QPen(Qt::white, 1, Qt::DashLine));
-    painter.drawLine(xOf(m_step), area.top(), xOf(m_step), area.bottom());
+    const QPointF top(xAt(m_step), area.top());
+    painter.drawLine(top, QPointF(top.x(), area.bottom()));
   }
+}
+
+// Below the plot: the step axis's ends with their simulated times, or
+// another axis's range and name.
+void StepPlot::drawAxis(QPainter& painter, const QRect& area) {
+  const QRect below(area.left(), area.bottom() + 4, area.width(), 20);
+  const auto steps = static_cast<int>(m_history.brokenBonds.size());
+  if (m_axis.isEmpty()) {
+    auto end = [&](int step) {
+      const auto k = static_cast<std::size_t>(step);
+      return k < m_history.time.size() ? tr("%1 (t = %2 s)").arg(step).arg(label(m_history.time[k]))
+                                       : QString::number(step);
+    };
+    painter.drawText(below, Qt::AlignLeft, end(0));
+    painter.drawText(below, Qt::AlignCenter, tr("step"));
+    painter.drawText(below, Qt::AlignRight, end(steps - 1));
+    return;
+  }
+  const auto [lo, hi] = rangeOf(axisValues());
+  painter.drawText(below, Qt::AlignLeft, label(lo));
+  painter.drawText(below, Qt::AlignCenter, m_axis);
+  painter.drawText(below, Qt::AlignRight, label(hi));
 }
 
 }  // namespace crackvis::client

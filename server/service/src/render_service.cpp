@@ -201,7 +201,31 @@ Status RenderServiceImpl::stepHistory(const Caller& caller, const v1::StepHistor
   }
   CRACKVIS_RETURN_IF_ERROR(fillStepHistory(*file, *breakSteps, response));
   record.bytes = breakSteps->size() * sizeof(std::int32_t);
-  return Status::ok();
+  if (request.cracks().empty()) {
+    return Status::ok();
+  }
+  return addCracks(caller, request, response, deadline);
+}
+
+// The crack's numbers per step: the method over the whole file, one such
+// call per user at a time.
+Status RenderServiceImpl::addCracks(const Caller& caller, const v1::StepHistoryRequest& request,
+                                    v1::StepHistoryResponse& response, Deadline deadline) {
+  auto method = cracks::parseMethod(request.cracks());
+  if (!method) {
+    return invalidArgument(fmt::format("cracks: {}", method.status().message()));
+  }
+  CRACKVIS_RETURN_IF_ERROR(m_crackHistories.enter(caller.name));
+  struct Leave {
+    CrackHistoryGate& gate;
+    const std::string& user;
+    ~Leave() { gate.leave(user); }
+  } leave{m_crackHistories, caller.name};
+  auto source = source::openRemoteSource(m_data, request.file(), m_config.limits.fileSizes);
+  if (!source) {
+    return source.status();
+  }
+  return addCrackSeries(**source, *method, deadline, response);
 }
 
 Session::SourceOpener RenderServiceImpl::opener(const Caller& caller) const {

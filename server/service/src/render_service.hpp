@@ -8,6 +8,7 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include "crack_history.hpp"
 #include "crackvis/v1/render.grpc.pb.h"
 #include "session_registry.hpp"
 #include <crackvis/dataservice_client/data_client.hpp>
@@ -104,6 +105,8 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   template <typename Body>
   grpc::Status handle(grpc::ServerContext* context, const char* method, Body&& body);
   Session::SourceOpener opener(const rpc::Caller& caller) const;
+  Status addCracks(const rpc::Caller& caller, const v1::StepHistoryRequest& request,
+                   v1::StepHistoryResponse& response, Deadline deadline);
   Status runStream(grpc::ServerContext* context,
                    grpc::ServerReaderWriter<v1::ServerMessage, v1::ClientEvent>* stream,
                    const rpc::Caller& caller, rpc::AccessRecord& record);
@@ -114,6 +117,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   rpc::AccessLog& m_log;
   SessionRegistry m_sessions;
   AttachWatch m_attaching;
+  CrackHistoryGate m_crackHistories;
 };
 
 }  // namespace crackvis::service

@@ -62,7 +62,7 @@ struct Session::Worker {
   std::optional<Clock::time_point> nextLook;
 
   explicit Worker(Session& owner)
-      : session(owner), reduction(owner.m_limits), refineDelayMs(owner.m_limits.refineAfterMs) {}
+      : session(owner), refineDelayMs(owner.m_limits.refineAfterMs), reduction(owner.m_limits) {}
 
   int stepCount() const { return scene->stepCount(); }
   const pipeline::PipelineDescription& description() const { return scene->description(); }

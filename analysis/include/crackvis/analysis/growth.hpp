@@ -85,4 +85,16 @@ CrackFront crackFront(std::span<const StepAnalysis> steps, int dimension);
 
 std::string axisName(int axis);
 
+// One number per step under a name.
+struct NamedSeries {
+  std::string name;
+  std::vector<double> values;
+};
+
+// The per-step crack numbers as series named as the columns of `crackvis
+// report`'s growth.csv (total_area, main_area, front_extent, ...), for a
+// plot of any one against any other; NaN where a step has no value (the
+// main crack's opening before there is a main crack).
+std::vector<NamedSeries> crackSeries(std::span<const StepAnalysis> steps, const CrackFront& front);
+
 }  // namespace crackvis::analysis

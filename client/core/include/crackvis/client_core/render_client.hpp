@@ -65,7 +65,7 @@ struct StepHistory {
   std::vector<double> time;         // per step, s
   std::vector<qint64> brokenBonds;  // broken at or before each step
   qint64 bondCount = 0;
-  QStringList scalarNames;                   // the file's step scalars
+  QStringList scalarNames;                   // the file's step scalars (and crack numbers)
   std::vector<std::vector<double>> scalars;  // [scalar][step], NaN where a step lacks it
 };
 
@@ -106,7 +106,10 @@ class RenderClient : public QObject {
 
   Result<std::vector<FileEntry>> listFiles();
   Result<FileSummary> describe(const QString& file);
-  Result<StepHistory> stepHistory(const QString& file);
+  // With a crack method ("local-voronoi", ...), the scalars gain the
+  // crack's numbers per step (crack area, front, fragments, modes): the
+  // server runs the method over every step, seconds for a large file.
+  Result<StepHistory> stepHistory(const QString& file, const QString& cracks = {});
 
   // Opens a session with a pipeline description and attaches its stream.
   Status openSession(const QString& pipelineXml);

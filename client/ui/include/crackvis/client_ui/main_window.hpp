@@ -69,6 +69,10 @@ class MainWindow : public QMainWindow {
   StepPlot& stepPlot() { return *m_plot; }
   // The step scalar drawn beside the broken bonds ("none" and the file's).
   QComboBox& plotScalarBox() { return *m_plotScalar; }
+  // What the Steps plot is drawn against ("step", "time", any series).
+  QComboBox& plotAxisBox() { return *m_plotAxis; }
+  // Adds the crack's numbers per step (the panel's method) to the plot.
+  QPushButton& crackNumbersButton() { return *m_crackNumbers; }
   QString lastMessage() const { return m_lastMessage; }
   // Everything reported so far, one message a line (the messages pane).
   QString messages() const;
@@ -111,6 +115,7 @@ class MainWindow : public QMainWindow {
   void describe(const QString& file);
   QWidget* buildStepDock();
   void showHistory(const QString& file);
+  void addCrackNumbers();
   void report(const QString& message);
   void updateStatus();
   void noteStepCount(int steps);
@@ -126,6 +131,11 @@ class MainWindow : public QMainWindow {
   QSlider* m_slider;
   StepPlot* m_plot;
   QComboBox* m_plotScalar;
+  QComboBox* m_plotAxis;
+  QPushButton* m_crackNumbers;
+  // The crack method whose numbers the Steps plot shows ("" none); kept for
+  // the file's later reads (a live file), dropped when another file opens.
+  QString m_historyCracks;
   QPushButton* m_play;
   QDoubleSpinBox* m_fps;
   QLabel* m_stepLabel;
