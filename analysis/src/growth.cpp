@@ -13,7 +13,8 @@ CrackAnalysis::CrackAnalysis(const dem::Lattice& lattice, AnalysisOptions option
       m_normals(lattice.dimension, options.opening.smoothingRadius) {}
 
 StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInput& input,
-                                    std::span<const Vec3> reference, const CrackMesh& mesh) {
+                                    std::span<const Vec3> reference, const CrackMesh& mesh,
+                                    std::span<const double> recordedModes) {
   StepAnalysis out;
   out.step = step;
   out.time = time;
@@ -41,7 +42,7 @@ StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInp
   out.fragments = fragments.countAtLeast(m_options.minFragment);
   out.largestFragmentShare = fragments.largestShare();
   m_modes.update(step, m_lattice.bonds, input.bondState, reference, input.positions,
-                 input.bondForce);
+                 input.bondForce, recordedModes);
   out.tension = m_modes.count(BreakMode::kTension);
   out.shear = m_modes.count(BreakMode::kShear);
   return out;

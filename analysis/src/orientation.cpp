@@ -107,10 +107,20 @@ BondBreak classifyBreak(Vec3 d0, Vec3 d, std::optional<double> forceBefore) {
   return result;
 }
 
+std::span<const double> recordedBreakModes(std::span<const dem::ExtraArray> extras) {
+  for (const dem::ExtraArray& extra : extras) {
+    if (extra.owner == dem::ExtraOwner::kBonds && extra.name == dem::kBreakModeArray &&
+        extra.components == 1) {
+      return extra.values;
+    }
+  }
+  return {};
+}
+
 void BreakModeTracker::update(int step, std::span<const dem::Bond> bonds,
                               std::span<const std::uint8_t> bondState,
                               std::span<const Vec3> reference, std::span<const Vec3> current,
-                              std::span<const float> bondForce) {
+                              std::span<const float> bondForce, std::span<const double> recorded) {
   const std::size_t m = std::min(bonds.size(), bondState.size());
   const std::size_t n = std::min(reference.size(), current.size());
   if (m_first || m_seen.size() != m) {
@@ -139,6 +149,11 @@ void BreakModeTracker::update(int step, std::span<const dem::Bond> bonds,
     BondBreak found = classifyBreak(reference[j] - reference[i], current[j] - current[i], force);
     found.bond = static_cast<std::int32_t>(b);
     found.step = step;
+    found.rule = found.mode;
+    if (b < recorded.size() && (recorded[b] == 1.0 || recorded[b] == 2.0)) {
+      found.recorded = true;
+      found.mode = recorded[b] == 1.0 ? BreakMode::kTension : BreakMode::kShear;
+    }
     m_breaks.push_back(found);
   }
 }

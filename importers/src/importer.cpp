@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -63,6 +64,8 @@ class SeriesConverter {
   std::vector<dem::StepScalar> scalarsOf(const SourceStep& step) const;
   std::optional<double> timeFromTable(std::int64_t sourceStep) const;
   Status checkSameArrays(const SourceStep& step, const dem::StepState& out);
+  void matchRecordedBreaks(const SourceStep& step, const std::vector<std::uint8_t>& before,
+                           const std::vector<dem::Vec3>& positions);
 
   SourceDescription m_description;
   double m_timestep = 0.0;
@@ -76,6 +79,8 @@ class SeriesConverter {
   bool m_arraysKnown = false;
   bool m_withVelocities = false;
   std::vector<std::string> m_extraNames;  // per-step arrays of the first step
+  // Per bond, the mode the code recorded for its break (kBreakModeArray).
+  std::vector<double> m_recordedModes;
 };
 
 std::vector<std::string> extraNames(const dem::StepState& state) {
@@ -340,10 +345,89 @@ std::optional<double> SeriesConverter::timeFromTable(std::int64_t sourceStep) co
   return m_table->has(sourceStep) ? std::nullopt : m_table->fittedTime(sourceStep);
 }
 
+// Each bond first seen broken at this step gets the mode of the nearest
+// break the code logged since the previous step, within the larger radius
+// of its two particles of the bond's midpoint (JCFpm logs the contact
+// point); the nearest pairs are matched first, each record once. A bond
+// without such a record keeps 0: crackvis's own rule decides its mode.
+void SeriesConverter::matchRecordedBreaks(const SourceStep& step,
+                                          const std::vector<std::uint8_t>& before,
+                                          const std::vector<dem::Vec3>& positions) {
+  m_recordedModes.resize(m_lattice.bondCount(), 0.0);
+  if (step.breaks.empty()) {
+    return;
+  }
+  double reach = 0.0;
+  for (double r : m_lattice.radius) {
+    reach = std::max(reach, r);
+  }
+  // The records in a grid of cells `reach` wide: a bond looks in the 27
+  // cells around its midpoint.
+  const auto cellOf = [&](const dem::Vec3& p) {
+    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(std::floor(p.x / reach)),
+                                       static_cast<std::int64_t>(std::floor(p.y / reach)),
+                                       static_cast<std::int64_t>(std::floor(p.z / reach))};
+  };
+  const auto keyOf = [](std::int64_t x, std::int64_t y, std::int64_t z) {
+    return (static_cast<std::uint64_t>(x) * 73856093U) ^
+           (static_cast<std::uint64_t>(y) * 19349663U) ^
+           (static_cast<std::uint64_t>(z) * 83492791U);
+  };
+  std::unordered_multimap<std::uint64_t, std::size_t> grid;
+  for (std::size_t r = 0; r < step.breaks.size(); ++r) {
+    const auto c = cellOf(step.breaks[r].at);
+    grid.emplace(keyOf(c[0], c[1], c[2]), r);
+  }
+  struct Candidate {
+    double distance;
+    std::size_t bond;
+    std::size_t record;
+  };
+  std::vector<Candidate> candidates;
+  for (std::size_t b = 0; b < m_state.size(); ++b) {
+    if (m_state[b] != kBroken || before[b] == kBroken) {
+      continue;
+    }
+    const dem::Bond& bond = m_lattice.bonds[b];
+    const auto i = static_cast<std::size_t>(bond.first);
+    const auto j = static_cast<std::size_t>(bond.second);
+    const dem::Vec3 mid = 0.5 * (positions[i] + positions[j]);
+    const double within = std::max(m_lattice.radius[i], m_lattice.radius[j]);
+    const auto c = cellOf(mid);
+    for (std::int64_t dx = -1; dx <= 1; ++dx) {
+      for (std::int64_t dy = -1; dy <= 1; ++dy) {
+        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+          const auto [from, to] = grid.equal_range(keyOf(c[0] + dx, c[1] + dy, c[2] + dz));
+          for (auto it = from; it != to; ++it) {
+            const double d = dem::norm(step.breaks[it->second].at - mid);
+            if (d <= within) {
+              candidates.push_back({d, b, it->second});
+            }
+          }
+        }
+      }
+    }
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+    return a.distance < b.distance || (a.distance == b.distance && a.bond < b.bond);
+  });
+  std::vector<char> recordUsed(step.breaks.size(), 0);
+  std::vector<char> bondDone(m_state.size(), 0);
+  for (const Candidate& c : candidates) {
+    if (recordUsed[c.record] || bondDone[c.bond]) {
+      continue;
+    }
+    recordUsed[c.record] = 1;
+    bondDone[c.bond] = 1;
+    m_recordedModes[c.bond] = static_cast<double>(step.breaks[c.record].mode);
+  }
+}
+
 Result<dem::StepState> SeriesConverter::convert(const SourceStep& step) {
   std::vector<dem::ParticleIndex> rowIndex;
   CRACKVIS_RETURN_IF_ERROR(placeParticles(step, rowIndex));
   std::vector<dem::BondIndex> bondOfRow;
+  const std::vector<std::uint8_t> before = m_state;
   CRACKVIS_RETURN_IF_ERROR(updateBonds(step, rowIndex, bondOfRow));
   dem::StepState out;
   // The time: as the source wrote it, else from the scalar table's `time`
@@ -367,6 +451,11 @@ Result<dem::StepState> SeriesConverter::convert(const SourceStep& step) {
   out.bondState = m_state;
   out.scalars = scalarsOf(step);
   addExtras(step, rowIndex, bondOfRow, out);
+  if (step.recordsBreaks) {
+    matchRecordedBreaks(step, before, out.positions);
+    out.extras.push_back(
+        {std::string(dem::kBreakModeArray), dem::ExtraOwner::kBonds, 1, m_recordedModes});
+  }
   CRACKVIS_RETURN_IF_ERROR(checkSameArrays(step, out));
   if (Status valid = dem::validateStep(m_lattice, out); !valid) {
     return failedPrecondition(

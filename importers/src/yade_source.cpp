@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <unordered_map>
@@ -121,6 +122,7 @@ Status checkDeclaredCounts(const std::string& path) {
 struct CrackRecord {
   std::int64_t iteration = 0;
   int type = 0;
+  dem::Vec3 at;  // the contact point
 };
 
 Result<std::vector<CrackRecord>> readCracks(const std::string& path) {
@@ -142,8 +144,10 @@ Result<std::vector<CrackRecord>> readCracks(const std::string& path) {
     }
     CrackRecord crack;
     double type = 0.0;
-    if (!parseId(tokens[0], crack.iteration) || !parseNumber(tokens[5], type)) {
-      return input->error("iter and type must be numbers");
+    if (!parseId(tokens[0], crack.iteration) || !parseNumber(tokens[5], type) ||
+        !parseNumber(tokens[2], crack.at.x) || !parseNumber(tokens[3], crack.at.y) ||
+        !parseNumber(tokens[4], crack.at.z)) {
+      return input->error("iter, p0, p1, p2 and type must be numbers");
     }
     crack.type = static_cast<int>(type);
     cracks.push_back(crack);
@@ -183,7 +187,7 @@ class YadeSource final : public StepSource {
  private:
   Status readSpheres(const std::string& path, SourceStep& out) const;
   Status readInteractions(const std::string& path, SourceStep& out) const;
-  void addCrackCounts(SourceStep& out) const;
+  void addCrackCounts(SourceStep& out, std::int64_t previous) const;
 
   struct Record {
     std::string spheres;
@@ -406,10 +410,13 @@ Status YadeSource::readInteractions(const std::string& path, SourceStep& out) co
 
 // The JCFpm crack recorder's count of breaks up to this iteration, as step
 // scalars: the code's own record beside the bonds the importer saw break.
-void YadeSource::addCrackCounts(SourceStep& out) const {
+// The breaks logged since the previous record go with the step, for the
+// importer to give each bond it sees break its recorded mode.
+void YadeSource::addCrackCounts(SourceStep& out, std::int64_t previous) const {
   if (!m_withCracks) {
     return;
   }
+  out.recordsBreaks = true;
   double all = 0.0;
   double tensile = 0.0;
   double shear = 0.0;
@@ -418,6 +425,11 @@ void YadeSource::addCrackCounts(SourceStep& out) const {
       all += 1.0;
       tensile += crack.type == 1 ? 1.0 : 0.0;
       shear += crack.type == 2 ? 1.0 : 0.0;
+    }
+    if (crack.iteration > previous && crack.iteration <= out.sourceStep &&
+        (crack.type == 1 || crack.type == 2)) {
+      out.breaks.push_back({crack.at, crack.type == 1 ? RecordedBreak::Mode::kTension
+                                                      : RecordedBreak::Mode::kShear});
     }
   }
   out.scalars.push_back({"jcfpm_cracks", all});
@@ -432,7 +444,9 @@ Result<SourceStep> YadeSource::readStep(int index) {
   out.origin = fmt::format("{} + {}", record.spheres, baseName(record.interactions));
   CRACKVIS_RETURN_IF_ERROR(readSpheres(record.spheres, out));
   CRACKVIS_RETURN_IF_ERROR(readInteractions(record.interactions, out));
-  addCrackCounts(out);
+  const std::int64_t previous = index > 0 ? std::next(m_records.begin(), index - 1)->first
+                                          : std::numeric_limits<std::int64_t>::min();
+  addCrackCounts(out, previous);
   return out;
 }
 

@@ -91,6 +91,16 @@ TEST_CASE("a Yade JCFpm notched bar imports with Yade's own record of its bonds 
     const auto broken = std::count(state->begin(), state->end(), std::uint8_t{1});
     CHECK(broken == static_cast<std::ptrdiff_t>(testing::scalarOf(stepInfo, "jcfpm_cracks")));
     CHECK(broken == static_cast<std::ptrdiff_t>(testing::scalarOf(stepInfo, "tensCracks")));
+    // Each bond seen broken has the mode JCFpm's crack file recorded for
+    // the break nearest it (all tensile in this run); intact bonds none.
+    auto full = reader->readStep(step);
+    REQUIRE(full);
+    const auto modes = std::find_if(full->extras.begin(), full->extras.end(),
+                                    [](const auto& e) { return e.name == "break_mode"; });
+    REQUIRE(modes != full->extras.end());
+    for (std::size_t b = 0; b < lattice->bondCount(); ++b) {
+      CHECK(modes->values[b] == ((*state)[b] == 1 ? 1.0 : 0.0));
+    }
   }
   // The spheres' own arrays ride along as extras.
   auto last = reader->readStep(reader->stepCount() - 1);
@@ -99,7 +109,8 @@ TEST_CASE("a Yade JCFpm notched bar imports with Yade's own record of its bonds 
   for (const auto& extra : last->extras) {
     names.push_back(extra.name);
   }
-  CHECK(names == std::vector<std::string>{"damage", "nbCracks", "forceN"});  // by name, as stored
+  // By name, as stored; break_mode is the import's (JCFpm's crack file).
+  CHECK(names == std::vector<std::string>{"damage", "nbCracks", "break_mode", "forceN"});
   double cracksAtSpheres = 0.0;
   for (double v : last->extras[1].values) {
     cracksAtSpheres += v;

@@ -706,6 +706,20 @@ TEST_CASE("snapshots, several sessions, close, and the data service passed throu
   CHECK(stub->CloseSession(&again, close, &closed).error_code() == grpc::StatusCode::NOT_FOUND);
 }
 
+// Yade's JCFpm notched bar (tests/data) imported into the served root as a
+// user would (crackvis import yade), once.
+void importYadeBar(const std::string& name) {
+  const std::string imported = crackRoot().file(name);
+  if (!std::filesystem::exists(imported)) {
+    auto source = importers::openYade({std::string(CRACKVIS_TEST_DATA) + "/yade/notched_bar"});
+    REQUIRE(source);
+    importers::ImportOptions options;
+    options.output = imported;
+    options.progress = false;
+    REQUIRE(importers::importSeries(**source, options));
+  }
+}
+
 // The series of a StepHistory answer by name; empty when it has none.
 std::vector<double> seriesOf(const v1::StepHistoryResponse& history, const std::string& name) {
   for (const auto& series : history.scalars()) {
@@ -758,6 +772,21 @@ TEST_CASE("StepHistory with a crack method adds the crack's numbers per step",
     CHECK(tension.back() + shear.back() ==
           static_cast<double>(history.broken_bonds(8) - history.broken_bonds(0)));
   }
+
+  // An imported Yade run: the modes JCFpm recorded (27 tensile breaks)
+  // come from the file's bonds/break_mode.
+  importYadeBar("yade-history.h5");
+  grpc::ClientContext yadeContext;
+  v1::StepHistoryRequest yade;
+  yade.set_file("yade-history.h5");
+  yade.set_cracks("cell-cut");
+  v1::StepHistoryResponse yadeHistory;
+  const grpc::Status yadeStatus = stub->StepHistory(&yadeContext, yade, &yadeHistory);
+  INFO(yadeStatus.error_message());
+  REQUIRE(yadeStatus.ok());
+  CHECK(seriesOf(yadeHistory, "tension_breaks").back() == 27.0);
+  CHECK(seriesOf(yadeHistory, "shear_breaks").back() == 0.0);
+  CHECK(seriesOf(yadeHistory, "jcfpm_tensile_cracks").back() == 27.0);
 
   grpc::ClientContext badContext;
   v1::StepHistoryRequest bad;
@@ -1185,16 +1214,7 @@ TEST_CASE("streams that never attach are cancelled, and cannot pin a thread each
 
 TEST_CASE("an imported Yade run goes through the data service into a render session",
           "[render][service][integration][importers]") {
-  // Imported into the served root as a user would: crackvis import yade.
-  const std::string imported = crackRoot().file("yade-import.h5");
-  if (!std::filesystem::exists(imported)) {
-    auto source = importers::openYade({std::string(CRACKVIS_TEST_DATA) + "/yade/notched_bar"});
-    REQUIRE(source);
-    importers::ImportOptions options;
-    options.output = imported;
-    options.progress = false;
-    REQUIRE(importers::importSeries(**source, options));
-  }
+  importYadeBar("yade-import.h5");
   auto services = startServices();
   auto stub = connect(*services.render);
   auto view = crackView();

@@ -270,8 +270,16 @@ TEST_CASE(
     REQUIRE(best < records.size());
     used[best] = 1;
     CHECK(bestDistance < lattice->radius[static_cast<std::size_t>(bond.first)]);
-    CHECK(row.at("mode") == (records[best].type == 1 ? "tension" : "shear"));
+    const std::string recorded = records[best].type == 1 ? "tension" : "shear";
+    CHECK(row.at("mode") == recorded);
+    // The import matched the same record to the bond (bonds/break_mode),
+    // and crackvis's own rule says the same.
+    CHECK(row.at("source") == "recorded");
+    CHECK(row.at("rule_mode") == recorded);
   }
+  CHECK_THAT(fileText(out + "/index.md"),
+             Catch::Contains("27 of the 27 breaks have the mode the code recorded") &&
+                 Catch::Contains("agrees on 27 of them"));
 }
 
 TEST_CASE("crackvis report on ESyS-Particle's and LAMMPS's notched bars writes every table",

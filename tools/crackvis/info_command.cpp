@@ -182,7 +182,9 @@ Status analyseCracks(const InfoOptions& options, FileSummary& summary) {
     CRACKVIS_RETURN_IF_ERROR(input.status());
     CRACKVIS_RETURN_IF_ERROR(extractor->extract(*input, mesh));
     const double time = summary.info.steps[static_cast<std::size_t>(step)].time;
-    summary.cracks.push_back(analyses.analyse(step, time, *input, input->referencePositions, mesh));
+    summary.cracks.push_back(
+        analyses.analyse(step, time, *input, input->referencePositions, mesh,
+                         analysis::recordedBreakModes((*series)->state().extras)));
   }
   summary.front = analysis::crackFront(summary.cracks, lattice.dimension);
   return Status::ok();

@@ -117,7 +117,9 @@ int runReport(const ReportCommandOptions& options) {
       return kExitFailure;
     }
     const double time = (*series)->info().steps[static_cast<std::size_t>(step)].time;
-    ReportRow row{analysis.analyse(step, time, *input, input->referencePositions, mesh), {}};
+    ReportRow row{analysis.analyse(step, time, *input, input->referencePositions, mesh,
+                                   analysis::recordedBreakModes((*series)->state().extras)),
+                  {}};
     collectScalars((*series)->state(), data.scalarNames, row.scalars);
     data.rows.push_back(std::move(row));
     if (step == at) {

@@ -8,14 +8,18 @@
 
 namespace crackvis::service {
 
-Status addCrackSeries(source::StepSource& source, cracks::Method method,
+Status addCrackSeries(source::StepSource& source, cracks::Method method, bool recordedModes,
                       std::chrono::system_clock::time_point deadline,
                       v1::StepHistoryResponse& response) {
   // The modes need each bond's force and break step where the file has them.
   source::ExtraArrays extras;
   extras.bondForce = true;
   extras.breakStep = true;
+  if (recordedModes) {
+    extras.bondExtra = std::string(dem::kBreakModeArray);
+  }
   CRACKVIS_RETURN_IF_ERROR(source.setExtraArrays(extras));
+  std::vector<double> modes;
   const dem::Lattice& lattice = source.lattice();
   const cracks::BondGraph graph(lattice.particleCount(), lattice.bonds);
   auto extractor = cracks::makeExtractor(method, graph, lattice.dimension);
@@ -44,7 +48,8 @@ Status addCrackSeries(source::StepSource& source, cracks::Method method,
                                   {},
                                   {}};
     CRACKVIS_RETURN_IF_ERROR(extractor->extract(input, mesh));
-    steps.push_back(analyses.analyse(k, step->time, input, reference, mesh));
+    modes.assign(step->bondExtra.begin(), step->bondExtra.end());
+    steps.push_back(analyses.analyse(k, step->time, input, reference, mesh, modes));
   }
   const analysis::CrackFront front = analysis::crackFront(steps, lattice.dimension);
   for (const analysis::NamedSeries& series : analysis::crackSeries(steps, front)) {

@@ -18,7 +18,9 @@ namespace crackvis::service {
 
 // `deadline`: the caller's; DEADLINE_EXCEEDED, naming the step reached, once
 // it passes between two steps.
-Status addCrackSeries(source::StepSource& source, cracks::Method method,
+// `recordedModes`: whether the file has the modes its code recorded
+// (dem::kBreakModeArray), which then count instead of the rule's.
+Status addCrackSeries(source::StepSource& source, cracks::Method method, bool recordedModes,
                       std::chrono::system_clock::time_point deadline,
                       v1::StepHistoryResponse& response);
 

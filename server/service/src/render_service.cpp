@@ -1,5 +1,6 @@
 #include "render_service.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <limits>
 #include <map>
@@ -15,6 +16,7 @@
 #include <crackvis/common/data_root.hpp>
 #include <crackvis/common/log.hpp>
 #include <crackvis/dataservice_client/remote_dem_file.hpp>
+#include <crackvis/dem/model.hpp>
 #include <crackvis/dem_layout/layout.hpp>
 #include <crackvis/rpc/grpc_status.hpp>
 
@@ -221,11 +223,22 @@ Status RenderServiceImpl::addCracks(const Caller& caller, const v1::StepHistoryR
     const std::string& user;
     ~Leave() { gate.leave(user); }
   } leave{m_crackHistories, caller.name};
+  // Whether the import kept the modes the code recorded (at the first
+  // step's extra arrays, as every step has them).
+  v1::DescribeRequest describe;
+  describe.set_file(request.file());
+  v1::DescribeResponse described;
+  CRACKVIS_RETURN_IF_ERROR(m_data.relayDescribe(describe, described, deadline));
+  const std::string recorded = fmt::format("/extra/bonds/{}", dem::kBreakModeArray);
+  const bool withModes = std::any_of(
+      described.datasets().begin(), described.datasets().end(), [&](const auto& dataset) {
+        return dataset.path().starts_with("/steps/") && dataset.path().ends_with(recorded);
+      });
   auto source = source::openRemoteSource(m_data, request.file(), m_config.limits.fileSizes);
   if (!source) {
     return source.status();
   }
-  return addCrackSeries(**source, *method, deadline, response);
+  return addCrackSeries(**source, *method, withModes, deadline, response);
 }
 
 Session::SourceOpener RenderServiceImpl::opener(const Caller& caller) const {

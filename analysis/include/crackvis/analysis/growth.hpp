@@ -52,8 +52,10 @@ class CrackAnalysis {
 
   // `reference`: the configuration openings are measured from (the file's
   // first step); `bondForce` may be empty.
+  // `recordedModes`: the file's dem::kBreakModeArray at this step, or empty.
   StepAnalysis analyse(int step, double time, const cracks::StepInput& input,
-                       std::span<const Vec3> reference, const CrackMesh& mesh);
+                       std::span<const Vec3> reference, const CrackMesh& mesh,
+                       std::span<const double> recordedModes = {});
 
   const CrackComponents& components() const { return m_components; }
   const ElementOpenings& openings() const { return m_openings; }

@@ -70,10 +70,16 @@ const char* toString(BreakMode mode);
 struct BondBreak {
   std::int32_t bond = -1;
   int step = 0;
-  BreakMode mode = BreakMode::kTension;
-  double stretch = 0.0;  // |d| - |d0|, m
-  double shear = 0.0;    // sideways jump, m
+  BreakMode mode = BreakMode::kTension;  // the mode counted: the recorded one, else the rule's
+  BreakMode rule = BreakMode::kTension;  // what the rule above says
+  bool recorded = false;                 // whether `mode` is the code's own record
+  double stretch = 0.0;                  // |d| - |d0|, m
+  double shear = 0.0;                    // sideways jump, m
 };
+
+// The per-bond modes a code recorded (dem::kBreakModeArray among a step's
+// extra arrays, as `crackvis import` writes it), or empty.
+std::span<const double> recordedBreakModes(std::span<const dem::ExtraArray> extras);
 
 // d0, d: the bond's separation (second end minus first) in the reference
 // and at its break; forceBefore: its normal force at the last step it was
@@ -85,10 +91,12 @@ BondBreak classifyBreak(Vec3 d0, Vec3 d, std::optional<double> forceBefore);
 // run and are not classified.
 class BreakModeTracker {
  public:
-  // `bondForce` may be empty.
+  // `bondForce` may be empty. `recorded`: per bond, the mode the code
+  // recorded (dem::kBreakModeArray: 1 tension, 2 shear, 0 none), or empty;
+  // a recorded mode is counted instead of the rule's.
   void update(int step, std::span<const dem::Bond> bonds, std::span<const std::uint8_t> bondState,
               std::span<const Vec3> reference, std::span<const Vec3> current,
-              std::span<const float> bondForce);
+              std::span<const float> bondForce, std::span<const double> recorded = {});
   const std::vector<BondBreak>& breaks() const { return m_breaks; }
   std::size_t count(BreakMode mode) const;
   std::size_t countUpTo(BreakMode mode, int step) const;

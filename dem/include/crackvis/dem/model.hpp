@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <crackvis/common/status.hpp>
@@ -66,6 +67,11 @@ struct ExtraArray {
 
   std::size_t rows() const { return components > 0 ? values.size() / components : 0; }
 };
+
+// The per-bond extra array in which `crackvis import` keeps the mode the
+// code itself recorded for each bond's break (Yade JCFpm's crack file):
+// 1 tension, 2 shear, 0 none recorded (or not broken by that step).
+inline constexpr std::string_view kBreakModeArray = "break_mode";
 
 // A named per-step scalar (load, displacement, energy...): v1.1.
 struct StepScalar {

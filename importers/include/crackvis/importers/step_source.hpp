@@ -29,6 +29,14 @@ struct SourceBond {
   bool cohesive = true;
 };
 
+// A break the code itself logged, with its mode (Yade JCFpm's crack file):
+// where (the contact point) and how the bond broke.
+struct RecordedBreak {
+  enum class Mode : std::uint8_t { kTension = 1, kShear = 2 };
+  dem::Vec3 at;
+  Mode mode = Mode::kTension;
+};
+
 // One step of a source, rows in the source's own order.
 struct SourceStep {
   std::int64_t sourceStep = 0;  // the code's step or iteration number
@@ -44,6 +52,10 @@ struct SourceStep {
   std::vector<double> bondStrength;              // optional, as `bonds` (first step only)
   std::vector<dem::StepScalar> scalars;          // named scalars the source wrote
   std::vector<dem::ExtraArray> extras;           // per-particle rows as `ids`, per-bond as `bonds`
+  // Whether the code logs its breaks (then every step says so), and those it
+  // logged after the previous step, up to and including this one.
+  bool recordsBreaks = false;
+  std::vector<RecordedBreak> breaks;
 };
 
 // Provenance of a source (crackvis-dem v1.1 root attributes).
