@@ -170,21 +170,19 @@ bool inComponent(const ElementOpenings& openings, std::size_t e, int component) 
 
 }  // namespace
 
-OpeningSummary summariseOpening(const ElementOpenings& openings, int component) {
-  OpeningSummary summary;
-  summary.maxOpening = -std::numeric_limits<double>::infinity();
-  for (std::size_t e = 0; e < openings.size(); ++e) {
-    if (!inComponent(openings, e, component)) {
-      continue;
-    }
-    const double a = openings.area[e];
-    ++summary.elements;
-    summary.area += a;
-    summary.meanOpening += a * openings.opening[e];
-    summary.meanSlip += a * openings.slip[e];
-    summary.maxOpening = std::max(summary.maxOpening, openings.opening[e]);
-    summary.maxSlip = std::max(summary.maxSlip, openings.slip[e]);
-  }
+namespace {
+
+void accumulate(OpeningSummary& summary, const ElementOpenings& openings, std::size_t e) {
+  const double a = openings.area[e];
+  ++summary.elements;
+  summary.area += a;
+  summary.meanOpening += a * openings.opening[e];
+  summary.meanSlip += a * openings.slip[e];
+  summary.maxOpening = std::max(summary.maxOpening, openings.opening[e]);
+  summary.maxSlip = std::max(summary.maxSlip, openings.slip[e]);
+}
+
+OpeningSummary finish(OpeningSummary summary) {
   if (summary.elements == 0) {
     return {};
   }
@@ -193,6 +191,40 @@ OpeningSummary summariseOpening(const ElementOpenings& openings, int component) 
     summary.meanSlip /= summary.area;
   }
   return summary;
+}
+
+OpeningSummary started() {
+  OpeningSummary summary;
+  summary.maxOpening = -std::numeric_limits<double>::infinity();
+  summary.maxSlip = -std::numeric_limits<double>::infinity();
+  return summary;
+}
+
+}  // namespace
+
+OpeningSummary summariseOpening(const ElementOpenings& openings, int component) {
+  OpeningSummary summary = started();
+  for (std::size_t e = 0; e < openings.size(); ++e) {
+    if (inComponent(openings, e, component)) {
+      accumulate(summary, openings, e);
+    }
+  }
+  return finish(summary);
+}
+
+std::vector<OpeningSummary> summariseByComponent(const ElementOpenings& openings,
+                                                 std::size_t components) {
+  std::vector<OpeningSummary> summaries(components, started());
+  for (std::size_t e = 0; e < openings.size(); ++e) {
+    const int c = openings.component[e];
+    if (!std::isnan(openings.opening[e]) && c >= 0 && static_cast<std::size_t>(c) < components) {
+      accumulate(summaries[static_cast<std::size_t>(c)], openings, e);
+    }
+  }
+  for (OpeningSummary& summary : summaries) {
+    summary = finish(summary);
+  }
+  return summaries;
 }
 
 Histogram openingHistogram(const ElementOpenings& openings, int component, double lo, double hi,

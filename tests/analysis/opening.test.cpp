@@ -108,3 +108,30 @@ TEST_CASE("opening statistics: histogram by area, profile along the crack, no bo
   const ElementOpenings none = openingsOf(cells, cellComponents);
   CHECK(summariseOpening(none, -1).elements == 0);
 }
+
+TEST_CASE("per-component opening summaries in one pass equal each component's own",
+          "[analysis][opening]") {
+  // Elements of components 2, 0, 1, 0, none and 2, one without a bond.
+  ElementOpenings openings;
+  openings.area = {1.0, 2.0, 3.0, 1.0, 5.0, 3.0, 2.0};
+  openings.opening = {0.1, 0.4, 0.2, 0.0, 0.9, 0.3, std::nan("")};
+  openings.slip = {0.01, 0.02, 0.0, 0.05, 0.1, 0.03, std::nan("")};
+  openings.component = {2, 0, 1, 0, -1, 2, 1};
+  const auto all = summariseByComponent(openings, 3);
+  REQUIRE(all.size() == 3);
+  for (int c = 0; c < 3; ++c) {
+    INFO("component " << c);
+    const OpeningSummary one = summariseOpening(openings, c);
+    const OpeningSummary& together = all[static_cast<std::size_t>(c)];
+    CHECK(together.elements == one.elements);
+    CHECK(together.area == one.area);
+    CHECK(together.meanOpening == one.meanOpening);
+    CHECK(together.maxOpening == one.maxOpening);
+    CHECK(together.meanSlip == one.meanSlip);
+    CHECK(together.maxSlip == one.maxSlip);
+  }
+  // Component 0 by hand: areas 2 and 1, openings 0.4 and 0.0.
+  CHECK(all[0].meanOpening == Approx(0.8 / 3.0));
+  CHECK(all[0].maxSlip == 0.05);
+  CHECK(all[1].elements == 1);  // the element without a bond is not counted
+}

@@ -50,9 +50,8 @@ ReportSnapshot snapshotOf(int step, const analysis::CrackAnalysis& analysis) {
   ReportSnapshot at;
   at.step = step;
   at.openings = analysis.openings();
-  for (std::size_t c = 0; c < analysis.components().components.size(); ++c) {
-    at.components.push_back(analysis::summariseOpening(analysis.openings(), static_cast<int>(c)));
-  }
+  at.components =
+      analysis::summariseByComponent(analysis.openings(), analysis.components().components.size());
   at.fragments = analysis.fragments();
   return at;
 }
