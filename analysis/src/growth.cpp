@@ -98,28 +98,28 @@ std::string axisName(int axis) {
   return axis == 0 ? "x" : axis == 1 ? "y" : axis == 2 ? "z" : "none";
 }
 
+namespace {
+
+// A main-crack opening figure, NaN before the main crack has an element with a bond.
+double mainOpening(const StepAnalysis& s, double OpeningSummary::*figure) {
+  return s.mainOpening.elements > 0 ? s.mainOpening.*figure
+                                    : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
 std::vector<NamedSeries> crackSeries(std::span<const StepAnalysis> steps, const CrackFront& front) {
-  const double nan = std::numeric_limits<double>::quiet_NaN();
   using Pick = double (*)(const StepAnalysis&);
   const std::pair<const char*, Pick> columns[] = {
       {"total_area", [](const StepAnalysis& s) { return s.totalArea; }},
       {"components", [](const StepAnalysis& s) { return static_cast<double>(s.components); }},
       {"main_area", [](const StepAnalysis& s) { return s.mainArea; }},
       {"main_mean_opening",
-       [](const StepAnalysis& s) {
-         return s.mainOpening.elements > 0 ? s.mainOpening.meanOpening
-                                           : std::numeric_limits<double>::quiet_NaN();
-       }},
+       [](const StepAnalysis& s) { return mainOpening(s, &OpeningSummary::meanOpening); }},
       {"main_max_opening",
-       [](const StepAnalysis& s) {
-         return s.mainOpening.elements > 0 ? s.mainOpening.maxOpening
-                                           : std::numeric_limits<double>::quiet_NaN();
-       }},
+       [](const StepAnalysis& s) { return mainOpening(s, &OpeningSummary::maxOpening); }},
       {"main_mean_slip",
-       [](const StepAnalysis& s) {
-         return s.mainOpening.elements > 0 ? s.mainOpening.meanSlip
-                                           : std::numeric_limits<double>::quiet_NaN();
-       }},
+       [](const StepAnalysis& s) { return mainOpening(s, &OpeningSummary::meanSlip); }},
       {"fragments", [](const StepAnalysis& s) { return static_cast<double>(s.fragments); }},
       {"largest_fragment_share", [](const StepAnalysis& s) { return s.largestFragmentShare; }},
       {"tension_breaks", [](const StepAnalysis& s) { return static_cast<double>(s.tension); }},
@@ -128,14 +128,16 @@ std::vector<NamedSeries> crackSeries(std::span<const StepAnalysis> steps, const 
   std::vector<NamedSeries> series;
   for (const auto& [name, pick] : columns) {
     NamedSeries& out = series.emplace_back(NamedSeries{name, {}});
-    out.values.reserve(steps.size());
     for (const StepAnalysis& s : steps) {
       out.values.push_back(pick(s));
     }
   }
   const auto perStep = [&](const std::vector<double>& values) {
-    return values.size() == steps.size() ? values : std::vector<double>(steps.size(), nan);
+    return values.size() == steps.size()
+               ? values
+               : std::vector<double>(steps.size(), std::numeric_limits<double>::quiet_NaN());
   };
+  // The front after the areas, as growth.csv orders its columns.
   series.insert(series.begin() + 3, {NamedSeries{"front_extent", perStep(front.extent)},
                                      NamedSeries{"front_speed", perStep(front.speed)}});
   return series;

@@ -427,7 +427,9 @@ Result<dem::StepState> SeriesConverter::convert(const SourceStep& step) {
   std::vector<dem::ParticleIndex> rowIndex;
   CRACKVIS_RETURN_IF_ERROR(placeParticles(step, rowIndex));
   std::vector<dem::BondIndex> bondOfRow;
-  const std::vector<std::uint8_t> before = m_state;
+  // The states before this step, for matching the breaks the code logged.
+  const std::vector<std::uint8_t> before =
+      step.recordsBreaks ? m_state : std::vector<std::uint8_t>{};
   CRACKVIS_RETURN_IF_ERROR(updateBonds(step, rowIndex, bondOfRow));
   dem::StepState out;
   // The time: as the source wrote it, else from the scalar table's `time`

@@ -40,29 +40,30 @@ std::string safeName(const std::string& name) {
 }
 
 // The tables. Column numbers in the scripts below follow these headers.
+// step, time, broken_bonds, then the crack's numbers (analysis::crackSeries,
+// the names the clients' Steps plot shows too), then the file's step scalars.
 std::string growthTable(const ReportData& d) {
-  std::string out =
-      "step,time,broken_bonds,total_area,components,main_area,front_extent,front_speed,"
-      "main_mean_opening,main_max_opening,main_mean_slip,fragments,largest_fragment_share,"
-      "tension_breaks,shear_breaks";
+  std::vector<analysis::StepAnalysis> steps;
+  for (const ReportRow& row : d.rows) {
+    steps.push_back(row.step);
+  }
+  const std::vector<analysis::NamedSeries> series = analysis::crackSeries(steps, d.front);
+  std::string out = "step,time,broken_bonds";
+  for (const analysis::NamedSeries& s : series) {
+    out += ',' + s.name;
+  }
   for (const std::string& name : d.scalarNames) {
-    out += ',';
-    out += name;
+    out += ',' + name;
   }
   out += "\n";
   for (std::size_t k = 0; k < d.rows.size(); ++k) {
     const analysis::StepAnalysis& s = d.rows[k].step;
-    const bool opened = s.mainOpening.elements > 0;
-    out +=
-        fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}", s.step, cell(s.time), s.broken,
-                    cell(s.totalArea), s.components, cell(s.mainArea), cell(d.front.extent[k]),
-                    cell(d.front.speed[k]), opened ? cell(s.mainOpening.meanOpening) : "nan",
-                    opened ? cell(s.mainOpening.maxOpening) : "nan",
-                    opened ? cell(s.mainOpening.meanSlip) : "nan", s.fragments,
-                    cell(s.largestFragmentShare), s.tension, s.shear);
+    out += fmt::format("{},{},{}", s.step, cell(s.time), s.broken);
+    for (const analysis::NamedSeries& column : series) {
+      out += ',' + cell(column.values[k]);
+    }
     for (double v : d.rows[k].scalars) {
-      out += ',';
-      out += cell(v);
+      out += ',' + cell(v);
     }
     out += "\n";
   }
