@@ -23,16 +23,67 @@ std::uint64_t packCell(std::int64_t x, std::int64_t y, std::int64_t z) {
 }  // namespace
 
 void BondNormals::reset(std::size_t bondCount) {
-  m_broken.assign(bondCount, 0);
-  m_mid.assign(bondCount, {});
-  m_axis.assign(bondCount, {});
-  m_normal.assign(bondCount, {});
-  m_window.assign(bondCount, 0);
-  m_cells.clear();
+  m_index.assign(bondCount, -1);
+  m_mid.clear();
+  m_axis.clear();
+  m_normal.clear();
+  m_window.clear();
+  m_stale.clear();
+  m_slots.assign(1024, Slot{});
+  m_lists.clear();
 }
 
 std::uint64_t BondNormals::cellKey(dem::Vec3 p) const {
   return packCell(cellOf(p.x, m_radius), cellOf(p.y, m_radius), cellOf(p.z, m_radius));
+}
+
+namespace {
+
+std::size_t slotHash(std::uint64_t key) {
+  key ^= key >> 33;
+  key *= 0xFF51AFD7ED558CCDull;
+  key ^= key >> 33;
+  return static_cast<std::size_t>(key);
+}
+
+}  // namespace
+
+const std::vector<BondNormals::Entry>* BondNormals::findCell(std::uint64_t key) const {
+  const std::size_t mask = m_slots.size() - 1;
+  for (std::size_t k = slotHash(key) & mask;; k = (k + 1) & mask) {
+    if (m_slots[k].key == key) {
+      return &m_lists[static_cast<std::size_t>(m_slots[k].list)];
+    }
+    if (m_slots[k].key == kNoCell) {
+      return nullptr;
+    }
+  }
+}
+
+std::vector<BondNormals::Entry>& BondNormals::cell(std::uint64_t key) {
+  if (2 * (m_lists.size() + 1) > m_slots.size()) {  // keep the table at most half full
+    std::vector<Slot> old(2 * m_slots.size(), Slot{});
+    old.swap(m_slots);
+    for (const Slot& slot : old) {
+      if (slot.key != kNoCell) {
+        std::size_t k = slotHash(slot.key) & (m_slots.size() - 1);
+        while (m_slots[k].key != kNoCell) {
+          k = (k + 1) & (m_slots.size() - 1);
+        }
+        m_slots[k] = slot;
+      }
+    }
+  }
+  const std::size_t mask = m_slots.size() - 1;
+  std::size_t k = slotHash(key) & mask;
+  while (m_slots[k].key != key && m_slots[k].key != kNoCell) {
+    k = (k + 1) & mask;
+  }
+  if (m_slots[k].key == kNoCell) {
+    m_slots[k] = {key, static_cast<std::int32_t>(m_lists.size())};
+    m_lists.emplace_back();
+  }
+  return m_lists[static_cast<std::size_t>(m_slots[k].list)];
 }
 
 template <typename Visit>
@@ -44,15 +95,15 @@ void BondNormals::forNear(dem::Vec3 p, Visit&& visit) const {
   for (std::int64_t dx = -1; dx <= 1; ++dx) {
     for (std::int64_t dy = -1; dy <= 1; ++dy) {
       for (std::int64_t dz = m_flat ? 0 : -1; dz <= (m_flat ? 0 : 1); ++dz) {
-        const auto found = m_cells.find(packCell(cx + dx, cy + dy, cz + dz));
-        if (found == m_cells.end()) {
+        const std::vector<Entry>* entries = findCell(packCell(cx + dx, cy + dy, cz + dz));
+        if (entries == nullptr) {
           continue;
         }
-        for (std::int32_t b : found->second) {
-          const dem::Vec3 d = m_mid[static_cast<std::size_t>(b)] - p;
+        for (const Entry& entry : *entries) {
+          const dem::Vec3 d = entry.mid - p;
           const double q = dem::dot(d, d) / r2;
           if (q < 1.0) {
-            visit(static_cast<std::size_t>(b), (1.0 - q) * (1.0 - q));
+            visit(static_cast<std::size_t>(entry.index), (1.0 - q) * (1.0 - q));
           }
         }
       }
@@ -60,12 +111,17 @@ void BondNormals::forNear(dem::Vec3 p, Visit&& visit) const {
   }
 }
 
-dem::Vec3 BondNormals::findNormal(std::size_t bond, std::uint32_t& window) const {
+dem::Vec3 BondNormals::findNormal(std::size_t k, std::uint32_t& window) const {
   // One pass over the grid collects the window; the sums run over it.
   thread_local std::vector<std::pair<std::size_t, double>> near;
   near.clear();
-  forNear(m_mid[bond], [&](std::size_t b, double w) { near.emplace_back(b, w); });
+  forNear(m_mid[k], [&](std::size_t b, double w) { near.emplace_back(b, w); });
   window = static_cast<std::uint32_t>(near.size());
+  return normalOf(k, near);
+}
+
+dem::Vec3 BondNormals::normalOf(std::size_t k,
+                                std::span<const std::pair<std::size_t, double>> near) const {
   double weight = 0.0;
   dem::Vec3 mean{};
   for (const auto& [b, w] : near) {
@@ -96,12 +152,12 @@ dem::Vec3 BondNormals::findNormal(std::size_t bond, std::uint32_t& window) const
     }
     axis = directions.principalAxis();
   }
-  return dem::dot(axis, m_axis[bond]) < 0.0 ? -1.0 * axis : axis;
+  return dem::dot(axis, m_axis[k]) < 0.0 ? -1.0 * axis : axis;
 }
 
 void BondNormals::add(std::span<const dem::Bond> bonds, std::span<const std::int32_t> broken,
                       std::span<const dem::Vec3> reference) {
-  if (m_broken.size() != bonds.size()) {
+  if (m_index.size() != bonds.size()) {
     reset(bonds.size());
   }
   if (m_radius <= 0.0) {
@@ -112,10 +168,10 @@ void BondNormals::add(std::span<const dem::Bond> bonds, std::span<const std::int
     }
     m_radius = bonds.empty() ? 1.0 : 3.0 * sum / static_cast<double>(bonds.size());
   }
-  std::vector<std::int32_t> fresh;
+  const std::size_t first = m_mid.size();  // the new bonds' dense indices follow
   for (std::int32_t id : broken) {
     const auto b = static_cast<std::size_t>(id);
-    if (id < 0 || b >= bonds.size() || m_broken[b] != 0) {
+    if (id < 0 || b >= bonds.size() || m_index[b] >= 0) {
       continue;
     }
     const auto i = static_cast<std::size_t>(bonds[b].first);
@@ -123,49 +179,58 @@ void BondNormals::add(std::span<const dem::Bond> bonds, std::span<const std::int
     if (i >= reference.size() || j >= reference.size()) {
       continue;
     }
-    m_broken[b] = 1;
-    m_mid[b] = 0.5 * (reference[i] + reference[j]);
+    const auto k = static_cast<std::int32_t>(m_mid.size());
+    m_index[b] = k;
+    const dem::Vec3 mid = 0.5 * (reference[i] + reference[j]);
     const dem::Vec3 d0 = reference[j] - reference[i];
     const double length = dem::norm(d0);
-    m_axis[b] = length > 0.0 ? (1.0 / length) * d0 : dem::Vec3{};
-    m_cells[cellKey(m_mid[b])].push_back(id);
-    fresh.push_back(id);
+    m_mid.push_back(mid);
+    m_axis.push_back(length > 0.0 ? (1.0 / length) * d0 : dem::Vec3{});
+    m_normal.emplace_back();
+    m_window.push_back(0);
+    m_stale.push_back(1);
+    cell(cellKey(mid)).push_back({mid, k});
   }
   // The new bonds, and the broken bonds whose window they entered while that
   // window was still sparse: once a window holds kSettledWindow midpoints,
   // one more moves its plane little, and finding it again for every break
-  // nearby was most of a step's cost on a large crack.
-  std::vector<std::uint8_t> stale(m_broken.size(), 0);
+  // nearby was most of a step's cost on a large crack. A new bond's window
+  // is the list of bonds it entered: one search gives both.
   std::vector<std::size_t> again;
-  for (std::int32_t id : fresh) {
-    stale[static_cast<std::size_t>(id)] = 1;
-    again.push_back(static_cast<std::size_t>(id));
-  }
-  for (std::int32_t id : fresh) {
-    forNear(m_mid[static_cast<std::size_t>(id)], [&](std::size_t b, double) {
-      if (stale[b] == 0 && m_window[b] < kSettledWindow) {
-        stale[b] = 1;
+  std::vector<std::pair<std::size_t, double>> near;
+  for (std::size_t k = first; k < m_mid.size(); ++k) {
+    near.clear();
+    forNear(m_mid[k], [&](std::size_t b, double w) {
+      near.emplace_back(b, w);
+      if (m_stale[b] == 0 && m_window[b] < kSettledWindow) {
+        m_stale[b] = 1;
         again.push_back(b);
       }
     });
+    m_normal[k] = normalOf(k, near);
+    m_window[k] = static_cast<std::uint32_t>(near.size());
   }
-  for (std::size_t b : again) {
-    m_normal[b] = findNormal(b, m_window[b]);
+  for (std::size_t k : again) {
+    m_normal[k] = findNormal(k, m_window[k]);
   }
-  m_computed += again.size();
+  std::fill(m_stale.begin() + static_cast<std::ptrdiff_t>(first), m_stale.end(), 0);
+  for (std::size_t k : again) {
+    m_stale[k] = 0;
+  }
+  m_computed += m_mid.size() - first + again.size();
 }
 
 void BondNormals::update(std::span<const dem::Bond> bonds, std::span<const std::uint8_t> bondState,
                          std::span<const dem::Vec3> reference) {
   const std::size_t m = std::min(bonds.size(), bondState.size());
-  if (m_broken.size() != bonds.size()) {
+  if (m_index.size() != bonds.size()) {
     reset(bonds.size());
   }
   std::vector<std::int32_t> fresh;
   for (std::size_t b = 0; b < m; ++b) {
-    if (bondState[b] != 0 && m_broken[b] == 0) {
+    if (bondState[b] != 0 && m_index[b] < 0) {
       fresh.push_back(static_cast<std::int32_t>(b));
-    } else if (bondState[b] == 0 && m_broken[b] != 0) {
+    } else if (bondState[b] == 0 && m_index[b] >= 0) {
       // A bond healed: the viewer went back in time. Start over.
       reset(bonds.size());
       update(bonds, bondState, reference);
@@ -173,6 +238,16 @@ void BondNormals::update(std::span<const dem::Bond> bonds, std::span<const std::
     }
   }
   add(bonds, fresh, reference);
+}
+
+void BondNormals::update(std::span<const dem::Bond> bonds, const BondDiff& diff,
+                         std::span<const std::uint8_t> bondState,
+                         std::span<const dem::Vec3> reference) {
+  if (diff.restart || m_index.size() != bonds.size()) {
+    update(bonds, bondState, reference);
+    return;
+  }
+  add(bonds, diff.fresh, reference);
 }
 
 }  // namespace crackvis::analysis

@@ -18,30 +18,30 @@ StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInp
   StepAnalysis out;
   out.step = step;
   out.time = time;
-  out.broken = static_cast<std::size_t>(
-      std::count_if(input.bondState.begin(), input.bondState.end(), [](auto s) { return s != 0; }));
-  m_components = cracks::findComponents(mesh);
-  out.components = m_components.components.size();
-  for (const cracks::CrackComponent& c : m_components.components) {
+  const BondDiff& diff = m_bondDiff.update(input.bondState);
+  out.broken = diff.broken;
+  const CrackComponents& components = m_components.update(mesh, !input.referencePositions.empty());
+  out.components = components.components.size();
+  for (const cracks::CrackComponent& c : components.components) {
     out.totalArea += c.area;
   }
-  if (!m_components.components.empty()) {
-    const cracks::CrackComponent& main = m_components.components.front();
+  if (!components.components.empty()) {
+    const cracks::CrackComponent& main = components.components.front();
     out.hasMain = true;
     out.mainArea = main.area;
     out.mainBox = main.box;
     out.mainNormal = main.normal;
   }
-  m_normals.update(m_lattice.bonds, input.bondState, reference);
-  m_openings = measureOpening(mesh, m_components, m_lattice.bonds, reference, input.positions,
+  m_normals.update(m_lattice.bonds, diff, input.bondState, reference);
+  m_openings = measureOpening(mesh, components, m_lattice.bonds, reference, input.positions,
                               m_options.opening, &m_normals);
   out.mainOpening = summariseOpening(m_openings, 0);
   out.allOpening = summariseOpening(m_openings, -1);
   const Fragments& fragments =
-      m_fragments.update(m_lattice.bonds, input.bondState, m_lattice.radius, mesh.dimension);
+      m_fragments.update(m_lattice.bonds, input.bondState, m_lattice.radius, mesh.dimension, &diff);
   out.fragments = fragments.countAtLeast(m_options.minFragment);
   out.largestFragmentShare = fragments.largestShare();
-  m_modes.update(step, m_lattice.bonds, input.bondState, reference, input.positions,
+  m_modes.update(step, m_lattice.bonds, diff, input.bondState, reference, input.positions,
                  input.bondForce, recordedModes);
   out.tension = m_modes.count(BreakMode::kTension);
   out.shear = m_modes.count(BreakMode::kShear);

@@ -95,7 +95,6 @@ ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& com
     out.area[e] = cracks::measure(mesh, primitive);
     out.centroid[e] = centroidOf(mesh, primitive);
     out.cell[e] = surfaceBase(mesh) + primitive.index;
-    out.normal[e] = elementNormal(mesh, primitive);
     if (primitive.index < components.ofPrimitive.size()) {
       out.component[e] = components.ofPrimitive[primitive.index];
     }
@@ -123,6 +122,8 @@ ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& com
     });
     const double length = dem::norm(normal);
     if (carried == 0 || length == 0.0) {
+      // No bond: the face's own normal (orientation counts it still).
+      out.normal[e] = elementNormal(mesh, primitive);
       continue;
     }
     out.normal[e] = (1.0 / length) * normal;

@@ -117,50 +117,80 @@ std::span<const double> recordedBreakModes(std::span<const dem::ExtraArray> extr
   return {};
 }
 
+// A bond first seen broken: its mode by the rule (the force is the one it
+// carried at the previous step, when it was intact), or the recorded one.
+void BreakModeTracker::classify(int step, std::size_t b, std::span<const dem::Bond> bonds,
+                                std::span<const Vec3> reference, std::span<const Vec3> current,
+                                std::span<const double> recorded) {
+  m_seen[b] = 1;
+  const std::size_t n = std::min(reference.size(), current.size());
+  const auto i = static_cast<std::size_t>(bonds[b].first);
+  const auto j = static_cast<std::size_t>(bonds[b].second);
+  if (i >= n || j >= n) {
+    return;
+  }
+  const float before =
+      b < m_previousForce.size() ? m_previousForce[b] : std::numeric_limits<float>::quiet_NaN();
+  const std::optional<double> force =
+      std::isnan(before) ? std::nullopt : std::optional<double>(before);
+  BondBreak found = classifyBreak(reference[j] - reference[i], current[j] - current[i], force);
+  found.bond = static_cast<std::int32_t>(b);
+  found.step = step;
+  found.rule = found.mode;
+  if (b < recorded.size() && (recorded[b] == 1.0 || recorded[b] == 2.0)) {
+    found.recorded = true;
+    found.mode = recorded[b] == 1.0 ? BreakMode::kTension : BreakMode::kShear;
+  }
+  ++(found.mode == BreakMode::kTension ? m_tension : m_shear);
+  m_breaks.push_back(found);
+}
+
+void BreakModeTracker::rememberForce(std::span<const float> bondForce, std::size_t bondCount) {
+  if (bondForce.empty()) {
+    m_previousForce.assign(bondCount, std::numeric_limits<float>::quiet_NaN());
+  } else {
+    m_previousForce.assign(bondForce.begin(), bondForce.end());
+  }
+}
+
 void BreakModeTracker::update(int step, std::span<const dem::Bond> bonds,
                               std::span<const std::uint8_t> bondState,
                               std::span<const Vec3> reference, std::span<const Vec3> current,
                               std::span<const float> bondForce, std::span<const double> recorded) {
   const std::size_t m = std::min(bonds.size(), bondState.size());
-  const std::size_t n = std::min(reference.size(), current.size());
   if (m_first || m_seen.size() != m) {
     m_seen.assign(bondState.begin(), bondState.begin() + static_cast<std::ptrdiff_t>(m));
-    m_lastForce.assign(m, std::numeric_limits<float>::quiet_NaN());
     m_first = false;
-  }
-  for (std::size_t b = 0; b < m; ++b) {
-    if (bondState[b] == 0) {
-      if (b < bondForce.size()) {
-        m_lastForce[b] = bondForce[b];
+  } else {
+    for (std::size_t b = 0; b < m; ++b) {
+      if (bondState[b] != 0 && m_seen[b] == 0) {
+        classify(step, b, bonds, reference, current, recorded);
       }
-      continue;
     }
-    if (m_seen[b] != 0) {
-      continue;
-    }
-    m_seen[b] = 1;
-    const auto i = static_cast<std::size_t>(bonds[b].first);
-    const auto j = static_cast<std::size_t>(bonds[b].second);
-    if (i >= n || j >= n) {
-      continue;
-    }
-    const std::optional<double> force =
-        std::isnan(m_lastForce[b]) ? std::nullopt : std::optional<double>(m_lastForce[b]);
-    BondBreak found = classifyBreak(reference[j] - reference[i], current[j] - current[i], force);
-    found.bond = static_cast<std::int32_t>(b);
-    found.step = step;
-    found.rule = found.mode;
-    if (b < recorded.size() && (recorded[b] == 1.0 || recorded[b] == 2.0)) {
-      found.recorded = true;
-      found.mode = recorded[b] == 1.0 ? BreakMode::kTension : BreakMode::kShear;
-    }
-    m_breaks.push_back(found);
   }
+  rememberForce(bondForce, m);
+}
+
+void BreakModeTracker::update(int step, std::span<const dem::Bond> bonds, const BondDiff& diff,
+                              std::span<const std::uint8_t> bondState,
+                              std::span<const Vec3> reference, std::span<const Vec3> current,
+                              std::span<const float> bondForce, std::span<const double> recorded) {
+  const std::size_t m = std::min(bonds.size(), bondState.size());
+  if (m_first || diff.restart || m_seen.size() != m) {
+    update(step, bonds, bondState, reference, current, bondForce, recorded);
+    return;
+  }
+  for (const std::int32_t bond : diff.fresh) {
+    const auto b = static_cast<std::size_t>(bond);
+    if (b < m && m_seen[b] == 0) {
+      classify(step, b, bonds, reference, current, recorded);
+    }
+  }
+  rememberForce(bondForce, m);
 }
 
 std::size_t BreakModeTracker::count(BreakMode mode) const {
-  return static_cast<std::size_t>(std::count_if(
-      m_breaks.begin(), m_breaks.end(), [&](const BondBreak& b) { return b.mode == mode; }));
+  return mode == BreakMode::kTension ? m_tension : m_shear;
 }
 
 std::size_t BreakModeTracker::countUpTo(BreakMode mode, int step) const {

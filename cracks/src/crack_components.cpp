@@ -4,7 +4,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <numbers>
 #include <numeric>
+#include <optional>
+#include <unordered_map>
 #include <utility>
 
 #include <crackvis/cracks/crack_components.hpp>
@@ -12,8 +15,61 @@
 
 namespace crackvis::cracks {
 
-// Cyclic Jacobi rotations: a few sweeps reach machine precision at this size.
+namespace {
+
+// The smallest eigenvalue from the trigonometric solution of the
+// characteristic cubic (Smith 1961), and its eigenvector as the longest cross
+// product of two rows of (a - lambda I). Empty where the two smallest
+// eigenvalues are too close for that vector to be accurate (a line-like or
+// round component, a multiple of I): Jacobi's rotations decide those.
+std::optional<Vec3> closedFormSmallest(const Matrix3& a) {
+  const double p1 = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+  const double q = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
+  const double d0 = a[0][0] - q;
+  const double d1 = a[1][1] - q;
+  const double d2 = a[2][2] - q;
+  const double p2 = d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * p1;
+  if (!(p2 > 0.0) || !std::isfinite(p2)) {
+    return std::nullopt;
+  }
+  const double p = std::sqrt(p2 / 6.0);
+  // det((a - qI) / p) / 2
+  const double b00 = d0 / p, b11 = d1 / p, b22 = d2 / p;
+  const double b01 = a[0][1] / p, b02 = a[0][2] / p, b12 = a[1][2] / p;
+  const double r = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) +
+                          b02 * (b01 * b12 - b11 * b02));
+  const double phi = std::acos(std::clamp(r, -1.0, 1.0)) / 3.0;
+  const double largest = q + 2.0 * p * std::cos(phi);
+  const double smallest = q + 2.0 * p * std::cos(phi + 2.0 * std::numbers::pi / 3.0);
+  const double middle = 3.0 * q - largest - smallest;
+  if (!(middle - smallest > 1e-6 * (largest - smallest))) {
+    return std::nullopt;
+  }
+  const Vec3 r0{a[0][0] - smallest, a[0][1], a[0][2]};
+  const Vec3 r1{a[1][0], a[1][1] - smallest, a[1][2]};
+  const Vec3 r2{a[2][0], a[2][1], a[2][2] - smallest};
+  Vec3 best = cross(r0, r1);
+  for (const Vec3 c : {cross(r0, r2), cross(r1, r2)}) {
+    if (dem::dot(c, c) > dem::dot(best, best)) {
+      best = c;
+    }
+  }
+  const double length = dem::norm(best);
+  if (!(length > 0.0) || !std::isfinite(length)) {
+    return std::nullopt;
+  }
+  return (1.0 / length) * best;
+}
+
+}  // namespace
+
+// In closed form where that is accurate (a component's covariance is nearly
+// always flat: one small eigenvalue well below the others), else cyclic
+// Jacobi rotations: a few sweeps reach machine precision at this size.
 Vec3 smallestEigenvector(Matrix3 a) {
+  if (const std::optional<Vec3> closed = closedFormSmallest(a)) {
+    return *closed;
+  }
   Matrix3 v{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
   for (int sweep = 0; sweep < 32; ++sweep) {
     const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
@@ -67,12 +123,54 @@ struct Moments {
   double area = 0.0;
   Vec3 first{};
   Matrix3 second{};
+  Vec3 newell{};  // the polygons' summed area vectors (times 2)
 
   void addTriangle(Vec3 a, Vec3 b, Vec3 c) {
     const double weight = 0.5 * dem::norm(cross(b - a, c - a));
     addWeighted(weight, {a, b, c});
   }
   void addSegment(Vec3 a, Vec3 b) { addWeighted(dem::norm(b - a), {a, b}); }
+  // A polygon as the fan of triangles from its first vertex; returns its
+  // area as polygonArea gives it (Newell's sum of the same cross products).
+  // Written out for the triangle, as every face of a crack passes here
+  // each step.
+  double addPolygon(const std::vector<Vec3>& points, const std::int32_t* ids, std::size_t count) {
+    const Vec3 a = points[static_cast<std::size_t>(ids[0])];
+    Vec3 newell{};
+    for (std::size_t k = 1; k + 1 < count; ++k) {
+      const Vec3 b = points[static_cast<std::size_t>(ids[k])];
+      const Vec3 c = points[static_cast<std::size_t>(ids[k + 1])];
+      const Vec3 n = cross(b - a, c - a);
+      newell = newell + n;
+      const double weight = 0.5 * dem::norm(n);
+      if (weight <= 0.0) {
+        continue;
+      }
+      const Vec3 s = a + b + c;
+      area += weight;
+      first = first + (weight / 3.0) * s;
+      const double scale = weight / 12.0;
+      auto entry = [&](double ai, double aj, double bi, double bj, double ci, double cj, double si,
+                       double sj) { return scale * (ai * aj + bi * bj + ci * cj + si * sj); };
+      const double xx = entry(a.x, a.x, b.x, b.x, c.x, c.x, s.x, s.x);
+      const double yy = entry(a.y, a.y, b.y, b.y, c.y, c.y, s.y, s.y);
+      const double zz = entry(a.z, a.z, b.z, b.z, c.z, c.z, s.z, s.z);
+      const double xy = entry(a.x, a.y, b.x, b.y, c.x, c.y, s.x, s.y);
+      const double xz = entry(a.x, a.z, b.x, b.z, c.x, c.z, s.x, s.z);
+      const double yz = entry(a.y, a.z, b.y, b.z, c.y, c.z, s.y, s.z);
+      second[0][0] += xx;
+      second[1][1] += yy;
+      second[2][2] += zz;
+      second[0][1] += xy;
+      second[1][0] += xy;
+      second[0][2] += xz;
+      second[2][0] += xz;
+      second[1][2] += yz;
+      second[2][1] += yz;
+    }
+    this->newell = this->newell + newell;
+    return 0.5 * dem::norm(newell);
+  }
   void addTetrahedron(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
     addWeighted(std::abs(dem::dot(b - a, cross(c - a, d - a))) / 6.0, {a, b, c, d});
   }
@@ -356,16 +454,82 @@ void sortLargestFirst(std::vector<CrackComponent>& found, CrackComponents& set) 
   }
 }
 
-CrackComponents surfaceComponents(const CrackMesh& mesh) {
+// The best-fit plane of a component of one primitive, without the
+// eigenvectors (most components of scattered damage are single faces): a
+// segment's line (2D), a polygon's plane by Newell's normal, which is that
+// plane for a planar polygon.
+Vec3 singleNormal(const Moments& moments, const Primitive& primitive, const CrackMesh& mesh) {
+  if (primitive.count == 2) {
+    const Vec3 d = mesh.points[static_cast<std::size_t>(primitive.ids[1])] -
+                   mesh.points[static_cast<std::size_t>(primitive.ids[0])];
+    const double length = std::hypot(d.x, d.y);
+    if (length > 0.0) {
+      return {-d.y / length, d.x / length, 0.0};
+    }
+  } else if (const double length = dem::norm(moments.newell); length > 0.0) {
+    return (1.0 / length) * moments.newell;
+  }
+  return bestFitNormal(moments, mesh.dimension);
+}
+
+// The components of a surface whose primitives are already grouped: each
+// primitive's group (< groupCount) names its component. Components are
+// numbered in order of first appearance, then summed up.
+CrackComponents summariseSurface(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
+                                 const std::vector<std::int32_t>& groupOf, std::size_t groupCount) {
   CrackComponents set;
   set.ofPrimitive.assign(componentList(mesh).size(), -1);
+  std::vector<std::int32_t> label(groupCount, -1);
+  std::vector<Moments> moments;
+  std::vector<CrackComponent> found;
+  std::vector<Primitive> singles;  // each component's first primitive
+  for (std::size_t k = 0; k < primitives.size(); ++k) {
+    const Primitive& primitive = primitives[k];
+    const auto group = static_cast<std::size_t>(groupOf[k]);
+    if (label[group] < 0) {
+      label[group] = static_cast<std::int32_t>(found.size());
+      found.emplace_back();
+      moments.emplace_back();
+      singles.push_back(primitive);
+    }
+    const auto c = static_cast<std::size_t>(label[group]);
+    set.ofPrimitive[primitive.index] = label[group];
+    auto point = [&](std::size_t v) {
+      return mesh.points[static_cast<std::size_t>(primitive.ids[v])];
+    };
+    ++found[c].primitives;
+    for (std::size_t v = 0; v < primitive.count; ++v) {
+      grow(found[c].box, point(v), found[c].primitives == 1 && v == 0);
+    }
+    if (primitive.count == 2) {
+      found[c].area += measure(mesh, primitive);
+      moments[c].addSegment(point(0), point(1));
+    } else {
+      found[c].area += moments[c].addPolygon(mesh.points, primitive.ids, primitive.count);
+    }
+  }
+  for (std::size_t c = 0; c < found.size(); ++c) {
+    found[c].centroid = moments[c].centroid();
+    found[c].normal = found[c].primitives == 1 ? singleNormal(moments[c], singles[c], mesh)
+                                               : bestFitNormal(moments[c], mesh.dimension);
+  }
+  sortLargestFirst(found, set);
+  return set;
+}
+
+double weldTolerance(const CrackMesh& mesh) {
+  const auto [lo, hi] = dem::boundingBox(mesh.points);
+  return 1e-9 * std::max(dem::norm(hi - lo), 1e-300);
+}
+
+CrackComponents surfaceComponents(const CrackMesh& mesh) {
   const std::vector<Primitive> primitives = surfacePrimitives(mesh);
   if (primitives.empty()) {
+    CrackComponents set;
+    set.ofPrimitive.assign(componentList(mesh).size(), -1);
     return set;
   }
-  const auto [lo, hi] = dem::boundingBox(mesh.points);
-  const std::vector<std::int32_t> welded =
-      weld(mesh.points, 1e-9 * std::max(dem::norm(hi - lo), 1e-300));
+  const std::vector<std::int32_t> welded = weld(mesh.points, weldTolerance(mesh));
   std::vector<std::int32_t> parent(
       static_cast<std::size_t>(*std::max_element(welded.begin(), welded.end())) + 1);
   std::iota(parent.begin(), parent.end(), 0);
@@ -377,42 +541,11 @@ CrackComponents surfaceComponents(const CrackMesh& mesh) {
       parent[static_cast<std::size_t>(other)] = findRoot(parent, first);
     }
   }
-  // Components numbered in order of first appearance, then summed up.
-  std::vector<std::int32_t> label(parent.size(), -1);
-  std::vector<Moments> moments;
-  std::vector<CrackComponent> found;
-  for (const Primitive& primitive : primitives) {
-    const auto root = static_cast<std::size_t>(
-        findRoot(parent, welded[static_cast<std::size_t>(primitive.ids[0])]));
-    if (label[root] < 0) {
-      label[root] = static_cast<std::int32_t>(found.size());
-      found.emplace_back();
-      moments.emplace_back();
-    }
-    const auto c = static_cast<std::size_t>(label[root]);
-    set.ofPrimitive[primitive.index] = label[root];
-    auto point = [&](std::size_t k) {
-      return mesh.points[static_cast<std::size_t>(primitive.ids[k])];
-    };
-    ++found[c].primitives;
-    found[c].area += measure(mesh, primitive);
-    for (std::size_t k = 0; k < primitive.count; ++k) {
-      grow(found[c].box, point(k), found[c].primitives == 1 && k == 0);
-    }
-    if (primitive.count == 2) {
-      moments[c].addSegment(point(0), point(1));
-    } else {
-      for (std::size_t k = 1; k + 1 < primitive.count; ++k) {
-        moments[c].addTriangle(point(0), point(k), point(k + 1));
-      }
-    }
+  std::vector<std::int32_t> groupOf(primitives.size());
+  for (std::size_t k = 0; k < primitives.size(); ++k) {
+    groupOf[k] = findRoot(parent, welded[static_cast<std::size_t>(primitives[k].ids[0])]);
   }
-  for (std::size_t c = 0; c < found.size(); ++c) {
-    found[c].centroid = moments[c].centroid();
-    found[c].normal = bestFitNormal(moments[c], mesh.dimension);
-  }
-  sortLargestFirst(found, set);
-  return set;
+  return summariseSurface(mesh, primitives, groupOf, parent.size());
 }
 
 // Cells sharing a face (3D: a triangle or quad; 2D: an edge) are one
@@ -578,6 +711,197 @@ std::size_t componentPrimitiveBase(const CrackMesh& mesh) {
 
 CrackComponents findComponents(const CrackMesh& mesh) {
   return mesh.holdsCells() ? cellComponents(mesh) : surfaceComponents(mesh);
+}
+
+namespace {
+
+using WeldKey = std::array<long long, 3>;
+
+struct WeldKeyHash {
+  std::size_t operator()(const WeldKey& k) const {
+    std::uint64_t h = static_cast<std::uint64_t>(k[0]) * 0x9E3779B97F4A7C15ull;
+    h ^= static_cast<std::uint64_t>(k[1]) * 0xC2B2AE3D27D4EB4Full + (h << 6) + (h >> 2);
+    h ^= static_cast<std::uint64_t>(k[2]) * 0x165667B19E3779F9ull + (h << 6) + (h >> 2);
+    return static_cast<std::size_t>(h ^ (h >> 29));
+  }
+};
+
+// weld()'s key of a point: its cell of the grid of size `tolerance`.
+WeldKey weldKey(Vec3 p, double tolerance) {
+  return {std::llround(p.x / tolerance), std::llround(p.y / tolerance),
+          std::llround(p.z / tolerance)};
+}
+
+// A coarse occupancy grid over a box: a point that welds to a marked point
+// lies in a marked cell, so most points need no key and no hash lookup.
+class CoarseMarks {
+ public:
+  CoarseMarks(dem::Bounds box, double margin) : m_lo(box.lo - Vec3{margin, margin, margin}) {
+    const Vec3 size = box.hi - box.lo + Vec3{2 * margin, 2 * margin, 2 * margin};
+    const double largest = std::max({size.x, size.y, size.z, 1e-300});
+    m_perCell = kCells / largest;
+    m_cells.assign(static_cast<std::size_t>(kCells) * kCells * kCells, 0);
+  }
+  // Marks the cells of the box [p - margin, p + margin].
+  void mark(Vec3 p, double margin) {
+    const std::array<int, 3> lo = cellOf(p - Vec3{margin, margin, margin});
+    const std::array<int, 3> hi = cellOf(p + Vec3{margin, margin, margin});
+    for (int x = lo[0]; x <= hi[0]; ++x) {
+      for (int y = lo[1]; y <= hi[1]; ++y) {
+        for (int z = lo[2]; z <= hi[2]; ++z) {
+          m_cells[index({x, y, z})] = 1;
+        }
+      }
+    }
+  }
+  bool marked(Vec3 p) const { return m_cells[index(cellOf(p))] != 0; }
+
+ private:
+  static constexpr int kCells = 64;
+  std::array<int, 3> cellOf(Vec3 p) const {
+    // A product, not a quotient: every point of the crack passes here.
+    auto at = [&](double v) { return std::clamp(static_cast<int>(v * m_perCell), 0, kCells - 1); };
+    return {at(p.x - m_lo.x), at(p.y - m_lo.y), at(p.z - m_lo.z)};
+  }
+  static std::size_t index(std::array<int, 3> c) {
+    return (static_cast<std::size_t>(c[0]) * kCells + static_cast<std::size_t>(c[1])) * kCells +
+           static_cast<std::size_t>(c[2]);
+  }
+  Vec3 m_lo;
+  double m_perCell = 1.0;  // cells per metre
+  std::vector<char> m_cells;
+};
+
+}  // namespace
+
+void ComponentTracker::reset() {
+  m_slotOfBond.clear();
+  m_parent.clear();
+  m_cellOfSlot.clear();
+  m_seenAt.clear();
+}
+
+std::int32_t ComponentTracker::slotOf(std::size_t bond) {
+  if (bond >= m_slotOfBond.size()) {
+    m_slotOfBond.resize(std::max(bond + 1, 2 * m_slotOfBond.size()), -1);
+  }
+  std::int32_t& slot = m_slotOfBond[bond];
+  if (slot < 0) {
+    slot = static_cast<std::int32_t>(m_parent.size());
+    m_parent.push_back(slot);
+    m_cellOfSlot.push_back(-1);
+    m_seenAt.push_back(0);
+  }
+  return slot;
+}
+
+void ComponentTracker::unite(std::int32_t a, std::int32_t b) {
+  a = findRoot(m_parent, a);
+  b = findRoot(m_parent, b);
+  m_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+}
+
+// The faces of the slots from `oldSlots` on are new this step: they weld to
+// each other through a hash of their points' weld keys, and to an old face
+// where one of its points has a key of theirs (the coarse marks spare most
+// old points the key and the lookup).
+void ComponentTracker::weldNewFaces(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
+                                    const std::vector<std::int32_t>& slots, std::int32_t oldSlots) {
+  const double tolerance = weldTolerance(mesh);
+  std::unordered_map<WeldKey, std::int32_t, WeldKeyHash> newKeys;
+  dem::Bounds box;
+  bool first = true;
+  for (std::size_t k = 0; k < primitives.size(); ++k) {
+    if (slots[k] < oldSlots) {
+      continue;
+    }
+    for (std::size_t v = 0; v < primitives[k].count; ++v) {
+      const Vec3 p = mesh.points[static_cast<std::size_t>(primitives[k].ids[v])];
+      grow(box, p, first);
+      first = false;
+      const auto [at, inserted] = newKeys.try_emplace(weldKey(p, tolerance), slots[k]);
+      if (!inserted) {
+        unite(at->second, slots[k]);
+      }
+    }
+  }
+  if (oldSlots == 0) {
+    return;
+  }
+  const double margin = 2.0 * tolerance;
+  CoarseMarks marks(box, margin);
+  for (std::size_t k = 0; k < primitives.size(); ++k) {
+    for (std::size_t v = 0; slots[k] >= oldSlots && v < primitives[k].count; ++v) {
+      marks.mark(mesh.points[static_cast<std::size_t>(primitives[k].ids[v])], margin);
+    }
+  }
+  for (std::size_t k = 0; k < primitives.size(); ++k) {
+    for (std::size_t v = 0; slots[k] < oldSlots && v < primitives[k].count; ++v) {
+      const Vec3 p = mesh.points[static_cast<std::size_t>(primitives[k].ids[v])];
+      if (!marks.marked(p)) {
+        continue;
+      }
+      const auto at = newKeys.find(weldKey(p, tolerance));
+      if (at != newKeys.end()) {
+        unite(at->second, slots[k]);
+      }
+    }
+  }
+}
+
+const CrackComponents& ComponentTracker::update(const CrackMesh& mesh, bool carried) {
+  if (carried && !mesh.holdsCells() && updateCarried(mesh)) {
+    return m_components;
+  }
+  reset();
+  m_components = findComponents(mesh);
+  ++m_recomputations;
+  return m_components;
+}
+
+// False where the mesh is not one whose components can be kept (the
+// caller then finds them anew).
+bool ComponentTracker::updateCarried(const CrackMesh& mesh) {
+  const AttributeArray* bondIds = mesh.findCellData("bond_id");
+  if (bondIds == nullptr) {
+    return false;
+  }
+  const std::vector<Primitive> primitives = surfacePrimitives(mesh);
+  const std::size_t base = componentPrimitiveBase(mesh);
+  const auto oldSlots = static_cast<std::int32_t>(m_parent.size());
+  ++m_stamp;
+  std::size_t oldSeen = 0;
+  std::vector<std::int32_t> groupOf(primitives.size());
+  for (std::size_t k = 0; k < primitives.size(); ++k) {
+    const std::size_t cell = base + primitives[k].index;
+    const double id = cell < bondIds->values.size() ? bondIds->values[cell] : -1.0;
+    if (!(id >= 0.0 && id < 2147483647.0 && id == std::floor(id))) {
+      return false;
+    }
+    const std::int32_t slot = slotOf(static_cast<std::size_t>(id));
+    const auto s = static_cast<std::size_t>(slot);
+    if (m_seenAt[s] == m_stamp) {
+      if (m_cellOfSlot[s] != static_cast<std::int64_t>(primitives[k].index)) {
+        return false;  // a bond with two cells: its faces need not touch
+      }
+    } else {
+      m_seenAt[s] = m_stamp;
+      m_cellOfSlot[s] = static_cast<std::int64_t>(primitives[k].index);
+      oldSeen += slot < oldSlots ? 1 : 0;
+    }
+    groupOf[k] = slot;
+  }
+  if (oldSeen != static_cast<std::size_t>(oldSlots)) {
+    return false;  // a face left: a bond healed, or the viewer went back
+  }
+  if (static_cast<std::int32_t>(m_parent.size()) > oldSlots) {
+    weldNewFaces(mesh, primitives, groupOf, oldSlots);
+  }
+  for (std::int32_t& group : groupOf) {
+    group = findRoot(m_parent, group);
+  }
+  m_components = summariseSurface(mesh, primitives, groupOf, m_parent.size());
+  return true;
 }
 
 double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::size_t c,

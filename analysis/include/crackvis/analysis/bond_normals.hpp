@@ -22,9 +22,10 @@
 
 #include <cstdint>
 #include <span>
-#include <unordered_map>
+#include <utility>
 #include <vector>
 
+#include <crackvis/analysis/bond_diff.hpp>
 #include <crackvis/dem/model.hpp>
 
 namespace crackvis::analysis {
@@ -38,13 +39,19 @@ class BondNormals {
   // Brings the set of broken bonds to `bondState` [M].
   void update(std::span<const dem::Bond> bonds, std::span<const std::uint8_t> bondState,
               std::span<const dem::Vec3> reference);
+  // The same, where the bonds new since the last update are known (`diff`,
+  // of these states).
+  void update(std::span<const dem::Bond> bonds, const BondDiff& diff,
+              std::span<const std::uint8_t> bondState, std::span<const dem::Vec3> reference);
   // Adds broken bonds (ids into `bonds`), finding their normals.
   void add(std::span<const dem::Bond> bonds, std::span<const std::int32_t> broken,
            std::span<const dem::Vec3> reference);
 
   // The unit normal of a broken bond (zero for one not in the set).
   dem::Vec3 normal(std::size_t bond) const {
-    return bond < m_normal.size() ? m_normal[bond] : dem::Vec3{};
+    return bond < m_index.size() && m_index[bond] >= 0
+               ? m_normal[static_cast<std::size_t>(m_index[bond])]
+               : dem::Vec3{};
   }
   double radius() const { return m_radius; }
   // How many normals were found (again) in all: the incremental work.
@@ -55,18 +62,39 @@ class BondNormals {
   std::uint64_t cellKey(dem::Vec3 p) const;
   template <typename Visit>
   void forNear(dem::Vec3 p, Visit&& visit) const;
-  // Also stores how many midpoints the bond's window held.
-  dem::Vec3 findNormal(std::size_t bond, std::uint32_t& window) const;
+  // The normal of broken bond k (its index among the broken ones); also
+  // stores how many midpoints its window held.
+  dem::Vec3 findNormal(std::size_t k, std::uint32_t& window) const;
+  // The normal from broken bond k's window: (index, weight) pairs.
+  dem::Vec3 normalOf(std::size_t k, std::span<const std::pair<std::size_t, double>> near) const;
   static constexpr std::uint32_t kSettledWindow = 24;
 
   bool m_flat;
   double m_radius;
-  std::vector<std::uint8_t> m_broken;   // [M]
-  std::vector<dem::Vec3> m_mid;         // [M] reference midpoints of broken bonds
-  std::vector<dem::Vec3> m_axis;        // [M] unit reference directions
-  std::vector<dem::Vec3> m_normal;      // [M]
-  std::vector<std::uint32_t> m_window;  // [M] midpoints in the window when last found
-  std::unordered_map<std::uint64_t, std::vector<std::int32_t>> m_cells;
+  // Per bond its index among the broken ones (-1: intact) [M]; per broken
+  // bond, in the order they broke, what its normal is found from [K].
+  std::vector<std::int32_t> m_index;
+  std::vector<dem::Vec3> m_mid;   // reference midpoints
+  std::vector<dem::Vec3> m_axis;  // unit reference directions
+  std::vector<dem::Vec3> m_normal;
+  std::vector<std::uint32_t> m_window;  // midpoints in the window when last found
+  std::vector<std::uint8_t> m_stale;    // scratch of add(), all 0 between calls
+  // The broken bonds' midpoints by grid cell (of size R), kept beside their
+  // ids so a window's search reads each cell's entries in a row.
+  struct Entry {
+    dem::Vec3 mid;
+    std::int32_t index;  // among the broken bonds
+  };
+  // Open addressing over the cells' keys (a power of two of slots).
+  struct Slot {
+    std::uint64_t key = kNoCell;
+    std::int32_t list = -1;  // into m_lists
+  };
+  static constexpr std::uint64_t kNoCell = ~std::uint64_t{0};
+  const std::vector<Entry>* findCell(std::uint64_t key) const;
+  std::vector<Entry>& cell(std::uint64_t key);
+  std::vector<Slot> m_slots = std::vector<Slot>(1024);
+  std::vector<std::vector<Entry>> m_lists;
   std::size_t m_computed = 0;
 };
 

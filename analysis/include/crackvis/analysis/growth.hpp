@@ -1,9 +1,12 @@
 // All analyses of one run, step by step, and the crack's growth.
 //
 // CrackAnalysis is fed each step's input and extracted crack mesh, in step
-// order (as the extractors are), and keeps what is incremental: fragments
-// are found again only when a bond broke, and each bond's mode is decided
-// the step it breaks.
+// order (as the extractors are), and keeps what is incremental: the bond
+// states are compared with the last step's once, and what follows breaks
+// reads only the new ones; the crack's components weld only the new faces
+// (cracks::ComponentTracker); fragments are found again only when a new
+// break may have split one; each bond's mode is decided the step it breaks.
+// Stepping back (a bond heals) starts them over.
 //
 // Growth per step: the total crack area, the main crack's (the largest
 // component's) area and bounding box, and its front (crackFront): the main
@@ -57,7 +60,7 @@ class CrackAnalysis {
                        std::span<const Vec3> reference, const CrackMesh& mesh,
                        std::span<const double> recordedModes = {});
 
-  const CrackComponents& components() const { return m_components; }
+  const CrackComponents& components() const { return m_components.current(); }
   const ElementOpenings& openings() const { return m_openings; }
   const Fragments& fragments() const { return m_fragments.current(); }
   const FragmentTracker& fragmentTracker() const { return m_fragments; }
@@ -67,7 +70,8 @@ class CrackAnalysis {
  private:
   const dem::Lattice& m_lattice;
   AnalysisOptions m_options;
-  CrackComponents m_components;
+  BondDiffer m_bondDiff;
+  cracks::ComponentTracker m_components;
   ElementOpenings m_openings;
   BondNormals m_normals;
   FragmentTracker m_fragments;

@@ -32,6 +32,7 @@
 #include <span>
 #include <vector>
 
+#include <crackvis/analysis/bond_diff.hpp>
 #include <crackvis/analysis/opening.hpp>
 
 namespace crackvis::analysis {
@@ -97,15 +98,28 @@ class BreakModeTracker {
   void update(int step, std::span<const dem::Bond> bonds, std::span<const std::uint8_t> bondState,
               std::span<const Vec3> reference, std::span<const Vec3> current,
               std::span<const float> bondForce, std::span<const double> recorded = {});
+  // The same, where the bonds new since the last step are known (`diff`,
+  // of these states): only those are read.
+  void update(int step, std::span<const dem::Bond> bonds, const BondDiff& diff,
+              std::span<const std::uint8_t> bondState, std::span<const Vec3> reference,
+              std::span<const Vec3> current, std::span<const float> bondForce,
+              std::span<const double> recorded = {});
   const std::vector<BondBreak>& breaks() const { return m_breaks; }
   std::size_t count(BreakMode mode) const;
   std::size_t countUpTo(BreakMode mode, int step) const;
 
  private:
-  std::vector<std::uint8_t> m_seen;  // bond state of the previous step
-  std::vector<float> m_lastForce;    // force at the last step seen intact
+  void classify(int step, std::size_t b, std::span<const dem::Bond> bonds,
+                std::span<const Vec3> reference, std::span<const Vec3> current,
+                std::span<const double> recorded);
+  void rememberForce(std::span<const float> bondForce, std::size_t bondCount);
+
+  std::vector<std::uint8_t> m_seen;    // 1: broken at a step seen (classified or before the run)
+  std::vector<float> m_previousForce;  // the previous step's force (NaN: none)
   bool m_first = true;
   std::vector<BondBreak> m_breaks;
+  std::size_t m_tension = 0;
+  std::size_t m_shear = 0;
 };
 
 }  // namespace crackvis::analysis

@@ -8,7 +8,9 @@
 // (the same rule as SurfaceMetrics::components). For each: its area (2D:
 // length), bounding box, area-weighted centroid and best-fit plane (the
 // least-squares plane of the surface, through the second moments of its
-// triangles; in 2D the best-fit line in the xy plane).
+// triangles; in 2D the best-fit line in the xy plane; for a component of
+// one polygon its plane by Newell's normal, the same for a planar polygon,
+// and of one segment its line).
 //
 // The cell attribute method gives cells, not a surface (CrackMesh::holdsCells):
 // a component is a set of cells joined through shared faces (3D) or edges
@@ -34,6 +36,7 @@
 
 #include <crackvis/cracks/crack_mesh.hpp>
 #include <crackvis/cracks/extractor.hpp>
+#include <crackvis/cracks/surface_primitives.hpp>
 
 namespace crackvis::cracks {
 
@@ -60,6 +63,42 @@ struct CrackComponents {
 };
 
 CrackComponents findComponents(const CrackMesh& mesh);
+
+// findComponents kept across the steps of a run, for a viewer or an analysis
+// that is fed the steps in order. Where a surface's every polygon (3D) or
+// line (2D) carries one bond of its own (cell data bond_id: local Voronoi,
+// cell centre) and the faces are made once per bond and carried with the
+// particles (`carried`: the step has a reference configuration), two faces
+// that shared a point keep sharing it, and faces only come as bonds break.
+// So only the faces of bonds new since the last step are welded: against
+// each other, and against the old faces' points that fall near them. The
+// components' areas, boxes and planes are summed anew each step (the faces
+// move). Anything else (cells, cell cut's point bond ids, no reference
+// configuration, a bond that left the mesh or holds two cells) is found
+// anew by findComponents, and the tracker starts over.
+class ComponentTracker {
+ public:
+  const CrackComponents& update(const CrackMesh& mesh, bool carried);
+  const CrackComponents& current() const { return m_components; }
+  // How often update() found the components of the whole mesh anew.
+  std::size_t recomputations() const { return m_recomputations; }
+
+ private:
+  bool updateCarried(const CrackMesh& mesh);
+  void weldNewFaces(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
+                    const std::vector<std::int32_t>& slots, std::int32_t oldSlots);
+  void unite(std::int32_t a, std::int32_t b);
+  std::int32_t slotOf(std::size_t bond);
+  void reset();
+
+  std::vector<std::int32_t> m_slotOfBond;  // -1: no face yet
+  std::vector<std::int32_t> m_parent;      // union-find over slots
+  std::vector<std::int64_t> m_cellOfSlot;  // the slot's cell this step
+  std::vector<std::uint32_t> m_seenAt;     // the step stamp a slot was last seen at
+  std::uint32_t m_stamp = 0;
+  CrackComponents m_components;
+  std::size_t m_recomputations = 0;
+};
 
 // The index, among all the mesh's primitives in VTK order (cell data order),
 // of the first one ofPrimitive numbers.

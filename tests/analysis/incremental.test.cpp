@@ -1,0 +1,262 @@
+// The analyses kept across steps (issue 33 point 6) against the same
+// analyses found anew at every step: the crack's components, the fragments,
+// the normals and the break modes must not depend on how they were reached.
+#include <algorithm>
+#include <cmath>
+
+#include "analysis_fixtures.hpp"
+#include <crackvis/analysis/bond_diff.hpp>
+#include <crackvis/cracks/crack_components.hpp>
+
+using namespace crackvis;
+using namespace crackvis::analysis;
+
+namespace {
+
+// A planted crack with a lot of scattered damage: many small components
+// beside the main one, and particles freed as dust.
+struct Run {
+  dem::LatticeBlock block;
+  std::vector<dem::StepState> steps;
+};
+
+Run plantedRun(dem::LatticeKind kind, std::array<int, 3> sites, double scatter) {
+  dem::BlockSpec spec;
+  spec.kind = kind;
+  spec.sites = sites;
+  spec.radius = 0.5;
+  Run run{dem::generateBlock(spec).value(), {}};
+  dem::PlantedCrackSpec planted;
+  planted.steps = 8;
+  planted.scatter = scatter;
+  planted.opening = 0.3;
+  auto crack = dem::PlantedCrack::create(run.block.lattice, run.block.positions, planted);
+  REQUIRE(crack);
+  for (int k = 0; k < crack->stepCount(); ++k) {
+    run.steps.push_back(crack->step(k));
+  }
+  return run;
+}
+
+cracks::StepInput inputOf(const Run& run, const dem::StepState& state) {
+  return {state.positions,
+          state.bondState,
+          run.block.lattice.radius,
+          {},
+          {},
+          run.block.positions,
+          {},
+          {}};
+}
+
+void requireSameComponents(const cracks::CrackComponents& kept,
+                           const cracks::CrackComponents& anew) {
+  REQUIRE(kept.components.size() == anew.components.size());
+  CHECK(kept.ofPrimitive == anew.ofPrimitive);
+  for (std::size_t c = 0; c < anew.components.size(); ++c) {
+    CHECK(kept.components[c].primitives == anew.components[c].primitives);
+    CHECK(kept.components[c].area == anew.components[c].area);
+    CHECK(dem::norm(kept.components[c].normal - anew.components[c].normal) == 0.0);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("components kept across steps equal the components found anew at each step",
+          "[analysis][incremental]") {
+  struct Case {
+    dem::LatticeKind kind;
+    std::array<int, 3> sites;
+  };
+  for (const Case& c : {Case{dem::LatticeKind::kFcc, dem::fccUnitCells(5, 4, 4)},
+                        Case{dem::LatticeKind::kTriangular, {24, 20, 1}}}) {
+    const Run run = plantedRun(c.kind, c.sites, 0.03);
+    const cracks::BondGraph graph(run.block.lattice.particleCount(), run.block.lattice.bonds);
+    for (const cracks::Method method : {cracks::Method::kLocalVoronoi, cracks::Method::kCellCentre,
+                                        cracks::Method::kCellCut, cracks::Method::kCellAttribute}) {
+      const std::string what =
+          std::string(dem::toString(c.kind)) + " " + std::string(cracks::toString(method));
+      CAPTURE(what);
+      auto extractor = cracks::makeExtractor(method, graph, dem::dimensionOf(c.kind));
+      cracks::ComponentTracker tracker;
+      cracks::CrackMesh mesh;
+      std::size_t largest = 0;
+      for (const dem::StepState& state : run.steps) {
+        REQUIRE(extractor->extract(inputOf(run, state), mesh));
+        requireSameComponents(tracker.update(mesh, true), cracks::findComponents(mesh));
+        largest = std::max(largest, tracker.current().components.size());
+      }
+      // Local Voronoi and cell centre carry a bond per face: only the new
+      // faces are welded, and there are many pieces to join or keep apart.
+      // The others are found anew at every step.
+      const bool kept =
+          method == cracks::Method::kLocalVoronoi || method == cracks::Method::kCellCentre;
+      CHECK((largest > 5 || !kept));
+      CHECK(tracker.recomputations() == (kept ? 0u : run.steps.size()));
+
+      // A viewer stepping back: faces leave, and the tracker starts over.
+      const std::size_t before = tracker.recomputations();
+      REQUIRE(extractor->extract(inputOf(run, run.steps[3]), mesh));
+      requireSameComponents(tracker.update(mesh, true), cracks::findComponents(mesh));
+      CHECK(tracker.recomputations() == before + 1);
+    }
+  }
+}
+
+TEST_CASE("components are found anew for a mesh not carried from a reference configuration",
+          "[analysis][incremental]") {
+  const Run run = plantedRun(dem::LatticeKind::kFcc, dem::fccUnitCells(4, 4, 4), 0.02);
+  const cracks::BondGraph graph(run.block.lattice.particleCount(), run.block.lattice.bonds);
+  auto extractor = cracks::makeExtractor(cracks::Method::kLocalVoronoi, graph, 3);
+  cracks::ComponentTracker tracker;
+  cracks::CrackMesh mesh;
+  for (const dem::StepState& state : run.steps) {
+    const cracks::StepInput input{
+        state.positions, state.bondState, run.block.lattice.radius, {}, {}, {}, {}, {}};
+    REQUIRE(extractor->extract(input, mesh));
+    requireSameComponents(tracker.update(mesh, false), cracks::findComponents(mesh));
+  }
+  CHECK(tracker.recomputations() == run.steps.size());
+}
+
+TEST_CASE("fragments kept across steps equal the fragments found anew at each step",
+          "[analysis][incremental]") {
+  const Run run = plantedRun(dem::LatticeKind::kFcc, dem::fccUnitCells(5, 4, 4), 0.3);
+  const auto& lattice = run.block.lattice;
+  BondDiffer differ;
+  FragmentTracker tracker;
+  std::size_t most = 0;
+  for (const dem::StepState& state : run.steps) {
+    const BondDiff& diff = differ.update(state.bondState);
+    const Fragments& kept =
+        tracker.update(lattice.bonds, state.bondState, lattice.radius, 3, &diff);
+    const Fragments anew = findFragments(lattice.bonds, state.bondState, lattice.radius, 3);
+    REQUIRE(kept.fragments.size() == anew.fragments.size());
+    CHECK(kept.ofParticle == anew.ofParticle);
+    CHECK(kept.totalVolume == anew.totalVolume);
+    most = std::max(most, anew.fragments.size());
+  }
+  // The last step splits the block in two; dust was freed on the way; yet
+  // most steps with new breaks were decided near the breaks.
+  CHECK(most > 2);
+  CAPTURE(most, tracker.recomputations());
+  CHECK(tracker.recomputations() < run.steps.size() - 1);
+  CHECK(tracker.recomputations() >= 2);
+}
+
+TEST_CASE("a freed particle and a bond broken twice over are seen by the fragment floods",
+          "[analysis][incremental]") {
+  const Run run = plantedRun(dem::LatticeKind::kFcc, dem::fccUnitCells(3, 3, 3), 0.0);
+  const auto& lattice = run.block.lattice;
+  std::vector<std::uint8_t> state(lattice.bonds.size(), 0);
+  BondDiffer differ;
+  FragmentTracker tracker;
+  tracker.update(lattice.bonds, state, lattice.radius, 3, &differ.update(state));
+  // One bond of particle 7: it stays joined through its other bonds.
+  std::vector<std::size_t> bondsOf7;
+  for (std::size_t b = 0; b < lattice.bonds.size(); ++b) {
+    if (lattice.bonds[b].first == 7 || lattice.bonds[b].second == 7) {
+      bondsOf7.push_back(b);
+    }
+  }
+  REQUIRE(bondsOf7.size() > 2);
+  state[bondsOf7[0]] = 1;
+  CHECK(tracker.update(lattice.bonds, state, lattice.radius, 3, &differ.update(state))
+            .fragments.size() == 1);
+  CHECK(tracker.recomputations() == 1);
+  // All the others at once: particle 7 is a fragment of its own.
+  for (std::size_t b : bondsOf7) {
+    state[b] = 1;
+  }
+  const Fragments& freed =
+      tracker.update(lattice.bonds, state, lattice.radius, 3, &differ.update(state));
+  REQUIRE(freed.fragments.size() == 2);
+  CHECK(freed.fragments.back().particles == 1);
+  CHECK(freed.ofParticle[7] == 1);
+  // A bond heals (a viewer going back): start over, still right.
+  state[bondsOf7[1]] = 0;
+  CHECK(tracker.update(lattice.bonds, state, lattice.radius, 3, &differ.update(state))
+            .fragments.size() == 1);
+}
+
+TEST_CASE("normals and break modes read from the new breaks equal those from all bond states",
+          "[analysis][incremental]") {
+  const Run run = plantedRun(dem::LatticeKind::kFcc, dem::fccUnitCells(5, 4, 4), 0.03);
+  const auto& lattice = run.block.lattice;
+  BondDiffer differ;
+  BondNormals fromDiff(3);
+  BondNormals fromStates(3);
+  BreakModeTracker modesFromDiff;
+  BreakModeTracker modesFromStates;
+  std::vector<float> force(lattice.bonds.size());
+  for (std::size_t k = 0; k < run.steps.size(); ++k) {
+    const dem::StepState& state = run.steps[k];
+    // A made-up force: compressive on every third bond, so the rule's
+    // force branch is taken too.
+    for (std::size_t b = 0; b < force.size(); ++b) {
+      force[b] = static_cast<float>((b % 3 == 0 ? -1.0 : 1.0) * static_cast<double>(k + 1));
+    }
+    const BondDiff& diff = differ.update(state.bondState);
+    fromDiff.update(lattice.bonds, diff, state.bondState, run.block.positions);
+    fromStates.update(lattice.bonds, state.bondState, run.block.positions);
+    modesFromDiff.update(static_cast<int>(k), lattice.bonds, diff, state.bondState,
+                         run.block.positions, state.positions, force);
+    modesFromStates.update(static_cast<int>(k), lattice.bonds, state.bondState, run.block.positions,
+                           state.positions, force);
+    CHECK(diff.broken ==
+          static_cast<std::size_t>(std::count_if(state.bondState.begin(), state.bondState.end(),
+                                                 [](auto s) { return s != 0; })));
+  }
+  std::size_t broken = 0;
+  for (std::size_t b = 0; b < lattice.bonds.size(); ++b) {
+    if (run.steps.back().bondState[b] != 0) {
+      ++broken;
+      CHECK(dem::norm(fromDiff.normal(b) - fromStates.normal(b)) == 0.0);
+      CHECK(dem::norm(fromDiff.normal(b)) == Approx(1.0));
+    }
+  }
+  CHECK(broken > 100);
+  REQUIRE(modesFromDiff.breaks().size() == modesFromStates.breaks().size());
+  CHECK(modesFromDiff.breaks().size() > 100);
+  for (std::size_t k = 0; k < modesFromDiff.breaks().size(); ++k) {
+    CHECK(modesFromDiff.breaks()[k].bond == modesFromStates.breaks()[k].bond);
+    CHECK(modesFromDiff.breaks()[k].mode == modesFromStates.breaks()[k].mode);
+  }
+  CHECK(modesFromDiff.count(BreakMode::kShear) > 0);
+  CHECK(modesFromDiff.count(BreakMode::kTension) > 0);
+  CHECK(modesFromDiff.count(BreakMode::kShear) == modesFromStates.count(BreakMode::kShear));
+}
+
+TEST_CASE("the smallest eigenvector in closed form, and by rotations where that is inaccurate",
+          "[analysis][incremental]") {
+  // R diag(l0, l1, l2) R^T for a rotation R about a tilted axis.
+  const auto rotated = [](std::array<double, 3> eigen) {
+    const double c = std::cos(0.7);
+    const double s = std::sin(0.7);
+    const cracks::Matrix3 r{{{c, -s, 0.0}, {s * 0.6, c * 0.6, -0.8}, {s * 0.8, c * 0.8, 0.6}}};
+    cracks::Matrix3 a{};
+    for (std::size_t i = 0; i < 3; ++i) {
+      for (std::size_t j = 0; j < 3; ++j) {
+        for (std::size_t k = 0; k < 3; ++k) {
+          a[i][j] += r[i][k] * eigen[k] * r[j][k];
+        }
+      }
+    }
+    return std::pair{a, dem::Vec3{r[0][0], r[1][0], r[2][0]}};  // the first column: eigen[0]'s
+  };
+  // A flat crack: one small eigenvalue far below the others.
+  for (const double small : {0.0, 1e-9, 1e-3, 0.2}) {
+    const auto [a, expected] = rotated({small, 1.0, 2.5});
+    const dem::Vec3 v = cracks::smallestEigenvector(a);
+    CHECK(std::abs(dem::dot(v, expected)) == Approx(1.0).epsilon(1e-10));
+  }
+  // Two equal small eigenvalues (a line-like component): any unit vector of
+  // their plane, which is what the rotations give.
+  const auto [a, expected] = rotated({1.0, 1.0, 3.0});
+  const dem::Vec3 v = cracks::smallestEigenvector(a);
+  CHECK(dem::norm(v) == Approx(1.0));
+  const dem::Vec3 third{a[0][0] * v.x + a[0][1] * v.y + a[0][2] * v.z,
+                        a[1][0] * v.x + a[1][1] * v.y + a[1][2] * v.z,
+                        a[2][0] * v.x + a[2][1] * v.y + a[2][2] * v.z};
+  CHECK(dem::norm(third - v) == Approx(0.0).margin(1e-9));  // A v = 1 v
+}
