@@ -146,11 +146,10 @@ void BreakModeTracker::classify(int step, std::size_t b, std::span<const dem::Bo
 }
 
 void BreakModeTracker::rememberForce(std::span<const float> bondForce, std::size_t bondCount) {
-  if (bondForce.empty()) {
-    m_previousForce.assign(bondCount, std::numeric_limits<float>::quiet_NaN());
-  } else {
-    m_previousForce.assign(bondForce.begin(), bondForce.end());
-  }
+  // Without forces nothing is kept: a bond past the end reads as no force.
+  m_previousForce.assign(
+      bondForce.begin(),
+      bondForce.begin() + static_cast<std::ptrdiff_t>(std::min(bondForce.size(), bondCount)));
 }
 
 void BreakModeTracker::update(int step, std::span<const dem::Bond> bonds,
