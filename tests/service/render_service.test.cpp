@@ -1319,6 +1319,24 @@ TEST_CASE(
   }
   CHECK(json.at("targets").at("interactive_spheres_at_most_2x_reduction").is_boolean());
   CHECK(json.at("load_before").size() == 3);
+  // The time to the first picture (issue 34 point 1): three sessions opened
+  // and closed, each timed from OpenSession to its first full-resolution
+  // frame, with the server's parts, which happen inside that time.
+  const auto& first = json.at("first_picture");
+  REQUIRE(first.at("opens").size() == 3);
+  for (const auto& open : first.at("opens")) {
+    const auto& server = open.at("server");
+    CHECK(open.at("total_ms").get<double>() == Approx(open.at("open_session_ms").get<double>() +
+                                                      open.at("first_frame_ms").get<double>()));
+    CHECK(server.at("open_file_ms").get<double>() > 0.0);  // each session opens the file
+    CHECK(server.at("renderer_ms").get<double>() > 0.0);
+    CHECK(server.at("extract_ms").get<double>() > 0.0);
+    CHECK(server.at("render_ms").get<double>() > 0.0);
+    CHECK(server.at("encode_ms").get<double>() > 0.0);
+    CHECK(open.at("other_ms").get<double>() >= 0.0);
+  }
+  CHECK(first.at("first") == first.at("opens").front());
+  CHECK(first.at("later_median").at("total_ms").get<double>() > 0.0);
 }
 
 TEST_CASE("a session at the largest view stays within its memory bound, and closing frees it",

@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <map>
 #include <mutex>
+#include <numeric>
 #include <thread>
 
 #include <fmt/format.h>
@@ -44,6 +45,7 @@ struct RenderBenchOptions {
   double seconds = 5.0;
   double eventRate = 60.0;  // events per second, a mouse drag's rate
   int stillFrames = 10;     // isolated camera moves answered at full resolution
+  int firstPictures = 3;    // sessions opened and closed for the time to the first picture
   tls::TlsFiles tls = tls::defaultTlsFiles("client");
   std::string token;
   bool jsonOnly = false;
@@ -136,8 +138,18 @@ class FrameCollector {
   std::thread m_thread;
 };
 
+// One open of the file as a user's first look at it: OpenSession, attach,
+// until the first full-resolution frame is received; then the session closes.
+struct FirstPicture {
+  double openSessionMs = 0.0;  // the OpenSession call, as the client waits for it
+  double firstFrameMs = 0.0;   // attaching until the first full-resolution frame is received
+  v1::FrameTimings server;     // that frame's timings, as the server measured them
+  double totalMs() const { return openSessionMs + firstFrameMs; }
+};
+
 struct Report {
   std::string backend;
+  std::vector<FirstPicture> firstPictures;
   int width = 0;
   int height = 0;
   std::int64_t particles = 0;
@@ -205,6 +217,62 @@ void authorize(grpc::ClientContext& context, const RenderBenchOptions& options) 
   }
 }
 
+Result<FirstPicture> timeFirstPicture(v1::RenderService::Stub& stub,
+                                      const RenderBenchOptions& options,
+                                      const pipeline::PipelineDescription& d,
+                                      const std::shared_ptr<grpc::Channel>& channel) {
+  FirstPicture picture;
+  grpc::ClientContext openContext;
+  authorize(openContext, options);
+  v1::OpenSessionRequest open;
+  open.set_pipeline_xml(pipeline::toXml(d));
+  v1::OpenSessionResponse opened;
+  const auto start = Clock::now();
+  CRACKVIS_RETURN_IF_ERROR(
+      rpc::fromGrpcStatus(stub.OpenSession(&openContext, open, &opened), "OpenSession",
+                          {rpc::ServerKind::kRender, options.server}, channel));
+  const auto attached = Clock::now();
+  picture.openSessionMs = ms(attached - start);
+  Status status;
+  {
+    grpc::ClientContext streamContext;
+    authorize(streamContext, options);
+    auto stream = stub.Stream(&streamContext);
+    v1::ClientEvent attach;
+    attach.set_attach_session_id(opened.session_id());
+    stream->Write(attach);
+    FrameCollector collector(stream.get());
+    const auto full = [](const auto& frames) {
+      return std::any_of(frames.begin(), frames.end(),
+                         [](const FrameRecord& f) { return f.frame.full_resolution(); });
+    };
+    if (collector.waitFor(full, 120.0)) {
+      for (const FrameRecord& record : collector.frames()) {
+        if (record.frame.full_resolution()) {
+          picture.firstFrameMs = ms(record.received - attached);
+          picture.server = record.frame.timings();
+          break;
+        }
+      }
+    } else {
+      status = Status(StatusCode::kUnavailable,
+                      fmt::format("no first frame within 120 s{}", serverErrors(collector)));
+    }
+    stream->WritesDone();
+    streamContext.TryCancel();
+  }
+  grpc::ClientContext closeContext;
+  authorize(closeContext, options);
+  v1::CloseSessionRequest close;
+  close.set_session_id(opened.session_id());
+  v1::CloseSessionResponse closed;
+  (void)stub.CloseSession(&closeContext, close, &closed);
+  if (!status) {
+    return status;
+  }
+  return picture;
+}
+
 Result<Report> run(const RenderBenchOptions& options) {
   CRACKVIS_RETURN_IF_ERROR(checkHostPort("--server", options.server));
   auto material = tls::loadTlsMaterial(options.tls);
@@ -239,6 +307,14 @@ Result<Report> run(const RenderBenchOptions& options) {
   const auto channel = std::move(created).value();
   auto stub = v1::RenderService::NewStub(channel);
   const LoadAverage loadBefore = loadAverage();
+  std::vector<FirstPicture> firstPictures;
+  for (int k = 0; k < options.firstPictures; ++k) {
+    auto picture = timeFirstPicture(*stub, options, d, channel);
+    if (!picture) {
+      return picture.status();
+    }
+    firstPictures.push_back(*picture);
+  }
 
   grpc::ClientContext openContext;
   authorize(openContext, options);
@@ -249,6 +325,7 @@ Result<Report> run(const RenderBenchOptions& options) {
       rpc::fromGrpcStatus(stub->OpenSession(&openContext, open, &opened), "OpenSession",
                           {rpc::ServerKind::kRender, options.server}, channel));
   Report report;
+  report.firstPictures = std::move(firstPictures);
   report.backend = opened.backend();
   report.loadBefore = loadBefore;
   report.width = d.view.width;
@@ -414,6 +491,45 @@ Result<Report> run(const RenderBenchOptions& options) {
   return finish(Status::ok());
 }
 
+nlohmann::json toJson(const FirstPicture& p) {
+  const v1::FrameTimings& s = p.server;
+  const double server = s.open_ms() + s.renderer_ms() + s.load_ms() + s.extract_ms() +
+                        s.scene_ms() + s.render_ms() + s.encode_ms();
+  return {{"total_ms", p.totalMs()},
+          {"open_session_ms", p.openSessionMs},
+          {"first_frame_ms", p.firstFrameMs},
+          {"server",
+           {{"open_file_ms", s.open_ms()},
+            {"renderer_ms", s.renderer_ms()},
+            {"load_ms", s.load_ms()},
+            {"extract_ms", s.extract_ms()},
+            {"scene_ms", s.scene_ms()},
+            {"render_ms", s.render_ms()},
+            {"encode_ms", s.encode_ms()}}},
+          {"other_ms", p.totalMs() - server}};
+}
+
+// The first open, and the median of the later ones by their total.
+nlohmann::json firstPictureJson(const std::vector<FirstPicture>& opens) {
+  nlohmann::json all = nlohmann::json::array();
+  for (const FirstPicture& p : opens) {
+    all.push_back(toJson(p));
+  }
+  nlohmann::json out{{"opens", all}};
+  if (!opens.empty()) {
+    out["first"] = all.front();
+  }
+  if (opens.size() > 1) {
+    std::vector<std::size_t> later(opens.size() - 1);
+    std::iota(later.begin(), later.end(), std::size_t{1});
+    std::sort(later.begin(), later.end(), [&](std::size_t a, std::size_t b) {
+      return opens[a].totalMs() < opens[b].totalMs();
+    });
+    out["later_median"] = all[later[later.size() / 2]];
+  }
+  return out;
+}
+
 nlohmann::json toJson(const Report& r) {
   std::vector<double> reductions(r.reductions.begin(), r.reductions.end());
   const double fps = r.interactionSeconds > 0
@@ -424,6 +540,7 @@ nlohmann::json toJson(const Report& r) {
                         {"particles", r.particles},
                         {"step", r.step},
                         {"first_frame_ms", r.firstFrameMs},
+                        {"first_picture", firstPictureJson(r.firstPictures)},
                         {"events", r.events},
                         {"event_to_frame_ms", summaryJson(r.latencies)},
                         {"interactive_fps", fps},
@@ -453,6 +570,28 @@ nlohmann::json toJson(const Report& r) {
                            r.interactiveFrames > 0 && r.dragSpheresAtMost2x}}}};
 }
 
+void printFirstPicture(const nlohmann::json& first) {
+  auto line = [](const char* what, const nlohmann::json& p) {
+    const auto& s = p["server"];
+    std::printf(
+        "%s %8.1f ms = OpenSession %.1f + first frame %.1f; server: file opened %.1f, renderer "
+        "%.1f, step read %.1f, extraction %.1f, scene %.1f, render %.1f, encode %.1f; other "
+        "%.1f\n",
+        what, p["total_ms"].get<double>(), p["open_session_ms"].get<double>(),
+        p["first_frame_ms"].get<double>(), s["open_file_ms"].get<double>(),
+        s["renderer_ms"].get<double>(), s["load_ms"].get<double>(), s["extract_ms"].get<double>(),
+        s["scene_ms"].get<double>(), s["render_ms"].get<double>(), s["encode_ms"].get<double>(),
+        p["other_ms"].get<double>());
+  };
+  if (first.contains("first")) {
+    std::printf("time to first picture (OpenSession to the first full-resolution frame):\n");
+    line("  first open  ", first["first"]);
+  }
+  if (first.contains("later_median")) {
+    line("  later, p50  ", first["later_median"]);
+  }
+}
+
 void printTable(const nlohmann::json& j) {
   std::printf(
       "crackvis bench render: %s, %lld particles, step %d\n%s\nmachine: %s; load before %s, after "
@@ -468,6 +607,7 @@ void printTable(const nlohmann::json& j) {
     std::printf("%-34s %10.2f %10.2f %10.2f %10.2f\n", key, s["mean"].get<double>(),
                 s["p50"].get<double>(), s["p90"].get<double>(), s["p99"].get<double>());
   }
+  printFirstPicture(j["first_picture"]);
   std::printf("\nfirst frame after attaching       %10.1f ms\n", j["first_frame_ms"].get<double>());
   std::printf("frames per second while dragging  %10.1f\n", j["interactive_fps"].get<double>());
   std::printf("bitrate while dragging            %10.2f Mbit/s\n",
@@ -506,7 +646,9 @@ Command addBenchRenderCommand(CLI::App& bench) {
   auto options = std::make_shared<RenderBenchOptions>();
   auto* command = bench.add_subcommand(
       "render",
-      "Interactive and still rendering against a running crackvis-render: opens a session "
+      "Interactive and still rendering against a running crackvis-render: first the time to "
+      "the first picture (--first-pictures sessions, each timed from OpenSession to its first "
+      "full-resolution frame, split into the server's parts), then opens a session "
       "(particles as sphere impostors + crack surfaces), drags the camera with rotate events "
       "(the interactive event-to-frame latency), then makes --still-frames isolated still camera "
       "moves, each answered by a full-resolution frame (the full-resolution event-to-frame "
@@ -536,6 +678,13 @@ Command addBenchRenderCommand(CLI::App& bench) {
                    "isolated camera moves answered at full resolution (0: none)")
       ->capture_default_str()
       ->check(CLI::Range(0, 1000));
+  command
+      ->add_option("--first-pictures", options->firstPictures,
+                   "sessions opened, each until its first full-resolution frame, and closed "
+                   "before the drag: the time to the first picture, the first open (cold on "
+                   "services started fresh) and the median of the others (warm)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 100));
   command->add_option("--ca", options->tls.ca, "CA certificate that signed the server's (PEM)")
       ->capture_default_str();
   command->add_option("--cert", options->tls.cert, "client certificate (PEM)")

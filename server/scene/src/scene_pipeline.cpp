@@ -267,8 +267,11 @@ Status ScenePipeline::apply(pipeline::PipelineDescription next) {
   const bool newSelection = !sameSelection(next.cracks, m_state.description.cracks);
   const bool stepChanged = next.step != m_state.description.step;
   const int shown = m_state.current ? m_state.current->index : -1;
+  double openMs = 0.0;
   if (reopen) {
+    const auto start = std::chrono::steady_clock::now();
     CRACKVIS_RETURN_IF_ERROR(openFile(next));
+    openMs = millisecondsSince(start);
   }
   const int target = newFile || stepChanged ? resolveStep(next.step, stepCount()) : shown;
   CRACKVIS_RETURN_IF_ERROR(source::checkStepInRange(next.file, target, stepCount()));
@@ -283,7 +286,9 @@ Status ScenePipeline::apply(pipeline::PipelineDescription next) {
     CRACKVIS_RETURN_IF_ERROR(scanSeries());
   }
   if (reopen || target != shown) {
-    return showStep(target);
+    CRACKVIS_RETURN_IF_ERROR(showStep(target));
+    m_timings.openMs = openMs;
+    return Status::ok();
   }
   if (newExtractor || newSelection) {
     m_timings = {};

@@ -64,6 +64,7 @@ Status Session::Worker::needRenderer() const {
 
 void Session::Worker::noteStepTimings() {
   stepTimings = {};
+  stepTimings.openMs = scene->timings().openMs;
   stepTimings.loadMs = scene->timings().loadMs;
   stepTimings.extractMs = scene->timings().extractMs;
 }
@@ -94,12 +95,15 @@ Status Session::Worker::start() {
   noteStepTimings();
   width = d.view.width;
   height = d.view.height;
+  const auto rendererStart = Clock::now();
   auto created = render::SceneRenderer::create(width, height);
   if (!created) {
     return created.status();
   }
   renderer = std::move(created).value();
+  const double rendererMs = millisecondsSince(rendererStart);
   CRACKVIS_RETURN_IF_ERROR(buildScene(false));
+  stepTimings.rendererMs = rendererMs;
   const dem::Lattice& lattice = scene->source().lattice();
   session.m_info.stepCount = stepCount();
   session.m_info.particleCount = static_cast<std::int64_t>(lattice.particleCount());

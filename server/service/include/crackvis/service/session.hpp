@@ -38,6 +38,8 @@
 namespace crackvis::service {
 
 struct FrameTimings {
+  double openMs = 0.0;      // the file opened for this frame (summary, lattice, first step)
+  double rendererMs = 0.0;  // the EGL context and renderer made for this frame
   double loadMs = 0.0;
   double extractMs = 0.0;
   double sceneMs = 0.0;
