@@ -553,7 +553,8 @@ TEST_CASE("the step plot shows the broken bonds of every step and goes to a clic
   openCuboid(window, *services.render);
   const client::StepHistory& history = window.stepPlot().history();
   const int steps = window.client().stepCount();
-  REQUIRE(static_cast<int>(history.brokenBonds.size()) == steps);
+  // The history is asked for off the window's thread and arrives later.
+  REQUIRE(spinUntil([&] { return static_cast<int>(history.brokenBonds.size()) == steps; }, 10000));
   REQUIRE(static_cast<int>(history.time.size()) == steps);
   // Against the file's own bond states, step by step (the plot counts
   // /bonds/break_step).
@@ -585,8 +586,15 @@ TEST_CASE("the step plot shows the broken bonds of every step and goes to a clic
 
   // The crack's numbers of the panel's method join the series: the crack
   // area drawn against the broken bonds, which grow to the last step.
+  // The window stays responsive while the server computes them: a step
+  // change goes through meanwhile.
   window.crackNumbersButton().click();
   const client::StepHistory& withCracks = window.stepPlot().history();
+  CHECK_FALSE(withCracks.scalarNames.contains(QStringLiteral("total_area")));  // not yet
+  window.stepSlider().setValue(steps / 3);
+  REQUIRE(spinUntil([&] { return withCracks.scalarNames.contains(QStringLiteral("total_area")); },
+                    60000));
+  CHECK(spinUntil([&] { return window.client().step() == steps / 3; }, 10000));
   const auto areaSeries = withCracks.scalarNames.indexOf(QStringLiteral("total_area"));
   REQUIRE(areaSeries >= 0);
   const std::vector<double>& crackArea = withCracks.scalars[static_cast<std::size_t>(areaSeries)];

@@ -51,6 +51,10 @@ RenderClient::RenderClient(QObject* parent) : QObject(parent), m_impl(std::make_
 }
 
 RenderClient::~RenderClient() {
+  if (m_impl->historyCall.joinable()) {
+    m_impl->historyContext->TryCancel();
+    m_impl->historyCall.join();  // its answer, posted to this object, is dropped with it
+  }
   closeSession();
 }
 
@@ -118,15 +122,16 @@ Result<std::vector<FileEntry>> RenderClient::listFiles() {
   return out;
 }
 
-Result<StepHistory> RenderClient::stepHistory(const QString& file, const QString& cracks) {
+namespace {
+
+v1::StepHistoryRequest historyRequest(const QString& file, const QString& cracks) {
   v1::StepHistoryRequest request;
   request.set_file(file.toStdString());
   request.set_cracks(cracks.toStdString());
-  v1::StepHistoryResponse response;
-  CRACKVIS_RETURN_IF_ERROR(
-      m_impl->unary("StepHistory", response, [&](grpc::ClientContext& context, auto& out) {
-        return m_impl->stub->StepHistory(&context, request, &out);
-      }));
+  return request;
+}
+
+StepHistory historyOf(const v1::StepHistoryResponse& response) {
   StepHistory history;
   history.time.assign(response.time().begin(), response.time().end());
   history.brokenBonds.assign(response.broken_bonds().begin(), response.broken_bonds().end());
@@ -136,6 +141,65 @@ Result<StepHistory> RenderClient::stepHistory(const QString& file, const QString
     history.scalars.emplace_back(series.values().begin(), series.values().end());
   }
   return history;
+}
+
+}  // namespace
+
+Result<StepHistory> RenderClient::stepHistory(const QString& file, const QString& cracks) {
+  const v1::StepHistoryRequest request = historyRequest(file, cracks);
+  v1::StepHistoryResponse response;
+  CRACKVIS_RETURN_IF_ERROR(
+      m_impl->unary("StepHistory", response, [&](grpc::ClientContext& context, auto& out) {
+        return m_impl->stub->StepHistory(&context, request, &out);
+      }));
+  return historyOf(response);
+}
+
+void RenderClient::requestStepHistory(const QString& file, const QString& cracks) {
+  if (m_impl->historyCall.joinable()) {
+    m_impl->pendingHistory = {file, cracks};
+    return;
+  }
+  startStepHistory(file, cracks);
+}
+
+// The call runs on a thread of its own, with a stub of its own on the
+// connection's channel (a reconnect may replace the client's stub meanwhile),
+// and posts its answer back to this object's thread.
+void RenderClient::startStepHistory(const QString& file, const QString& cracks) {
+  if (!m_impl->channel) {
+    emit stepHistoryReady(file, cracks, {}, tr("not connected"));
+    return;
+  }
+  auto context = std::make_shared<grpc::ClientContext>();
+  m_impl->authorize(*context);
+  m_impl->historyContext = context;
+  m_impl->historyCall = std::thread([this, channel = m_impl->channel, context,
+                                     request = historyRequest(file, cracks), file, cracks] {
+    auto stub = v1::RenderService::NewStub(channel);
+    auto response = std::make_shared<v1::StepHistoryResponse>();
+    const grpc::Status status = stub->StepHistory(context.get(), request, response.get());
+    QMetaObject::invokeMethod(
+        this,
+        [this, status, response, file, cracks] {
+          const Status outcome =
+              status.ok() ? Status::ok() : m_impl->failure(status, "StepHistory");
+          finishStepHistory(file, cracks,
+                            outcome ? QString() : QString::fromStdString(outcome.message()),
+                            outcome ? historyOf(*response) : StepHistory{});
+        },
+        Qt::QueuedConnection);
+  });
+}
+
+void RenderClient::finishStepHistory(const QString& file, const QString& cracks,
+                                     const QString& error, const StepHistory& history) {
+  m_impl->historyCall.join();
+  m_impl->historyContext.reset();
+  emit stepHistoryReady(file, cracks, history, error);
+  if (auto next = std::exchange(m_impl->pendingHistory, std::nullopt)) {
+    startStepHistory(next->first, next->second);
+  }
 }
 
 Result<FileSummary> RenderClient::describe(const QString& file) {

@@ -89,6 +89,13 @@ struct RenderClient::Impl {
   std::thread supervisor;
   std::thread decoder;
 
+  // requestStepHistory's call in flight (GUI thread only), with its own
+  // context to cancel it when the client goes, and the newest request that
+  // waits for it.
+  std::thread historyCall;
+  std::shared_ptr<grpc::ClientContext> historyContext;
+  std::optional<std::pair<QString, QString>> pendingHistory;
+
   // render_client.cpp: the connection.
   Status failure(const grpc::Status& status, const char* call) const;
 

@@ -116,6 +116,7 @@ MainWindow::MainWindow(QWidget* parent) : QMainWindow(parent) {
   buildMenus();
 
   connect(&m_client, &RenderClient::frameReady, m_viewport, &Viewport::showFrame);
+  connect(&m_client, &RenderClient::stepHistoryReady, this, &MainWindow::historyReady);
   connect(&m_client, &RenderClient::stateChanged, this, [this](int step, int steps, bool playing) {
     noteStepCount(steps);
     const QSignalBlocker blocker(m_slider);
@@ -218,20 +219,23 @@ QWidget* MainWindow::buildStepDock() {
 }
 
 // The opened file's steps in the plot (with the crack's numbers when they
-// were asked for); the series and axis chosen stay chosen when the new
-// history has them too.
+// were asked for), asked of the server off this thread: with a crack method
+// it runs the method over every step, seconds for a large file, and a live
+// file asks again as steps come.
 void MainWindow::showHistory(const QString& file) {
-  const bool slow = !m_historyCracks.isEmpty();
-  if (slow) {
-    QApplication::setOverrideCursor(Qt::WaitCursor);
+  m_client.requestStepHistory(file, m_historyCracks);
+}
+
+// The series and axis chosen stay chosen when the new history has them too.
+// An answer for another file than the one open now, or without the crack
+// numbers asked for since, is dropped (a newer request follows it).
+void MainWindow::historyReady(const QString& file, const QString& cracks,
+                              const StepHistory& history, const QString& error) {
+  if (file != m_file || cracks != m_historyCracks) {
+    return;
   }
-  auto history = m_client.stepHistory(file, m_historyCracks);
-  if (slow) {
-    QApplication::restoreOverrideCursor();
-  }
-  if (!history) {
-    report(tr("no step plot for %1: %2")
-               .arg(file, QString::fromStdString(history.status().message())));
+  if (!error.isEmpty()) {
+    report(tr("no step plot for %1: %2").arg(file, error));
     m_plot->setHistory({});
     return;
   }
@@ -241,8 +245,8 @@ void MainWindow::showHistory(const QString& file) {
   const QSignalBlocker axisBlocker(m_plotAxis);
   m_plotScalar->clear();
   m_plotScalar->addItem(tr("none"));
-  m_plotScalar->addItems(history->scalarNames);
-  m_plot->setHistory(*history);
+  m_plotScalar->addItems(history.scalarNames);
+  m_plot->setHistory(history);
   m_plotScalar->setCurrentIndex(std::max(0, static_cast<int>(m_plotScalar->findText(chosen))));
   m_plot->setScalar(m_plotScalar->currentIndex() > 0 ? chosen : QString());
   m_plotAxis->clear();
@@ -250,10 +254,17 @@ void MainWindow::showHistory(const QString& file) {
   m_plotAxis->setCurrentIndex(std::max(0, static_cast<int>(m_plotAxis->findText(against))));
   m_plot->setAxis(m_plotAxis->currentText());
   m_plot->setCurrentStep(m_slider->value());
+  if (!cracks.isEmpty() && m_reportCrackNumbers &&
+      history.scalarNames.contains(QStringLiteral("total_area"))) {
+    m_reportCrackNumbers = false;
+    report(tr("the Steps plot has the crack's numbers (%1): choose total_area, main_area, "
+              "front_extent, fragments, ... and what to draw them against")
+               .arg(cracks));
+  }
 }
 
 // The crack's numbers of the panel's method over the file's steps, added
-// to the plot's series (the server computes them; the cursor waits).
+// to the plot's series when the server has computed them.
 void MainWindow::addCrackNumbers() {
   if (m_file.isEmpty()) {
     report(tr("open a file first: the crack's numbers are the file's"));
@@ -263,12 +274,8 @@ void MainWindow::addCrackNumbers() {
       QString::fromStdString(std::string(cracks::toString(m_panel->description().cracks.method)));
   report(tr("computing the crack's numbers (%1) over the steps of %2 ...")
              .arg(m_historyCracks, m_file));
+  m_reportCrackNumbers = true;
   showHistory(m_file);
-  if (m_plot->history().scalarNames.contains(QStringLiteral("total_area"))) {
-    report(tr("the Steps plot has the crack's numbers (%1): choose total_area, main_area, "
-              "front_extent, fragments, ... and what to draw them against")
-               .arg(m_historyCracks));
-  }
 }
 
 // A live file's step count grew: when, and the Steps plot with the new

@@ -110,6 +110,11 @@ class RenderClient : public QObject {
   // crack's numbers per step (crack area, front, fragments, modes): the
   // server runs the method over every step, seconds for a large file.
   Result<StepHistory> stepHistory(const QString& file, const QString& cracks = {});
+  // The same off the calling thread, for a window that must stay responsive
+  // while the server works: the answer comes as stepHistoryReady, on the
+  // client's thread. One call runs at a time; a request made meanwhile waits
+  // for it, and only the newest waiting one is kept.
+  void requestStepHistory(const QString& file, const QString& cracks = {});
 
   // Opens a session with a pipeline description and attaches its stream.
   Status openSession(const QString& pipelineXml);
@@ -179,8 +184,15 @@ class RenderClient : public QObject {
   void picked(quint64 eventId, const QString& text, const QString& kind, qint64 index);
   void connectionLost(const QString& why);
   void reconnected();
+  // requestStepHistory's answer: `error` empty when `history` holds it.
+  void stepHistoryReady(const QString& file, const QString& cracks,
+                        const crackvis::client::StepHistory& history, const QString& error);
 
  private:
+  void startStepHistory(const QString& file, const QString& cracks);
+  void finishStepHistory(const QString& file, const QString& cracks, const QString& error,
+                         const StepHistory& history);
+
   struct Impl;
   std::unique_ptr<Impl> m_impl;
 };

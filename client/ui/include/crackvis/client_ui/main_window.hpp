@@ -115,6 +115,8 @@ class MainWindow : public QMainWindow {
   void describe(const QString& file);
   QWidget* buildStepDock();
   void showHistory(const QString& file);
+  void historyReady(const QString& file, const QString& cracks, const StepHistory& history,
+                    const QString& error);
   void addCrackNumbers();
   void report(const QString& message);
   void updateStatus();
@@ -136,6 +138,7 @@ class MainWindow : public QMainWindow {
   // The crack method whose numbers the Steps plot shows ("" none); kept for
   // the file's later reads (a live file), dropped when another file opens.
   QString m_historyCracks;
+  bool m_reportCrackNumbers = false;  // say so when the asked-for crack numbers arrive
   QPushButton* m_play;
   QDoubleSpinBox* m_fps;
   QLabel* m_stepLabel;
