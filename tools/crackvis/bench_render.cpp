@@ -217,20 +217,41 @@ void authorize(grpc::ClientContext& context, const RenderBenchOptions& options) 
   }
 }
 
+Result<v1::OpenSessionResponse> openSession(v1::RenderService::Stub& stub,
+                                            const RenderBenchOptions& options,
+                                            const pipeline::PipelineDescription& d,
+                                            const std::shared_ptr<grpc::Channel>& channel) {
+  grpc::ClientContext context;
+  authorize(context, options);
+  v1::OpenSessionRequest open;
+  open.set_pipeline_xml(pipeline::toXml(d));
+  v1::OpenSessionResponse opened;
+  CRACKVIS_RETURN_IF_ERROR(
+      rpc::fromGrpcStatus(stub.OpenSession(&context, open, &opened), "OpenSession",
+                          {rpc::ServerKind::kRender, options.server}, channel));
+  return opened;
+}
+
+void closeSession(v1::RenderService::Stub& stub, const RenderBenchOptions& options,
+                  const std::string& sessionId) {
+  grpc::ClientContext context;
+  authorize(context, options);
+  v1::CloseSessionRequest close;
+  close.set_session_id(sessionId);
+  v1::CloseSessionResponse closed;
+  (void)stub.CloseSession(&context, close, &closed);
+}
+
 Result<FirstPicture> timeFirstPicture(v1::RenderService::Stub& stub,
                                       const RenderBenchOptions& options,
                                       const pipeline::PipelineDescription& d,
                                       const std::shared_ptr<grpc::Channel>& channel) {
   FirstPicture picture;
-  grpc::ClientContext openContext;
-  authorize(openContext, options);
-  v1::OpenSessionRequest open;
-  open.set_pipeline_xml(pipeline::toXml(d));
-  v1::OpenSessionResponse opened;
   const auto start = Clock::now();
-  CRACKVIS_RETURN_IF_ERROR(
-      rpc::fromGrpcStatus(stub.OpenSession(&openContext, open, &opened), "OpenSession",
-                          {rpc::ServerKind::kRender, options.server}, channel));
+  auto opened = openSession(stub, options, d, channel);
+  if (!opened) {
+    return opened.status();
+  }
   const auto attached = Clock::now();
   picture.openSessionMs = ms(attached - start);
   Status status;
@@ -239,7 +260,7 @@ Result<FirstPicture> timeFirstPicture(v1::RenderService::Stub& stub,
     authorize(streamContext, options);
     auto stream = stub.Stream(&streamContext);
     v1::ClientEvent attach;
-    attach.set_attach_session_id(opened.session_id());
+    attach.set_attach_session_id(opened->session_id());
     stream->Write(attach);
     FrameCollector collector(stream.get());
     const auto full = [](const auto& frames) {
@@ -261,12 +282,7 @@ Result<FirstPicture> timeFirstPicture(v1::RenderService::Stub& stub,
     stream->WritesDone();
     streamContext.TryCancel();
   }
-  grpc::ClientContext closeContext;
-  authorize(closeContext, options);
-  v1::CloseSessionRequest close;
-  close.set_session_id(opened.session_id());
-  v1::CloseSessionResponse closed;
-  (void)stub.CloseSession(&closeContext, close, &closed);
+  closeSession(stub, options, opened->session_id());
   if (!status) {
     return status;
   }
@@ -316,14 +332,11 @@ Result<Report> run(const RenderBenchOptions& options) {
     firstPictures.push_back(*picture);
   }
 
-  grpc::ClientContext openContext;
-  authorize(openContext, options);
-  v1::OpenSessionRequest open;
-  open.set_pipeline_xml(pipeline::toXml(d));
-  v1::OpenSessionResponse opened;
-  CRACKVIS_RETURN_IF_ERROR(
-      rpc::fromGrpcStatus(stub->OpenSession(&openContext, open, &opened), "OpenSession",
-                          {rpc::ServerKind::kRender, options.server}, channel));
+  auto session = openSession(*stub, options, d, channel);
+  if (!session) {
+    return session.status();
+  }
+  const v1::OpenSessionResponse& opened = *session;
   Report report;
   report.firstPictures = std::move(firstPictures);
   report.backend = opened.backend();
@@ -343,12 +356,7 @@ Result<Report> run(const RenderBenchOptions& options) {
   auto finish = [&](Status status) -> Result<Report> {
     stream->WritesDone();
     (void)stream->Finish();
-    grpc::ClientContext closeContext;
-    authorize(closeContext, options);
-    v1::CloseSessionRequest close;
-    close.set_session_id(opened.session_id());
-    v1::CloseSessionResponse closed;
-    (void)stub->CloseSession(&closeContext, close, &closed);
+    closeSession(*stub, options, opened.session_id());
     if (!status) {
       return status;
     }

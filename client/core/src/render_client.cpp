@@ -145,16 +145,6 @@ StepHistory historyOf(const v1::StepHistoryResponse& response) {
 
 }  // namespace
 
-Result<StepHistory> RenderClient::stepHistory(const QString& file, const QString& cracks) {
-  const v1::StepHistoryRequest request = historyRequest(file, cracks);
-  v1::StepHistoryResponse response;
-  CRACKVIS_RETURN_IF_ERROR(
-      m_impl->unary("StepHistory", response, [&](grpc::ClientContext& context, auto& out) {
-        return m_impl->stub->StepHistory(&context, request, &out);
-      }));
-  return historyOf(response);
-}
-
 void RenderClient::requestStepHistory(const QString& file, const QString& cracks) {
   if (m_impl->historyCall.joinable()) {
     m_impl->pendingHistory = {file, cracks};

@@ -106,14 +106,13 @@ class RenderClient : public QObject {
 
   Result<std::vector<FileEntry>> listFiles();
   Result<FileSummary> describe(const QString& file);
-  // With a crack method ("local-voronoi", ...), the scalars gain the
-  // crack's numbers per step (crack area, front, fragments, modes): the
-  // server runs the method over every step, seconds for a large file.
-  Result<StepHistory> stepHistory(const QString& file, const QString& cracks = {});
-  // The same off the calling thread, for a window that must stay responsive
-  // while the server works: the answer comes as stepHistoryReady, on the
-  // client's thread. One call runs at a time; a request made meanwhile waits
-  // for it, and only the newest waiting one is kept.
+  // The file's course over its steps, asked for off the calling thread: the
+  // answer comes as stepHistoryReady, on the client's thread. With a crack
+  // method ("local-voronoi", ...), the scalars gain the crack's numbers per
+  // step (crack area, front, fragments, modes): the server runs the method
+  // over every step, seconds for a large file, and the window stays
+  // responsive meanwhile. One call runs at a time; a request made meanwhile
+  // waits for it, and only the newest waiting one is kept.
   void requestStepHistory(const QString& file, const QString& cracks = {});
 
   // Opens a session with a pipeline description and attaches its stream.
