@@ -278,6 +278,10 @@ int main(int argc, char** argv) {
   app.add_option("--max-reduction", config.limits.maxReduction,
                  "largest image reduction factor while interacting (1: always full resolution)")
       ->capture_default_str();
+  app.add_option("--renders-at-once", config.limits.rendersAtOnce,
+                 "frames of all sessions rendered at the same time; the others wait their turn, "
+                 "first come first served (0: the hardware threads)")
+      ->capture_default_str();
   app.add_option("--max-particles", config.limits.fileSizes.maxParticles,
                  "refuse files declaring more particles (before allocating for them)")
       ->capture_default_str();

@@ -16,6 +16,7 @@
 #include <grpcpp/grpcpp.h>
 #include <nlohmann/json.hpp>
 #include <signal.h>
+#include <unistd.h>
 
 #include "crackvis/v1/render.grpc.pb.h"
 #include "dataservice/service_fixture.hpp"
@@ -1280,6 +1281,12 @@ TEST_CASE(
                                         "1",
                                         "--still-frames",
                                         "3",
+                                        "--jumps",
+                                        "4",
+                                        "--playback-steps",
+                                        "5",
+                                        "--playback-rate",
+                                        "10",
                                         "--ca",
                                         tls.ca,
                                         "--cert",
@@ -1337,6 +1344,84 @@ TEST_CASE(
   }
   CHECK(first.at("first") == first.at("opens").front());
   CHECK(first.at("later_median").at("total_ms").get<double>() > 0.0);
+  // Jumps in time (issue 34 point 2): each to another step, its full frame
+  // no earlier than its first, forwards and backwards counted apart.
+  const auto& jumps = json.at("jumps");
+  REQUIRE(jumps.at("list").size() == 4);
+  for (const auto& jump : jumps.at("list")) {
+    CHECK(jump.at("from") != jump.at("to"));
+    CHECK(jump.at("first_frame_ms").get<double>() > 0.0);
+    CHECK(jump.at("full_frame_ms").get<double>() >= jump.at("first_frame_ms").get<double>());
+  }
+  CHECK(jumps.at("forward_full_frame_ms").at("count").get<int>() +
+            jumps.at("backward_full_frame_ms").at("count").get<int>() ==
+        4);
+  CHECK(json.at("targets").contains("jump_full_frame_p95_le_100ms"));
+  // Playback: 5 steps ending at the last, each shown, paced by the server at
+  // the asked rate (never faster: 4 periods at least between the first and
+  // the last step's frames).
+  const auto& playback = json.at("playback");
+  CHECK(playback.at("steps").get<int>() == 5);
+  CHECK(playback.at("steps_not_shown").get<int>() == 0);
+  CHECK(playback.at("gap_ms").at("count").get<int>() == 5);
+  CHECK(playback.at("seconds").get<double>() >= 0.39);
+  CHECK(playback.at("achieved_rate").get<double>() > 0.0);
+  CHECK(json.at("targets").contains("playback_no_missed_slots"));
+}
+
+TEST_CASE("crackvis bench render --sessions drags several sessions at once, each measured",
+          "[render][service][integration][bench]") {
+  // issue 34 point 3: N users on one node, each with its own connection,
+  // session and file, dragging together; the server here runs in this
+  // process, whose CPU time and memory the benchmark samples.
+  auto services = startServices();
+  const auto tls = testing::clientTls("client");
+  const auto run = testing::runProcess({CRACKVIS_CLI,
+                                        "bench",
+                                        "render",
+                                        "--server",
+                                        fmt::format("localhost:{}", services.render->port()),
+                                        "--file",
+                                        "cuboidA.h5",
+                                        "--file",
+                                        "alice/a.h5",
+                                        "--sessions",
+                                        "3",
+                                        "--server-pid",
+                                        std::to_string(getpid()),
+                                        "--size",
+                                        "320x240",
+                                        "--seconds",
+                                        "1",
+                                        "--ca",
+                                        tls.ca,
+                                        "--cert",
+                                        tls.cert,
+                                        "--key",
+                                        tls.key,
+                                        "--json"});
+  INFO(run.out << run.err);
+  REQUIRE(run.exitCode == 0);
+  const auto json = nlohmann::json::parse(run.out.substr(run.out.find('{')));
+  CHECK(json.at("sessions") == 3);
+  CHECK(json.at("failed") == 0);
+  const auto& each = json.at("per_session");
+  REQUIRE(each.size() == 3);
+  CHECK(each[0].at("file") == "cuboidA.h5");
+  CHECK(each[1].at("file") == "alice/a.h5");
+  CHECK(each[2].at("file") == "cuboidA.h5");
+  for (const auto& session : each) {
+    CHECK(session.at("events").get<int>() > 10);
+    CHECK(session.at("event_to_frame_ms").at("count").get<int>() > 10);
+    CHECK(session.at("event_to_frame_ms").at("p50").get<double>() > 0.0);
+    CHECK(session.at("fps").get<double>() > 0.0);
+    CHECK(session.at("reduction_mean").get<double>() >= 1.0);
+  }
+  CHECK(json.at("p95_max_ms").get<double>() >= json.at("p50_max_ms").get<double>());
+  const auto& server = json.at("server");
+  REQUIRE(server.is_object());
+  CHECK(server.at("cpu_cores").get<double>() > 0.0);
+  CHECK(server.at("rss_peak_mib").get<double>() > 0.0);
 }
 
 TEST_CASE("a session at the largest view stays within its memory bound, and closing frees it",

@@ -1,12 +1,18 @@
 // A render session's thread on its own (EGL, no gRPC): what no input may do
 // to it. A step source or an opener that throws stands for any library that
 // throws on data it should have refused; only that read or event fails.
+#include <algorithm>
+#include <atomic>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
+#include <vector>
 
 #include <catch2/catch.hpp>
 
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
+#include <crackvis/service/render_turns.hpp>
 #include <crackvis/service/session.hpp>
 
 namespace crackvis {
@@ -291,6 +297,128 @@ TEST_CASE("a drag whose moves come in bunches is not broken up by full-resolutio
   full = 0;
   drain(service::Clock::now() + std::chrono::milliseconds(1500));
   CHECK(full >= 1);
+  session.detach(attachment);
+}
+
+TEST_CASE("render turns: at most so many at once, in the order asked", "[session][turns]") {
+  SECTION("never more at once than allowed, and as many when asked") {
+    for (int atOnce : {1, 2}) {
+      service::RenderTurns turns(atOnce);
+      CHECK(turns.atOnce() == atOnce);
+      std::atomic<int> rendering{0};
+      std::atomic<int> most{0};
+      std::vector<std::thread> sessions;
+      for (int k = 0; k < 6; ++k) {
+        sessions.emplace_back([&] {
+          for (int frame = 0; frame < 5; ++frame) {
+            const auto turn = turns.take();
+            const int now = ++rendering;
+            int seen = most.load();
+            while (now > seen && !most.compare_exchange_weak(seen, now)) {
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+            --rendering;
+          }
+        });
+      }
+      for (std::thread& session : sessions) {
+        session.join();
+      }
+      CHECK(most.load() == atOnce);
+    }
+  }
+  SECTION("first come, first served") {
+    service::RenderTurns turns(1);
+    std::vector<int> order;
+    std::mutex orderMutex;
+    std::vector<std::thread> waiting;
+    {
+      const auto held = turns.take();
+      for (int k = 0; k < 3; ++k) {
+        waiting.emplace_back([&, k] {
+          const auto turn = turns.take();
+          std::lock_guard lock(orderMutex);
+          order.push_back(k);
+        });
+        // Each one in line before the next asks.
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      }
+    }
+    for (std::thread& thread : waiting) {
+      thread.join();
+    }
+    CHECK(order == std::vector<int>{0, 1, 2});
+  }
+  SECTION("0 means the hardware threads") {
+    CHECK(service::RenderTurns(0).atOnce() ==
+          std::max(1, static_cast<int>(std::thread::hardware_concurrency())));
+  }
+}
+
+TEST_CASE("a drag that waited for its render turn goes on with reduced frames",
+          "[session][render][turns]") {
+  // issue 34 point 3: a session that waited long for its turn found the
+  // refinement planned after its previous reduced frame due, and drew a
+  // full-resolution frame in the middle of the drag.
+  const Fixture fixture;
+  service::SessionLimits limits;
+  limits.refineAfterMs = 50.0;
+  limits.interactiveFrameMs = 1.0;  // every move is drawn reduced
+  limits.maxReduction = 4;
+  pipeline::PipelineDescription view = smallView(0);
+  view.view.width = 320;
+  view.view.height = 240;
+  auto turns = std::make_shared<service::RenderTurns>(1);
+  auto opened = Session::open("s7", view, fixture.opener(-1), limits, turns);
+  REQUIRE(opened);
+  Session& session = **opened;
+  const std::uint64_t attachment = session.attach();
+  // The frames that reflect event `id` or later, until one does.
+  auto frameFor = [&](std::uint64_t id) {
+    service::RenderedFrame frame;
+    SessionNotice notice;
+    const auto until = service::Clock::now() + std::chrono::seconds(30);
+    while (service::Clock::now() < until) {
+      if (session.next(attachment, std::chrono::milliseconds(100), frame, notice) ==
+              Session::Next::kFrame &&
+          frame.lastEventId >= id) {
+        return frame;
+      }
+    }
+    FAIL("no frame for event " << id);
+    return frame;
+  };
+  auto rotate = [&](std::uint64_t id) {
+    session.post(
+        {id, service::Clock::now(), service::CameraEvent{render::CameraMove::kRotate, 0.01, 0.0}});
+  };
+  frameFor(0);
+  rotate(1);
+  CHECK_FALSE(frameFor(1).fullResolution);
+  std::uint64_t id = 1;
+  {
+    // Another session renders for 300 ms while this one's drag goes on.
+    const auto other = turns->take();
+    for (int k = 0; k < 10; ++k) {
+      rotate(++id);
+      std::this_thread::sleep_for(std::chrono::milliseconds(30));
+    }
+  }
+  // Every frame until the last move's: reduced (the moves queued behind
+  // the wait are applied before the next frame, and supersede the
+  // refinement planned after the frame that waited).
+  int full = 0;
+  service::RenderedFrame frame;
+  SessionNotice notice;
+  const auto until = service::Clock::now() + std::chrono::seconds(30);
+  while (frame.lastEventId < id && service::Clock::now() < until) {
+    if (session.next(attachment, std::chrono::milliseconds(100), frame, notice) ==
+        Session::Next::kFrame) {
+      full += frame.fullResolution ? 1 : 0;
+    }
+  }
+  REQUIRE(frame.lastEventId == id);
+  CHECK(full == 0);
   session.detach(attachment);
 }
 

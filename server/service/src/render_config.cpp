@@ -35,7 +35,8 @@ Status readLimits(const json& object, const std::string& where, RenderServerConf
       checkKeys(object, where,
                 {"max_sessions", "max_sessions_per_user", "session_grace_seconds", "attach_seconds",
                  "refine_after_ms", "interactive_frame_ms", "max_reduction", "max_width",
-                 "max_height", "max_particles", "max_bonds"}));
+                 "max_height", "max_particles", "max_bonds", "renders_at_once"}));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "renders_at_once", where, config.limits.rendersAtOnce));
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "max_particles", where, config.limits.fileSizes.maxParticles));
   CRACKVIS_RETURN_IF_ERROR(read(object, "max_bonds", where, config.limits.fileSizes.maxBonds));
@@ -144,6 +145,8 @@ Status validateRenderServerConfig(const RenderServerConfig& config) {
                                         limits.interactiveFrameMs, 1.0, 1000.0));
   CRACKVIS_RETURN_IF_ERROR(
       checkSetting({"--max-reduction", "limits.max_reduction"}, limits.maxReduction, 1, 8));
+  CRACKVIS_RETURN_IF_ERROR(
+      checkSetting({"--renders-at-once", "limits.renders_at_once"}, limits.rendersAtOnce, 0, 256));
   // The schema's frame sizes: a larger limit could never be used.
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-particles", "limits.max_particles"},
                                         limits.fileSizes.maxParticles, std::int64_t{1},

@@ -274,7 +274,7 @@ Status RenderServiceImpl::openSession(const Caller& caller, const v1::OpenSessio
   }
   Result<std::shared_ptr<Session>> session = internalError("the session did not open");
   try {
-    session = Session::open(newSessionId(), *description, opener(caller), m_config.limits);
+    session = Session::open(newSessionId(), *description, opener(caller), m_config.limits, m_turns);
   } catch (...) {
     m_sessions.add(nullptr, caller.name);  // the reservation is given back, then rethrown
     throw;

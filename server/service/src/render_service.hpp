@@ -48,7 +48,8 @@ class RenderServiceImpl final : public v1::RenderService::Service {
         m_data(std::move(data)),
         m_log(log),
         m_sessions(config.maxSessions, config.maxSessionsPerUser, config.sessionGraceSeconds),
-        m_attaching(config.attachSeconds) {}
+        m_attaching(config.attachSeconds),
+        m_turns(std::make_shared<RenderTurns>(config.limits.rendersAtOnce)) {}
 
   SessionRegistry& sessions() { return m_sessions; }
   AttachWatch& attaching() { return m_attaching; }
@@ -118,6 +119,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   SessionRegistry m_sessions;
   AttachWatch m_attaching;
   CrackHistoryGate m_crackHistories;
+  std::shared_ptr<RenderTurns> m_turns;  // shared by every session's frames
 };
 
 }  // namespace crackvis::service

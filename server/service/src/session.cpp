@@ -23,18 +23,20 @@ const char* eventName(const SessionEvent& event) {
 }  // namespace
 
 Session::Session(std::string id, pipeline::PipelineDescription description, SourceOpener opener,
-                 SessionLimits limits)
+                 SessionLimits limits, std::shared_ptr<RenderTurns> turns)
     : m_id(std::move(id)),
       m_limits(limits),
       m_initial(std::move(description)),
       m_opener(std::move(opener)),
+      m_turns(std::move(turns)),
       m_detachedSince(Clock::now()) {}
 
 Result<std::shared_ptr<Session>> Session::open(std::string id,
                                                pipeline::PipelineDescription description,
-                                               SourceOpener opener, SessionLimits limits) {
-  std::shared_ptr<Session> session(
-      new Session(std::move(id), std::move(description), std::move(opener), limits));
+                                               SourceOpener opener, SessionLimits limits,
+                                               std::shared_ptr<RenderTurns> turns) {
+  std::shared_ptr<Session> session(new Session(std::move(id), std::move(description),
+                                               std::move(opener), limits, std::move(turns)));
   std::promise<Status> started;
   auto result = started.get_future();
   session->m_thread = std::thread(

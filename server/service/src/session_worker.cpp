@@ -187,6 +187,13 @@ namespace {
 constexpr auto kPrematureRefine = std::chrono::milliseconds(250);
 constexpr auto kNewDrag = std::chrono::seconds(1);
 constexpr double kMaxRefineStretch = 8.0;
+// A step change with no other step change or camera move for this long is
+// a jump (a click on the Steps plot, a typed step), not a slider being
+// dragged: the user waits for the picture of that step, so it is rendered
+// at full resolution at once instead of a reduced frame and a refinement
+// after refine_after_ms (issue 34 point 2: 114 -> ~80 ms on cuboid A). The
+// first step of a slider drag pays one full render; the rest are reduced.
+constexpr auto kJumpAfterRest = std::chrono::milliseconds(250);
 }  // namespace
 
 void Session::Worker::interacted(const SessionEvent& event) {
@@ -197,6 +204,12 @@ void Session::Worker::interacted(const SessionEvent& event) {
     refineDelayMs = std::min(2.0 * refineDelayMs, kMaxRefineStretch * configured);
   }
   refinedAt.reset();
+  // A refinement planned after the last reduced frame is superseded: the
+  // next reduced frame plans it anew from this event. Without this, a
+  // session that waited long for its render turn found the old plan due and
+  // drew a full-resolution frame in the middle of a drag, the dearest frame
+  // at the worst time (issue 34 point 3).
+  refineAt.reset();
   lastInteraction = event.received;
   lastEventReceived = event.received;
   dirty = true;
@@ -249,7 +262,14 @@ void Session::Worker::handle(const SessionEvent& event, const SetStepEvent& set)
     return;
   }
   scene->prefetch(step + 1);
-  interacted(event);
+  const bool jump = event.received - lastStepChange > kJumpAfterRest &&
+                    event.received - lastInteraction > kJumpAfterRest;
+  lastStepChange = event.received;
+  if (jump) {
+    stillFrame(event);
+  } else {
+    interacted(event);
+  }
   session.notify({event.id, Status::ok(), state()});
 }
 
@@ -394,9 +414,13 @@ void Session::Worker::renderIfDirty() {
   render::Image image;
   const int w = std::max(16, width / factor);
   const int h = std::max(16, height / factor);
-  const auto start = Clock::now();
   Status rendered = needRenderer();
+  auto start = Clock::now();
   if (rendered) {
+    const auto asked = start;
+    const RenderTurns::Turn turn = session.m_turns ? session.m_turns->take() : RenderTurns::Turn();
+    start = Clock::now();
+    frame.timings.turnWaitMs = millisecondsSince(asked);
     rendered = renderer->renderFrame(w, h, image, factor > 1);
   }
   if (Status status = rendered; !status) {

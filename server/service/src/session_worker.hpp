@@ -47,6 +47,7 @@ struct Session::Worker {
   double refineDelayMs = 0.0;
   std::optional<Clock::time_point> refinedAt;  // the last refinement the wait led to
   Clock::time_point lastInteraction = Clock::now() - std::chrono::hours(1);
+  Clock::time_point lastStepChange = Clock::now() - std::chrono::hours(1);  // SetStep
   ReductionPolicy reduction;  // of the frames rendered while interacting or playing
   std::uint64_t lastEventId = 0;
   std::optional<Clock::time_point> lastEventReceived;

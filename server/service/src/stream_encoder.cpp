@@ -53,6 +53,7 @@ Result<v1::Frame> StreamEncoder::encode(RenderedFrame& frame) {
   timings->set_extract_ms(frame.timings.extractMs);
   timings->set_scene_ms(frame.timings.sceneMs);
   timings->set_render_ms(frame.timings.renderMs);
+  timings->set_turn_wait_ms(frame.timings.turnWaitMs);
   timings->set_encode_ms(encodeMs);
   if (frame.lastEventReceived) {
     timings->set_event_to_send_ms(secondsSince(*frame.lastEventReceived) * 1000.0);

@@ -32,6 +32,7 @@
 #include <crackvis/render/scene_renderer.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 #include <crackvis/scene_model/scene_pick.hpp>
+#include <crackvis/service/render_turns.hpp>
 #include <crackvis/service/session_event.hpp>
 #include <crackvis/source/step_source.hpp>
 
@@ -44,6 +45,7 @@ struct FrameTimings {
   double extractMs = 0.0;
   double sceneMs = 0.0;
   double renderMs = 0.0;
+  double turnWaitMs = 0.0;  // waiting for the server's render turn (render_turns.hpp)
 };
 
 struct RenderedFrame {
@@ -105,9 +107,12 @@ class Session {
   // file, loads and extracts the description's step and builds the scene;
   // returns once that has succeeded or with its error (NOT_FOUND for an
   // unknown file, OUT_OF_RANGE for a step outside the file, ...).
+  // `turns`: the server's, shared by its sessions so that their frames take
+  // turns (none: this session renders whenever it has a frame to draw).
   static Result<std::shared_ptr<Session>> open(std::string id,
                                                pipeline::PipelineDescription description,
-                                               SourceOpener opener, SessionLimits limits);
+                                               SourceOpener opener, SessionLimits limits,
+                                               std::shared_ptr<RenderTurns> turns = nullptr);
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
   ~Session();  // closes and joins the thread (the GL context goes with it)
@@ -158,7 +163,7 @@ class Session {
 
  private:
   Session(std::string id, pipeline::PipelineDescription description, SourceOpener opener,
-          SessionLimits limits);
+          SessionLimits limits, std::shared_ptr<RenderTurns> turns);
   struct Worker;  // the thread's state: scene pipeline, renderer, view
 
   void run(std::promise<Status> started);
@@ -173,6 +178,7 @@ class Session {
   SessionInfo m_info;
   pipeline::PipelineDescription m_initial;
   SourceOpener m_opener;
+  std::shared_ptr<RenderTurns> m_turns;
 
   mutable std::mutex m_mutex;
   std::condition_variable m_wake;      // the session thread

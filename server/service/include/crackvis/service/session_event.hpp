@@ -26,6 +26,9 @@ struct SessionLimits {
   double interactiveFrameMs = 35.0;  // render budget of a reduced frame
   int maxReduction = 8;
   std::size_t cacheSteps = 8;
+  // Frames of all sessions rendered at once (render_turns.hpp); 0: the
+  // hardware threads.
+  int rendersAtOnce = 0;
   // Bounds of what waits for a slow or absent stream reader.
   std::size_t maxQueuedEvents = 256;  // beyond: an event is refused (RESOURCE_EXHAUSTED)
   std::size_t maxQueuedErrors = 64;   // beyond: event errors are dropped
