@@ -157,6 +157,12 @@ TEST_CASE("crackvis-render refuses out-of-range limits from flags and file at st
       {"no frame budget", with({"--interactive-frame-ms", "0"}), "",
        "--interactive-frame-ms must be between 1 and 1000, got 0 (limits.interactive_frame_ms "
        "in the configuration file)"},
+      {"negative renders at once", with({"--renders-at-once", "-1"}), "",
+       "--renders-at-once must be between 0 and 256, got -1 (limits.renders_at_once in the "
+       "configuration file)"},
+      {"too many renders at once in the file", base, R"({"limits": {"renders_at_once": 1000}})",
+       "--renders-at-once must be between 0 and 256, got 1000 (limits.renders_at_once in the "
+       "configuration file)"},
       {"listen address",
        {"--insecure", "--listen", "[::1]50052", "--data-server", "127.0.0.1:1", "--data-insecure"},
        "",
