@@ -3,14 +3,17 @@
 // frame over the cores itself; N sessions rendering at once only time-slice
 // the cores, so every frame's wall time grows N-fold and each session's
 // latency with it. Taking turns, at most `atOnce` frames render together,
-// while the sessions' encoders and event handling run beside them. Measured
-// on 2 cores with llvmpipe (docs/benchmarks.md, "Many users on one render
-// node"): 2 at once beat 1 (a frame does not keep both cores busy) and 8
-// (time slicing): at N = 8, p95 417 ms against 525 and 696. Turns go in the order they were asked
-// for, and a session asks for one frame at a time, so with N sessions each waits for at most N - 1
-// others: fair, bounded, and a busy session cannot starve the rest. Events that arrive while a
-// session waits are coalesced into its next frame, so a loaded server lowers each session's frame
-// rate instead of queueing frames.
+// while the sessions' encoders and event handling run beside them.
+//
+// Turns go in the order they were asked for, and a session asks for one
+// frame at a time, so with N sessions each waits for at most N - 1 others:
+// fair, bounded, and a busy session cannot starve the rest. Events that
+// arrive while a session waits are coalesced into its next frame, so a
+// loaded server lowers each session's frame rate instead of queueing frames.
+//
+// Measured on 2 cores with llvmpipe (docs/benchmarks.md, "Many users on one
+// render node"): 2 at once beat 1 (a frame does not keep both cores busy) and
+// 8 (time slicing): at N = 8, a p95 of 417 ms against 525 and 696 ms.
 #pragma once
 
 #include <condition_variable>
