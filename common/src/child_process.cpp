@@ -2,10 +2,12 @@
 #include <cerrno>
 #include <csignal>
 #include <cstring>
+#include <fstream>
 
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <poll.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -60,7 +62,41 @@ bool readUntilClosed(int fd, Clock::time_point deadline, std::string& out) {
   }
 }
 
+// The address space this process maps now, from /proc/self/statm.
+Result<std::uint64_t> mappedBytes() {
+  std::ifstream statm("/proc/self/statm");
+  std::uint64_t pages = 0;
+  if (!(statm >> pages)) {
+    return internalError("cannot read /proc/self/statm");
+  }
+  return pages * static_cast<std::uint64_t>(::sysconf(_SC_PAGESIZE));
+}
+
 }  // namespace
+
+Status capAddressSpace(std::uint64_t headroomBytes) {
+  auto mapped = mappedBytes();
+  if (!mapped) {
+    return mapped.status();
+  }
+  rlimit limit{};
+  if (::getrlimit(RLIMIT_AS, &limit) != 0) {
+    return internalError(fmt::format("getrlimit(RLIMIT_AS): {}", std::strerror(errno)));
+  }
+  std::uint64_t cap = *mapped + headroomBytes;
+  if (limit.rlim_max != RLIM_INFINITY) {
+    cap = std::min<std::uint64_t>(cap, limit.rlim_max);
+  }
+  if (limit.rlim_cur != RLIM_INFINITY && limit.rlim_cur <= cap) {
+    return {};  // a lower limit is already set
+  }
+  limit.rlim_cur = cap;
+  limit.rlim_max = cap;
+  if (::setrlimit(RLIMIT_AS, &limit) != 0) {
+    return internalError(fmt::format("setrlimit(RLIMIT_AS): {}", std::strerror(errno)));
+  }
+  return {};
+}
 
 bool ChildOutcome::finished() const {
   return !timedOut && WIFEXITED(waitStatus) && WEXITSTATUS(waitStatus) == 0;

@@ -9,6 +9,10 @@
 namespace crackvis::dem {
 namespace {
 
+// What reading a file's structure may map beyond what the process maps:
+// libhdf5's metadata cache needs megabytes.
+constexpr std::uint64_t kStructureHeadroom = std::uint64_t{4} << 30;
+
 // The child's answer: "<code> <message>".
 std::string encode(const Status& status) {
   return fmt::format("{} {}", static_cast<int>(status.code()), status.message());
@@ -29,7 +33,16 @@ Status decode(const std::string& answer, const std::string& path) {
 
 Result<DemFileReader> DemFileReader::openGuarded(const std::string& path,
                                                  std::chrono::milliseconds limit) {
-  auto outcome = runInChild([&] { return encode(open(path).status()); }, limit);
+  auto outcome = runInChild(
+      [&] {
+        // A corrupt size makes libhdf5 allocate and fill what it says (20
+        // GB for one the fuzzer kept): the child's allocation fails instead.
+        if (const Status capped = capAddressSpace(kStructureHeadroom); !capped) {
+          return encode(capped);
+        }
+        return encode(open(path).status());
+      },
+      limit);
   if (!outcome) {
     return outcome.status();
   }

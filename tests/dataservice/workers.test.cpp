@@ -216,6 +216,50 @@ TEST_CASE("A corpus of corrupt files costs the data service nothing",
   CHECK(client.checkHealth().isOk());
 }
 
+namespace {
+
+// The largest resident size a process reached, from /proc/PID/status.
+std::uint64_t peakResidentKiB(int pid) {
+  std::ifstream status(fmt::format("/proc/{}/status", pid));
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) {
+      return std::stoull(line.substr(6));
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+TEST_CASE("A corrupt size that asks libhdf5 for 20 GB fails its call, not the host",
+          "[dataservice][integration]") {
+  // Uncapped, the worker's libhdf5 allocated and zero-filled the 20 GB the
+  // file's corrupt size asks for: within the call's 30 s it took a 24 GiB
+  // node's memory and the OOM killer chose among all its processes.
+  TempDir root;
+  const std::string name = "dem_reader-hdf5-20gb-metadata-read.h5";
+  std::filesystem::copy_file(
+      std::filesystem::path(CRACKVIS_SOURCE_DIR) / "tests" / "fuzz" / "crashes" / name,
+      root.file(name));
+  std::filesystem::copy_file(sampleRoot().file("run.h5"), root.file("run.h5"));
+  auto config = oneWorker();
+  config.dataRoot = root.path().string();
+  auto server = startServer(config);
+  const int pid = server->hdf5WorkerPids().at(0);
+  auto client = connect(clientOptions(*server));
+  const Status described = client.describe(name).status();
+  INFO(described.message());
+  CHECK(described.code() == StatusCode::kFailedPrecondition);
+  CHECK_THAT(described.message(), Catch::Contains("memory allocation failed"));
+  // The worker answered: it was neither killed nor replaced, and it never
+  // held more than a fraction of the 20 GB.
+  CHECK(server->hdf5WorkersReplaced() == 0);
+  CHECK(server->hdf5WorkerPids().at(0) == pid);
+  CHECK(peakResidentKiB(pid) < std::uint64_t{1} << 20);
+  requireServerHealthy(*server);
+}
+
 TEST_CASE("HDF5 workers run the worker program and keep nothing of the service but a socket",
           "[dataservice][integration]") {
   namespace fs = std::filesystem;

@@ -211,6 +211,29 @@ TEST_CASE("Every local reader refuses every file the fuzzers kept, with one line
   CHECK(files >= 4);
 }
 
+TEST_CASE("A corrupt size that asks libhdf5 for 20 GB is refused at once, not by the OOM killer",
+          "[cli][info]") {
+  // Uncapped, the guarded child allocated and zero-filled the 20 GB: on a
+  // 24 GiB node the OOM killer ended it after 45 s ("killed by SIGKILL"),
+  // five readers of this file outlasted ctest's 300 s, and any process on
+  // the node could have been chosen instead.
+  const std::string name = "dem_reader-hdf5-20gb-metadata-read.h5";
+  const std::string path = kData + "/../fuzz/crashes/" + name;
+  TempDir dir;
+  const std::string view = dir.file("view.xml");
+  std::ofstream(view) << "<pipeline version=\"1\"><data file=\"" << name << "\"/></pipeline>\n";
+  for (const auto& command : std::vector<std::vector<std::string>>{
+           {kCli, "info", path},
+           {kRender, "--snapshot", view, "--data-root", kData + "/../fuzz/crashes", "-o",
+            dir.file("r.png")}}) {
+    auto run = runProcess(command);
+    INFO(command[0] << "\n" << run.err);
+    CHECK(run.exitCode == 1);
+    CHECK(crackvis::testing::lines(run.err).size() == 1);
+    CHECK_THAT(run.err, Catch::Contains(name) && Catch::Contains("memory allocation failed"));
+  }
+}
+
 TEST_CASE("A libhdf5 fault while opening is one line naming the file and the signal",
           "[cli][info]") {
   // libhdf5 overflows its heap in H5Aexists on this file. Whether that

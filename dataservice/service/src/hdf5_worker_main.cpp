@@ -15,12 +15,18 @@
 #include "crackvis/v1/data.pb.h"
 #include "describe_proto.hpp"
 #include "worker_protocol.hpp"
+#include <crackvis/common/child_process.hpp>
 #include <crackvis/dataservice_service/hdf5_worker_main.hpp>
 
 namespace crackvis::dataservice {
 namespace {
 
 using namespace worker_protocol;
+
+// What a worker may map beyond its start: libhdf5's metadata and chunk
+// caches and one decompressed chunk need megabytes; 4 GiB leaves room for
+// chunks far larger than any writer we import makes.
+constexpr std::uint64_t kLibhdf5Headroom = std::uint64_t{4} << 30;
 
 // What a worker answers to one request: kOk and its payload, or kError and
 // an encoded Status.
@@ -175,6 +181,12 @@ int hdf5WorkerMain(int argc, char** argv) {
   auto root = DataRoot::open(argv[1]);
   if (shared == MAP_FAILED || !root) {
     return 1;  // the service sees the socket close before kReady
+  }
+  // A corrupt size makes libhdf5 allocate and fill what it says (20 GB for
+  // one the fuzzer kept): the worker's allocation fails instead, and its
+  // call answers FAILED_PRECONDITION, before the host runs out of memory.
+  if (const Status capped = capAddressSpace(kLibhdf5Headroom); !capped) {
+    std::fprintf(stderr, "crackvis-hdf5-worker: %s\n", capped.message().c_str());
   }
   if (!sendFrame(kWorkerSocket, kReady, {})) {
     return 0;

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <functional>
 #include <string>
 
@@ -30,5 +31,14 @@ Result<ChildOutcome> runInChild(const std::function<std::string()>& work,
 // How a child ended, for messages: "killed by SIGSEGV (signal 11)",
 // "exited with status 3".
 std::string describeExit(int waitStatus);
+
+// Caps this process's address space (RLIMIT_AS, soft and hard) at what it
+// maps now plus `headroomBytes`, so that an allocation past that fails
+// instead of taking the host's memory. For processes that run libhdf5 on
+// files users name: a corrupt size makes libhdf5 allocate what the size says
+// and then fill it (tests/fuzz/crashes/dem_reader-hdf5-20gb-metadata-read.h5:
+// 20 GB, which ran a 24 GiB node into the OOM killer in 45 s). Never raises
+// a lower limit already set.
+Status capAddressSpace(std::uint64_t headroomBytes);
 
 }  // namespace crackvis
