@@ -44,6 +44,9 @@ readonly PACKAGES=(
   # HDF5 and MPI, and the Qt 5 tools that make the plugin's documentation
   libhdf5-openmpi-dev libopenmpi-dev openmpi-bin
   qtbase5-dev qttools5-dev qttools5-dev-tools qtxmlpatterns5-dev-tools
+  # deploy/slurm/: its test submits the batch script to a single-node Slurm
+  # (slurmctld and slurmd on loopback, started by the test)
+  slurmctld slurmd slurm-client
 )
 
 # What crackvis-data, crackvis-render and the crackvis CLI load when they run

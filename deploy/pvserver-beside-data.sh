@@ -19,7 +19,9 @@
 #
 # Debian's ParaView renders through GLX only, so the script starts a private
 # Xvfb (Mesa's llvmpipe) when no DISPLAY is set. It runs until stopped
-# (Ctrl-C or SIGTERM), then stops pvserver and Xvfb. docs/deploy.md has more.
+# (Ctrl-C or SIGTERM), then stops pvserver and Xvfb; a client that
+# disconnects ends only its pvserver, and a new one takes the next client.
+# docs/deploy.md has more.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 port=11111
@@ -32,24 +34,28 @@ die() {
 
 while (($#)); do
   case $1 in
-    -h | --help) sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h | --help) sed -n '2,24p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     --port) port=${2:?--port needs a value}; shift 2 ;;
     --ranks) ranks=${2:?--ranks needs a value}; shift 2 ;;
     *) die "unknown option $1 (see --help)" ;;
   esac
 done
-[[ $port =~ ^[0-9]+$ ]] && ((port > 0 && port < 65536)) || die "--port must be 1-65535, not '$port'"
+if ! [[ $port =~ ^[0-9]+$ ]] || ((port < 1 || port > 65535)); then
+  die "--port must be 1-65535, not '$port'"
+fi
 [[ $ranks =~ ^[1-9][0-9]*$ ]] || die "--ranks must be a positive integer, not '$ranks'"
 
 plugin=$("$root/paraview-plugin/build.sh")
 env_lines=$("$root/deploy/paraview-prefix.sh" --env)
 eval "$env_lines"
-export PV_PLUGIN_PATH=$(dirname "$plugin")
+PV_PLUGIN_PATH=$(dirname "$plugin")
+export PV_PLUGIN_PATH
 
 xvfb_pid=""
 server_pid=""
 cleanup() {
   local pid
+  rm -f "${run_log:-}"
   for pid in $server_pid $xvfb_pid; do
     kill "$pid" 2>/dev/null || true
     wait "$pid" 2>/dev/null || true
@@ -71,20 +77,41 @@ if [[ -z ${DISPLAY:-} ]]; then
     sleep 0.1
   done
   [[ -s $display_file ]] || die "Xvfb did not report a display in 10 s"
-  export DISPLAY=:$(head -1 "$display_file")
+  DISPLAY=:$(head -1 "$display_file")
+  export DISPLAY
   rm -f "$display_file"
 fi
 
 server=("$CRACKVIS_PARAVIEW_PREFIX/usr/bin/pvserver" --server-port="$port" --force-offscreen-rendering
         --disable-registry)
-if ((ranks == 1)); then
-  "${server[@]}" --no-mpi &
-else
-  # Debian's ParaView is built against Open MPI: its mpiexec, which wants
-  # --allow-run-as-root for root and --oversubscribe beyond the cores.
-  mpiexec --allow-run-as-root --oversubscribe -np "$ranks" -x LD_LIBRARY_PATH -x PYTHONPATH \
-    -x PV_PLUGIN_PATH -x DISPLAY "${server[@]}" &
-fi
-server_pid=$!
+# Starts pvserver; what it prints goes to our output and to $run_log.
+run_log=$(mktemp)
+start_server() {
+  : >"$run_log"
+  if ((ranks == 1)); then
+    "${server[@]}" --no-mpi > >(tee -a "$run_log") 2>&1 &
+  else
+    # Debian's ParaView is built against Open MPI: its mpiexec, which wants
+    # --allow-run-as-root for root and --oversubscribe beyond the cores.
+    mpiexec --allow-run-as-root --oversubscribe -np "$ranks" -x LD_LIBRARY_PATH -x PYTHONPATH \
+      -x PV_PLUGIN_PATH -x DISPLAY "${server[@]}" > >(tee -a "$run_log") 2>&1 &
+  fi
+  server_pid=$!
+}
+
 echo "pvserver-beside-data.sh: pvserver ($ranks rank(s), plugin $plugin) on port $port, DISPLAY=$DISPLAY" >&2
-wait "$server_pid"
+# pvserver ends when its client disconnects (its --multi-clients mode is
+# deprecated): a new one takes the next client, so the server lasts until it
+# is stopped. One that ends without a client failed (it exits with status 0
+# even when its port is taken): that ends the script.
+while true; do
+  start_server
+  status=0
+  wait "$server_pid" || status=$?
+  server_pid=""
+  if ! grep -q "Client connected" "$run_log"; then
+    rm -f "$run_log"
+    die "pvserver ended (status $status) before a client connected; its output is above"
+  fi
+  echo "pvserver-beside-data.sh: the client left; pvserver starts again for the next" >&2
+done
