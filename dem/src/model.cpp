@@ -24,27 +24,45 @@ Status checkSelfBonds(const Lattice& lattice) {
   return Status::ok();
 }
 
-// Sorting bond keys finds duplicates in O(M log M) without a hash set.
+// Each bond goes into the bucket of its lower particle (a counting sort,
+// O(N + M)), and only each particle's few partners are sorted. The first
+// duplicate reported is the one with the smallest pair of particles, between
+// its two lowest bond indices. A sort of all M bond indices by pair, as
+// before, took about 0.4 s of a 1e6-particle view's first picture (5.9
+// million bonds, every comparison a cache miss).
 Status checkDuplicateBonds(const Lattice& lattice) {
-  const std::size_t m = lattice.bondCount();
-  std::vector<std::uint64_t> keys(m);
-  for (std::size_t b = 0; b < m; ++b) {
-    const auto lo =
-        static_cast<std::uint32_t>(std::min(lattice.bonds[b].first, lattice.bonds[b].second));
-    const auto hi =
-        static_cast<std::uint32_t>(std::max(lattice.bonds[b].first, lattice.bonds[b].second));
-    keys[b] = (std::uint64_t{lo} << 32) | hi;
+  const std::size_t n = lattice.particleCount();
+  std::vector<std::uint32_t> start(n + 1, 0);
+  for (const Bond& bond : lattice.bonds) {
+    // The callers checked the ends; one out of range must not index here.
+    if (std::min(bond.first, bond.second) < 0 ||
+        static_cast<std::size_t>(std::max(bond.first, bond.second)) >= n) {
+      return checkBondEnds(lattice.bonds, static_cast<std::int64_t>(n));
+    }
+    ++start[static_cast<std::size_t>(std::min(bond.first, bond.second)) + 1];
   }
-  std::vector<std::uint32_t> order(m);
-  std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-    return keys[a] != keys[b] ? keys[a] < keys[b] : a < b;
-  });
-  for (std::size_t i = 1; i < m; ++i) {
-    if (keys[order[i]] == keys[order[i - 1]]) {
-      const Bond bond = lattice.bonds[order[i]];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  // (higher particle, bond index), bucket by bucket, each in index order.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> partners(lattice.bonds.size());
+  std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+  for (std::size_t b = 0; b < lattice.bonds.size(); ++b) {
+    const Bond bond = lattice.bonds[b];
+    const auto lo = static_cast<std::size_t>(std::min(bond.first, bond.second));
+    partners[next[lo]++] = {static_cast<std::uint32_t>(std::max(bond.first, bond.second)),
+                            static_cast<std::uint32_t>(b)};
+  }
+  for (std::size_t p = 0; p < n; ++p) {
+    const auto first = partners.begin() + start[p];
+    const auto last = partners.begin() + start[p + 1];
+    std::sort(first, last);
+    const auto twin = std::adjacent_find(
+        first, last, [](const auto& a, const auto& b) { return a.first == b.first; });
+    if (twin != last) {
+      const std::uint32_t original = twin->second;
+      const std::uint32_t duplicate = std::next(twin)->second;
+      const Bond bond = lattice.bonds[duplicate];
       return invalidArgument(fmt::format("bond {} duplicates bond {} (particles {} and {})",
-                                         order[i], order[i - 1], bond.first, bond.second));
+                                         duplicate, original, bond.first, bond.second));
     }
   }
   return Status::ok();

@@ -47,6 +47,15 @@ TEST_CASE("validateLattice accepts a good lattice and names the first bad bond",
     lattice.bonds[3] = {1, 0};
     CHECK(validateLattice(lattice).message() == "bond 3 duplicates bond 0 (particles 1 and 0)");
   }
+  SECTION("of several duplicates, the smallest pair's two lowest bonds are named") {
+    lattice.radius.assign(8, 0.5);
+    lattice.bonds = {{5, 6}, {2, 3}, {6, 5}, {3, 2}, {2, 3}, {0, 7}, {7, 0}};
+    lattice.strength.assign(lattice.bonds.size(), 1.0);
+    // (0, 7) and (2, 3) come before (5, 6); (0, 7) is the smallest pair.
+    CHECK(validateLattice(lattice).message() == "bond 6 duplicates bond 5 (particles 7 and 0)");
+    lattice.bonds[6] = {1, 7};
+    CHECK(validateLattice(lattice).message() == "bond 3 duplicates bond 1 (particles 3 and 2)");
+  }
   SECTION("non-positive radius") {
     lattice.radius[3] = 0.0;
     CHECK(validateLattice(lattice).message() ==
