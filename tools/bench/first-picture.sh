@@ -138,8 +138,10 @@ print(f"{'p50':>5} {cold:>14.0f} {warm:>14.0f} {pv:>9.0f} {med(r['pv_load'] for 
 ratio = cold / pv
 print(f"goal: crackvis's first picture at most 0.2x ParaView's: cold {ratio:.3f}x, warm {warm / pv:.3f}x "
       f"({'met' if ratio <= 0.2 else 'NOT met'} cold)")
-parts = med(r["cold_parts"]["server"]["extract_ms"] for r in rows)
+def part(key):
+    """The median over the rounds of one part of crackvis's cold first picture."""
+    return med(r["cold_parts"]["server"][key] for r in rows)
 print(f"crackvis cold, median parts: OpenSession {med(r['cold_parts']['open_session_ms'] for r in rows):.0f} ms, "
-      f"file opened {med(r['cold_parts']['server']['open_file_ms'] for r in rows):.0f}, "
-      f"extraction {parts:.0f}, render {med(r['cold_parts']['server']['render_ms'] for r in rows):.0f}")
+      f"file opened {part('open_file_ms'):.0f}, extraction {part('extract_ms'):.0f}, "
+      f"render {part('render_ms'):.0f}")
 EOF
