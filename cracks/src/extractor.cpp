@@ -63,6 +63,12 @@ std::unique_ptr<CrackExtractor> makeExtractor(Method method, const BondGraph& gr
   return extractor;
 }
 
+dem::CellDecomposition decompositionOf(const dem::Lattice& lattice) {
+  const BondGraph graph(lattice.particleCount(), lattice.bonds);
+  return isLatticeGraph(graph, lattice.dimension) ? dem::CellDecomposition::kLattice
+                                                  : dem::CellDecomposition::kTriangulation;
+}
+
 Status checkStepInput(const BondGraph& graph, const StepInput& step) {
   const std::size_t n = graph.particleCount();
   const std::size_t m = graph.bondCount();

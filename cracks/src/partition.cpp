@@ -1,6 +1,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <utility>
+
+#include <fmt/format.h>
 
 #include <crackvis/cracks/partition.hpp>
 #include <crackvis/cracks/surface_primitives.hpp>
@@ -8,17 +11,8 @@
 namespace crackvis::cracks {
 namespace {
 
-int longestAxis(const dem::Bounds& box) {
-  const Vec3 size = box.hi - box.lo;
-  if (size.x >= size.y && size.x >= size.z) {
-    return 0;
-  }
-  return size.y >= size.z ? 1 : 2;
-}
-
-double along(const Vec3& p, int axis) {
-  return axis == 0 ? p.x : (axis == 1 ? p.y : p.z);
-}
+using dem::axisCoordinate;
+using dem::longestAxis;
 
 // Calls visit(k, ids, count) for each primitive in VTK order: vertices,
 // lines, polygons, volume cells.
@@ -84,16 +78,6 @@ PrimitiveList keptOf(const PrimitiveList& list, const std::vector<char>& keep, s
 
 }  // namespace
 
-double longestBond(std::span<const Vec3> reference, std::span<const dem::Bond> bonds) {
-  double longest = 0.0;
-  for (const dem::Bond& bond : bonds) {
-    const Vec3 d = reference[static_cast<std::size_t>(bond.second)] -
-                   reference[static_cast<std::size_t>(bond.first)];
-    longest = std::max(longest, std::sqrt(dem::dot(d, d)));
-  }
-  return longest;
-}
-
 namespace {
 
 // Adds the nodes of every cell touching `held`, then those nodes' bonded
@@ -137,8 +121,8 @@ Piece partitionPiece(std::span<const Vec3> reference, std::span<const dem::Bond>
   std::vector<dem::ParticleIndex> order(n);
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&](dem::ParticleIndex a, dem::ParticleIndex b) {
-    const double ca = along(reference[static_cast<std::size_t>(a)], axis);
-    const double cb = along(reference[static_cast<std::size_t>(b)], axis);
+    const double ca = axisCoordinate(reference[static_cast<std::size_t>(a)], axis);
+    const double cb = axisCoordinate(reference[static_cast<std::size_t>(b)], axis);
     return ca < cb || (ca == cb && a < b);
   });
   const std::size_t first = n * static_cast<std::size_t>(piece) / static_cast<std::size_t>(pieces);
@@ -150,11 +134,12 @@ Piece partitionPiece(std::span<const Vec3> reference, std::span<const dem::Bond>
     owned[static_cast<std::size_t>(order[k])] = 1;
   }
   if (first < last) {
-    const double lo = along(reference[static_cast<std::size_t>(order[first])], axis) - ghostWidth;
+    const double lo =
+        axisCoordinate(reference[static_cast<std::size_t>(order[first])], axis) - ghostWidth;
     const double hi =
-        along(reference[static_cast<std::size_t>(order[last - 1])], axis) + ghostWidth;
+        axisCoordinate(reference[static_cast<std::size_t>(order[last - 1])], axis) + ghostWidth;
     for (std::size_t i = 0; i < n; ++i) {
-      const double c = along(reference[i], axis);
+      const double c = axisCoordinate(reference[i], axis);
       held[i] = owned[i] != 0 || (c >= lo && c <= hi) ? 1 : 0;
     }
     if (triangulation != nullptr) {
@@ -180,6 +165,193 @@ Piece partitionPiece(std::span<const Vec3> reference, std::span<const dem::Bond>
     }
   }
   return result;
+}
+
+namespace {
+
+// The first position k in [lo, hi) of /index/coordinate for which
+// before(coordinate[k]) is false (hi when there is none): a binary search
+// that reads one coordinate per probe.
+template <typename Before>
+Result<std::int64_t> searchIndex(const dem::DemFileReader& reader, std::int64_t lo, std::int64_t hi,
+                                 Before before) {
+  while (lo < hi) {
+    const std::int64_t middle = lo + (hi - lo) / 2;
+    auto value = reader.readIndexCoordinate(middle);
+    if (!value) {
+      return value.status();
+    }
+    if (before(*value)) {
+      lo = middle + 1;
+    } else {
+      hi = middle;
+    }
+  }
+  return lo;
+}
+
+// The particles of order positions [held0, held1), ascending, with those
+// at positions [owned0, owned1) owned.
+Status heldParticles(const dem::DemFileReader& reader, std::int64_t held0, std::int64_t held1,
+                     std::int64_t owned0, std::int64_t owned1, Piece& part) {
+  auto order = reader.readIndexOrder(held0, held1);
+  if (!order) {
+    return order.status();
+  }
+  std::vector<std::pair<dem::ParticleIndex, std::uint8_t>> held;
+  held.reserve(order->size());
+  for (std::size_t k = 0; k < order->size(); ++k) {
+    const auto at = held0 + static_cast<std::int64_t>(k);
+    held.emplace_back((*order)[k], at >= owned0 && at < owned1 ? 1 : 0);
+  }
+  std::sort(held.begin(), held.end());
+  for (std::size_t k = 0; k < held.size(); ++k) {
+    if (k > 0 && held[k].first == held[k - 1].first) {
+      return failedPrecondition(fmt::format("{}: {} names particle {} twice", reader.info().path,
+                                            dem::kIndexOrderPath, held[k].first));
+    }
+    part.particles.push_back(held[k].first);
+    part.owned.push_back(held[k].second);
+  }
+  return Status::ok();
+}
+
+// The bonds whose first end is a held particle, from /index/bond_start.
+Result<std::vector<dem::BondIndex>> bondsFromHeld(const dem::DemFileReader& reader,
+                                                  const std::vector<dem::ParticleIndex>& held,
+                                                  std::vector<dem::ParticleIndex>& firstEnds) {
+  std::vector<std::int32_t> rows;
+  rows.reserve(2 * held.size());
+  for (dem::ParticleIndex i : held) {
+    if (rows.empty() || rows.back() < i) {
+      rows.push_back(i);
+    }
+    rows.push_back(i + 1);
+  }
+  auto starts = reader.readBondStarts(rows);
+  if (!starts) {
+    return starts.status();
+  }
+  std::vector<dem::BondIndex> bonds;
+  std::size_t row = 0;
+  for (dem::ParticleIndex i : held) {
+    while (rows[row] < i) {
+      ++row;
+    }
+    const std::int64_t begin = (*starts)[row];
+    const std::int64_t end = (*starts)[row + 1];
+    if (end < begin || (!bonds.empty() && begin < std::int64_t{bonds.back()} + 1)) {
+      return failedPrecondition(fmt::format("{}: {} is not ascending at particle {}",
+                                            reader.info().path, dem::kIndexBondStartPath, i));
+    }
+    for (std::int64_t b = begin; b < end; ++b) {
+      bonds.push_back(static_cast<dem::BondIndex>(b));
+      firstEnds.push_back(i);
+    }
+  }
+  return bonds;
+}
+
+// Keeps, of the candidate bonds, those whose other end the piece holds too.
+Status keepHeldBonds(const dem::DemFileReader& reader,
+                     const std::vector<dem::BondIndex>& candidates,
+                     const std::vector<dem::ParticleIndex>& firstEnds, Piece& part) {
+  auto pairs = reader.readBondRows(candidates);
+  if (!pairs) {
+    return pairs.status();
+  }
+  auto local = [&](dem::ParticleIndex i) -> std::int32_t {
+    const auto at = std::lower_bound(part.particles.begin(), part.particles.end(), i);
+    return at != part.particles.end() && *at == i
+               ? static_cast<std::int32_t>(at - part.particles.begin())
+               : -1;
+  };
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    const dem::Bond& pair = (*pairs)[k];
+    if (pair.first != firstEnds[k]) {
+      return failedPrecondition(fmt::format(
+          "{}: {} puts bond {} at particle {}, but its first end is {}", reader.info().path,
+          dem::kIndexBondStartPath, candidates[k], firstEnds[k], pair.first));
+    }
+    const std::int32_t a = local(pair.first);
+    const std::int32_t c = local(pair.second);
+    if (c >= 0) {
+      part.bonds.push_back(candidates[k]);
+      part.localBonds.push_back({a, c});
+      part.bondOwned.push_back(
+          part.owned[static_cast<std::size_t>(pair.first < pair.second ? a : c)]);
+    }
+  }
+  return Status::ok();
+}
+
+// The piece's rows of the time-independent arrays and of the first step.
+Status readPieceRows(const dem::DemFileReader& reader, IndexedPiece& piece) {
+  const Piece& part = piece.part;
+  auto lattice = reader.readLatticeRows(part.particles, part.bonds);
+  if (!lattice) {
+    return lattice.status();
+  }
+  piece.lattice = std::move(*lattice);
+  piece.lattice.bonds = part.localBonds;
+  auto breakSteps = reader.readBreakStepRows(part.bonds);
+  if (!breakSteps) {
+    return breakSteps.status();
+  }
+  piece.breakSteps = std::move(*breakSteps);
+  auto first = reader.readStepRows(0, part.particles, {});
+  if (!first) {
+    return first.status();
+  }
+  piece.reference = std::move(first->positions);
+  return Status::ok();
+}
+
+}  // namespace
+
+Result<std::optional<IndexedPiece>> readIndexedPiece(const dem::DemFileReader& reader, int piece,
+                                                     int pieces, double ghostBonds) {
+  auto index = reader.readSpatialIndexInfo();
+  if (!index) {
+    return index.status();
+  }
+  if (!*index || !(*index)->hasBondStart ||
+      (*index)->decomposition != dem::CellDecomposition::kLattice) {
+    return std::optional<IndexedPiece>{};
+  }
+  IndexedPiece result;
+  result.index = **index;
+  result.lattice.dimension = reader.info().dimension;
+  const auto n = static_cast<std::int64_t>(reader.info().particleCount);
+  const std::int64_t first = n * piece / pieces;
+  const std::int64_t last = n * (piece + 1) / pieces;
+  if (first >= last) {
+    return std::optional<IndexedPiece>{std::move(result)};
+  }
+  // partitionPiece's slab: order [first, last), and every particle whose
+  // coordinate lies within the ghost width of it, a range of the order.
+  const double width = ghostBonds * result.index.longestBond;
+  auto lo = reader.readIndexCoordinate(first);
+  auto hi = reader.readIndexCoordinate(last - 1);
+  if (!lo || !hi) {
+    return !lo ? lo.status() : hi.status();
+  }
+  const double from = *lo - width;
+  const double to = *hi + width;
+  auto held0 = searchIndex(reader, 0, first, [&](double c) { return c < from; });
+  auto held1 = searchIndex(reader, last, n, [&](double c) { return c <= to; });
+  if (!held0 || !held1) {
+    return !held0 ? held0.status() : held1.status();
+  }
+  CRACKVIS_RETURN_IF_ERROR(heldParticles(reader, *held0, *held1, first, last, result.part));
+  std::vector<dem::ParticleIndex> firstEnds;
+  auto candidates = bondsFromHeld(reader, result.part.particles, firstEnds);
+  if (!candidates) {
+    return candidates.status();
+  }
+  CRACKVIS_RETURN_IF_ERROR(keepHeldBonds(reader, *candidates, firstEnds, result.part));
+  CRACKVIS_RETURN_IF_ERROR(readPieceRows(reader, result));
+  return std::optional<IndexedPiece>{std::move(result)};
 }
 
 std::vector<std::int32_t> connectedComponents(std::size_t particleCount,

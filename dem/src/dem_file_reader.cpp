@@ -1,8 +1,10 @@
 // DemFileReader: opens a DEM file, checks its structure and reads it.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <numeric>
 
 #include <fmt/format.h>
 
@@ -731,6 +733,302 @@ Result<std::vector<std::uint8_t>> DemFileReader::readBondState(int step) const {
   std::vector<std::uint8_t> state(static_cast<std::uint64_t>(m_info.bondCount));
   CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondState, step, state.data()));
   if (Status valid = validateBondStates(state); !valid) {
+    return fail(failedPrecondition(fmt::format("step {}: {}", step, valid.message())));
+  }
+  return state;
+}
+
+// --- The spatial index and partial reads -----------------------------------
+
+Result<Handle> DemFileReader::openIndexDataset(const char* path, ElementType type,
+                                               std::vector<std::uint64_t> dims) const {
+  auto opened = openInFile(path);
+  if (!opened) {
+    return opened.status();
+  }
+  if (opened->shape.type != type || opened->shape.dims != dims) {
+    return fail(failedPrecondition(
+        fmt::format("dataset {} is {} {}, expected {} {} (N = {})", path, opened->shape.typeName,
+                    h5::formatDims(opened->shape.dims), elementTypeName(type), h5::formatDims(dims),
+                    m_info.particleCount)));
+  }
+  return std::move(opened->dataset);
+}
+
+Result<std::optional<SpatialIndexInfo>> DemFileReader::readSpatialIndexInfo() const {
+  if (!h5::linkExists(m_file.get(), kSpatialIndexGroup)) {
+    return std::optional<SpatialIndexInfo>{};
+  }
+  auto resolved = h5::resolveInFile(m_file.get(), kSpatialIndexGroup);
+  if (!resolved) {
+    return fail(failedPrecondition(
+        fmt::format("group {}: {}", kSpatialIndexGroup, resolved.status().message())));
+  }
+  Handle group = h5::groupHandle(H5Gopen2(m_file.get(), resolved->c_str(), H5P_DEFAULT));
+  auto axis = h5::readIntAttribute(group.get(), "axis");
+  auto radius = h5::readDoubleAttribute(group.get(), "largest_radius");
+  auto longest = h5::readDoubleAttribute(group.get(), "longest_bond");
+  if (!group.valid() || !axis || *axis < 0 || *axis > 2 || !radius || !std::isfinite(*radius) ||
+      !longest || !std::isfinite(*longest) || *longest < 0.0) {
+    return fail(failedPrecondition(
+        fmt::format("group {}: needs attributes axis (0, 1 or 2), largest_radius and "
+                    "longest_bond (finite, >= 0)",
+                    kSpatialIndexGroup)));
+  }
+  SpatialIndexInfo info;
+  info.axis = static_cast<int>(*axis);
+  info.largestRadius = *radius;
+  info.longestBond = *longest;
+  if (H5Aexists(group.get(), "decomposition") > 0) {
+    auto name = h5::readStringAttribute(group.get(), "decomposition");
+    if (name && *name == decompositionName(CellDecomposition::kLattice)) {
+      info.decomposition = CellDecomposition::kLattice;
+    } else if (name && *name == decompositionName(CellDecomposition::kTriangulation)) {
+      info.decomposition = CellDecomposition::kTriangulation;
+    } else {
+      return fail(failedPrecondition(fmt::format(
+          "{}@decomposition is {}, expected 'lattice' or 'triangulation'", kSpatialIndexGroup,
+          name ? "'" + echoed(*name) + "'" : std::string("not a string"))));
+    }
+  }
+  const auto n = static_cast<std::uint64_t>(m_info.particleCount);
+  auto box = openIndexDataset(kIndexBoxPath, ElementType::kFloat64, {2, 3});
+  if (!box) {
+    return box.status();
+  }
+  std::array<Vec3, 2> corners{};
+  if (Status read = h5::readDataset(box->get(), ElementType::kFloat64, corners.data()); !read) {
+    return fail(read);
+  }
+  info.box = {corners[0], corners[1]};
+  if (auto order = openIndexDataset(kIndexOrderPath, ElementType::kInt32, {n}); !order) {
+    return order.status();
+  }
+  if (auto coordinate = openIndexDataset(kIndexCoordinatePath, ElementType::kFloat64, {n});
+      !coordinate) {
+    return coordinate.status();
+  }
+  if (h5::linkExists(m_file.get(), kIndexBondStartPath)) {
+    if (auto dataset = openIndexDataset(kIndexBondStartPath, ElementType::kInt64, {n + 1});
+        !dataset) {
+      return dataset.status();
+    }
+    info.hasBondStart = true;
+  }
+  return std::optional<SpatialIndexInfo>{info};
+}
+
+Result<std::vector<ParticleIndex>> DemFileReader::readIndexOrder(std::int64_t first,
+                                                                 std::int64_t last) const {
+  if (first < 0 || last < first || last > m_info.particleCount) {
+    return fail(outOfRange(fmt::format("{}[{}, {}) asked of N = {}", kIndexOrderPath, first, last,
+                                       m_info.particleCount)));
+  }
+  const auto n = static_cast<std::uint64_t>(m_info.particleCount);
+  auto dataset = openIndexDataset(kIndexOrderPath, ElementType::kInt32, {n});
+  if (!dataset) {
+    return dataset.status();
+  }
+  std::vector<std::int32_t> rows(static_cast<std::size_t>(last - first));
+  std::iota(rows.begin(), rows.end(), static_cast<std::int32_t>(first));
+  std::vector<ParticleIndex> order(rows.size());
+  if (Status read = h5::readRowsAt(dataset->get(), ElementType::kInt32, -1, rows, order.data());
+      !read) {
+    return fail(read);
+  }
+  for (ParticleIndex i : order) {
+    if (i < 0 || i >= m_info.particleCount) {
+      return fail(failedPrecondition(fmt::format("{} names particle {}, outside 0..{}",
+                                                 kIndexOrderPath, i, m_info.particleCount - 1)));
+    }
+  }
+  return order;
+}
+
+Result<double> DemFileReader::readIndexCoordinate(std::int64_t k) const {
+  const auto n = static_cast<std::uint64_t>(m_info.particleCount);
+  auto dataset = openIndexDataset(kIndexCoordinatePath, ElementType::kFloat64, {n});
+  if (!dataset) {
+    return dataset.status();
+  }
+  if (k < 0 || k >= m_info.particleCount) {
+    return fail(outOfRange(fmt::format("{}[{}] asked of N = {}", kIndexCoordinatePath, k, n)));
+  }
+  const std::array<std::int32_t, 1> row{static_cast<std::int32_t>(k)};
+  double value = 0.0;
+  if (Status read = h5::readRowsAt(dataset->get(), ElementType::kFloat64, -1, row, &value); !read) {
+    return fail(read);
+  }
+  return value;
+}
+
+Result<std::vector<std::int64_t>> DemFileReader::readBondStarts(
+    std::span<const std::int32_t> rows) const {
+  const auto n = static_cast<std::uint64_t>(m_info.particleCount);
+  auto dataset = openIndexDataset(kIndexBondStartPath, ElementType::kInt64, {n + 1});
+  if (!dataset) {
+    return dataset.status();
+  }
+  std::vector<std::int64_t> starts(rows.size());
+  if (Status read = h5::readRowsAt(dataset->get(), ElementType::kInt64, -1, rows, starts.data());
+      !read) {
+    return fail(Status(read.code(), fmt::format("{}: {}", kIndexBondStartPath, read.message())));
+  }
+  for (std::int64_t start : starts) {
+    if (start < 0 || start > m_info.bondCount) {
+      return fail(failedPrecondition(fmt::format("{} holds {}, outside 0..{} (M)",
+                                                 kIndexBondStartPath, start, m_info.bondCount)));
+    }
+  }
+  return starts;
+}
+
+Status DemFileReader::readRows(DemDataset id, int step, std::span<const std::int32_t> rows,
+                               void* out) const {
+  auto dataset = openChecked(id, step);
+  if (!dataset) {
+    return dataset.status();
+  }
+  const DatasetSpec& spec = datasetSpec(id);
+  const bool row = spec.perStep && m_info.stepLayout == StepLayout::kAppendable;
+  if (Status read = h5::readRowsAt(dataset->get(), spec.type, row ? step : -1, rows, out); !read) {
+    return fail(Status(read.code(),
+                       fmt::format("dataset {}: {}", stepDatasetPath(id, step), read.message())));
+  }
+  return Status::ok();
+}
+
+template <typename T>
+Status DemFileReader::readOptionalRows(DemDataset id, std::span<const std::int32_t> rows,
+                                       std::vector<T>& out) const {
+  out.clear();
+  if (!h5::linkExists(m_file.get(), datasetPath(id))) {
+    return Status::ok();
+  }
+  out.resize(rows.size());
+  return readRows(id, 0, rows, out.data());
+}
+
+Result<ExtraArray> DemFileReader::readExtraRows(const ExtraInfo& extra, int step,
+                                                std::span<const std::int32_t> rows) const {
+  auto dataset = openExtra(extra, step);
+  if (!dataset) {
+    return dataset.status();
+  }
+  const auto& dims = dataset->shape.dims;
+  ExtraArray array{extra.name, extra.owner, dims.size() == 2 ? static_cast<int>(dims[1]) : 1, {}};
+  array.values.resize(rows.size() * static_cast<std::size_t>(array.components));
+  const bool row = extra.perStep && m_info.stepLayout == StepLayout::kAppendable;
+  if (Status read = h5::readRowsAt(dataset->dataset.get(), ElementType::kFloat64, row ? step : -1,
+                                   rows, array.values.data());
+      !read) {
+    return fail(Status(
+        read.code(),
+        fmt::format("dataset {}: {}", extraPath(extra, step, m_info.stepLayout), read.message())));
+  }
+  return array;
+}
+
+Result<std::vector<Bond>> DemFileReader::readBondRows(std::span<const BondIndex> bonds) const {
+  CRACKVIS_RETURN_IF_ERROR(m_countsStored);
+  std::vector<Bond> pairs(bonds.size());
+  CRACKVIS_RETURN_IF_ERROR(readRows(DemDataset::kPairs, 0, bonds, pairs.data()));
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const Bond& pair = pairs[k];
+    if (pair.first < 0 || pair.second < 0 || pair.first >= m_info.particleCount ||
+        pair.second >= m_info.particleCount || pair.first == pair.second) {
+      return fail(failedPrecondition(
+          fmt::format("bond {} joins particles {} and {}, expected two distinct in 0..{}", bonds[k],
+                      pair.first, pair.second, m_info.particleCount - 1)));
+    }
+  }
+  return pairs;
+}
+
+Result<Lattice> DemFileReader::readLatticeRows(std::span<const ParticleIndex> particles,
+                                               std::span<const BondIndex> bonds) const {
+  CRACKVIS_RETURN_IF_ERROR(m_countsStored);
+  Lattice lattice;
+  lattice.dimension = m_info.dimension;
+  lattice.radius.resize(particles.size());
+  CRACKVIS_RETURN_IF_ERROR(readRows(DemDataset::kRadius, 0, particles, lattice.radius.data()));
+  for (std::size_t k = 0; k < particles.size(); ++k) {
+    if (!(lattice.radius[k] > 0.0) || !std::isfinite(lattice.radius[k])) {
+      return fail(failedPrecondition(
+          fmt::format("particle {} has radius {}, expected > 0", particles[k], lattice.radius[k])));
+    }
+  }
+  auto pairs = readBondRows(bonds);
+  if (!pairs) {
+    return pairs.status();
+  }
+  lattice.bonds = std::move(*pairs);
+  CRACKVIS_RETURN_IF_ERROR(readOptionalRows(DemDataset::kStrength, bonds, lattice.strength));
+  CRACKVIS_RETURN_IF_ERROR(
+      readOptionalRows(DemDataset::kParticleId, particles, lattice.particleId));
+  CRACKVIS_RETURN_IF_ERROR(
+      readOptionalRows(DemDataset::kParticleGroup, particles, lattice.particleGroup));
+  CRACKVIS_RETURN_IF_ERROR(readOptionalRows(DemDataset::kBondFlags, bonds, lattice.bondFlags));
+  for (const ExtraInfo& extra : m_info.extras) {
+    if (!extra.perStep) {
+      auto array =
+          readExtraRows(extra, 0, extra.owner == ExtraOwner::kParticles ? particles : bonds);
+      if (!array) {
+        return array.status();
+      }
+      lattice.extras.push_back(std::move(*array));
+    }
+  }
+  return lattice;
+}
+
+Result<std::vector<std::int32_t>> DemFileReader::readBreakStepRows(
+    std::span<const BondIndex> bonds) const {
+  CRACKVIS_RETURN_IF_ERROR(m_countsStored);
+  std::vector<std::int32_t> breakStep(bonds.size());
+  CRACKVIS_RETURN_IF_ERROR(readRows(DemDataset::kBreakStep, 0, bonds, breakStep.data()));
+  for (std::size_t k = 0; k < breakStep.size(); ++k) {
+    if (breakStep[k] < -1) {
+      return fail(failedPrecondition(fmt::format(
+          "/bonds/break_step[{}] is {}, expected -1 or a step index", bonds[k], breakStep[k])));
+    }
+  }
+  return breakStep;
+}
+
+Result<StepState> DemFileReader::readStepRows(int step, std::span<const ParticleIndex> particles,
+                                              std::span<const BondIndex> bonds) const {
+  CRACKVIS_RETURN_IF_ERROR(checkStepInRange(m_path, step, stepCount()));
+  CRACKVIS_RETURN_IF_ERROR(m_countsStored);
+  StepState state;
+  state.time = m_info.steps[static_cast<size_t>(step)].time;
+  state.positions.resize(particles.size());
+  state.bondState.resize(bonds.size());
+  CRACKVIS_RETURN_IF_ERROR(
+      readRows(DemDataset::kPositions, step, particles, state.positions.data()));
+  CRACKVIS_RETURN_IF_ERROR(readRows(DemDataset::kBondState, step, bonds, state.bondState.data()));
+  if (h5::linkExists(m_file.get(), stepDatasetPath(DemDataset::kVelocities, step))) {
+    state.velocities.resize(particles.size());
+    CRACKVIS_RETURN_IF_ERROR(
+        readRows(DemDataset::kVelocities, step, particles, state.velocities.data()));
+  }
+  if (h5::linkExists(m_file.get(), stepDatasetPath(DemDataset::kBondForce, step))) {
+    state.bondForce.resize(bonds.size());
+    CRACKVIS_RETURN_IF_ERROR(readRows(DemDataset::kBondForce, step, bonds, state.bondForce.data()));
+  }
+  state.scalars = m_info.steps[static_cast<size_t>(step)].scalars;
+  for (const ExtraInfo& extra : m_info.extras) {
+    if (extra.perStep) {
+      auto array =
+          readExtraRows(extra, step, extra.owner == ExtraOwner::kParticles ? particles : bonds);
+      if (!array) {
+        return array.status();
+      }
+      state.extras.push_back(std::move(*array));
+    }
+  }
+  if (Status valid = validateStep(m_info.dimension, particles.size(), bonds.size(), state);
+      !valid) {
     return fail(failedPrecondition(fmt::format("step {}: {}", step, valid.message())));
   }
   return state;

@@ -1,5 +1,6 @@
 // DemFileWriter: creates a DEM file and appends steps to it.
 #include <algorithm>
+#include <array>
 #include <limits>
 #include <random>
 
@@ -91,6 +92,8 @@ Result<DemFileWriter> DemFileWriter::create(const std::string& path, const Latti
   writer.m_lattice = lattice;
   writer.m_breakStep.assign(lattice.bondCount(), -1);
   writer.m_storage = metadata.storage;
+  writer.m_spatialIndex = metadata.spatialIndex;
+  writer.m_decomposition = metadata.decomposition;
   if (Status written = writer.writeTimeIndependent(metadata); !written) {
     // Every message names the file (a full disk fails any of the writes).
     return written.message().starts_with(path)
@@ -221,27 +224,10 @@ Status DemFileWriter::appendStep(const StepState& step) {
   // The step's data first, flushed; only then the commit mark, flushed
   // again. A write that fails (a full disk) leaves the file as the last
   // commit mark describes it, and the writer closed.
-  Status written;
-  if (m_layout == StepLayout::kAppendable) {
-    written = m_axis ? Status::ok() : startStepAxis(step);
-    if (written) {
-      written = writeStepRows(step, breaksChanged);
-    }
-    if (written) {
-      written = commitStepRow(step.time);
-    }
-  } else {
-    written = writeStepData(step, breaksChanged);
-    if (written) {
-      written = flush();
-    }
-    if (written) {
-      Handle steps = h5::groupHandle(H5Gopen2(m_file.get(), "/steps", H5P_DEFAULT));
-      written = h5::writeIntAttribute(steps.get(), "count", m_stepCount + 1);
-    }
-    if (written) {
-      written = flush();
-    }
+  Status written = m_stepCount == 0 && m_spatialIndex ? writeSpatialIndex(step) : Status::ok();
+  if (written) {
+    written = m_layout == StepLayout::kAppendable ? writeAppendableStep(step, breaksChanged)
+                                                  : writeGroupStep(step, breaksChanged);
   }
   if (!written) {
     m_breakStep = std::move(previous);
@@ -250,6 +236,56 @@ Status DemFileWriter::appendStep(const StepState& step) {
                                               written.message()));
   }
   ++m_stepCount;
+  return Status::ok();
+}
+
+Status DemFileWriter::writeAppendableStep(const StepState& step, bool breaksChanged) {
+  CRACKVIS_RETURN_IF_ERROR(m_axis ? Status::ok() : startStepAxis(step));
+  CRACKVIS_RETURN_IF_ERROR(writeStepRows(step, breaksChanged));
+  return commitStepRow(step.time);
+}
+
+Status DemFileWriter::writeGroupStep(const StepState& step, bool breaksChanged) {
+  CRACKVIS_RETURN_IF_ERROR(writeStepData(step, breaksChanged));
+  CRACKVIS_RETURN_IF_ERROR(flush());
+  Handle steps = h5::groupHandle(H5Gopen2(m_file.get(), "/steps", H5P_DEFAULT));
+  CRACKVIS_RETURN_IF_ERROR(h5::writeIntAttribute(steps.get(), "count", m_stepCount + 1));
+  return flush();
+}
+
+// The spatial index of the first step's configuration, before the step
+// itself (and, in a live file, before SWMR writing starts, after which no
+// dataset can be added): a reader that finds the step finds the index.
+Status DemFileWriter::writeSpatialIndex(const StepState& first) {
+  const SpatialIndex index = buildSpatialIndex(first.positions, m_lattice, m_decomposition);
+  const SpatialIndexInfo& info = index.info;
+  const hid_t root = m_file.get();
+  Handle group =
+      h5::groupHandle(H5Gcreate2(root, kSpatialIndexGroup, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+  if (!group.valid()) {
+    return internalError(
+        fmt::format("cannot create group {} ({})", kSpatialIndexGroup, h5::lastHdf5Error()));
+  }
+  CRACKVIS_RETURN_IF_ERROR(h5::writeIntAttribute(group.get(), "axis", info.axis));
+  CRACKVIS_RETURN_IF_ERROR(
+      h5::writeDoubleAttribute(group.get(), "largest_radius", info.largestRadius));
+  CRACKVIS_RETURN_IF_ERROR(h5::writeDoubleAttribute(group.get(), "longest_bond", info.longestBond));
+  if (info.decomposition != CellDecomposition::kUnknown) {
+    CRACKVIS_RETURN_IF_ERROR(h5::writeStringAttribute(group.get(), "decomposition",
+                                                      decompositionName(info.decomposition)));
+  }
+  const auto n = static_cast<std::uint64_t>(index.order.size());
+  const std::array<Vec3, 2> box{info.box.lo, info.box.hi};
+  CRACKVIS_RETURN_IF_ERROR(
+      h5::writeDataset(root, kIndexBoxPath, ElementType::kFloat64, {2, 3}, box.data()));
+  CRACKVIS_RETURN_IF_ERROR(
+      h5::writeDataset(root, kIndexOrderPath, ElementType::kInt32, {n}, index.order.data()));
+  CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(root, kIndexCoordinatePath, ElementType::kFloat64, {n},
+                                            index.coordinate.data()));
+  if (info.hasBondStart) {
+    CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(root, kIndexBondStartPath, ElementType::kInt64,
+                                              {n + 1}, index.bondStart.data()));
+  }
   return Status::ok();
 }
 

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <cstring>
 #include <string_view>
 
 #include <fmt/format.h>
@@ -586,6 +587,96 @@ Status readRow(hid_t dataset, ElementType type, std::uint64_t row, void* out) {
               H5P_DEFAULT, out) < 0) {
     return failedPrecondition(
         fmt::format("read failed, the file may be truncated or corrupt ({})", lastHdf5Error()));
+  }
+  return Status::ok();
+}
+
+namespace {
+
+// A run of rows read with one hyperslab: [first, last].
+struct RowSpan {
+  std::int64_t first = 0;
+  std::int64_t last = 0;
+};
+
+// The spans readRowsAt reads: rows at most kGapBytes apart share one, and
+// none holds more than kSpanBytes (one row at the least).
+std::vector<RowSpan> rowSpans(std::span<const std::int32_t> rows, std::uint64_t rowBytes) {
+  constexpr std::uint64_t kGapBytes = 64u << 10;
+  constexpr std::uint64_t kSpanBytes = 4u << 20;
+  const auto gapRows = static_cast<std::int64_t>(std::max<std::uint64_t>(1, kGapBytes / rowBytes));
+  const auto spanRows =
+      static_cast<std::int64_t>(std::max<std::uint64_t>(1, kSpanBytes / rowBytes));
+  std::vector<RowSpan> spans;
+  for (std::int32_t row : rows) {
+    if (!spans.empty() && row - spans.back().last <= gapRows &&
+        row - spans.back().first < spanRows) {
+      spans.back().last = row;
+    } else {
+      spans.push_back({row, row});
+    }
+  }
+  return spans;
+}
+
+}  // namespace
+
+Status readRowsAt(hid_t dataset, ElementType type, std::int64_t stepRow,
+                  std::span<const std::int32_t> rows, void* out) {
+  if (rows.empty()) {
+    return Status::ok();
+  }
+  Handle space = dataspaceHandle(H5Dget_space(dataset));
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  const std::size_t axis = stepRow >= 0 ? 1 : 0;
+  if (rank < static_cast<int>(axis) + 1) {
+    return failedPrecondition(fmt::format("has {} axes, too few for rows", rank));
+  }
+  std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+  H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  if (stepRow >= 0 && static_cast<hsize_t>(stepRow) >= dims[0]) {
+    return outOfRange(fmt::format("has {} rows, row {} asked for", dims[0], stepRow));
+  }
+  const bool ascending = std::is_sorted(rows.begin(), rows.end()) &&
+                         std::adjacent_find(rows.begin(), rows.end()) == rows.end();
+  if (!ascending || rows.front() < 0 || static_cast<hsize_t>(rows.back()) >= dims[axis]) {
+    return outOfRange(fmt::format("rows {}..{} asked of {} (ascending, each once)", rows.front(),
+                                  rows.back(), dims[axis]));
+  }
+  const hid_t memoryType = nativeType(type);
+  std::uint64_t rowValues = 1;
+  for (std::size_t d = axis + 1; d < dims.size(); ++d) {
+    rowValues *= dims[d];
+  }
+  const std::uint64_t rowBytes = std::max<std::uint64_t>(1, rowValues * H5Tget_size(memoryType));
+  std::vector<unsigned char> buffer;
+  auto* target = static_cast<unsigned char*>(out);
+  std::size_t next = 0;  // the next row of `rows` to copy out
+  for (const RowSpan& span : rowSpans(rows, rowBytes)) {
+    const auto length = static_cast<hsize_t>(span.last - span.first + 1);
+    std::vector<hsize_t> start(dims.size(), 0);
+    std::vector<hsize_t> count(dims);
+    if (stepRow >= 0) {
+      start[0] = static_cast<hsize_t>(stepRow);
+      count[0] = 1;
+    }
+    start[axis] = static_cast<hsize_t>(span.first);
+    count[axis] = length;
+    const hsize_t values = length * rowValues;
+    buffer.resize(static_cast<std::size_t>(length * rowBytes));
+    Handle memory = dataspaceHandle(H5Screate_simple(1, &values, nullptr));
+    if (H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(),
+                            nullptr) < 0 ||
+        H5Dread(dataset, memoryType, memory.get(), space.get(), H5P_DEFAULT, buffer.data()) < 0) {
+      return failedPrecondition(
+          fmt::format("read of rows {}..{} failed, the file may be truncated or corrupt ({})",
+                      span.first, span.last, lastHdf5Error()));
+    }
+    for (; next < rows.size() && rows[next] <= span.last; ++next) {
+      std::memcpy(target + next * rowBytes,
+                  buffer.data() + static_cast<std::size_t>(rows[next] - span.first) * rowBytes,
+                  rowBytes);
+    }
   }
   return Status::ok();
 }

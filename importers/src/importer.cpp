@@ -17,6 +17,7 @@
 #include "scalar_table.hpp"
 #include <crackvis/common/pending_file.hpp>
 #include <crackvis/common/progress.hpp>
+#include <crackvis/cracks/extractor.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/step_range.hpp>
 #include <crackvis/importers/importer.hpp>
@@ -660,7 +661,9 @@ namespace {
 Status writeSeries(StepSource& source, SeriesConverter& converter, SourceStep first,
                    const std::string& path, const dem::DemMetadata& metadata,
                    const ImportOptions& options, ImportSummary& summary) {
-  auto writer = dem::DemFileWriter::create(path, converter.lattice(), metadata);
+  dem::DemMetadata indexed = metadata;
+  indexed.decomposition = cracks::decompositionOf(converter.lattice());
+  auto writer = dem::DemFileWriter::create(path, converter.lattice(), indexed);
   if (!writer) {
     return writer.status();
   }
@@ -851,6 +854,7 @@ class LiveOutput {
     metadata.sourceFiles = m_source.files;
     metadata.storage = m_options.storage;
     metadata.stepLayout = dem::StepLayout::kAppendable;
+    metadata.decomposition = cracks::decompositionOf(lattice);
     if (!converter.timeKnown(first) && !(m_options.timestep > 0.0)) {
       metadata.timeUnit = dem::kTimeInIterations;
     }

@@ -25,7 +25,10 @@
 #include <vtkSmartPointer.h>
 #include <vtkStreamingDemandDrivenPipeline.h>
 
+#include "support/h5_tamper.hpp"
 #include "support/temp_dir.hpp"
+#include <crackvis/cracks/extractor.hpp>
+#include <crackvis/cracks/partition.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/lattice_generator.hpp>
 #include <crackvis/dem/planted_crack.hpp>
@@ -35,9 +38,10 @@ using namespace crackvis;
 
 namespace {
 
-// A planted through crack (6 steps after the intact one) written as a file.
+// A planted through crack (6 steps after the intact one) written as a file,
+// with its spatial index as `crackvis generate` writes it, or without one.
 void writeSpecimen(const dem::Lattice& lattice, const std::vector<dem::Vec3>& positions,
-                   const std::string& path) {
+                   const std::string& path, bool index = true) {
   dem::PlantedCrackSpec spec;
   spec.steps = 6;
   spec.opening = 1.0;
@@ -46,6 +50,8 @@ void writeSpecimen(const dem::Lattice& lattice, const std::vector<dem::Vec3>& po
   REQUIRE(crack.isOk());
   dem::DemMetadata metadata;
   metadata.source = "vtk_pieces test";
+  metadata.spatialIndex = index;
+  metadata.decomposition = cracks::decompositionOf(lattice);
   auto writer = dem::DemFileWriter::create(path, lattice, metadata);
   REQUIRE(writer.isOk());
   for (int k = 0; k < crack->stepCount(); ++k) {
@@ -54,13 +60,13 @@ void writeSpecimen(const dem::Lattice& lattice, const std::vector<dem::Vec3>& po
   REQUIRE(writer->close().isOk());
 }
 
-std::string latticeFile(const testing::TempDir& dir) {
+std::string latticeFile(const testing::TempDir& dir, bool index = true) {
   dem::BlockSpec spec;
   spec.sites = {30, 8, 8};
   auto block = dem::generateBlock(spec);
   REQUIRE(block.isOk());
-  const std::string path = dir.file("lattice.h5");
-  writeSpecimen(block->lattice, block->positions, path);
+  const std::string path = dir.file(index ? "lattice.h5" : "lattice-without-index.h5");
+  writeSpecimen(block->lattice, block->positions, path, index);
   return path;
 }
 
@@ -198,10 +204,14 @@ void checkPiecesAddUp(const std::string& path, int pieces) {
 TEST_CASE("the reader's pieces through each filter add up to the whole set, face for face",
           "[cracks][vtk][pieces]") {
   testing::TempDir dir;
-  const bool random = GENERATE(false, true);
-  const std::string path = random ? randomFile(dir) : latticeFile(dir);
+  // The lattice's pieces read through its spatial index, or cut from the
+  // whole set (a file without one); the random packing's always the latter.
+  const int kind = GENERATE(0, 1, 2);
+  const bool random = kind == 2;
+  const std::string path = random ? randomFile(dir) : latticeFile(dir, kind == 0);
   const int pieces = GENERATE(2, 3);
-  INFO((random ? "random packing" : "FCC lattice") << ", " << pieces << " pieces");
+  INFO((random ? "random packing" : (kind == 0 ? "FCC lattice" : "FCC lattice, no index"))
+       << ", " << pieces << " pieces");
   SECTION("cell cut") {
     checkPiecesAddUp<vtkCellCutCrackFilter>(path, pieces);
   }
@@ -255,4 +265,146 @@ TEST_CASE("a piece holds its slab and a ghost layer, marked, with the file's ids
   }
   CHECK(owned == n);       // every particle is owned by exactly one piece
   CHECK(ownedBonds == m);  // and every bond
+}
+
+namespace {
+
+// Every array of `from` equals the same-named array of `to`, value for value.
+void checkSameArrays(vtkFieldData* from, vtkFieldData* to, const char* where) {
+  INFO(where);
+  REQUIRE(from->GetNumberOfArrays() == to->GetNumberOfArrays());
+  for (int k = 0; k < from->GetNumberOfArrays(); ++k) {
+    vtkAbstractArray* a = from->GetAbstractArray(k);
+    vtkAbstractArray* b = to->GetAbstractArray(a->GetName());
+    INFO("array " << a->GetName());
+    REQUIRE(b != nullptr);
+    REQUIRE(a->GetNumberOfTuples() == b->GetNumberOfTuples());
+    REQUIRE(a->GetNumberOfComponents() == b->GetNumberOfComponents());
+    for (vtkIdType v = 0; v < a->GetNumberOfValues(); ++v) {
+      if (!(a->GetVariantValue(v) == b->GetVariantValue(v))) {
+        FAIL("value " << v << " differs");
+      }
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("a piece read through the file's spatial index is the piece cut from the whole set",
+          "[cracks][vtk][pieces][index]") {
+  testing::TempDir dir;
+  const std::string indexed = latticeFile(dir, true);
+  const std::string plain = latticeFile(dir, false);
+  const int pieces = GENERATE(2, 3, 5);
+  const double ghost = GENERATE(1.0, 4.0);
+  INFO(pieces << " pieces, ghost width " << ghost << " bonds");
+
+  // The partition itself: readIndexedPiece reads what partitionPiece cuts.
+  auto whole = dem::DemFileReader::open(plain);
+  REQUIRE(whole.isOk());
+  auto lattice = whole->readLattice();
+  auto first = whole->readStep(0);
+  REQUIRE(lattice.isOk());
+  REQUIRE(first.isOk());
+  auto file = dem::DemFileReader::open(indexed);
+  REQUIRE(file.isOk());
+  const double width = ghost * cracks::longestBond(first->positions, lattice->bonds);
+  for (int p = 0; p < pieces; ++p) {
+    const cracks::Piece cut =
+        cracks::partitionPiece(first->positions, lattice->bonds, p, pieces, width);
+    auto read = cracks::readIndexedPiece(*file, p, pieces, ghost);
+    REQUIRE(read.isOk());
+    REQUIRE(read->has_value());
+    const cracks::IndexedPiece& piece = **read;
+    CHECK(piece.part.particles == cut.particles);
+    CHECK(piece.part.owned == cut.owned);
+    CHECK(piece.part.bonds == cut.bonds);
+    CHECK(piece.part.localBonds == cut.localBonds);
+    CHECK(piece.part.bondOwned == cut.bondOwned);
+    CHECK(piece.lattice.bonds == cut.localBonds);
+    REQUIRE(piece.reference.size() == cut.particles.size());
+    for (std::size_t k = 0; k < cut.particles.size(); ++k) {
+      CHECK(piece.reference[k] == first->positions[static_cast<std::size_t>(cut.particles[k])]);
+    }
+  }
+
+  // And through the reader: the same output, array for array, at every step.
+  vtkNew<vtkCrackvisDemReader> through;
+  vtkNew<vtkCrackvisDemReader> cutFrom;
+  through->SetFileName(indexed.c_str());
+  cutFrom->SetFileName(plain.c_str());
+  through->SetGhostWidth(ghost);
+  cutFrom->SetGhostWidth(ghost);
+  through->UpdateInformation();
+  vtkInformation* info = through->GetOutputInformation(0);
+  const int steps = info->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+  const double* times = info->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+  for (int step = 0; step < steps; step += 3) {
+    for (int p = 0; p < pieces; ++p) {
+      INFO("step " << step << ", piece " << p);
+      through->UpdateTimeStep(times[step], p, pieces, 0);
+      cutFrom->UpdateTimeStep(times[step], p, pieces, 0);
+      vtkPolyData* a = through->GetOutput();
+      vtkPolyData* b = cutFrom->GetOutput();
+      REQUIRE(a->GetNumberOfPoints() == b->GetNumberOfPoints());
+      REQUIRE(a->GetNumberOfLines() == b->GetNumberOfLines());
+      for (vtkIdType i = 0; i < a->GetNumberOfPoints(); i += 17) {
+        double pa[3];
+        double pb[3];
+        a->GetPoint(i, pa);
+        b->GetPoint(i, pb);
+        CHECK(std::equal(pa, pa + 3, pb));
+      }
+      checkSameArrays(a->GetPointData(), b->GetPointData(), "point data");
+      checkSameArrays(a->GetCellData(), b->GetCellData(), "cell data");
+      checkSameArrays(a->GetFieldData(), b->GetFieldData(), "field data");
+      vtkIdType na = 0;
+      vtkIdType nb = 0;
+      const vtkIdType* ia = nullptr;
+      const vtkIdType* ib = nullptr;
+      a->GetLines()->InitTraversal();
+      b->GetLines()->InitTraversal();
+      while (a->GetLines()->GetNextCell(na, ia) != 0 && b->GetLines()->GetNextCell(nb, ib) != 0) {
+        REQUIRE(na == nb);
+        REQUIRE(std::equal(ia, ia + na, ib));
+      }
+    }
+  }
+}
+
+TEST_CASE("a triangulated packing's pieces are not read through the index, and say why not",
+          "[cracks][vtk][pieces][index]") {
+  testing::TempDir dir;
+  const std::string path = randomFile(dir);
+  auto file = dem::DemFileReader::open(path);
+  REQUIRE(file.isOk());
+  auto index = file->readSpatialIndexInfo();
+  REQUIRE(index.isOk());
+  REQUIRE(index->has_value());
+  CHECK((*index)->decomposition == dem::CellDecomposition::kTriangulation);
+  auto read = cracks::readIndexedPiece(*file, 0, 2, 4.0);
+  REQUIRE(read.isOk());
+  CHECK_FALSE(read->has_value());
+}
+
+TEST_CASE("a piece's reader reads the index: a damaged one fails the piece, not the whole read",
+          "[cracks][vtk][pieces][index]") {
+  testing::TempDir dir;
+  const std::string path = latticeFile(dir, true);
+  std::int32_t n = 0;
+  {
+    auto file = dem::DemFileReader::open(path);
+    REQUIRE(file.isOk());
+    n = static_cast<std::int32_t>(file->info().particleCount);
+  }
+  // Piece 0's slab starts at the order's first position.
+  testing::setInt32Elements(path, dem::kIndexOrderPath, {n + 5}, 0);
+  vtkObject::GlobalWarningDisplayOff();
+  vtkNew<vtkCrackvisDemReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->UpdatePiece(0, 2, 0);
+  CHECK(reader->GetOutput()->GetNumberOfPoints() == 0);
+  reader->UpdatePiece(0, 1, 0);  // one process reads the file whole, without the index
+  CHECK(reader->GetOutput()->GetNumberOfPoints() == n);
+  vtkObject::GlobalWarningDisplayOn();
 }

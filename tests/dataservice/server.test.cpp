@@ -89,8 +89,9 @@ TEST_CASE("Describe returns the whole tree of a file in one call, as the file ho
     CHECK(description->steps[k].time == sample.sample3d.steps[k].time);
     CHECK(description->steps[k].group == dem::stepGroupPath(k));
   }
-  // 4 time-independent datasets and 4 per step (with the optional arrays).
-  CHECK(description->datasets.size() == 4 + 3 * 4);
+  // 4 time-independent datasets, the spatial index's 4 (v1.3) and 4 per
+  // step (with the optional arrays).
+  CHECK(description->datasets.size() == 4 + 4 + 3 * 4);
   struct Expected {
     std::string path;
     DataType dtype;
@@ -101,6 +102,10 @@ TEST_CASE("Describe returns the whole tree of a file in one call, as the file ho
                              {"/bonds/pairs", DataType::kInt32, {m, 2}},
                              {"/bonds/strength", DataType::kFloat64, {m}},
                              {"/bonds/break_step", DataType::kInt32, {m}},
+                             {"/index/box", DataType::kFloat64, {2, 3}},
+                             {"/index/order", DataType::kInt32, {n}},
+                             {"/index/coordinate", DataType::kFloat64, {n}},
+                             {"/index/bond_start", DataType::kInt64, {n + 1}},
                              {"/steps/000002/positions", DataType::kFloat64, {n, 3}},
                              {"/steps/000002/bond_state", DataType::kUInt8, {m}},
                              {"/steps/000002/velocities", DataType::kFloat32, {n, 3}},

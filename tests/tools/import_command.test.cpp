@@ -44,7 +44,7 @@ TEST_CASE("crackvis import reads each code's run in one command", "[cli][import]
     CHECK_THAT(run.out, Catch::Contains("wrote         " + out));
     auto info = runProcess({kCli, "info", out});
     REQUIRE(info.exitCode == 0);
-    CHECK_THAT(info.out, Catch::Contains("format        crackvis-dem v1.2"));
+    CHECK_THAT(info.out, Catch::Contains("format        crackvis-dem v1.3"));
     CHECK_THAT(info.out, Catch::Contains("steps         11"));
   }
 }

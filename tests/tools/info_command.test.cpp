@@ -33,6 +33,10 @@ TEST_CASE("crackvis info prints the counts of a generated FCC block", "[cli][inf
   CHECK_THAT(info.out, Catch::Contains("particles     N = 172"));
   CHECK_THAT(info.out, Catch::Contains("bonds         M = 756 (mean coordination 8.791)"));
   CHECK_THAT(info.out, Catch::Contains("crack cells   lattice"));
+  // generate writes the spatial index (v1.3), with the lattice decided.
+  CHECK_THAT(info.out, Catch::Contains("format        crackvis-dem v1.3"));
+  CHECK_THAT(info.out,
+             Catch::Contains("index         order along x: MPI ranks read only their slab"));
   CHECK_THAT(info.out, Catch::Contains("steps         1 (time 0 .. 0 s)"));
   CHECK_THAT(info.out,
              Catch::Contains("broken bonds  first step: 0 (0.00 %), last step: 0 (0.00 %)"));
@@ -89,6 +93,10 @@ TEST_CASE("crackvis info says which cells the crack methods use on a random pack
                                          "span no lattice"));
     const auto json = nlohmann::json::parse(runProcess({kCli, "info", path, "--json"}).out);
     CHECK_THAT(json["cells"].get<std::string>(), Catch::StartsWith(cells + " triangulation"));
+    // Its pieces need the whole set's triangulation: no per-rank reads.
+    CHECK(json["spatial_index"]["decomposition"] == "triangulation");
+    CHECK(json["spatial_index"]["per_rank_reads"] == false);
+    CHECK_THAT(info.out, Catch::Contains("MPI ranks read every particle (a triangulated packing"));
   }
 }
 

@@ -3,6 +3,7 @@
 // line on stderr and exit status 1.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -40,11 +41,43 @@ struct FileSummary {
   // The cells the crack methods use by default (--decomposition auto) and
   // why: the lattice's, or a triangulation, Delaunay or regular.
   std::string cells;
+  // The spatial index (v1.3), if the file has one.
+  std::optional<dem::SpatialIndexInfo> index;
   std::vector<StepRow> rows;  // first and last only, unless per-step was asked
   // With --cracks: per step (all of them), the crack's analyses and front.
   std::vector<analysis::StepAnalysis> cracks;
   analysis::CrackFront front;
 };
+
+// Whether the ParaView plugin's MPI ranks read only their slab of this file
+// (cracks::readIndexedPiece's conditions).
+bool perRankReads(const dem::SpatialIndexInfo& index) {
+  return index.hasBondStart && index.decomposition == dem::CellDecomposition::kLattice;
+}
+
+const char* axisName(int axis) {
+  return axis == 0 ? "x" : (axis == 1 ? "y" : "z");
+}
+
+nlohmann::json indexJson(const std::optional<dem::SpatialIndexInfo>& index) {
+  if (!index) {
+    return nullptr;
+  }
+  const char* decomposition = dem::decompositionName(index->decomposition);
+  return {{"axis", axisName(index->axis)},
+          {"decomposition", *decomposition != '\0' ? nlohmann::json(decomposition) : nullptr},
+          {"per_rank_reads", perRankReads(*index)}};
+}
+
+std::string indexText(const std::optional<dem::SpatialIndexInfo>& index) {
+  if (!index) {
+    return "none (a file before v1.3): MPI ranks read every particle";
+  }
+  return fmt::format("order along {}: MPI ranks read {}", axisName(index->axis),
+                     perRankReads(*index) ? "only their slab"
+                                          : "every particle (a triangulated packing, or bonds "
+                                            "not sorted by first end)");
+}
 
 double percent(std::int64_t part, std::int64_t whole) {
   return whole > 0 ? 100.0 * static_cast<double>(part) / static_cast<double>(whole) : 0.0;
@@ -104,6 +137,11 @@ Result<FileSummary> summarize(const InfoOptions& options) {
                                        static_cast<double>(lattice->particleCount())
                                  : 0.0;
   summary.cells = defaultCells(*lattice, summary.info.dimension);
+  auto index = reader->readSpatialIndexInfo();
+  if (!index) {
+    return index.status();
+  }
+  summary.index = *index;
   for (std::size_t b = 0; b < lattice->bondCount(); ++b) {
     summary.cutAtStart += lattice->cutAtStart(b) ? 1 : 0;
   }
@@ -230,6 +268,7 @@ nlohmann::json toJson(const FileSummary& summary, bool perStep) {
       {"stopped_early", info.stoppedEarly()},
       {"step_layout", info.stepLayout == dem::StepLayout::kAppendable ? "appendable" : "groups"},
       {"being_written", info.beingWritten},
+      {"spatial_index", indexJson(summary.index)},
   };
   if (summary.rows.empty()) {
     out["time"] = nullptr;
@@ -272,6 +311,7 @@ void printText(const FileSummary& summary, bool perStep) {
     fmt::print("groups        {}\n", fmt::join(summary.groups, ", "));
   }
   fmt::print("crack cells   {}\n", summary.cells);
+  fmt::print("index         {}\n", indexText(summary.index));
   if (summary.rows.empty()) {
     fmt::print("steps         0\n");
   } else {

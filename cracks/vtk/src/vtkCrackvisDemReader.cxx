@@ -49,12 +49,17 @@ struct DemReaderCache {
   // holds the same particles and bonds, so the filters stay incremental.
   int piece = 0;
   int pieces = 1;
-  double ghostWidth = 0.0;
+  double ghostBonds = -1.0;  // the request's ghost width in longest bonds; -1: none yet
+  // Whether the piece was read through the file's spatial index (only its
+  // rows; a step reads only its rows), or cut from the whole set.
+  bool indexed = false;
   Piece part;
   dem::Lattice pieceLattice;
   std::vector<std::int32_t> pieceBreakSteps;
   std::vector<dem::Vec3> pieceReference;
-  int decomposition = -1;  // of the whole set: 0 lattice, 1 triangulation; -1 not decided
+  dem::Bounds box;             // the whole specimen's reference box
+  double largestRadius = 0.0;  // the whole set's
+  int decomposition = -1;      // of the whole set: 0 lattice, 1 triangulation; -1 not decided
   std::optional<Triangulation> triangulation;  // the whole set's, when it is triangulated
   std::vector<std::int32_t> pieceCells;        // its cells and edges in the piece
   std::vector<std::int32_t> pieceEdges;
@@ -63,7 +68,6 @@ struct DemReaderCache {
   // whole set's box, decomposition and triangulation), made once and added
   // by reference: an unchanged array tells the filters nothing changed.
   vtkSmartPointer<vtkPolyData> pieceData;
-  double longestBond = -1.0;  // of the reference configuration; -1: not measured
 };
 
 namespace {
@@ -156,8 +160,8 @@ void addFieldData(int step, const dem::StepState& state, vtkPolyData* output) {
   }
 }
 
-// The time-independent part and the reference configuration, read once (each
-// MPI rank reads the whole lattice: the partition is made from it).
+// The time-independent part and the reference configuration, read once (a
+// piece read through the file's spatial index does without).
 Status loadLattice(DemReaderCache& cache) {
   if (cache.loaded) {
     return Status::ok();
@@ -311,34 +315,45 @@ void addPieceMarks(vtkDataSetAttributes* attributes, const std::vector<Index>& g
 void addPieceData(const DemReaderCache& cache, vtkPolyData* output) {
   addPieceMarks(output->GetPointData(), cache.part.particles, cache.part.owned, true);
   addPieceMarks(output->GetCellData(), cache.part.bonds, cache.part.bondOwned, false);
-  const dem::Bounds box = dem::boundingBox(cache.reference);
+  const dem::Bounds& box = cache.box;
   const std::vector<double> centres{box.lo.x, box.lo.y, box.lo.z, box.hi.x, box.hi.y, box.hi.z};
   vtkFieldData* field = output->GetFieldData();
   addArray<vtkDoubleArray>(field, kSpecimenCentresArray, centres, 6);
-  const auto& radius = cache.lattice.radius;
-  addArray<vtkDoubleArray>(field, kLargestRadiusArray,
-                           std::vector<double>{*std::max_element(radius.begin(), radius.end())});
+  addArray<vtkDoubleArray>(field, kLargestRadiusArray, std::vector<double>{cache.largestRadius});
   addArray<vtkIntArray>(field, kDecompositionArray, std::vector<int>{cache.decomposition});
   addArray<vtkIntArray>(field, kTriangulationCellsArray, cache.pieceCells, 4);
   addArray<vtkIntArray>(field, kTriangulationEdgesArray, cache.pieceEdges, 2);
   addArray<vtkIntArray>(output->GetPointData(), kIntactComponentArray, cache.pieceIntactComponents);
 }
 
-// Cuts the whole set into `pieces` and keeps piece `piece` (once per
-// request: the partition depends only on the reference configuration).
-Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBonds) {
-  if (cache.longestBond < 0.0) {
-    cache.longestBond = longestBond(cache.reference, cache.lattice.bonds);
+// Piece `piece` of `pieces` through the file's spatial index: only the
+// piece's rows are read, now and at every step. False when the file has no
+// index this can use (cracks::readIndexedPiece).
+Result<bool> readPieceThroughIndex(DemReaderCache& cache, int piece, int pieces,
+                                   double ghostBonds) {
+  auto indexed = readIndexedPiece(*cache.reader, piece, pieces, ghostBonds);
+  if (!indexed) {
+    return indexed.status();
   }
-  const double width = ghostBonds * cache.longestBond;
-  if (cache.pieces == pieces && cache.piece == piece && cache.ghostWidth == width &&
-      !cache.part.particles.empty()) {
-    return Status::ok();
+  if (!*indexed) {
+    return false;
   }
+  IndexedPiece& read = **indexed;
+  cache.part = std::move(read.part);
+  cache.pieceLattice = std::move(read.lattice);
+  cache.pieceBreakSteps = std::move(read.breakSteps);
+  cache.pieceReference = std::move(read.reference);
+  cache.box = read.index.box;
+  cache.largestRadius = read.index.largestRadius;
+  cache.decomposition = 0;
+  return true;
+}
+
+// Piece `piece` of `pieces` cut from the whole set, read whole.
+Status cutPieceFromWholeSet(DemReaderCache& cache, int piece, int pieces, double ghostBonds) {
+  CRACKVIS_RETURN_IF_ERROR(loadLattice(cache));
   CRACKVIS_RETURN_IF_ERROR(decideDecomposition(cache));
-  cache.piece = piece;
-  cache.pieces = pieces;
-  cache.ghostWidth = width;
+  const double width = ghostBonds * longestBond(cache.reference, cache.lattice.bonds);
   cache.part = partitionPiece(cache.reference, cache.lattice.bonds, piece, pieces, width,
                               cache.triangulation ? &*cache.triangulation : nullptr);
   const Piece& part = cache.part;
@@ -354,9 +369,33 @@ Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBo
   lattice.extras = pickExtras(whole.extras, part);
   cache.pieceBreakSteps = pick(cache.breakSteps, part.bonds);
   cache.pieceReference = pick(cache.reference, part.particles);
+  cache.box = dem::boundingBox(cache.reference);
+  const auto& radius = whole.radius;
+  cache.largestRadius = radius.empty() ? 0.0 : *std::max_element(radius.begin(), radius.end());
   if (cache.triangulation) {
     restrictTriangulation(cache);
   }
+  return Status::ok();
+}
+
+// Piece `piece` of `pieces` (once per request: the partition depends only
+// on the reference configuration): through the file's spatial index when it
+// has one, else cut from the whole set.
+Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBonds) {
+  if (cache.pieces == pieces && cache.piece == piece && cache.ghostBonds == ghostBonds) {
+    return Status::ok();
+  }
+  auto indexed = readPieceThroughIndex(cache, piece, pieces, ghostBonds);
+  if (!indexed) {
+    return indexed.status();
+  }
+  cache.indexed = *indexed;
+  if (!cache.indexed) {
+    CRACKVIS_RETURN_IF_ERROR(cutPieceFromWholeSet(cache, piece, pieces, ghostBonds));
+  }
+  cache.piece = piece;
+  cache.pieces = pieces;
+  cache.ghostBonds = ghostBonds;
   cache.pieceData = vtkSmartPointer<vtkPolyData>::New();
   addPieceData(cache, cache.pieceData);
   return Status::ok();
@@ -487,34 +526,44 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
   if (piece < 0 || piece >= pieces) {
     return 1;  // no such piece: empty
   }
-  if (crackvis::Status loaded = crackvis::cracks::vtkadapter::loadLattice(cache); !loaded) {
-    vtkErrorMacro(<< loaded.message());
-    return 0;
-  }
+  namespace adapter = crackvis::cracks::vtkadapter;
   const int step =
       out->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
-          ? crackvis::cracks::vtkadapter::stepAt(
-                cache.times, out->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
+          ? adapter::stepAt(cache.times,
+                            out->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
           : 0;
-  auto state = cache.reader->readStep(step);
-  if (!state) {
-    vtkErrorMacro(<< state.status().message());
-    return 0;
-  }
-  namespace adapter = crackvis::cracks::vtkadapter;
-  if (pieces == 1) {
-    adapter::fill(cache.lattice, cache.breakSteps, cache.reference, step, *state, output);
-  } else {
+  if (pieces > 1) {
     if (crackvis::Status prepared = adapter::preparePiece(cache, piece, pieces, this->GhostWidth);
         !prepared) {
       vtkErrorMacro(<< this->FileName << ": " << prepared.message());
       return 0;
     }
-    adapter::addComponents(cache, *state, output);
-    adapter::fill(cache.pieceLattice, cache.pieceBreakSteps, cache.pieceReference, step,
-                  adapter::pieceState(std::move(*state), cache.part), output);
+  } else if (crackvis::Status loaded = adapter::loadLattice(cache); !loaded) {
+    vtkErrorMacro(<< loaded.message());
+    return 0;
+  }
+  // A piece read through the index reads only its rows of the step.
+  auto state = pieces > 1 && cache.indexed
+                   ? cache.reader->readStepRows(step, cache.part.particles, cache.part.bonds)
+                   : cache.reader->readStep(step);
+  if (!state) {
+    vtkErrorMacro(<< state.status().message());
+    return 0;
+  }
+  const double time = state->time;
+  if (pieces == 1) {
+    adapter::fill(cache.lattice, cache.breakSteps, cache.reference, step, *state, output);
+  } else {
+    if (cache.indexed) {
+      adapter::fill(cache.pieceLattice, cache.pieceBreakSteps, cache.pieceReference, step, *state,
+                    output);
+    } else {
+      adapter::addComponents(cache, *state, output);
+      adapter::fill(cache.pieceLattice, cache.pieceBreakSteps, cache.pieceReference, step,
+                    adapter::pieceState(std::move(*state), cache.part), output);
+    }
     adapter::sharePieceData(cache.pieceData, output);
   }
-  output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), state->time);
+  output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), time);
   return 1;
 }

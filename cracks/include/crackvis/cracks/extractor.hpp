@@ -18,6 +18,7 @@
 #include <crackvis/cracks/crack_mesh.hpp>
 #include <crackvis/cracks/lattice_decomposition.hpp>
 #include <crackvis/cracks/triangulation.hpp>
+#include <crackvis/dem/spatial_index.hpp>
 #include <crackvis/vocabulary/crack_method.hpp>
 
 // dem::Bounds has no comparison of its own; ExtractOptions compares its domain.
@@ -116,6 +117,9 @@ class CrackExtractor {
 // sample of particles lie on a lattice cell found from the graph alone. A
 // random packing's bonds do not (its 4-cliques fill a small part of space).
 bool isLatticeGraph(const BondGraph& graph, int dimension);
+// isLatticeGraph of a lattice's whole bond graph, as a file's spatial index
+// records it (dem::DemMetadata::decomposition) for readers of one piece.
+dem::CellDecomposition decompositionOf(const dem::Lattice& lattice);
 
 // The graph must outlive the extractor.
 std::unique_ptr<CrackExtractor> makeExtractor(Method method, const BondGraph& graph, int dimension,

@@ -14,12 +14,15 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
 #include <crackvis/cracks/crack_mesh.hpp>
 #include <crackvis/cracks/triangulation.hpp>
+#include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/model.hpp>
+#include <crackvis/dem/spatial_index.hpp>
 
 namespace crackvis::cracks {
 
@@ -32,7 +35,7 @@ struct Piece {
 };
 
 // The longest reference bond (the unit of the default ghost width).
-double longestBond(std::span<const Vec3> reference, std::span<const dem::Bond> bonds);
+using dem::longestBond;
 
 // Piece `piece` of `pieces` (0 <= piece < pieces); ghostWidth in metres.
 // With the whole set's triangulation (a packing that is no lattice), the
@@ -42,6 +45,25 @@ double longestBond(std::span<const Vec3> reference, std::span<const dem::Bond> b
 // are held by paths through its nodes' neighbours.
 Piece partitionPiece(std::span<const Vec3> reference, std::span<const dem::Bond> bonds, int piece,
                      int pieces, double ghostWidth, const Triangulation* triangulation = nullptr);
+
+// A piece read from a file through its spatial index (/index, v1.3;
+// dem::SpatialIndex): the piece partitionPiece cuts, found by binary searches
+// of the stored coordinates and read row by row, so that a rank holds its
+// slab and ghost layer and never the whole set. With the piece's part of the
+// time-independent arrays; a step's part is
+// reader.readStepRows(step, part.particles, part.bonds).
+struct IndexedPiece {
+  Piece part;
+  dem::Lattice lattice;                  // the piece's rows; bonds in piece indices
+  std::vector<std::int32_t> breakSteps;  // of the piece's bonds
+  std::vector<Vec3> reference;           // the piece's particles at the first step
+  dem::SpatialIndexInfo index;           // the whole set's box, largest radius, decomposition
+};
+// nullopt when the file cannot be read so: it has no index, no bond_start
+// (bonds not sorted by first end), or a decomposition other than a lattice
+// (a triangulated packing's pieces need the whole set's triangulation).
+Result<std::optional<IndexedPiece>> readIndexedPiece(const dem::DemFileReader& reader, int piece,
+                                                     int pieces, double ghostBonds);
 
 // Each particle's connected component by the bonds that are intact in
 // `bondState` (all of them when it is empty), labelled by a member's index.

@@ -11,6 +11,8 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -18,6 +20,7 @@
 #include <crackvis/common/status.hpp>
 #include <crackvis/dem/h5.hpp>
 #include <crackvis/dem/model.hpp>
+#include <crackvis/dem/spatial_index.hpp>
 #include <crackvis/dem_layout/layout.hpp>
 
 namespace crackvis::dem {
@@ -48,6 +51,11 @@ struct DemMetadata {
   // while it grows (HDF5 SWMR); every step then carries the optional arrays,
   // extras and scalar names of the first.
   StepLayout stepLayout = StepLayout::kGroups;
+  // The spatial index (/index, v1.3) is written with the first step; its
+  // cell decomposition, when the caller decided it on the whole bond graph
+  // (cracks::decompositionOf), lets a reader of one slab skip that decision.
+  bool spatialIndex = true;
+  CellDecomposition decomposition = CellDecomposition::kUnknown;
 };
 
 // Metadata naming only what produced the file.
@@ -142,6 +150,31 @@ class DemFileReader {
   Result<StepState> readStep(int step) const;
   // Only the bond states of a step (for statistics over many steps).
   Result<std::vector<std::uint8_t>> readBondState(int step) const;
+  // The file's spatial index (/index, v1.3; docs/data-format.md): its
+  // attributes, its datasets' shapes checked against N and M; nullopt when
+  // the file has none (files before v1.3, a writer told not to).
+  Result<std::optional<SpatialIndexInfo>> readSpatialIndexInfo() const;
+  // /index/order at positions [first, last) of the order.
+  Result<std::vector<ParticleIndex>> readIndexOrder(std::int64_t first, std::int64_t last) const;
+  // /index/coordinate at position k (a binary search probes a few).
+  Result<double> readIndexCoordinate(std::int64_t k) const;
+  // /index/bond_start at `rows` (ascending particle indices, N included).
+  Result<std::vector<std::int64_t>> readBondStarts(std::span<const std::int32_t> rows) const;
+
+  // Partial reads, for a reader of one piece of the specimen (an MPI rank;
+  // cracks::readIndexedPiece): rows `particles` of the per-particle arrays
+  // and `bonds` of the per-bond arrays (ascending whole-set indices, each
+  // once), read in spans through a bounded buffer (h5::readRowsAt), so that
+  // memory follows the piece, not the file. Contents are checked as far as
+  // the rows allow: radii, bond ends in range, finite positions, bond states.
+  Result<std::vector<Bond>> readBondRows(std::span<const BondIndex> bonds) const;
+  // The lattice's rows; its bonds keep whole-set particle indices.
+  Result<Lattice> readLatticeRows(std::span<const ParticleIndex> particles,
+                                  std::span<const BondIndex> bonds) const;
+  Result<std::vector<std::int32_t>> readBreakStepRows(std::span<const BondIndex> bonds) const;
+  Result<StepState> readStepRows(int step, std::span<const ParticleIndex> particles,
+                                 std::span<const BondIndex> bonds) const;
+
   // The headers of a step's datasets (type and shape against N and M),
   // without reading their data: what readStep would refuse for its shape.
   Status checkStepHeaders(int step) const;
@@ -169,6 +202,14 @@ class DemFileReader {
   Status refreshed(const std::string& path, hid_t dataset) const;
   Result<h5::Handle> openChecked(DemDataset id, int step = 0) const;
   Status readWhole(DemDataset id, int step, void* out) const;
+  Status readRows(DemDataset id, int step, std::span<const std::int32_t> rows, void* out) const;
+  template <typename T>
+  Status readOptionalRows(DemDataset id, std::span<const std::int32_t> rows,
+                          std::vector<T>& out) const;
+  Result<ExtraArray> readExtraRows(const ExtraInfo& extra, int step,
+                                   std::span<const std::int32_t> rows) const;
+  Result<h5::Handle> openIndexDataset(const char* path, ElementType type,
+                                      std::vector<std::uint64_t> dims) const;
   template <typename T>
   Status readOptional(DemDataset id, std::uint64_t count, std::vector<T>& out) const;
   Status readProvenance();
@@ -211,6 +252,10 @@ class DemFileWriter {
   Status recordBreaks(const StepState& step, bool& changed);
   Status writeStepData(const StepState& step, bool breaksChanged);
   Status writeExtras(hid_t location, const std::vector<ExtraArray>& extras);
+  Status writeSpatialIndex(const StepState& first);
+  // One step in the appendable layout, or as a step group; the commit last.
+  Status writeAppendableStep(const StepState& step, bool breaksChanged);
+  Status writeGroupStep(const StepState& step, bool breaksChanged);
   Status flush();
   void abandon();
 
@@ -230,6 +275,8 @@ class DemFileWriter {
   std::vector<std::int32_t> m_breakStep;
   int m_stepCount = 0;
   StepLayout m_layout = StepLayout::kGroups;
+  bool m_spatialIndex = true;
+  CellDecomposition m_decomposition = CellDecomposition::kUnknown;
   std::shared_ptr<StepAxis> m_axis;  // appendable, from the first step on
 };
 

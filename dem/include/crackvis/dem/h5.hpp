@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -190,6 +191,14 @@ Status appendRow(hid_t dataset, ElementType type, std::uint64_t row, const void*
 // Reads row `row` of a dataset whose first axis counts steps (the rest of
 // its shape) into `out`.
 Status readRow(hid_t dataset, ElementType type, std::uint64_t row, void* out);
+// Reads the rows `rows` (ascending, no repeats) of a dataset along its first
+// axis, or along its second when `stepRow` >= 0 names a row of its leading
+// step axis (the appendable layout); a row is the rest of the shape. Rows
+// close together are read as one span through a buffer of a few MiB and
+// picked from it, so a scattered selection (a slab of a specimen) costs few
+// reads, and memory follows the rows asked for, not the dataset.
+Status readRowsAt(hid_t dataset, ElementType type, std::int64_t stepRow,
+                  std::span<const std::int32_t> rows, void* out);
 // Reads the first `count` values of a 1-D dataset.
 Status readLeading(hid_t dataset, ElementType type, std::uint64_t count, void* out);
 // Reloads what this process holds of a dataset's metadata (its extent and

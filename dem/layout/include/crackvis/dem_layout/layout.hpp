@@ -24,7 +24,7 @@ inline constexpr std::string_view kFormatName = "crackvis-dem";
 // The major version: a reader refuses any other. The minor version (root
 // attribute `version_minor`, absent in v1.0 files) only adds optional parts.
 inline constexpr int kFormatVersion = 1;
-inline constexpr int kFormatMinorVersion = 2;
+inline constexpr int kFormatMinorVersion = 3;
 
 // How a file stores its steps (v1.2). kGroups: a group per step,
 // /steps/NNNNNN, committed by /steps@count (every file before v1.2, and

@@ -1,0 +1,75 @@
+// The spatial index of a crackvis-dem file (/index, v1.3): the particles in
+// order along the reference configuration's longest axis, with what a reader
+// of one slab of the specimen (an MPI rank of the ParaView plugin) needs to
+// find its particles and bonds without reading every particle
+// (docs/data-format.md, "The spatial index").
+//
+// The order is the one cracks::partitionPiece cuts: by the coordinate along
+// the longest axis of the reference box, ties by index. So slab k of R holds
+// order[k N / R, (k + 1) N / R), and its ghost layer, every particle within a
+// width of the slab, is the range of order around it that a binary search of
+// `coordinate` finds.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <crackvis/dem/model.hpp>
+
+namespace crackvis::dem {
+
+// How the crack methods divide a specimen into cells, decided once on the
+// whole bond graph (cracks::isLatticeGraph) and stored, since a piece's
+// graph, cut at its ghost layer, might not look like a lattice.
+enum class CellDecomposition : std::int32_t {
+  kUnknown = -1,       // not recorded: a reader decides on the whole bond graph
+  kLattice = 0,        // the bonds span lattice cells
+  kTriangulation = 1,  // a packing that is no lattice: a Delaunay triangulation
+};
+
+// Where the index lives (docs/data-format.md).
+inline constexpr const char* kSpatialIndexGroup = "/index";
+inline constexpr const char* kIndexOrderPath = "/index/order";
+inline constexpr const char* kIndexCoordinatePath = "/index/coordinate";
+inline constexpr const char* kIndexBondStartPath = "/index/bond_start";
+inline constexpr const char* kIndexBoxPath = "/index/box";
+
+// "lattice", "triangulation" (the attribute /index@decomposition); "" unknown.
+const char* decompositionName(CellDecomposition decomposition);
+
+// The index's scalar part (attributes of /index).
+struct SpatialIndexInfo {
+  int axis = 0;  // 0 x, 1 y, 2 z: the longest axis of the reference box
+  Bounds box;    // of the reference configuration (step 0)
+  double largestRadius = 0.0;
+  double longestBond = 0.0;  // the longest bond's length in the reference configuration
+  CellDecomposition decomposition = CellDecomposition::kUnknown;
+  // Whether /index/bond_start is stored: only when the bonds are sorted by
+  // their first end, as crackvis writes them.
+  bool hasBondStart = false;
+};
+
+struct SpatialIndex {
+  SpatialIndexInfo info;
+  std::vector<ParticleIndex> order;  // [N]: particles by (coordinate, index)
+  std::vector<double> coordinate;    // [N]: order[k]'s reference coordinate along info.axis
+  // [N + 1]: bonds [bondStart[i], bondStart[i + 1]) are those whose first
+  // end is particle i; empty when the bonds are not sorted by first end.
+  std::vector<std::int64_t> bondStart;
+};
+
+// The longest axis of a box: x, then y, then z on ties.
+int longestAxis(const Bounds& box);
+// A point's coordinate along an axis (0 x, 1 y, 2 z).
+inline double axisCoordinate(const Vec3& p, int axis) {
+  return axis == 0 ? p.x : (axis == 1 ? p.y : p.z);
+}
+// The longest bond of a configuration (0 without bonds).
+double longestBond(std::span<const Vec3> positions, std::span<const Bond> bonds);
+
+// The index of a lattice with the reference configuration `reference`.
+SpatialIndex buildSpatialIndex(std::span<const Vec3> reference, const Lattice& lattice,
+                               CellDecomposition decomposition);
+
+}  // namespace crackvis::dem

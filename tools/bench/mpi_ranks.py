@@ -1,0 +1,64 @@
+"""One run of tools/bench/mpi-ranks.sh, under pvbatch (R MPI ranks or none).
+
+The crackvis plugin's reader and local Voronoi filter on FILE, the crack
+shown in a render view of SIZE: the first update at step FIRST (the reader
+finds its piece, reads it and the step, the filter extracts), its first
+frame, then each following step of COUNT: update (read + extract), frame
+(render + composite across ranks). With "baseline" as FILE it loads the
+plugin and renders an empty view: the fixed part of a rank's memory.
+Writes the timings (ms) as JSON to OUT.
+
+    pvbatch mpi_ranks.py PLUGIN FILE FIRST COUNT WIDTHxHEIGHT OUT
+"""
+import json
+import sys
+import time
+
+from paraview.simple import (CreateRenderView, GetActiveCamera, LoadPlugin, Render, ResetCamera,
+                             Show)
+from paraview import servermanager
+
+plugin, path, first, count, size, out = sys.argv[1:7]
+first, count = int(first), int(count)
+width, height = (int(v) for v in size.split("x"))
+LoadPlugin(plugin, ns=globals())
+view = CreateRenderView()
+view.ViewSize = [width, height]
+view.OrientationAxesVisibility = 0
+result = {"ranks": servermanager.ActiveConnection.GetNumberOfDataPartitions()}
+
+def ms_since(start):
+    return 1000.0 * (time.perf_counter() - start)
+
+if path == "baseline":
+    start = time.perf_counter()
+    Render(view)
+    result["first_frame_ms"] = ms_since(start)
+else:
+    reader = crackvisdemreader(FileName=path)  # noqa: F821 (the plugin defines it)
+    times = list(reader.TimestepValues) if len(reader.TimestepValues) > 1 else [reader.TimestepValues]
+    first = first if first >= 0 else len(times) + first
+    steps = list(range(first, min(first + 1 + count, len(times))))
+    crack = CrackSurfaceLocalVoronoi(Input=reader)  # noqa: F821
+    Show(crack, view)
+    start = time.perf_counter()
+    crack.UpdatePipeline(times[steps[0]])
+    result["first_update_ms"] = ms_since(start)
+    view.ViewTime = times[steps[0]]
+    ResetCamera(view)
+    GetActiveCamera().Azimuth(30)
+    start = time.perf_counter()
+    Render(view)
+    result["first_frame_ms"] = ms_since(start)
+    result["cells"] = crack.GetDataInformation().GetNumberOfCells()
+    result["steps"] = []
+    for step in steps[1:]:
+        start = time.perf_counter()
+        crack.UpdatePipeline(times[step])
+        update = ms_since(start)
+        view.ViewTime = times[step]
+        start = time.perf_counter()
+        Render(view)
+        result["steps"].append({"step": step, "update_ms": update, "frame_ms": ms_since(start)})
+with open(out, "w") as handle:
+    json.dump(result, handle)
