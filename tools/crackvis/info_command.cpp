@@ -55,16 +55,12 @@ bool perRankReads(const dem::SpatialIndexInfo& index) {
   return index.hasBondStart && index.decomposition == dem::CellDecomposition::kLattice;
 }
 
-const char* axisName(int axis) {
-  return axis == 0 ? "x" : (axis == 1 ? "y" : "z");
-}
-
 nlohmann::json indexJson(const std::optional<dem::SpatialIndexInfo>& index) {
   if (!index) {
     return nullptr;
   }
   const char* decomposition = dem::decompositionName(index->decomposition);
-  return {{"axis", axisName(index->axis)},
+  return {{"axis", analysis::axisName(index->axis)},
           {"decomposition", *decomposition != '\0' ? nlohmann::json(decomposition) : nullptr},
           {"per_rank_reads", perRankReads(*index)}};
 }
@@ -73,7 +69,7 @@ std::string indexText(const std::optional<dem::SpatialIndexInfo>& index) {
   if (!index) {
     return "none (a file before v1.3): MPI ranks read every particle";
   }
-  return fmt::format("order along {}: MPI ranks read {}", axisName(index->axis),
+  return fmt::format("order along {}: MPI ranks read {}", analysis::axisName(index->axis),
                      perRankReads(*index) ? "only their slab"
                                           : "every particle (a triangulated packing, or bonds "
                                             "not sorted by first end)");
