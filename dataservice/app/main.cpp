@@ -49,6 +49,8 @@ struct Flags {
   std::optional<int> maxStreamsPerUser;
   std::optional<double> handshakeSeconds;
   std::optional<double> idleConnectionSeconds;
+  std::optional<int> maxConnections;
+  std::optional<int> maxConnectionsPerAddress;
   std::optional<double> maxCallSeconds;
   std::optional<int> maxSlabsPerRead;
   std::optional<int> describeMaxDepth;
@@ -119,6 +121,12 @@ crackvis::Result<ServerConfig> configure(const Flags& flags, const CLI::App& app
   }
   if (flags.handshakeSeconds) {
     config.limits.handshakeSeconds = *flags.handshakeSeconds;
+  }
+  if (flags.maxConnections) {
+    config.limits.maxConnections = *flags.maxConnections;
+  }
+  if (flags.maxConnectionsPerAddress) {
+    config.limits.maxConnectionsPerAddress = *flags.maxConnectionsPerAddress;
   }
   if (flags.maxCallSeconds) {
     config.limits.maxCallSeconds = *flags.maxCallSeconds;
@@ -250,6 +258,12 @@ int main(int argc, char** argv) {
   app.add_option("--idle-connection-seconds", flags.idleConnectionSeconds,
                  "a gRPC connection without a call for this long is closed; clients reconnect "
                  "when they next call (default 300)");
+  app.add_option("--max-connections", flags.maxConnections,
+                 "gRPC connections open at once; more are closed before their handshake "
+                 "(default 1024)");
+  app.add_option("--max-connections-per-address", flags.maxConnectionsPerAddress,
+                 "gRPC connections open at once from one address; behind a NAT or proxy many "
+                 "users share one (default 64)");
   app.add_option("--max-call-seconds", flags.maxCallSeconds,
                  "a Read or Fetch running longer is cancelled");
   app.add_option("--max-slabs-per-read", flags.maxSlabsPerRead,

@@ -63,8 +63,16 @@ Result<std::unique_ptr<ServerHost>> ServerHost::start(const Listener& listener,
   host->m_settings = std::move(settings);
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  auto gate = ConnectionGate::bind(listener.hostPort, listener.listen, host->m_settings.connections,
+                                   host->m_settings.program);
+  if (!gate) {
+    return gate.status();
+  }
   grpc::ServerBuilder builder;
-  builder.AddListeningPort(listener.listen, listener.credentials, &host->m_port);
+  // The gate accepts; gRPC handshakes with these credentials as on its own port.
+  auto acceptor = builder.experimental().AddExternalConnectionAcceptor(
+      grpc::ServerBuilder::experimental_type::ExternalConnectionType::FROM_FD,
+      listener.credentials);
   for (grpc::Service* service : services) {
     builder.RegisterService(service);
   }
@@ -83,15 +91,13 @@ Result<std::unique_ptr<ServerHost>> ServerHost::start(const Listener& listener,
                              static_cast<int>(host->m_settings.handshake.count()));
   builder.AddChannelArgument(GRPC_ARG_MAX_CONNECTION_IDLE_MS,
                              static_cast<int>(host->m_settings.idleConnection.count()));
-  // With SO_REUSEPORT a second server on a busy port would bind silently
-  // and take half the new connections.
-  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   host->m_server = builder.BuildAndStart();
-  if (!host->m_server || host->m_port == 0) {
-    return unavailable(fmt::format(
-        "cannot listen on {}: the address is in use (or not an address of this machine)",
-        listener.listen));
+  if (!host->m_server) {
+    return unavailable(fmt::format("cannot start the gRPC server for {}", listener.listen));
   }
+  host->m_gate = std::move(gate).value();
+  host->m_port = host->m_gate->port();
+  host->m_gate->start(std::move(acceptor));
   host->m_server->GetHealthCheckService()->SetServingStatus(true);
   if (!host->m_settings.service.empty()) {
     host->m_server->GetHealthCheckService()->SetServingStatus(host->m_settings.service, true);
@@ -141,6 +147,9 @@ void ServerHost::shutdown(double graceSeconds) {
     }
     if (m_settings.beforeStop) {
       m_settings.beforeStop();
+    }
+    if (m_gate) {
+      m_gate->stop();  // no new connections while the calls finish
     }
     if (!m_server) {
       return;  // it never started

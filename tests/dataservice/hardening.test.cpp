@@ -1,9 +1,9 @@
 // The data service under hostile but authenticated use (issue 13 points 1,
 // 4 and 9): fast token checks, throttled sign-in failures, the handler
 // boundary, folder answers that are no existence oracle, per-user stream
-// caps, refused NULs, capped echoes, a busy port and idle raw TLS
-// connections; and user B's Read latency while user A describes a hostile
-// file. Each through a real server on loopback.
+// caps, refused NULs, capped echoes, a busy port, idle raw TLS
+// connections and connection caps per address; and user B's Read latency while user A describes a
+// hostile file. Each through a real server on loopback.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <functional>
 #include <thread>
+#include <vector>
 
 #include <arpa/inet.h>
 #include <catch2/catch.hpp>
@@ -397,6 +398,81 @@ StallFigures measureStall(const dataservice::Limits& limits, const TempDir& root
 }
 
 }  // namespace
+
+namespace {
+
+// A TCP connection to 127.0.0.1:`port` from the loopback address `source`
+// (any of 127.0.0.0/8 is this machine's): another client's address.
+int connectFrom(const char* source, int port) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  REQUIRE(fd >= 0);
+  sockaddr_in from{};
+  from.sin_family = AF_INET;
+  REQUIRE(::inet_pton(AF_INET, source, &from.sin_addr) == 1);
+  REQUIRE(::bind(fd, reinterpret_cast<sockaddr*>(&from), sizeof(from)) == 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(static_cast<std::uint16_t>(port));
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  REQUIRE(::connect(fd, reinterpret_cast<sockaddr*>(&to), sizeof(to)) == 0);
+  return fd;
+}
+
+// Whether the server closes `fd` (EOF or reset) within `seconds`.
+bool closedWithin(int fd, double seconds) {
+  pollfd ready{fd, POLLIN, 0};
+  if (::poll(&ready, 1, static_cast<int>(seconds * 1000)) <= 0) {
+    return false;
+  }
+  char byte = 0;
+  return ::recv(fd, &byte, 1, MSG_DONTWAIT) <= 0;
+}
+
+}  // namespace
+
+TEST_CASE("Connections past the per-address and total caps are closed before any handshake",
+          "[dataservice][integration]") {
+  auto config = baseConfig();
+  config.limits.maxConnectionsPerAddress = 3;
+  config.limits.maxConnections = 4;
+  config.limits.handshakeSeconds = 20.0;  // idle connections stay: only the caps close them
+  auto server = startServer(config);
+  auto describeOn = [](const std::shared_ptr<grpc::Channel>& channel) {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+    v1::DescribeRequest request;
+    request.set_file("run.h5");
+    v1::DescribeResponse response;
+    return v1::DataService::NewStub(channel)->Describe(&context, request, &response).ok();
+  };
+  // A client with a call made, then two idle connections: 3 from 127.0.0.1.
+  auto channel = rawChannel(*server);
+  REQUIRE(describeOn(channel));
+  std::vector<int> idle = {connectFrom("127.0.0.1", server->port()),
+                           connectFrom("127.0.0.1", server->port())};
+  for (int fd : idle) {
+    CHECK_FALSE(closedWithin(fd, 0.3));
+  }
+  // The fourth from that address is closed at once, long before its
+  // handshake time; the address's working client keeps its connection.
+  const int fourth = connectFrom("127.0.0.1", server->port());
+  CHECK(closedWithin(fourth, 2.0));
+  ::close(fourth);
+  CHECK(describeOn(channel));
+  // Another address still gets in, up to the total of 4.
+  const int other = connectFrom("127.0.0.2", server->port());
+  CHECK_FALSE(closedWithin(other, 0.3));
+  const int pastTotal = connectFrom("127.0.0.3", server->port());
+  CHECK(closedWithin(pastTotal, 2.0));
+  ::close(pastTotal);
+  // Connections that end free their places: a new client from 127.0.0.1
+  // connects once the idle ones are gone.
+  for (int fd : idle) {
+    ::close(fd);
+  }
+  ::close(other);
+  CHECK(waitUntil([&] { return describeOn(rawChannel(*server)); }, 5.0));
+}
 
 TEST_CASE("Idle connections to the gRPC port are closed: no handshake, then no call",
           "[dataservice][integration]") {

@@ -62,6 +62,12 @@ TEST_CASE("crackvis-data refuses out-of-range limits from flags and file at star
       {"no streams per user", with({"--max-streams-per-user", "0"}), "",
        "--max-streams-per-user must be at least 1, got 0 (limits.max_streams_per_user in the "
        "configuration file)"},
+      {"no connections per address", with({"--max-connections-per-address", "0"}), "",
+       "--max-connections-per-address must be between 1 and 65536, got 0 "
+       "(limits.max_connections_per_address in the configuration file)"},
+      {"too many connections in the file", base, R"({"limits": {"max_connections": 100000}})",
+       "--max-connections must be between 1 and 65536, got 100000 (limits.max_connections in "
+       "the configuration file)"},
       {"no handshake time in the file", base, R"({"limits": {"handshake_seconds": 0}})",
        "--handshake-seconds must be between 0.1 and 3600, got 0 (limits.handshake_seconds in "
        "the configuration file)"},

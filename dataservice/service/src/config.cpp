@@ -33,7 +33,8 @@ Status readLimits(const json& object, const std::string& where, Limits& limits) 
       {"max_read_bytes", "max_fetch_bytes", "max_concurrent_streams", "max_streams_per_user",
        "max_slabs_per_read", "max_call_seconds", "handshake_seconds", "max_memory_bytes",
        "describe_max_depth", "describe_max_objects", "describe_max_seconds", "describe_cache_bytes",
-       "hdf5_workers", "hdf5_call_seconds", "idle_connection_seconds"}));
+       "hdf5_workers", "hdf5_call_seconds", "idle_connection_seconds", "max_connections",
+       "max_connections_per_address"}));
   CRACKVIS_RETURN_IF_ERROR(read(object, "hdf5_call_seconds", where, limits.hdf5CallSeconds));
   CRACKVIS_RETURN_IF_ERROR(read(object, "hdf5_workers", where, limits.hdf5Workers));
   CRACKVIS_RETURN_IF_ERROR(read(object, "describe_max_depth", where, limits.describe.maxDepth));
@@ -54,6 +55,9 @@ Status readLimits(const json& object, const std::string& where, Limits& limits) 
   CRACKVIS_RETURN_IF_ERROR(read(object, "handshake_seconds", where, limits.handshakeSeconds));
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "idle_connection_seconds", where, limits.idleConnectionSeconds));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "max_connections", where, limits.maxConnections));
+  CRACKVIS_RETURN_IF_ERROR(
+      read(object, "max_connections_per_address", where, limits.maxConnectionsPerAddress));
   return read(object, "max_call_seconds", where, limits.maxCallSeconds);
 }
 
@@ -139,6 +143,11 @@ Status validateServerConfig(const ServerConfig& config) {
   CRACKVIS_RETURN_IF_ERROR(
       checkSetting({"--idle-connection-seconds", "limits.idle_connection_seconds"},
                    limits.idleConnectionSeconds, 0.1, 7 * 86400.0));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-connections", "limits.max_connections"},
+                                        limits.maxConnections, 1, 65'536));
+  CRACKVIS_RETURN_IF_ERROR(
+      checkSetting({"--max-connections-per-address", "limits.max_connections_per_address"},
+                   limits.maxConnectionsPerAddress, 1, 65'536));
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--max-slabs-per-read", "limits.max_slabs_per_read"},
                                         limits.maxSlabsPerRead, 1,
                                         std::numeric_limits<int>::max()));

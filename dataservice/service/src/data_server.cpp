@@ -126,6 +126,8 @@ Result<std::unique_ptr<DataServer>> DataServer::start(const ServerConfig& config
       std::chrono::milliseconds(static_cast<std::int64_t>(config.limits.handshakeSeconds * 1000.0));
   settings.idleConnection = std::chrono::milliseconds(
       static_cast<std::int64_t>(config.limits.idleConnectionSeconds * 1000.0));
+  settings.connections.total = config.limits.maxConnections;
+  settings.connections.perAddress = config.limits.maxConnectionsPerAddress;
   settings.reapPeriod = std::chrono::milliseconds(100);
   settings.reap = [self] { self->reap(); };
   settings.beforeStop = [self] {

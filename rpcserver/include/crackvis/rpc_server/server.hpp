@@ -1,9 +1,10 @@
 // The start-up and shut-down both gRPC servers share (crackvis-data and
 // crackvis-render): the loopback rule for plaintext, mutual-TLS server
 // credentials, the grpc.health.v1 service with its serving status, server
-// reflection, binding with "address in use" as an error (SO_REUSEPORT off,
-// so a second server on a busy port fails instead of taking half the
-// connections), a reaper thread, and a shutdown that waits for the calls.
+// reflection, binding through the connection gate (limits per address and in
+// all; "address in use" is an error, SO_REUSEPORT off, so a second server on
+// a busy port fails instead of taking half the connections), a reaper
+// thread, and a shutdown that waits for the calls.
 #pragma once
 
 #include <chrono>
@@ -19,6 +20,7 @@
 
 #include <crackvis/common/status.hpp>
 #include <crackvis/rpc/host_port.hpp>
+#include <crackvis/rpc_server/connection_gate.hpp>
 #include <crackvis/tls/tls_material.hpp>
 
 namespace crackvis::rpc {
@@ -57,6 +59,8 @@ struct ServerSettings {
   // next calls. Idle connections must not pile up for ever.
   std::chrono::milliseconds handshake{10'000};
   std::chrono::milliseconds idleConnection{300'000};
+  // Connections past these are closed before any handshake (connection_gate.hpp).
+  ConnectionLimits connections;
   std::chrono::milliseconds reapPeriod{100};
   std::function<void()> reap;        // run every reapPeriod on the reaper thread; may be empty
   std::function<void()> beforeStop;  // run by shutdown() before gRPC stops; may be empty
@@ -89,6 +93,7 @@ class ServerHost {
   void reapLoop();
 
   ServerSettings m_settings;
+  std::unique_ptr<ConnectionGate> m_gate;
   std::unique_ptr<grpc::Server> m_server;
   std::string m_address;
   int m_port = 0;

@@ -33,6 +33,10 @@ struct Limits {
   double handshakeSeconds = 10.0;
   // A gRPC connection without a call for this long is closed (GOAWAY).
   double idleConnectionSeconds = 300.0;
+  // gRPC connections open at once, in all and from one address; one past
+  // either is closed before its handshake (rpc::ConnectionGate).
+  int maxConnections = 1024;
+  int maxConnectionsPerAddress = 64;
   // Bytes of data buffered by all Read and Fetch streams together. A stream
   // holds at most one chunk (about 1 MiB) whatever it reads, and reserves it
   // from this budget when it starts; past it, RESOURCE_EXHAUSTED.
