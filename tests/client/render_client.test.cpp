@@ -21,6 +21,7 @@
 #include <optional>
 
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 
 #include "dataservice/service_fixture.hpp"
 #include "service/render_fixture.hpp"
@@ -528,7 +529,18 @@ TEST_CASE("a double click shows the values of the particle under it", "[client][
   const QList<QVariant> answer = picked.takeFirst();
   CHECK(answer.at(2).toString() == QStringLiteral("particle"));
   CHECK(answer.at(3).toLongLong() >= 0);
-  CHECK(answer.at(1).toString().contains(QStringLiteral("radius")));
+  // The radius is the picked particle's own, in metres, as the file holds it
+  // (issue 29 saw "radius 0" reported for a 5.7 mm particle once).
+  auto file = dem::DemFileReader::open(crackRoot().file("cuboidA.h5"));
+  REQUIRE(file.isOk());
+  const auto lattice = file->readLattice();
+  REQUIRE(lattice.isOk());
+  const auto index = static_cast<std::size_t>(answer.at(3).toLongLong());
+  REQUIRE(index < lattice->radius.size());
+  REQUIRE(lattice->radius[index] > 0.0);
+  const std::string radius = fmt::format("radius {:.6g} m", lattice->radius[index]);
+  INFO(answer.at(1).toString().toStdString());
+  CHECK(answer.at(1).toString().contains(QString::fromStdString(radius)));
   CHECK(spinUntil([&] { return window.messages().contains(QStringLiteral("picked: particle")); },
                   5000));
   // Off the specimen (the view's corner, the background): nothing there.
