@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 
+#include <vtkAbstractArray.h>
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkDataSetAttributes.h>
@@ -35,6 +36,14 @@
 
 namespace crackvis::cracks::vtkadapter {
 
+// A lattice's arrays as the output carries them, the same at every step.
+struct StaticArrays {
+  vtkSmartPointer<vtkDoubleArray> reference;              // the first step's positions
+  vtkSmartPointer<vtkCellArray> lines;                    // the bonds
+  std::vector<vtkSmartPointer<vtkAbstractArray>> points;  // radius, ids, groups, extras
+  std::vector<vtkSmartPointer<vtkAbstractArray>> cells;   // break steps, strength, flags, extras
+};
+
 // The open file and its time-independent part, kept while the file name
 // stays the same: stepping through time reads only the step.
 struct DemReaderCache {
@@ -55,6 +64,8 @@ struct DemReaderCache {
   // rows; a step reads only its rows), or cut from the whole set.
   bool indexed = false;
   Piece part;
+  // The piece's lattice, break steps and first positions, held only while
+  // the piece is prepared: pieceArrays keeps them after.
   dem::Lattice pieceLattice;
   std::vector<std::int32_t> pieceBreakSteps;
   std::vector<dem::Vec3> pieceReference;
@@ -70,6 +81,12 @@ struct DemReaderCache {
   // whole set's box, decomposition and triangulation), made once and added
   // by reference: an unchanged array tells the filters nothing changed.
   vtkSmartPointer<vtkPolyData> pieceData;
+  // The time-independent arrays of the whole set and of the piece: made
+  // once, not at every step. Making them again at every step was a large
+  // part of a step's time at 10^7 particles (the bond lines alone are 24
+  // bytes a bond), spent faulting in fresh pages.
+  std::optional<StaticArrays> wholeArrays;
+  std::optional<StaticArrays> pieceArrays;
 };
 
 namespace {
@@ -81,18 +98,27 @@ int stepAt(const std::vector<double>& times, double t) {
   return after == times.begin() ? 0 : static_cast<int>(after - times.begin()) - 1;
 }
 
+// `values` as a named VTK array of `components`; null when empty.
 template <typename VtkArray, typename Value>
-void addArray(vtkFieldData* data, const char* name, const std::vector<Value>& values,
-              int components = 1) {
+vtkSmartPointer<VtkArray> makeArray(const char* name, const std::vector<Value>& values,
+                                    int components = 1) {
   if (values.empty()) {
-    return;
+    return nullptr;
   }
-  vtkNew<VtkArray> array;
+  auto array = vtkSmartPointer<VtkArray>::New();
   array->SetName(name);
   array->SetNumberOfComponents(components);
   array->SetNumberOfTuples(static_cast<vtkIdType>(values.size() / components));
   std::copy(values.begin(), values.end(), array->GetPointer(0));
-  data->AddArray(array);
+  return array;
+}
+
+template <typename VtkArray, typename Value>
+void addArray(vtkFieldData* data, const char* name, const std::vector<Value>& values,
+              int components = 1) {
+  if (auto array = makeArray<VtkArray>(name, values, components)) {
+    data->AddArray(array);
+  }
 }
 
 void addExtras(const std::vector<dem::ExtraArray>& extras, vtkPolyData* output) {
@@ -115,19 +141,7 @@ vtkSmartPointer<vtkDoubleArray> toArray(const std::vector<dem::Vec3>& positions)
   return coordinates;
 }
 
-void addPoints(const dem::StepState& step, const std::vector<dem::Vec3>& reference,
-               vtkPolyData* output) {
-  vtkNew<vtkPoints> points;
-  points->SetData(toArray(step.positions));
-  output->SetPoints(points);
-  // The filters make local Voronoi faces and triangulations in it, as
-  // `crackvis extract` does in the file's first step.
-  vtkSmartPointer<vtkDoubleArray> first = toArray(reference);
-  first->SetName(kReferencePositionArray);
-  output->GetPointData()->AddArray(first);
-}
-
-void addBonds(const std::vector<dem::Bond>& bonds, vtkPolyData* output) {
+vtkSmartPointer<vtkCellArray> toLines(const std::vector<dem::Bond>& bonds) {
   vtkNew<vtkIdTypeArray> offsets;
   vtkNew<vtkIdTypeArray> connectivity;
   offsets->SetNumberOfTuples(static_cast<vtkIdType>(bonds.size() + 1));
@@ -139,9 +153,40 @@ void addBonds(const std::vector<dem::Bond>& bonds, vtkPolyData* output) {
     connectivity->SetValue(static_cast<vtkIdType>(2 * b), bonds[b].first);
     connectivity->SetValue(static_cast<vtkIdType>(2 * b + 1), bonds[b].second);
   }
-  vtkNew<vtkCellArray> lines;
+  auto lines = vtkSmartPointer<vtkCellArray>::New();
   lines->SetData(offsets, connectivity);
-  output->SetLines(lines);
+  return lines;
+}
+
+template <typename VtkArray, typename Value>
+void keep(std::vector<vtkSmartPointer<vtkAbstractArray>>& arrays, const char* name,
+          const std::vector<Value>& values, int components = 1) {
+  if (auto array = makeArray<VtkArray>(name, values, components)) {
+    arrays.push_back(array);
+  }
+}
+
+// In the order the output has always carried them.
+StaticArrays makeStaticArrays(const dem::Lattice& lattice,
+                              const std::vector<std::int32_t>& breakSteps,
+                              const std::vector<dem::Vec3>& reference) {
+  StaticArrays fixed;
+  // The filters make local Voronoi faces and triangulations in it, as
+  // `crackvis extract` does in the file's first step.
+  fixed.reference = toArray(reference);
+  fixed.reference->SetName(kReferencePositionArray);
+  fixed.lines = toLines(lattice.bonds);
+  keep<vtkDoubleArray>(fixed.points, "radius", lattice.radius);
+  keep<vtkTypeInt64Array>(fixed.points, "particle_id", lattice.particleId);
+  keep<vtkIntArray>(fixed.points, "particle_group", lattice.particleGroup);
+  keep<vtkIntArray>(fixed.cells, "break_step", breakSteps);
+  keep<vtkDoubleArray>(fixed.cells, "strength", lattice.strength);
+  keep<vtkUnsignedCharArray>(fixed.cells, "bond_flags", lattice.bondFlags);
+  for (const dem::ExtraArray& extra : lattice.extras) {
+    keep<vtkDoubleArray>(extra.owner == dem::ExtraOwner::kParticles ? fixed.points : fixed.cells,
+                         extra.name.c_str(), extra.values, extra.components);
+  }
+  return fixed;
 }
 
 void addFieldData(int step, const dem::StepState& state, vtkPolyData* output) {
@@ -187,28 +232,30 @@ Status loadLattice(DemReaderCache& cache) {
   return Status::ok();
 }
 
-void fill(const dem::Lattice& lattice, const std::vector<std::int32_t>& breakSteps,
-          const std::vector<dem::Vec3>& reference, int step, const dem::StepState& state,
-          vtkPolyData* output) {
-  addPoints(state, reference, output);
-  addBonds(lattice.bonds, output);
-  vtkPointData* points = output->GetPointData();
-  addArray<vtkDoubleArray>(points, "radius", lattice.radius);
+// One step's output: the step's own arrays, made now, and the lattice's,
+// added by reference.
+void fill(const StaticArrays& fixed, int step, const dem::StepState& state, vtkPolyData* output) {
+  vtkNew<vtkPoints> points;
+  points->SetData(toArray(state.positions));
+  output->SetPoints(points);
+  output->SetLines(fixed.lines);
+  vtkPointData* pointData = output->GetPointData();
+  pointData->AddArray(fixed.reference);
+  for (const auto& array : fixed.points) {
+    pointData->AddArray(array);
+  }
   std::vector<float> velocities;
   velocities.reserve(3 * state.velocities.size());
   for (const auto& v : state.velocities) {
     velocities.insert(velocities.end(), v.begin(), v.end());
   }
-  addArray<vtkFloatArray>(points, "velocity", velocities, 3);
-  addArray<vtkTypeInt64Array>(points, "particle_id", lattice.particleId);
-  addArray<vtkIntArray>(points, "particle_group", lattice.particleGroup);
+  addArray<vtkFloatArray>(pointData, "velocity", velocities, 3);
   vtkCellData* cells = output->GetCellData();
   addArray<vtkUnsignedCharArray>(cells, "bond_state", state.bondState);
-  addArray<vtkIntArray>(cells, "break_step", breakSteps);
   addArray<vtkFloatArray>(cells, "bond_force", state.bondForce);
-  addArray<vtkDoubleArray>(cells, "strength", lattice.strength);
-  addArray<vtkUnsignedCharArray>(cells, "bond_flags", lattice.bondFlags);
-  addExtras(lattice.extras, output);
+  for (const auto& array : fixed.cells) {
+    cells->AddArray(array);
+  }
   addExtras(state.extras, output);
   addFieldData(step, state, output);
 }
@@ -428,6 +475,12 @@ Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBo
   cache.ghostBonds = ghostBonds;
   cache.pieceData = vtkSmartPointer<vtkPolyData>::New();
   addPieceData(cache, cache.pieceData);
+  cache.pieceArrays =
+      makeStaticArrays(cache.pieceLattice, cache.pieceBreakSteps, cache.pieceReference);
+  // The arrays hold them now: a rank keeps one copy of its piece.
+  cache.pieceLattice = dem::Lattice{};
+  cache.pieceBreakSteps = {};
+  cache.pieceReference = {};
   return Status::ok();
 }
 
@@ -571,6 +624,8 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
   } else if (crackvis::Status loaded = adapter::loadLattice(cache); !loaded) {
     vtkErrorMacro(<< loaded.message());
     return 0;
+  } else if (!cache.wholeArrays) {
+    cache.wholeArrays = adapter::makeStaticArrays(cache.lattice, cache.breakSteps, cache.reference);
   }
   // A piece read through the index reads only its rows of the step.
   auto state = pieces > 1 && cache.indexed
@@ -582,15 +637,14 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
   }
   const double time = state->time;
   if (pieces == 1) {
-    adapter::fill(cache.lattice, cache.breakSteps, cache.reference, step, *state, output);
+    adapter::fill(*cache.wholeArrays, step, *state, output);
   } else {
     if (cache.indexed) {
-      adapter::fill(cache.pieceLattice, cache.pieceBreakSteps, cache.pieceReference, step, *state,
-                    output);
+      adapter::fill(*cache.pieceArrays, step, *state, output);
     } else {
       adapter::addComponents(cache, *state, output);
-      adapter::fill(cache.pieceLattice, cache.pieceBreakSteps, cache.pieceReference, step,
-                    adapter::pieceState(std::move(*state), cache.part), output);
+      adapter::fill(*cache.pieceArrays, step, adapter::pieceState(std::move(*state), cache.part),
+                    output);
     }
     adapter::sharePieceData(cache.pieceData, output);
   }
