@@ -425,6 +425,9 @@ TEST_CASE("the crackvis-dem reader shows a live file's new steps on the next upd
   reader->UpdateInformation();
   vtkInformation* info = reader->GetOutputInformation(0);
   CHECK(info->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS()) == 2);
+  // Step 1 shown before step 2 exists: no bond has broken yet.
+  reader->UpdateTimeStep(1.5);
+  CHECK(reader->GetOutput()->GetCellData()->GetArray("break_step")->GetRange()[1] == -1.0);
   nextStep();  // step 2, the cracked one
   // ParaView's Reload Files: the reader is modified, its information asked again.
   reader->Modified();
@@ -435,6 +438,8 @@ TEST_CASE("the crackvis-dem reader shows a live file's new steps on the next upd
   vtkPolyData* cracked = reader->GetOutput();
   CHECK(vtkIntArray::SafeDownCast(cracked->GetFieldData()->GetArray("step"))->GetValue(0) == 2);
   CHECK(cracked->GetCellData()->GetArray("bond_state")->GetRange()[1] == 1.0);
+  // The bonds broken at step 2 say so, though the lattice was read before.
+  CHECK(cracked->GetCellData()->GetArray("break_step")->GetRange()[1] == 2.0);
   REQUIRE(write(go[1], "g", 1) == 1);
   int status = 0;
   REQUIRE(waitpid(writer, &status, 0) == writer);

@@ -87,6 +87,9 @@ struct DemReaderCache {
   // bytes a bond), spent faulting in fresh pages.
   std::optional<StaticArrays> wholeArrays;
   std::optional<StaticArrays> pieceArrays;
+  // A live file's writer records the step of each bond it breaks as it
+  // commits the step: the break steps read before new steps are stale.
+  bool breakStepsStale = false;
 };
 
 namespace {
@@ -484,6 +487,47 @@ Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBo
   return Status::ok();
 }
 
+void replaceCellArray(StaticArrays& arrays, vtkSmartPointer<vtkAbstractArray> array) {
+  for (auto& kept : arrays.cells) {
+    if (std::strcmp(kept->GetName(), array->GetName()) == 0) {
+      kept = array;
+      return;
+    }
+  }
+  arrays.cells.push_back(array);
+}
+
+// The break steps again, after a live file's writer added steps: the whole
+// set's, and the piece's rows of them.
+Status refreshBreakSteps(DemReaderCache& cache) {
+  if (cache.loaded) {
+    auto breakSteps = cache.reader->readBreakSteps();
+    if (!breakSteps) {
+      return breakSteps.status();
+    }
+    cache.breakSteps = std::move(*breakSteps);
+    auto array = makeArray<vtkIntArray>("break_step", cache.breakSteps);
+    if (array && cache.wholeArrays) {
+      replaceCellArray(*cache.wholeArrays, array);
+    }
+  }
+  if (cache.pieceArrays && !cache.part.bonds.empty()) {
+    std::vector<std::int32_t> rows;
+    if (cache.indexed) {
+      auto read = cache.reader->readBreakStepRows(cache.part.bonds);
+      if (!read) {
+        return read.status();
+      }
+      rows = std::move(*read);
+    } else {
+      rows = pick(cache.breakSteps, cache.part.bonds);
+    }
+    replaceCellArray(*cache.pieceArrays, makeArray<vtkIntArray>("break_step", rows));
+  }
+  cache.breakStepsStale = false;
+  return Status::ok();
+}
+
 dem::StepState pieceState(dem::StepState state, const Piece& part) {
   state.positions = pick(state.positions, part.particles);
   state.velocities = pick(state.velocities, part.particles);
@@ -578,10 +622,12 @@ int vtkCrackvisDemReader::RequestInformation(vtkInformation*, vtkInformationVect
       vtkErrorMacro(<< refreshed.message());
       return 0;
     }
+    const std::size_t before = cache.times.size();
     cache.times.clear();
     for (const crackvis::dem::StepInfo& step : cache.reader->info().steps) {
       cache.times.push_back(step.time);
     }
+    cache.breakStepsStale = cache.breakStepsStale || cache.times.size() != before;
   }
   vtkInformation* out = outputVector->GetInformationObject(0);
   out->Set(vtkStreamingDemandDrivenPipeline::TIME_STEPS(), cache.times.data(),
@@ -626,6 +672,12 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
     return 0;
   } else if (!cache.wholeArrays) {
     cache.wholeArrays = adapter::makeStaticArrays(cache.lattice, cache.breakSteps, cache.reference);
+  }
+  if (cache.breakStepsStale) {
+    if (crackvis::Status refreshed = adapter::refreshBreakSteps(cache); !refreshed) {
+      vtkErrorMacro(<< refreshed.message());
+      return 0;
+    }
   }
   // A piece read through the index reads only its rows of the step.
   auto state = pieces > 1 && cache.indexed
