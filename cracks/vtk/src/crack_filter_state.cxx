@@ -1,5 +1,6 @@
 #include "crack_filter_state.h"
 
+#include <algorithm>
 #include <cstring>
 
 #include <fmt/format.h>
@@ -94,6 +95,104 @@ vtkSmartPointer<vtkPoints> toPoints(const std::vector<Vec3>& points) {
 
 }  // namespace
 
+bool ArrayStamp::matches(vtkObject* object) const {
+  return object != nullptr && object == m_object && object->GetMTime() == m_time;
+}
+
+void ArrayStamp::set(vtkObject* object) {
+  m_object = object;
+  m_time = object != nullptr ? object->GetMTime() : 0;
+}
+
+namespace {
+
+// The positions, and whether every z is 0 (a 2D set).
+bool readPositions(vtkPolyData* input, std::vector<Vec3>& positions) {
+  const vtkIdType n = input->GetNumberOfPoints();
+  positions.resize(static_cast<std::size_t>(n));
+  vtkDoubleArray* data =
+      n > 0 ? vtkDoubleArray::FastDownCast(input->GetPoints()->GetData()) : nullptr;
+  if (data != nullptr && data->GetNumberOfComponents() == 3) {
+    static_assert(sizeof(Vec3) == 3 * sizeof(double));
+    // Vec3 is three doubles (asserted above), as the array holds them.
+    std::memcpy(static_cast<void*>(positions.data()), data->GetPointer(0),
+                positions.size() * sizeof(Vec3));
+  } else {
+    for (vtkIdType i = 0; i < n; ++i) {
+      double p[3];
+      input->GetPoint(i, p);
+      positions[static_cast<std::size_t>(i)] = {p[0], p[1], p[2]};
+    }
+  }
+  return std::all_of(positions.begin(), positions.end(), [](const Vec3& p) { return p.z == 0.0; });
+}
+
+// The bond states as 0 and 1.
+void readStates(vtkDataArray* state, std::vector<std::uint8_t>& out) {
+  const vtkIdType m = state->GetNumberOfTuples();
+  out.resize(static_cast<std::size_t>(m));
+  if (auto* bytes = vtkUnsignedCharArray::FastDownCast(state);
+      bytes != nullptr && bytes->GetNumberOfComponents() == 1) {
+    const unsigned char* values = bytes->GetPointer(0);
+    for (vtkIdType b = 0; b < m; ++b) {
+      out[static_cast<std::size_t>(b)] = values[b] != 0 ? 1 : 0;
+    }
+    return;
+  }
+  for (vtkIdType b = 0; b < m; ++b) {
+    out[static_cast<std::size_t>(b)] = state->GetComponent(b, 0) != 0.0 ? 1 : 0;
+  }
+}
+
+}  // namespace
+
+bool CrackFilterState::readBonds(vtkCellArray* lines, vtkIdType n, std::vector<dem::Bond>& bonds,
+                                 std::string& error) {
+  bonds.reserve(static_cast<std::size_t>(lines->GetNumberOfCells()));
+  const vtkIdType* ids = nullptr;
+  vtkIdType count = 0;
+  auto iterator = vtk::TakeSmartPointer(lines->NewIterator());
+  for (iterator->GoToFirstCell(); !iterator->IsDoneWithTraversal(); iterator->GoToNextCell()) {
+    iterator->GetCurrentCell(count, ids);
+    if (count != 2 || ids[0] < 0 || ids[1] < 0 || ids[0] >= n || ids[1] >= n) {
+      error = fmt::format("bond {} is not a line between two of the {} points", bonds.size(), n);
+      return false;
+    }
+    bonds.push_back(
+        {static_cast<dem::ParticleIndex>(ids[0]), static_cast<dem::ParticleIndex>(ids[1])});
+  }
+  return true;
+}
+
+void CrackFilterState::readRadius(vtkPolyData* input, vtkIdType n, double radiusDefault) {
+  vtkDataArray* radius =
+      input->GetPointData() != nullptr ? input->GetPointData()->GetArray("radius") : nullptr;
+  if (m_radiusStamp.matches(radius) && m_radius.size() == static_cast<std::size_t>(n)) {
+    return;
+  }
+  m_radiusStamp.set(nullptr);
+  m_radius.assign(static_cast<std::size_t>(n), radiusDefault);
+  if (radius != nullptr && radius->GetNumberOfTuples() == n) {
+    for (vtkIdType i = 0; i < n; ++i) {
+      m_radius[static_cast<std::size_t>(i)] = radius->GetComponent(i, 0);
+    }
+    m_radiusStamp.set(radius);
+  }
+}
+
+void CrackFilterState::readBreakSteps(vtkPolyData* input, vtkIdType m) {
+  vtkDataArray* breaks = cellArray(input, "break_step");
+  if (m_breakStepStamp.matches(breaks) && m_breakStep.size() == static_cast<std::size_t>(m)) {
+    return;
+  }
+  m_breakStepStamp.set(nullptr);
+  m_breakStep.clear();
+  if (breaks != nullptr && breaks->GetNumberOfTuples() == m) {
+    readInts(breaks, m, m_breakStep);
+    m_breakStepStamp.set(breaks);
+  }
+}
+
 bool CrackFilterState::readLattice(vtkPolyData* input, double radiusDefault, std::string& error) {
   const vtkIdType n = input->GetNumberOfPoints();
   vtkCellArray* lines = input->GetLines();
@@ -107,40 +206,17 @@ bool CrackFilterState::readLattice(vtkPolyData* input, double radiusDefault, std
         m, input->GetNumberOfCells(), state != nullptr ? state->GetNumberOfTuples() : 0);
     return false;
   }
+  // The bonds as last read, checked against these points: the same lines
+  // need no second look.
+  const bool sameLines = m_graph != nullptr && m_linesStamp.matches(lines) &&
+                         m_positions.size() == static_cast<std::size_t>(n);
   std::vector<dem::Bond> bonds;
-  bonds.reserve(static_cast<std::size_t>(m));
-  const vtkIdType* ids = nullptr;
-  vtkIdType count = 0;
-  auto iterator = vtk::TakeSmartPointer(lines->NewIterator());
-  for (iterator->GoToFirstCell(); !iterator->IsDoneWithTraversal(); iterator->GoToNextCell()) {
-    iterator->GetCurrentCell(count, ids);
-    if (count != 2 || ids[0] < 0 || ids[1] < 0 || ids[0] >= n || ids[1] >= n) {
-      error = fmt::format("bond {} is not a line between two of the {} points", bonds.size(), n);
-      return false;
-    }
-    bonds.push_back(
-        {static_cast<dem::ParticleIndex>(ids[0]), static_cast<dem::ParticleIndex>(ids[1])});
+  if (!sameLines && !readBonds(lines, n, bonds, error)) {
+    return false;
   }
-  m_positions.resize(static_cast<std::size_t>(n));
-  bool flat = true;
-  for (vtkIdType i = 0; i < n; ++i) {
-    double p[3];
-    input->GetPoint(i, p);
-    m_positions[static_cast<std::size_t>(i)] = {p[0], p[1], p[2]};
-    flat = flat && p[2] == 0.0;
-  }
-  vtkDataArray* radius =
-      input->GetPointData() != nullptr ? input->GetPointData()->GetArray("radius") : nullptr;
-  m_radius.assign(static_cast<std::size_t>(n), radiusDefault);
-  if (radius != nullptr && radius->GetNumberOfTuples() == n) {
-    for (vtkIdType i = 0; i < n; ++i) {
-      m_radius[static_cast<std::size_t>(i)] = radius->GetComponent(i, 0);
-    }
-  }
-  m_state.resize(static_cast<std::size_t>(m));
-  for (vtkIdType b = 0; b < m; ++b) {
-    m_state[static_cast<std::size_t>(b)] = state->GetComponent(b, 0) != 0.0 ? 1 : 0;
-  }
+  const bool flat = readPositions(input, m_positions);
+  readRadius(input, n, radiusDefault);
+  readStates(state, m_state);
   m_force.clear();
   if (vtkDataArray* force = cellArray(input, "bond_force");
       force != nullptr && force->GetNumberOfTuples() == m) {
@@ -150,15 +226,11 @@ bool CrackFilterState::readLattice(vtkPolyData* input, double radiusDefault, std
     }
   }
   readReference(input, n);
-  m_breakStep.clear();
-  if (vtkDataArray* breaks = cellArray(input, "break_step");
-      breaks != nullptr && breaks->GetNumberOfTuples() == m) {
-    m_breakStep.resize(static_cast<std::size_t>(m));
-    for (vtkIdType b = 0; b < m; ++b) {
-      m_breakStep[static_cast<std::size_t>(b)] =
-          static_cast<std::int32_t>(breaks->GetComponent(b, 0));
-    }
+  readBreakSteps(input, m);
+  if (sameLines) {
+    return true;
   }
+  m_linesStamp.set(nullptr);
   if (bonds != m_bonds || m_graph == nullptr) {
     dem::Lattice check;
     check.dimension = flat ? 2 : 3;
@@ -174,18 +246,24 @@ bool CrackFilterState::readLattice(vtkPolyData* input, double radiusDefault, std
     m_extractor.reset();
     m_graph = std::make_unique<BondGraph>(static_cast<std::size_t>(n), m_bonds);
   }
+  m_linesStamp.set(lines);
   return true;
 }
 
 void CrackFilterState::readReference(vtkPolyData* input, vtkIdType n) {
-  m_reference.clear();
   vtkDataArray* reference = input->GetPointData() != nullptr
                                 ? input->GetPointData()->GetArray(kReferencePositionArray)
                                 : nullptr;
+  if (m_referenceStamp.matches(reference) && m_reference.size() == static_cast<std::size_t>(n)) {
+    return;
+  }
+  m_referenceStamp.set(nullptr);
+  m_reference.clear();
   if (reference == nullptr || reference->GetNumberOfComponents() != 3 ||
       reference->GetNumberOfTuples() != n) {
     return;
   }
+  m_referenceStamp.set(reference);
   m_reference.resize(static_cast<std::size_t>(n));
   for (vtkIdType i = 0; i < n; ++i) {
     double p[3];
@@ -212,16 +290,25 @@ bool CrackFilterState::readPiece(vtkPolyData* input, ExtractOptions& options) {
     m_intactComponents.clear();
     return false;
   }
-  m_owned.resize(static_cast<std::size_t>(n));
-  m_globalParticle.resize(static_cast<std::size_t>(n));
-  for (vtkIdType i = 0; i < n; ++i) {
-    m_owned[static_cast<std::size_t>(i)] = ghost->GetComponent(i, 0) == 0.0 ? 1 : 0;
-    m_globalParticle[static_cast<std::size_t>(i)] =
-        static_cast<vtkIdType>(particles->GetComponent(i, 0));
+  // A piece keeps its particles and bonds from step to step.
+  if (!m_ghostStamp.matches(ghost) || !m_particleIdStamp.matches(particles) ||
+      m_owned.size() != static_cast<std::size_t>(n)) {
+    m_owned.resize(static_cast<std::size_t>(n));
+    m_globalParticle.resize(static_cast<std::size_t>(n));
+    for (vtkIdType i = 0; i < n; ++i) {
+      m_owned[static_cast<std::size_t>(i)] = ghost->GetComponent(i, 0) == 0.0 ? 1 : 0;
+      m_globalParticle[static_cast<std::size_t>(i)] =
+          static_cast<vtkIdType>(particles->GetComponent(i, 0));
+    }
+    m_ghostStamp.set(ghost);
+    m_particleIdStamp.set(particles);
   }
-  m_globalBond.resize(static_cast<std::size_t>(m));
-  for (vtkIdType b = 0; b < m; ++b) {
-    m_globalBond[static_cast<std::size_t>(b)] = static_cast<vtkIdType>(bonds->GetComponent(b, 0));
+  if (!m_bondIdStamp.matches(bonds) || m_globalBond.size() != static_cast<std::size_t>(m)) {
+    m_globalBond.resize(static_cast<std::size_t>(m));
+    for (vtkIdType b = 0; b < m; ++b) {
+      m_globalBond[static_cast<std::size_t>(b)] = static_cast<vtkIdType>(bonds->GetComponent(b, 0));
+    }
+    m_bondIdStamp.set(bonds);
   }
   double box[6];
   for (int k = 0; k < 6; ++k) {

@@ -14,10 +14,26 @@
 #include "crackvis_vtk_conversion.h"
 #include <crackvis/cracks/extractor.hpp>
 
+class vtkCellArray;
+class vtkObject;
 class vtkPolyData;
 class vtkUnstructuredGrid;
 
 namespace crackvis::cracks::vtkadapter {
+
+// Which VTK object a cached copy was read from. The reader hands the same
+// time-independent arrays at every step; the same object with the same
+// modification time holds the same values (VTK's modification counter is
+// global, so a new array at a freed one's address has another time).
+class ArrayStamp {
+ public:
+  bool matches(vtkObject* object) const;
+  void set(vtkObject* object);
+
+ private:
+  const vtkObject* m_object = nullptr;
+  vtkMTimeType m_time = 0;
+};
 
 class CrackFilterState {
  public:
@@ -28,6 +44,10 @@ class CrackFilterState {
 
  private:
   bool readLattice(vtkPolyData* input, double radiusDefault, std::string& error);
+  static bool readBonds(vtkCellArray* lines, vtkIdType n, std::vector<dem::Bond>& bonds,
+                        std::string& error);
+  void readRadius(vtkPolyData* input, vtkIdType n, double radiusDefault);
+  void readBreakSteps(vtkPolyData* input, vtkIdType m);
   void readReference(vtkPolyData* input, vtkIdType n);
   // A piece of a larger set (the reader under MPI): what makes its output
   // the piece's own share of the whole set's. False for a whole set.
@@ -36,6 +56,15 @@ class CrackFilterState {
   void toWholeSet(CrackMesh& mesh) const;
 
   std::vector<dem::Bond> m_bonds;
+  // What the time-independent copies below were read from: unchanged, they
+  // are not read again at the next step.
+  ArrayStamp m_linesStamp;
+  ArrayStamp m_radiusStamp;
+  ArrayStamp m_breakStepStamp;
+  ArrayStamp m_referenceStamp;
+  ArrayStamp m_ghostStamp;
+  ArrayStamp m_particleIdStamp;
+  ArrayStamp m_bondIdStamp;
   std::vector<Vec3> m_positions;
   std::vector<double> m_radius;
   std::vector<std::uint8_t> m_state;
