@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include <catch2/catch.hpp>
 #include <vtkCellAttributeCrackFilter.h>
@@ -84,8 +85,24 @@ std::string randomFile(const testing::TempDir& dir) {
 
 // One primitive as order-free numbers: its type, point count, and the mean
 // and spread of its points, rounded to a grid far finer than any face but
-// far coarser than rounding noise (a piece sums in another order).
+// far coarser than rounding noise (a piece sums in another order); then its
+// opening and slip (issue 33: measured on a piece with its ghost layer, they
+// must be the whole set's, also next to the cut), on a coarser grid, since
+// a crack component's plane is fitted to the part of it a piece holds.
 using Signature = std::array<long long, 8>;
+
+// Not measured (NaN), or no such array: values no measurement can take.
+constexpr long long kNotMeasured = std::numeric_limits<long long>::min();
+constexpr long long kNoArray = kNotMeasured + 1;
+
+long long openingOf(vtkDataSet* data, const char* name, vtkIdType cell, double scale) {
+  vtkDataArray* array = data->GetCellData()->GetArray(name);
+  if (array == nullptr) {
+    return kNoArray;
+  }
+  const double value = array->GetComponent(cell, 0);
+  return std::isnan(value) ? kNotMeasured : std::llround(value / scale * 1e4);
+}
 
 std::vector<Signature> signatures(vtkDataSet* data, double scale) {
   std::vector<Signature> result;
@@ -109,7 +126,8 @@ std::vector<Signature> signatures(vtkDataSet* data, double scale) {
     }
     auto grid = [&](double v) { return std::llround(v / scale * 1e7); };
     result.push_back({data->GetCellType(c), ids->GetNumberOfIds(), grid(mean[0]), grid(mean[1]),
-                      grid(mean[2]), grid(spread), 0, 0});
+                      grid(mean[2]), grid(spread), openingOf(data, "opening", c, scale),
+                      openingOf(data, "slip", c, scale)});
   }
   std::sort(result.begin(), result.end());
   return result;
@@ -149,8 +167,48 @@ vtkDataSet* update(Run& run, double time, int piece, int pieces) {
   return vtkDataSet::SafeDownCast(run.filter->GetOutputDataObject(0));
 }
 
+bool sameGeometry(const std::vector<Signature>& a, const std::vector<Signature>& b) {
+  return std::equal(a.begin(), a.end(), b.begin(), [](const Signature& x, const Signature& y) {
+    return std::equal(x.begin(), x.begin() + 6, y.begin());
+  });
+}
+
+// Opening and slip (slots 6 and 7) within a share of the largest opening of
+// the step, and at least within one grid step; measured on the same elements.
+bool openingsWithin(const std::vector<Signature>& merged, const std::vector<Signature>& expected,
+                    double openingShare, double slipShare) {
+  long long largest = 0;
+  for (const Signature& e : expected) {
+    largest = std::max(largest, e[6]);
+  }
+  const auto tolerance = [&](double share) {
+    return std::max<long long>(1, std::llround(share * static_cast<double>(largest)));
+  };
+  for (std::size_t k = 0; k < merged.size(); ++k) {
+    for (const auto& [slot, allowed] :
+         {std::pair{6, tolerance(openingShare)}, std::pair{7, tolerance(slipShare)}}) {
+      const long long m = merged[k][static_cast<std::size_t>(slot)];
+      const long long e = expected[k][static_cast<std::size_t>(slot)];
+      const bool sentinel = m <= kNoArray || e <= kNoArray;
+      if (sentinel ? m != e : std::llabs(m - e) > allowed) {
+        UNSCOPED_INFO("element " << k << ": slot " << slot << " is " << m << " in the pieces, " << e
+                                 << " whole (allowed " << allowed << ")");
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+// Opening and slip of a piece's elements are measured against the crack
+// component's plane fitted to the part of it the piece holds (its slab and
+// ghost layer): on a lattice's flat crack that is the whole's plane to
+// rounding; on a random packing's rough crack, next to the cut, the fit
+// differs a little (measured: opening within 1 %, slip within 7 % of the
+// step's largest opening). `openingShare` and `slipShare` allow that.
 template <typename Filter>
-void checkPiecesAddUp(const std::string& path, int pieces) {
+void checkPiecesAddUp(const std::string& path, int pieces, double openingShare = 0.0,
+                      double slipShare = 0.0) {
   Run whole = makeRun<Filter>(path);
   std::vector<Run> parts;
   for (int p = 0; p < pieces; ++p) {
@@ -181,8 +239,9 @@ void checkPiecesAddUp(const std::string& path, int pieces) {
     std::sort(merged.begin(), merged.end());
     std::sort(mergedBonds.begin(), mergedBonds.end());
     INFO("step " << step << " of " << steps << ", " << pieces << " pieces");
-    CHECK(merged.size() == expected.size());
-    CHECK(merged == expected);
+    REQUIRE(merged.size() == expected.size());
+    CHECK(sameGeometry(merged, expected));
+    CHECK(openingsWithin(merged, expected, openingShare, slipShare));
     if (expectedBonds.size() > 0) {
       // Point bond ids repeat where pieces share a point; compare the set.
       auto unique = [](std::vector<double> v) {
@@ -212,17 +271,21 @@ TEST_CASE("the reader's pieces through each filter add up to the whole set, face
   const int pieces = GENERATE(2, 3);
   INFO((random ? "random packing" : (kind == 0 ? "FCC lattice" : "FCC lattice, no index"))
        << ", " << pieces << " pieces");
+  // A lattice's openings to rounding; a random packing's near the cut as
+  // measured (checkPiecesAddUp).
+  const double opening = random ? 0.02 : 0.0;
+  const double slip = random ? 0.1 : 0.0;
   SECTION("cell cut") {
-    checkPiecesAddUp<vtkCellCutCrackFilter>(path, pieces);
+    checkPiecesAddUp<vtkCellCutCrackFilter>(path, pieces, opening, slip);
   }
   SECTION("local Voronoi") {
-    checkPiecesAddUp<vtkLocalVoronoiCrackFilter>(path, pieces);
+    checkPiecesAddUp<vtkLocalVoronoiCrackFilter>(path, pieces, opening, slip);
   }
   SECTION("cell centre") {
-    checkPiecesAddUp<vtkCellCentreCrackFilter>(path, pieces);
+    checkPiecesAddUp<vtkCellCentreCrackFilter>(path, pieces, opening, slip);
   }
   SECTION("cell attribute") {
-    checkPiecesAddUp<vtkCellAttributeCrackFilter>(path, pieces);
+    checkPiecesAddUp<vtkCellAttributeCrackFilter>(path, pieces, opening, slip);
   }
 }
 
