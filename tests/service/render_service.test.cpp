@@ -25,6 +25,7 @@
 #include "support/process.hpp"
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
+#include <crackvis/dem/dem_file.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/importers/importer.hpp>
 #include <crackvis/importers/step_source.hpp>
@@ -818,6 +819,66 @@ TEST_CASE("StepHistory with a crack method adds the crack's numbers per step",
   }
   INFO(again.error_message());
   CHECK(again.ok());
+}
+
+TEST_CASE("StepHistory's crack numbers of a live file go on from the caller's last step",
+          "[render][service][integration][live]") {
+  // The same planted crack written at once, and step by step as a running
+  // code writes it.
+  const std::string whole = "history-whole.h5";
+  const auto sample = testing::writePlantedLattice(crackRoot().file(whole), 8);
+  REQUIRE(sample.steps.size() == 9);
+  const std::string live = "history-live.h5";
+  std::filesystem::remove(crackRoot().file(live));
+  dem::DemMetadata metadata = dem::metadataFrom("render_service test");
+  metadata.stepLayout = dem::StepLayout::kAppendable;
+  auto writer = dem::DemFileWriter::create(crackRoot().file(live), sample.lattice, metadata);
+  REQUIRE(writer.isOk());
+  auto append = [&](std::size_t from, std::size_t to) {
+    for (std::size_t k = from; k < to; ++k) {
+      REQUIRE(writer->appendStep(sample.steps[k]).isOk());
+    }
+  };
+  auto services = startServices();
+  auto stub = connect(*services.render);
+  auto history = [&](const std::string& file) {
+    grpc::ClientContext context;
+    v1::StepHistoryRequest request;
+    request.set_file(file);
+    request.set_cracks("local-voronoi");
+    v1::StepHistoryResponse response;
+    const grpc::Status status = stub->StepHistory(&context, request, &response);
+    INFO(status.error_message());
+    REQUIRE(status.ok());
+    return response;
+  };
+  // The whole file first: a user's kept run is of one file, and a call on
+  // another file lets it go.
+  const v1::StepHistoryResponse reference = history(whole);
+  CHECK(reference.crack_steps_computed() == 9);
+  append(0, 5);
+  const v1::StepHistoryResponse early = history(live);
+  CHECK(early.time_size() == 5);
+  CHECK(early.crack_steps_computed() == 5);
+  CHECK(seriesOf(early, "total_area").size() == 5);
+  // The run goes on: only the 4 new steps are extracted and analysed.
+  append(5, 9);
+  const v1::StepHistoryResponse later = history(live);
+  CHECK(later.time_size() == 9);
+  CHECK(later.crack_steps_computed() == 4);
+  // And its numbers are those of the whole file run at once, bit for bit
+  // (NaN where a step has no crack).
+  REQUIRE(reference.scalars_size() > 5);
+  for (const auto& series : reference.scalars()) {
+    INFO(series.name());
+    CHECK(testing::sameBytes(seriesOf(later, series.name()),
+                             std::vector<double>(series.values().begin(), series.values().end())));
+  }
+  // The writer is done: the kept run finds no new step and is let go, so
+  // the next call runs on every step again.
+  REQUIRE(writer->close().isOk());
+  CHECK(history(live).crack_steps_computed() == 0);
+  CHECK(history(live).crack_steps_computed() == 9);
 }
 
 TEST_CASE("crackvis-render --snapshot draws the cracks of a generated series",

@@ -71,6 +71,7 @@ Result<std::unique_ptr<RenderServer>> RenderServer::start(const RenderServerConf
   settings.reap = [service] {
     service->sessions().reap();
     service->attaching().cancelOverdue();
+    service->reapCrackHistories();
   };
   // Each stream holds a handler thread and a reader thread: cap what many
   // clients opening calls can make us create (gRPC refuses calls beyond it

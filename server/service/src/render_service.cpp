@@ -219,7 +219,7 @@ Status RenderServiceImpl::addCracks(const Caller& caller, const v1::StepHistoryR
   }
   CRACKVIS_RETURN_IF_ERROR(m_crackHistories.enter(caller.name));
   struct Leave {
-    CrackHistoryGate& gate;
+    CrackHistories& gate;
     const std::string& user;
     ~Leave() { gate.leave(user); }
   } leave{m_crackHistories, caller.name};
@@ -234,11 +234,31 @@ Status RenderServiceImpl::addCracks(const Caller& caller, const v1::StepHistoryR
       described.datasets().begin(), described.datasets().end(), [&](const auto& dataset) {
         return dataset.path().starts_with("/steps/") && dataset.path().ends_with(recorded);
       });
-  auto source = source::openRemoteSource(m_data, request.file(), m_config.limits.fileSizes);
-  if (!source) {
-    return source.status();
+  // A live file's run goes on from where this user's last call left it.
+  auto run = m_crackHistories.take(caller.name, request.file(), *method, withModes);
+  if (!run) {
+    auto source = source::openRemoteSource(m_data, request.file(), m_config.limits.fileSizes);
+    if (!source) {
+      return source.status();
+    }
+    auto started = CrackHistoryRun::start(std::move(source).value(), *method, withModes);
+    if (!started) {
+      return started.status();
+    }
+    run = std::move(started).value();
   }
-  return addCrackSeries(**source, *method, withModes, deadline, response);
+  const Status status = run->addSeries(response.time_size(), deadline, response);
+  // A deadline stops it between two steps, so what it analysed holds; after
+  // another error the run's state is not trusted.
+  const bool whole = status || status.code() == StatusCode::kDeadlineExceeded;
+  if (whole && run->live()) {
+    m_crackHistories.keep(caller.name, std::move(run));
+  }
+  return status;
+}
+
+void RenderServiceImpl::reapCrackHistories() {
+  m_crackHistories.dropIdle();
 }
 
 Session::SourceOpener RenderServiceImpl::opener(const Caller& caller) const {

@@ -52,6 +52,8 @@ class RenderServiceImpl final : public v1::RenderService::Service {
         m_turns(std::make_shared<RenderTurns>(config.limits.rendersAtOnce)) {}
 
   SessionRegistry& sessions() { return m_sessions; }
+  // Drops the crack histories of live files no call has used for a while.
+  void reapCrackHistories();
   AttachWatch& attaching() { return m_attaching; }
   const rpc::Authenticator& authenticator() const { return m_authenticator; }
   rpc::AccessLog& accessLog() { return m_log; }
@@ -118,7 +120,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   rpc::AccessLog& m_log;
   SessionRegistry m_sessions;
   AttachWatch m_attaching;
-  CrackHistoryGate m_crackHistories;
+  CrackHistories m_crackHistories;
   std::shared_ptr<RenderTurns> m_turns;  // shared by every session's frames
 };
 
