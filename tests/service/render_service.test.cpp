@@ -881,6 +881,78 @@ TEST_CASE("StepHistory's crack numbers of a live file go on from the caller's la
   CHECK(history(live).crack_steps_computed() == 9);
 }
 
+TEST_CASE("StepHistory keeps a finished file's crack numbers until the file changes",
+          "[render][service][integration]") {
+  const std::string file = "history-finished.h5";
+  const std::string path = crackRoot().file(file);
+  // A file counts as finished once it has been left alone for 2 s: its
+  // modification time is set back rather than waited for.
+  auto writeSettled = [&](int steps, std::chrono::minutes age) {
+    testing::writePlantedLattice(path, steps);
+    std::filesystem::last_write_time(path, std::filesystem::file_time_type::clock::now() - age);
+  };
+  auto services = startServices();
+  auto stub = connect(*services.render);
+  auto history = [&](const char* method) {
+    grpc::ClientContext context;
+    v1::StepHistoryRequest request;
+    request.set_file(file);
+    request.set_cracks(method);
+    v1::StepHistoryResponse response;
+    const grpc::Status status = stub->StepHistory(&context, request, &response);
+    INFO(status.error_message());
+    REQUIRE(status.ok());
+    return response;
+  };
+  auto revision = [&] {
+    grpc::ClientContext context;
+    v1::DescribeRequest request;
+    request.set_file(file);
+    v1::DescribeResponse response;
+    REQUIRE(stub->Describe(&context, request, &response).ok());
+    return response.revision();
+  };
+  auto sameSeries = [](const v1::StepHistoryResponse& a, const v1::StepHistoryResponse& b) {
+    REQUIRE(a.scalars_size() == b.scalars_size());
+    for (const auto& series : a.scalars()) {
+      INFO(series.name());
+      CHECK(
+          testing::sameBytes(seriesOf(b, series.name()),
+                             std::vector<double>(series.values().begin(), series.values().end())));
+    }
+  };
+
+  // A file just written has no revision: its numbers are not kept.
+  testing::writePlantedLattice(path, 8);
+  CHECK(revision().empty());
+  CHECK(history("local-voronoi").crack_steps_computed() == 9);
+  CHECK(history("local-voronoi").crack_steps_computed() == 9);
+
+  writeSettled(8, std::chrono::minutes(60));
+  const std::string first = revision();
+  CHECK(first.size() == 32);
+  CHECK(revision() == first);
+  const v1::StepHistoryResponse computed = history("local-voronoi");
+  CHECK(computed.crack_steps_computed() == 9);
+  // Asked again: no step is run, and the numbers are the same.
+  const v1::StepHistoryResponse kept = history("local-voronoi");
+  CHECK(kept.crack_steps_computed() == 0);
+  CHECK(kept.time_size() == 9);
+  sameSeries(computed, kept);
+  REQUIRE(seriesOf(kept, "total_area").size() == 9);
+  // Another method is another entry.
+  CHECK(history("cell-centre").crack_steps_computed() == 9);
+  CHECK(history("cell-centre").crack_steps_computed() == 0);
+
+  // The file is written again, with fewer steps: a new revision, new numbers.
+  writeSettled(5, std::chrono::minutes(30));
+  CHECK(revision() != first);
+  const v1::StepHistoryResponse rewritten = history("local-voronoi");
+  CHECK(rewritten.crack_steps_computed() == 6);
+  CHECK(seriesOf(rewritten, "total_area").size() == 6);
+  CHECK(history("local-voronoi").crack_steps_computed() == 0);
+}
+
 TEST_CASE("crackvis-render --snapshot draws the cracks of a generated series",
           "[render][service][integration]") {
   testing::TempDir out;

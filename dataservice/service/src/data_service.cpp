@@ -199,7 +199,13 @@ Status DataServiceImpl::walk(grpc::CallbackServerContext* context, const Caller&
     return internalError(fmt::format("Describe of {}: an HDF5 worker sent an unreadable answer",
                                      echoed(resolved.requested)));
   }
-  if (stamp && settled(*stamp)) {
+  // The file as it was before the walk, and still is after it.
+  if (stamp && settled(*stamp) && stampOf(resolved.absolute.string()) == stamp) {
+    // A message's serialized fields may be appended to it: the revision is
+    // added to the worker's answer (checked above) without parsing it again.
+    v1::DescribeResponse revision;
+    revision.set_revision(revisionOf(*stamp));
+    described->append(revision.SerializeAsString());
     m_descriptions.store(key, *stamp, *described);
   }
   record.bytes = described->size();

@@ -1,7 +1,9 @@
 #include "describe_cache.hpp"
 
+#include <array>
 #include <chrono>
 
+#include <fmt/format.h>
 #include <sys/stat.h>
 
 namespace crackvis::dataservice {
@@ -23,6 +25,23 @@ bool settled(const FileStamp& stamp) {
                                std::chrono::system_clock::now().time_since_epoch())
                                .count();
   return now - stamp.modifiedNanoseconds >= kSettledNanoseconds;
+}
+
+std::string revisionOf(const FileStamp& stamp) {
+  // FNV-1a over the stamp's bytes, twice with different bases: 128 bits, so
+  // that two versions of one file never share a name in practice.
+  const std::array<std::uint64_t, 4> fields{stamp.device, stamp.inode, stamp.size,
+                                            static_cast<std::uint64_t>(stamp.modifiedNanoseconds)};
+  auto fnv = [&](std::uint64_t hash) {
+    constexpr std::uint64_t kPrime = 0x100000001b3;
+    for (const std::uint64_t field : fields) {
+      for (int byte = 0; byte < 8; ++byte) {
+        hash = (hash ^ ((field >> (8 * byte)) & 0xff)) * kPrime;
+      }
+    }
+    return hash;
+  };
+  return fmt::format("{:016x}{:016x}", fnv(0xcbf29ce484222325), fnv(0x84222325cbf29ce4));
 }
 
 std::optional<std::string> DescribeCache::find(const std::string& key, const FileStamp& stamp) {

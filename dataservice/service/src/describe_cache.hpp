@@ -33,6 +33,9 @@ std::optional<FileStamp> stampOf(const std::string& path);
 // only for files that have settled. A live file being written is walked
 // afresh for every Describe, which therefore sees every committed step.
 bool settled(const FileStamp& stamp);
+// DescribeResponse.revision for a settled file: an opaque 32-digit hex name
+// of its stamp (a hash, so that inode numbers are not handed out).
+std::string revisionOf(const FileStamp& stamp);
 
 class DescribeCache {
  public:

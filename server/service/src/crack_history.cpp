@@ -56,8 +56,8 @@ Status CrackHistoryRun::analyseStep(int k) {
   return Status::ok();
 }
 
-Status CrackHistoryRun::addSeries(int steps, std::chrono::system_clock::time_point deadline,
-                                  v1::StepHistoryResponse& response) {
+Result<CrackHistoryRun::Series> CrackHistoryRun::series(
+    int steps, std::chrono::system_clock::time_point deadline) {
   if (live()) {
     CRACKVIS_RETURN_IF_ERROR(m_source->refresh().status());
   }
@@ -76,13 +76,55 @@ Status CrackHistoryRun::addSeries(int steps, std::chrono::system_clock::time_poi
       std::min(static_cast<std::size_t>(std::max(last, 0)), m_steps.size()));
   const int dimension = m_source->lattice().dimension;
   const analysis::CrackFront front = analysis::crackFront(shown, dimension);
-  for (const analysis::NamedSeries& series : analysis::crackSeries(shown, front)) {
-    auto* out = response.add_scalars();
-    out->set_name(series.name);
-    out->mutable_values()->Add(series.values.begin(), series.values.end());
+  return Series{analysis::crackSeries(shown, front), std::max(0, last - before)};
+}
+
+std::string FinishedSeries::key(const std::string& revision, cracks::Method method,
+                                bool recordedModes, int steps) {
+  return fmt::format("{}\n{}\n{}\n{}", revision, cracks::toString(method), recordedModes, steps);
+}
+
+std::optional<std::vector<analysis::NamedSeries>> FinishedSeries::find(const std::string& key) {
+  const std::lock_guard lock(m_mutex);
+  const auto found = m_byKey.find(key);
+  if (found == m_byKey.end()) {
+    return std::nullopt;
   }
-  response.set_crack_steps_computed(std::max(0, last - before));
-  return Status::ok();
+  m_recent.splice(m_recent.begin(), m_recent, found->second);
+  return found->second->series;
+}
+
+void FinishedSeries::store(const std::string& key, std::vector<analysis::NamedSeries> series) {
+  std::size_t bytes = key.size();
+  for (const analysis::NamedSeries& one : series) {
+    bytes += one.name.size() + one.values.size() * sizeof(double);
+  }
+  if (bytes > kMaxBytes) {
+    return;
+  }
+  const std::lock_guard lock(m_mutex);
+  if (const auto found = m_byKey.find(key); found != m_byKey.end()) {
+    m_bytes -= found->second->bytes;
+    m_recent.erase(found->second);
+    m_byKey.erase(found);
+  }
+  evictTo(kMaxBytes - bytes);
+  m_bytes += bytes;
+  m_recent.push_front({key, std::move(series), bytes});
+  m_byKey.emplace(key, m_recent.begin());
+}
+
+std::size_t FinishedSeries::entries() const {
+  const std::lock_guard lock(m_mutex);
+  return m_recent.size();
+}
+
+void FinishedSeries::evictTo(std::size_t bytes) {
+  while (m_bytes > bytes && !m_recent.empty()) {
+    m_bytes -= m_recent.back().bytes;
+    m_byKey.erase(m_recent.back().key);
+    m_recent.pop_back();
+  }
 }
 
 Status CrackHistories::enter(const std::string& user) {

@@ -7,11 +7,14 @@
 #pragma once
 
 #include <chrono>
+#include <list>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "crackvis/v1/render.pb.h"
@@ -36,15 +39,23 @@ class CrackHistoryRun {
 
   // Whether a request for `file` with `method` continues this run.
   bool continues(const std::string& file, cracks::Method method, bool recordedModes) const;
+  // The series of every step analysed, and how many of them were new.
+  struct Series {
+    std::vector<analysis::NamedSeries> series;
+    int computed = 0;
+  };
   // Looks at a live file again, analyses its steps not analysed yet, up to
-  // the `steps` the response's history counts, and adds the series of all
-  // of them; `crack_steps_computed` says how many were new. `deadline`: the
-  // caller's; DEADLINE_EXCEEDED, naming the step reached, once it passes
-  // between two steps (the steps analysed until then stay analysed).
-  Status addSeries(int steps, std::chrono::system_clock::time_point deadline,
-                   v1::StepHistoryResponse& response);
+  // the `steps` the response's history counts, and gives the series of all
+  // of them. `deadline`: the caller's; DEADLINE_EXCEEDED, naming the step
+  // reached, once it passes between two steps (the steps analysed until
+  // then stay analysed).
+  Result<Series> series(int steps, std::chrono::system_clock::time_point deadline);
   // A file its writer is still adding steps to: worth keeping.
   bool live() const { return m_source->appendable() && m_source->beingWritten(); }
+  // Every step of a file no writer adds to any more has been analysed.
+  bool finished() const {
+    return !live() && static_cast<int>(m_steps.size()) == m_source->stepCount();
+  }
 
  private:
   CrackHistoryRun(std::unique_ptr<source::StepSource> source, cracks::Method method,
@@ -61,6 +72,37 @@ class CrackHistoryRun {
   std::vector<dem::Vec3> m_reference;
   cracks::CrackMesh m_mesh;
   std::vector<double> m_modes;
+};
+
+// The series of finished files, by file revision (DescribeResponse.revision,
+// which names the file's bytes), method and whether recorded modes counted:
+// every StepHistory call on a finished file would otherwise run the method
+// over all its steps again (seconds on a 200-step file, for each user who
+// opens the Steps plot). The revision names one file on disk whatever its
+// name in a user's folders, so users who may read it share its entry. Least
+// recently used entries go first past kMaxBytes.
+class FinishedSeries {
+ public:
+  static constexpr std::size_t kMaxBytes = std::size_t{32} << 20;
+
+  static std::string key(const std::string& revision, cracks::Method method, bool recordedModes,
+                         int steps);
+  std::optional<std::vector<analysis::NamedSeries>> find(const std::string& key);
+  void store(const std::string& key, std::vector<analysis::NamedSeries> series);
+  std::size_t entries() const;
+
+ private:
+  struct Entry {
+    std::string key;
+    std::vector<analysis::NamedSeries> series;
+    std::size_t bytes = 0;
+  };
+  void evictTo(std::size_t bytes);
+
+  mutable std::mutex m_mutex;
+  std::list<Entry> m_recent;
+  std::unordered_map<std::string, std::list<Entry>::iterator> m_byKey;
+  std::size_t m_bytes = 0;
 };
 
 // One crack history per user at a time: each runs a method over a whole file

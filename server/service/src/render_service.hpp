@@ -121,6 +121,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   SessionRegistry m_sessions;
   AttachWatch m_attaching;
   CrackHistories m_crackHistories;
+  FinishedSeries m_finishedSeries;
   std::shared_ptr<RenderTurns> m_turns;  // shared by every session's frames
 };
 
