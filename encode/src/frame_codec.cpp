@@ -69,6 +69,59 @@ Status check(int code, const char* call) {
   return Status::ok();
 }
 
+// Which source pixel each pixel of a frame `to` long shows when a line of
+// `from` is enlarged by replication (render::resample's rule).
+void replicationMap(int from, int to, std::vector<int>& map) {
+  map.resize(static_cast<std::size_t>(to));
+  for (int x = 0; x < to; ++x) {
+    map[static_cast<std::size_t>(x)] = std::min(from - 1, x * from / to);
+  }
+}
+
+// The luma plane of `target` from the small frame's: pixel (x, y) takes
+// source pixel (column[x], row[y]). A row that shows the same source row as
+// the row above it is copied from it.
+void replicateLuma(const std::uint8_t* source, int sourceStride, std::uint8_t* target,
+                   int targetStride, int width, int height, const std::vector<int>& column,
+                   const std::vector<int>& row) {
+  int previous = -1;
+  for (int y = 0; y < height; ++y) {
+    std::uint8_t* out = target + static_cast<std::ptrdiff_t>(y) * targetStride;
+    const int sy = row[static_cast<std::size_t>(y)];
+    if (sy == previous) {
+      std::memcpy(out, out - targetStride, static_cast<std::size_t>(width));
+      continue;
+    }
+    previous = sy;
+    const std::uint8_t* in = source + static_cast<std::ptrdiff_t>(sy) * sourceStride;
+    for (int x = 0; x < width; ++x) {
+      out[x] = in[column[static_cast<std::size_t>(x)]];
+    }
+  }
+}
+
+// A chroma plane (4:2:0) of `target` from the small frame's 4:4:4 one: each
+// sample is the mean of the 2 x 2 pixels it covers in the enlarged frame, as
+// the whole frame's conversion averages them.
+void replicateChroma(const std::uint8_t* source, int sourceStride, std::uint8_t* target,
+                     int targetStride, int width, int height, const std::vector<int>& column,
+                     const std::vector<int>& row) {
+  for (int y = 0; y < height; ++y) {
+    std::uint8_t* out = target + static_cast<std::ptrdiff_t>(y) * targetStride;
+    const std::uint8_t* upper =
+        source + static_cast<std::ptrdiff_t>(row[static_cast<std::size_t>(2 * y)]) * sourceStride;
+    const std::uint8_t* lower =
+        source +
+        static_cast<std::ptrdiff_t>(row[static_cast<std::size_t>(2 * y + 1)]) * sourceStride;
+    for (int x = 0; x < width; ++x) {
+      const int left = column[static_cast<std::size_t>(2 * x)];
+      const int right = column[static_cast<std::size_t>(2 * x + 1)];
+      out[x] = static_cast<std::uint8_t>(
+          (upper[left] + upper[right] + lower[left] + lower[right] + 2) >> 2);
+    }
+  }
+}
+
 }  // namespace
 
 struct FrameEncoder::Impl {
@@ -77,6 +130,14 @@ struct FrameEncoder::Impl {
   av::Packet packet;
   Scaler toYuv;
   std::int64_t next = 0;
+  // A reduced frame: converted at its size to YUV 4:4:4, then replicated.
+  Scaler smallToYuv;
+  av::Frame small;
+  std::vector<int> column;  // per pixel of the stream's width, the frame's
+  std::vector<int> row;
+
+  Status convert(const RgbFrame& frame);
+  Status convertSmall(const RgbFrame& frame);
 };
 
 Result<std::unique_ptr<FrameEncoder>> FrameEncoder::create(const EncoderSettings& settings) {
@@ -131,21 +192,61 @@ Result<std::unique_ptr<FrameEncoder>> FrameEncoder::create(const EncoderSettings
 
 FrameEncoder::~FrameEncoder() = default;
 
+Status FrameEncoder::Impl::convert(const RgbFrame& frame) {
+  const std::uint8_t* source[1] = {frame.rgb.data()};
+  const int stride[1] = {frame.width * 3};
+  if (sws_scale(toYuv.get(), source, stride, 0, frame.height, yuv->data, yuv->linesize) !=
+      frame.height) {
+    return internalError("sws_scale: RGB24 to YUV420P converted fewer rows than the frame has");
+  }
+  return Status::ok();
+}
+
+Status FrameEncoder::Impl::convertSmall(const RgbFrame& frame) {
+  if (!small || small->width != frame.width || small->height != frame.height) {
+    small.reset(av_frame_alloc());
+    CRACKVIS_RETURN_IF_ERROR(allocated(small.get(), "av_frame_alloc"));
+    small->format = AV_PIX_FMT_YUV444P;
+    small->width = frame.width;
+    small->height = frame.height;
+    CRACKVIS_RETURN_IF_ERROR(check(av_frame_get_buffer(small.get(), 0), "av_frame_get_buffer"));
+    smallToYuv.reset(sws_getContext(frame.width, frame.height, AV_PIX_FMT_RGB24, frame.width,
+                                    frame.height, AV_PIX_FMT_YUV444P, SWS_POINT, nullptr, nullptr,
+                                    nullptr));
+    if (!smallToYuv) {
+      small.reset();
+      return failedPrecondition("sws_getContext: RGB24 to YUV444P not available");
+    }
+    replicationMap(frame.width, yuv->width, column);
+    replicationMap(frame.height, yuv->height, row);
+  }
+  const std::uint8_t* source[1] = {frame.rgb.data()};
+  const int stride[1] = {frame.width * 3};
+  if (sws_scale(smallToYuv.get(), source, stride, 0, frame.height, small->data, small->linesize) !=
+      frame.height) {
+    return internalError("sws_scale: RGB24 to YUV444P converted fewer rows than the frame has");
+  }
+  replicateLuma(small->data[0], small->linesize[0], yuv->data[0], yuv->linesize[0], yuv->width,
+                yuv->height, column, row);
+  for (int plane = 1; plane <= 2; ++plane) {
+    replicateChroma(small->data[plane], small->linesize[plane], yuv->data[plane],
+                    yuv->linesize[plane], yuv->width / 2, yuv->height / 2, column, row);
+  }
+  return Status::ok();
+}
+
 Result<EncodedFrame> FrameEncoder::encode(const RgbFrame& frame, bool keyframe) {
   Impl& impl = *m_impl;
-  if (frame.width != m_settings.width || frame.height != m_settings.height ||
+  if (frame.width < 1 || frame.height < 1 || frame.width > m_settings.width ||
+      frame.height > m_settings.height ||
       frame.rgb.size() !=
           static_cast<std::size_t>(frame.width) * static_cast<std::size_t>(frame.height) * 3) {
     return invalidArgument(fmt::format("frame {}x{} for an encoder of {}x{}", frame.width,
                                        frame.height, m_settings.width, m_settings.height));
   }
   CRACKVIS_RETURN_IF_ERROR(check(av_frame_make_writable(impl.yuv.get()), "av_frame_make_writable"));
-  const std::uint8_t* source[1] = {frame.rgb.data()};
-  const int stride[1] = {frame.width * 3};
-  if (sws_scale(impl.toYuv.get(), source, stride, 0, frame.height, impl.yuv->data,
-                impl.yuv->linesize) != frame.height) {
-    return internalError("sws_scale: RGB24 to YUV420P converted fewer rows than the frame has");
-  }
+  const bool whole = frame.width == m_settings.width && frame.height == m_settings.height;
+  CRACKVIS_RETURN_IF_ERROR(whole ? impl.convert(frame) : impl.convertSmall(frame));
   impl.yuv->pts = impl.next;
   impl.yuv->pict_type = keyframe ? AV_PICTURE_TYPE_I : AV_PICTURE_TYPE_NONE;
   impl.yuv->key_frame = keyframe ? 1 : 0;

@@ -9,7 +9,8 @@
 
 using namespace crackvis;
 
-TEST_CASE("the encoder refuses bad settings and frames of another size", "[encode]") {
+TEST_CASE("the encoder refuses bad settings, frames larger than its own and short pixel arrays",
+          "[encode]") {
   struct Bad {
     encode::EncoderSettings settings;
     const char* message;
@@ -37,9 +38,17 @@ TEST_CASE("the encoder refuses bad settings and frames of another size", "[encod
   CHECK(quality.value()->encode(grey, true).isOk());
   auto encoder = encode::FrameEncoder::create({64, 48, 30, 1'000'000});
   REQUIRE(encoder.isOk());
-  const encode::RgbFrame wrong{32, 32, std::vector<std::uint8_t>(32 * 32 * 3, 0)};
-  CHECK(encoder.value()->encode(wrong, false).status().message() ==
+  const encode::RgbFrame wider{66, 32, std::vector<std::uint8_t>(66 * 32 * 3, 0)};
+  CHECK(encoder.value()->encode(wider, false).status().message() ==
+        "frame 66x32 for an encoder of 64x48");
+  const encode::RgbFrame taller{32, 50, std::vector<std::uint8_t>(32 * 50 * 3, 0)};
+  CHECK(encoder.value()->encode(taller, false).status().code() == StatusCode::kInvalidArgument);
+  const encode::RgbFrame short_{32, 32, std::vector<std::uint8_t>(32 * 31 * 3, 0)};
+  CHECK(encoder.value()->encode(short_, false).status().message() ==
         "frame 32x32 for an encoder of 64x48");
+  // A smaller frame is a reduced render: enlarged, not refused.
+  const encode::RgbFrame reduced{32, 24, std::vector<std::uint8_t>(32 * 24 * 3, 90)};
+  CHECK(encoder.value()->encode(reduced, false).isOk());
 }
 
 TEST_CASE("frames of any even width survive the round trip, and the stream may change size",

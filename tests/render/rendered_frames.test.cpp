@@ -24,24 +24,44 @@ std::size_t contentPixels(const std::vector<std::uint8_t>& rgb) {
   return count;
 }
 
+constexpr int kWidth = 640;
+constexpr int kHeight = 360;
+
+// An FCC block cut by a (111) plane, its crack from local Voronoi, and a
+// 640x360 view of both with the particles coloured by damage.
+struct CrackView {
+  testing::PlantedCrack crack =
+      testing::fccPlaneCrack(4, {1, 1, 1}, 13 / std::sqrt(2.0) + 1.5, 0.02);
+  cracks::CrackMesh mesh;
+  pipeline::PipelineDescription description;
+
+  CrackView() {
+    auto extractor = cracks::makeExtractor(cracks::Method::kLocalVoronoi, *crack.graph, 3);
+    REQUIRE(extractor->extract(crack.input(), mesh).isOk());
+    description.view.width = kWidth;
+    description.view.height = kHeight;
+    description.particles.colourBy = pipeline::ParticleColourBy::kDamage;
+  }
+  render::SceneInput input() const {
+    render::SceneInput scene;
+    scene.lattice = &crack.block.lattice;
+    scene.step = crack.input();
+    scene.cracks = &mesh;
+    return scene;
+  }
+};
+
 }  // namespace
 
 TEST_CASE("rendered frames survive H.264 encode and decode at >= 35 dB PSNR",
           "[encode][render][egl]") {
-  constexpr int kWidth = 640;
-  constexpr int kHeight = 360;
   auto renderer = render::SceneRenderer::create(kWidth, kHeight);
   REQUIRE(renderer.isOk());
-  const auto crack = testing::fccPlaneCrack(4, {1, 1, 1}, 13 / std::sqrt(2.0) + 1.5, 0.02);
-  auto extractor = cracks::makeExtractor(cracks::Method::kLocalVoronoi, *crack.graph, 3);
-  cracks::CrackMesh mesh;
-  REQUIRE(extractor->extract(crack.input(), mesh).isOk());
-  pipeline::PipelineDescription description;
-  description.view.width = kWidth;
-  description.view.height = kHeight;
+  CrackView view;
+  pipeline::PipelineDescription& description = view.description;
   description.particles.opacity = 1.0;
-  description.particles.colourBy = pipeline::ParticleColourBy::kDamage;
-  const render::SceneInput input{&crack.block.lattice, crack.input(), {}, {}, &mesh};
+  const render::SceneInput input = view.input();
+  const auto& crack = view.crack;
 
   auto encoder = encode::FrameEncoder::create({kWidth, kHeight, 30, 4'000'000});
   REQUIRE(encoder.isOk());
@@ -79,4 +99,58 @@ TEST_CASE("rendered frames survive H.264 encode and decode at >= 35 dB PSNR",
   INFO("lowest PSNR over 30 frames: " << worst << " dB");
   CHECK(decoded == 30);
   CHECK(worst >= 35.0);
+}
+
+TEST_CASE("a reduced frame is enlarged by the encoder as resample enlarges it",
+          "[encode][render][egl]") {
+  // A drag's frames are rendered at 1/k of the view and streamed at its
+  // size: the encoder converts the small frame and replicates its planes.
+  auto renderer = render::SceneRenderer::create(kWidth, kHeight);
+  REQUIRE(renderer.isOk());
+  const CrackView view;
+  const render::SceneInput input = view.input();
+  const pipeline::PipelineDescription& description = view.description;
+  REQUIRE((*renderer)->setScene(description, input, true).isOk());
+
+  auto replicating = encode::FrameEncoder::create({kWidth, kHeight, 30, 4'000'000});
+  auto enlarged = encode::FrameEncoder::create({kWidth, kHeight, 30, 4'000'000});
+  REQUIRE((replicating.isOk() && enlarged.isOk()));
+  auto replicatingDecoder = encode::FrameDecoder::create();
+  auto enlargedDecoder = encode::FrameDecoder::create();
+  REQUIRE((replicatingDecoder.isOk() && enlargedDecoder.isOk()));
+  // 3 and 7 do not divide the view: the rule for the pixels left over is
+  // resample's. 1 is the whole frame again, after reduced ones.
+  int frame = 0;
+  for (const int factor : {2, 3, 7, 2, 1}) {
+    INFO("reduction " << factor);
+    render::Image small;
+    REQUIRE((*renderer)->renderFrame(kWidth / factor, kHeight / factor, small, factor > 1).isOk());
+    render::Image big;
+    render::resample(small, kWidth, kHeight, big);
+    const encode::RgbFrame reference{big.width, big.height, big.rgb};
+    const bool keyframe = frame++ == 0;
+    auto viaReplication = (*replicating)->encode({small.width, small.height, small.rgb}, keyframe);
+    auto viaResample = (*enlarged)->encode(reference, keyframe);
+    REQUIRE((viaReplication.isOk() && viaResample.isOk()));
+    auto a = (*replicatingDecoder)->decode(*viaReplication);
+    auto b = (*enlargedDecoder)->decode(*viaResample);
+    REQUIRE((a.isOk() && b.isOk() && a->has_value() && b->has_value()));
+    CHECK((*a)->width == kWidth);
+    CHECK((*a)->height == kHeight);
+    CHECK(contentPixels((*a)->rgb) > static_cast<std::size_t>(kWidth) * kHeight / 10);
+    const double replicated = encode::psnr(reference, **a);
+    const double resampled = encode::psnr(reference, **b);
+    INFO("PSNR against the enlarged frame: replicated planes " << replicated << " dB, enlarged RGB "
+                                                               << resampled << " dB");
+    CHECK(replicated >= 35.0);
+    CHECK(replicated >= resampled - 1.0);
+  }
+  // A frame larger than the stream is refused, and the encoder goes on.
+  const encode::RgbFrame tooWide{kWidth + 2, kHeight,
+                                 std::vector<std::uint8_t>((kWidth + 2) * kHeight * 3)};
+  const auto refused = (*replicating)->encode(tooWide, false);
+  CHECK(refused.status().code() == StatusCode::kInvalidArgument);
+  render::Image small;
+  REQUIRE((*renderer)->renderFrame(kWidth / 4, kHeight / 4, small, true).isOk());
+  CHECK((*replicating)->encode({small.width, small.height, small.rgb}, false).isOk());
 }

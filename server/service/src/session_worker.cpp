@@ -430,12 +430,12 @@ void Session::Worker::renderIfDirty() {
   }
   frame.timings.renderMs = millisecondsSince(start);
   frame.particles = particleDrawing();
+  frame.width = width;
+  frame.height = height;
+  frame.image = std::move(image);
   if (factor > 1) {
-    render::resample(image, width, height, frame.image);
     refineAt = lastInteraction + std::chrono::duration_cast<Clock::duration>(
                                      std::chrono::duration<double, std::milli>(refineDelayMs));
-  } else {
-    frame.image = std::move(image);
   }
   if (interacting && !forceFull) {
     reduction.adaptReduction(frame.timings.renderMs);

@@ -16,12 +16,12 @@ double secondsSince(Clock::time_point start) {
 }  // namespace
 
 Result<v1::Frame> StreamEncoder::encode(RenderedFrame& frame) {
-  const auto& image = frame.image;
-  if (!m_encoder || m_encoder->settings().width != image.width ||
-      m_encoder->settings().height != image.height ||
+  // A reduced frame's image is smaller than the stream: the encoder enlarges it.
+  if (!m_encoder || m_encoder->settings().width != frame.width ||
+      m_encoder->settings().height != frame.height ||
       m_encoder->settings().bitrate != frame.bitrate) {
     auto created = encode::FrameEncoder::create(
-        {image.width, image.height, std::max(1, frame.fps), frame.bitrate});
+        {frame.width, frame.height, std::max(1, frame.fps), frame.bitrate});
     if (!created) {
       return created.status();
     }
@@ -29,7 +29,7 @@ Result<v1::Frame> StreamEncoder::encode(RenderedFrame& frame) {
     frame.keyframe = true;
   }
   const auto start = Clock::now();
-  encode::RgbFrame rgb{image.width, image.height, std::move(frame.image.rgb)};
+  encode::RgbFrame rgb{frame.image.width, frame.image.height, std::move(frame.image.rgb)};
   auto encoded = m_encoder->encode(rgb, frame.keyframe);
   if (!encoded) {
     return encoded.status();
@@ -38,8 +38,8 @@ Result<v1::Frame> StreamEncoder::encode(RenderedFrame& frame) {
   v1::Frame out;
   out.set_frame_id(frame.frameId);
   out.set_last_event_id(frame.lastEventId);
-  out.set_width(image.width);
-  out.set_height(image.height);
+  out.set_width(frame.width);
+  out.set_height(frame.height);
   out.set_keyframe(encoded->keyframe);
   out.set_full_resolution(frame.fullResolution);
   out.set_reduction(frame.reduction);

@@ -48,7 +48,12 @@ class FrameEncoder {
   ~FrameEncoder();
 
   // Encodes one frame of the settings' size; `keyframe` forces an IDR frame.
-  // With zerolatency every frame yields its access unit at once.
+  // With zerolatency every frame yields its access unit at once. A smaller
+  // frame (a reduced render) is enlarged to the settings' size by pixel
+  // replication, as render::resample does (the stream's pixel x shows the
+  // frame's pixel x * width / settings' width, rows alike): it is converted
+  // to YUV at its own size and its planes replicated, a fraction of the cost
+  // of converting the enlarged frame.
   Result<EncodedFrame> encode(const RgbFrame& frame, bool keyframe);
   const EncoderSettings& settings() const { return m_settings; }
 

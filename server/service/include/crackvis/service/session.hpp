@@ -62,7 +62,11 @@ struct RenderedFrame {
   // for spheres wider than the largest point, VTK's geometry shader),
   // "points", or "none".
   std::string particles;
-  render::Image image;  // the view's size
+  int width = 0;  // the view's size, the stream's
+  int height = 0;
+  // The view's pixels, or fewer: a reduced frame (`reduction` > 1), which the
+  // encoder enlarges to width x height by pixel replication.
+  render::Image image;
   FrameTimings timings;
 };
 
