@@ -143,6 +143,11 @@ Status EglContext::makeCurrent() {
   return Status::ok();
 }
 
+void EglContext::releaseFromThread() {
+  eglMakeCurrent(m_display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+  eglReleaseThread();
+}
+
 EglContext::~EglContext() {
   if (m_display == nullptr) {
     return;

@@ -97,6 +97,10 @@ SceneRenderer::~SceneRenderer() {
   }
 }
 
+void SceneRenderer::releaseContext() {
+  m_impl->egl->releaseFromThread();
+}
+
 int SceneRenderer::capacityWidth() const {
   return m_impl->width;
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <future>
 
 #include <fmt/format.h>
 
@@ -87,21 +88,33 @@ Status Session::Worker::showStep(int step) {
 Status Session::Worker::start() {
   const auto& d = session.m_initial;
   CRACKVIS_RETURN_IF_ERROR(checkViewSize(d.view.width, d.view.height, session.m_limits));
+  width = d.view.width;
+  height = d.view.height;
+  // The GL context is made while the file opens: each takes about 100 ms
+  // of the first picture (EGL, llvmpipe and VTK's first frame; the file's
+  // lattice and first step through crackvis-data and the bond graph), and
+  // they need different cores, not one after the other.
+  auto making = std::async(std::launch::async, [w = width, h = height] {
+    auto created = render::SceneRenderer::create(w, h);
+    if (created) {
+      (*created)->releaseContext();
+    }
+    return created;
+  });
   auto opened = scene::ScenePipeline::open(d, session.m_opener, session.m_limits.cacheSteps);
+  // Waited for whatever the file did: the thread must not outlive the call.
+  const auto rendererWait = Clock::now();
+  auto created = making.get();
+  const double rendererMs = millisecondsSince(rendererWait);
   if (!opened) {
     return opened.status();
   }
   scene = std::move(opened).value();
   noteStepTimings();
-  width = d.view.width;
-  height = d.view.height;
-  const auto rendererStart = Clock::now();
-  auto created = render::SceneRenderer::create(width, height);
   if (!created) {
     return created.status();
   }
   renderer = std::move(created).value();
-  const double rendererMs = millisecondsSince(rendererStart);
   CRACKVIS_RETURN_IF_ERROR(buildScene(false));
   stepTimings.rendererMs = rendererMs;
   const dem::Lattice& lattice = scene->source().lattice();

@@ -22,6 +22,10 @@ class EglContext {
   ~EglContext();
 
   Status makeCurrent();
+  // Leaves the context current on no thread and frees this thread's EGL
+  // state: the thread that made a context hands it to another, which then
+  // makes it current (a context is current on one thread at a time).
+  void releaseFromThread();
   // Contexts alive in this process (a test checks that a closed session
   // leaves none behind).
   static int liveCount();

@@ -49,9 +49,13 @@ using SceneInput = scene::SceneInput;
 
 class SceneRenderer {
  public:
-  // An off-screen context that holds frames up to width x height.
+  // An off-screen context that holds frames up to width x height. setScene
+  // and renderFrame make it current on the calling thread first.
   static Result<std::unique_ptr<SceneRenderer>> create(int width, int height);
   ~SceneRenderer();
+  // Hands the context over: the thread that created the renderer calls this
+  // before another thread uses it.
+  void releaseContext();
 
   // Builds the scene's actors. The camera is kept across calls; it is set
   // from the description's camera (or reset to show everything) on the first
