@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <mutex>
 #include <numbers>
@@ -65,7 +64,8 @@ struct SceneRenderer::Impl {
   bool cameraSet = false;
   vtkSmartPointer<vtkPointSpriteSphereMapper> impostors;  // null unless particles are impostors
   ImpostorOptions impostorOptions;
-  std::unique_ptr<Overlays> overlays;  // scalar bars and annotations
+  std::unique_ptr<Overlays> overlays;   // scalar bars and annotations
+  vtkNew<vtkUnsignedCharArray> pixels;  // the last frame read back
   // The whole specimen at the step shown (every particle with its radius):
   // what a camera reset fits, whatever is hidden, clipped or thresholded.
   std::array<double, 6> specimenBounds{0, -1, 0, -1, 0, -1};
@@ -216,7 +216,9 @@ Status SceneRenderer::renderFrame(int width, int height, Image& out,
     impl.window->Render();
   }
   CRACKVIS_RETURN_IF_ERROR(vtkErrors.status(fmt::format("rendering a {}x{} frame", width, height)));
-  vtkNew<vtkUnsignedCharArray> pixels;
+  // The read-back buffer is the renderer's, kept from frame to frame (a
+  // 720p frame's 2.7 MB, fresh each frame, cost page faults every frame).
+  vtkUnsignedCharArray* pixels = impl.pixels;
   const std::size_t row = static_cast<std::size_t>(width) * 3;
   if (impl.window->GetPixelData(0, 0, width - 1, height - 1, 0, pixels, 0) != VTK_OK ||
       static_cast<std::size_t>(pixels->GetNumberOfValues()) !=
@@ -227,12 +229,14 @@ Status SceneRenderer::renderFrame(int width, int height, Image& out,
   out.width = width;
   out.height = height;
   // Capacity beyond the pixels: swscale reads RGB rows in whole SIMD blocks.
+  // The rows are appended, not written over zeros: a frame is never cleared
+  // first.
+  out.rgb.clear();
   out.rgb.reserve(row * static_cast<std::size_t>(height) + 256);
-  out.rgb.resize(row * static_cast<std::size_t>(height));
   // OpenGL's rows run bottom to top.
-  for (int y = 0; y < height; ++y) {
-    std::memcpy(out.rgb.data() + static_cast<std::size_t>(y) * row,
-                pixels->GetPointer(0) + static_cast<std::size_t>(height - 1 - y) * row, row);
+  for (int y = height - 1; y >= 0; --y) {
+    const std::uint8_t* first = pixels->GetPointer(0) + static_cast<std::size_t>(y) * row;
+    out.rgb.insert(out.rgb.end(), first, first + row);
   }
   return Status::ok();
 }
