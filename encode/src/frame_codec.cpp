@@ -204,21 +204,26 @@ Status FrameEncoder::Impl::convert(const RgbFrame& frame) {
 
 Status FrameEncoder::Impl::convertSmall(const RgbFrame& frame) {
   if (!small || small->width != frame.width || small->height != frame.height) {
-    small.reset(av_frame_alloc());
-    CRACKVIS_RETURN_IF_ERROR(allocated(small.get(), "av_frame_alloc"));
-    small->format = AV_PIX_FMT_YUV444P;
-    small->width = frame.width;
-    small->height = frame.height;
-    CRACKVIS_RETURN_IF_ERROR(check(av_frame_get_buffer(small.get(), 0), "av_frame_get_buffer"));
-    smallToYuv.reset(sws_getContext(frame.width, frame.height, AV_PIX_FMT_RGB24, frame.width,
-                                    frame.height, AV_PIX_FMT_YUV444P, SWS_POINT, nullptr, nullptr,
-                                    nullptr));
-    if (!smallToYuv) {
-      small.reset();
+    // Made aside and kept only once both exist: a failure leaves no half
+    // made frame for the next one of this size.
+    small.reset();
+    smallToYuv.reset();
+    av::Frame planes(av_frame_alloc());
+    CRACKVIS_RETURN_IF_ERROR(allocated(planes.get(), "av_frame_alloc"));
+    planes->format = AV_PIX_FMT_YUV444P;
+    planes->width = frame.width;
+    planes->height = frame.height;
+    CRACKVIS_RETURN_IF_ERROR(check(av_frame_get_buffer(planes.get(), 0), "av_frame_get_buffer"));
+    Scaler scaler(sws_getContext(frame.width, frame.height, AV_PIX_FMT_RGB24, frame.width,
+                                 frame.height, AV_PIX_FMT_YUV444P, SWS_POINT, nullptr, nullptr,
+                                 nullptr));
+    if (!scaler) {
       return failedPrecondition("sws_getContext: RGB24 to YUV444P not available");
     }
     replicationMap(frame.width, yuv->width, column);
     replicationMap(frame.height, yuv->height, row);
+    small = std::move(planes);
+    smallToYuv = std::move(scaler);
   }
   const std::uint8_t* source[1] = {frame.rgb.data()};
   const int stride[1] = {frame.width * 3};

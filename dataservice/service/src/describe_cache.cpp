@@ -16,7 +16,8 @@ std::optional<FileStamp> stampOf(const std::string& path) {
   return FileStamp{
       static_cast<std::uint64_t>(status.st_dev), static_cast<std::uint64_t>(status.st_ino),
       static_cast<std::uint64_t>(status.st_size),
-      static_cast<std::int64_t>(status.st_mtim.tv_sec) * 1'000'000'000 + status.st_mtim.tv_nsec};
+      static_cast<std::int64_t>(status.st_mtim.tv_sec) * 1'000'000'000 + status.st_mtim.tv_nsec,
+      static_cast<std::int64_t>(status.st_ctim.tv_sec) * 1'000'000'000 + status.st_ctim.tv_nsec};
 }
 
 bool settled(const FileStamp& stamp) {
@@ -30,8 +31,9 @@ bool settled(const FileStamp& stamp) {
 std::string revisionOf(const FileStamp& stamp) {
   // FNV-1a over the stamp's bytes, twice with different bases: 128 bits, so
   // that two versions of one file never share a name in practice.
-  const std::array<std::uint64_t, 4> fields{stamp.device, stamp.inode, stamp.size,
-                                            static_cast<std::uint64_t>(stamp.modifiedNanoseconds)};
+  const std::array<std::uint64_t, 5> fields{stamp.device, stamp.inode, stamp.size,
+                                            static_cast<std::uint64_t>(stamp.modifiedNanoseconds),
+                                            static_cast<std::uint64_t>(stamp.changedNanoseconds)};
   auto fnv = [&](std::uint64_t hash) {
     constexpr std::uint64_t kPrime = 0x100000001b3;
     for (const std::uint64_t field : fields) {

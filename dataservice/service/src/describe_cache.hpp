@@ -3,7 +3,7 @@
 // datasets (about 1,000 objects for 200 steps: tens of milliseconds), while
 // every view of the file asks for the same answer; a file is walked once
 // per change instead of once per view. A change is a new size, modification
-// time, inode or device; least recently used answers go first when the
+// time, status-change time, inode or device; least recently used answers go first when the
 // cache is full.
 #pragma once
 
@@ -22,6 +22,9 @@ struct FileStamp {
   std::uint64_t inode = 0;
   std::uint64_t size = 0;
   std::int64_t modifiedNanoseconds = 0;
+  // The inode's last change: a rewrite that restores the size and the
+  // modification time (cp -p, rsync --inplace, utimensat) still sets it.
+  std::int64_t changedNanoseconds = 0;
   friend bool operator==(const FileStamp&, const FileStamp&) = default;
 };
 

@@ -137,6 +137,12 @@ Result<std::unique_ptr<EglContext>> EglContext::create(int width, int height) {
 }
 
 Status EglContext::makeCurrent() {
+  // The client API is a per-thread setting, and a context may be made on
+  // one thread and used on another (a session's renderer is made while its
+  // file opens): the releases below then act on desktop OpenGL too.
+  if (eglBindAPI(EGL_OPENGL_API) != EGL_TRUE) {
+    return failedPrecondition(fmt::format("eglBindAPI(EGL_OPENGL_API): {}", eglErrorText()));
+  }
   if (eglMakeCurrent(m_display, m_surface, m_surface, m_context) != EGL_TRUE) {
     return failedPrecondition(fmt::format("eglMakeCurrent: {}", eglErrorText()));
   }
