@@ -732,6 +732,21 @@ std::vector<double> seriesOf(const v1::StepHistoryResponse& history, const std::
   return {};
 }
 
+// StepHistory of `file` with the crack numbers of `method`; the call must
+// succeed.
+v1::StepHistoryResponse crackHistory(v1::RenderService::Stub& stub, const std::string& file,
+                                     const std::string& method) {
+  grpc::ClientContext context;
+  v1::StepHistoryRequest request;
+  request.set_file(file);
+  request.set_cracks(method);
+  v1::StepHistoryResponse response;
+  const grpc::Status status = stub.StepHistory(&context, request, &response);
+  INFO(status.error_message());
+  REQUIRE(status.ok());
+  return response;
+}
+
 TEST_CASE("StepHistory with a crack method adds the crack's numbers per step",
           "[render][service][integration]") {
   // A planted through crack: at the last step the right half has moved one
@@ -742,14 +757,7 @@ TEST_CASE("StepHistory with a crack method adds the crack's numbers per step",
   auto stub = connect(*services.render);
   for (const char* method : {"local-voronoi", "cell-centre"}) {
     INFO(method);
-    grpc::ClientContext context;
-    v1::StepHistoryRequest request;
-    request.set_file(file);
-    request.set_cracks(method);
-    v1::StepHistoryResponse history;
-    const grpc::Status status = stub->StepHistory(&context, request, &history);
-    INFO(status.error_message());
-    REQUIRE(status.ok());
+    const v1::StepHistoryResponse history = crackHistory(*stub, file, method);
     const auto steps = static_cast<std::size_t>(history.broken_bonds_size());
     REQUIRE(steps == 9);  // the intact block and 8 steps
     for (const char* name :
@@ -842,15 +850,7 @@ TEST_CASE("StepHistory's crack numbers of a live file go on from the caller's la
   auto services = startServices();
   auto stub = connect(*services.render);
   auto history = [&](const std::string& file) {
-    grpc::ClientContext context;
-    v1::StepHistoryRequest request;
-    request.set_file(file);
-    request.set_cracks("local-voronoi");
-    v1::StepHistoryResponse response;
-    const grpc::Status status = stub->StepHistory(&context, request, &response);
-    INFO(status.error_message());
-    REQUIRE(status.ok());
-    return response;
+    return crackHistory(*stub, file, "local-voronoi");
   };
   // The whole file first: a user's kept run is of one file, and a call on
   // another file lets it go.
@@ -893,17 +893,7 @@ TEST_CASE("StepHistory keeps a finished file's crack numbers until the file chan
   };
   auto services = startServices();
   auto stub = connect(*services.render);
-  auto history = [&](const char* method) {
-    grpc::ClientContext context;
-    v1::StepHistoryRequest request;
-    request.set_file(file);
-    request.set_cracks(method);
-    v1::StepHistoryResponse response;
-    const grpc::Status status = stub->StepHistory(&context, request, &response);
-    INFO(status.error_message());
-    REQUIRE(status.ok());
-    return response;
-  };
+  auto history = [&](const char* method) { return crackHistory(*stub, file, method); };
   auto revision = [&] {
     grpc::ClientContext context;
     v1::DescribeRequest request;
