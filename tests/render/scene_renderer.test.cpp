@@ -10,6 +10,7 @@
 
 #include "cracks/crack_fixtures.hpp"
 #include "support/temp_dir.hpp"
+#include <crackvis/render/probe_scene.hpp>
 #include <crackvis/render/scene_renderer.hpp>
 #include <crackvis/render/sphere_occlusion.hpp>
 #include <crackvis/scene_model/scene_content.hpp>
@@ -474,6 +475,39 @@ TEST_CASE("a camera reset fits the whole specimen, whatever is hidden or clipped
   CHECK(dem::norm(fitted.position - whole.position) < 1e-9);
   // The specimen's centre, with the particles' radii.
   CHECK(dem::norm(whole.focalPoint - centre) < 0.6);
+}
+
+TEST_CASE("a rehearsal on the probe specimen leaves the next scene drawn as on a fresh renderer",
+          "[render][egl]") {
+  Scene scene;
+  scene.description.view.camera.reset();  // the first scene fits the camera to itself
+  scene.description.particles.visible = true;
+  scene.description.particles.colourBy = pipeline::ParticleColourBy::kDamage;
+  scene.description.annotations.show = true;
+  auto fresh = render::SceneRenderer::create(kWidth, kHeight);
+  auto rehearsed = render::SceneRenderer::create(kWidth, kHeight);
+  REQUIRE(fresh.isOk());
+  REQUIRE(rehearsed.isOk());
+  // Another description than the scene's: bonds, another colour-by, a camera.
+  pipeline::PipelineDescription other = scene.description;
+  other.bonds.show = pipeline::BondSelection::kAll;
+  other.cracks.colourBy = pipeline::CrackColourBy::kComponent;
+  other.view.camera = pipeline::CameraDescription{{40, 3, 2}, {1, 1, 1}, {0, 1, 0}, 20};
+  REQUIRE(render::rehearseOnProbe(**rehearsed, scene.description).isOk());
+  REQUIRE(render::rehearseOnProbe(**rehearsed, other).isOk());
+  render::Image expected;
+  render::Image got;
+  REQUIRE((*fresh)->setScene(scene.description, scene.input()).isOk());
+  REQUIRE((*fresh)->renderFrame(kWidth, kHeight, expected).isOk());
+  REQUIRE((*rehearsed)->setScene(scene.description, scene.input()).isOk());
+  REQUIRE((*rehearsed)->renderFrame(kWidth, kHeight, got).isOk());
+  CHECK(count(got, notBlack) > kWidth * kHeight / 10);
+  CHECK(got.rgb == expected.rgb);
+  const pipeline::CameraDescription a = (*fresh)->camera();
+  const pipeline::CameraDescription b = (*rehearsed)->camera();
+  CHECK(dem::norm(a.position - b.position) < 1e-12);
+  CHECK(dem::norm(a.focalPoint - b.focalPoint) < 1e-12);
+  CHECK(dem::norm(a.viewUp - b.viewUp) < 1e-12);
 }
 
 TEST_CASE("hidden particles are culled without changing the picture", "[render][egl]") {

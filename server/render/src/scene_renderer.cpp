@@ -247,6 +247,25 @@ Status SceneRenderer::render(const pipeline::PipelineDescription& d, const Scene
   return renderFrame(d.view.width, d.view.height, out);
 }
 
+Status SceneRenderer::rehearse(const pipeline::PipelineDescription& d, const SceneInput& input) {
+  Impl& impl = *m_impl;
+  CRACKVIS_RETURN_IF_ERROR(impl.egl->makeCurrent());
+  vtkNew<vtkCamera> camera;
+  camera->DeepCopy(impl.renderer->GetActiveCamera());
+  const bool cameraSet = impl.cameraSet;
+  Image frame;
+  Status drawn = setScene(d, input, true);
+  if (drawn) {
+    drawn = renderFrame(d.view.width, d.view.height, frame);
+  }
+  impl.renderer->RemoveAllViewProps();
+  impl.impostors = nullptr;
+  impl.renderer->GetActiveCamera()->DeepCopy(camera);
+  impl.cameraSet = cameraSet;
+  impl.specimenBounds = {0, -1, 0, -1, 0, -1};
+  return drawn;
+}
+
 void SceneRenderer::setImpostorOptions(const ImpostorOptions& options) {
   m_impl->impostorOptions = options;
   m_impl->applyImpostorOptions();

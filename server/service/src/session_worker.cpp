@@ -8,6 +8,7 @@
 
 #include "session_guard.hpp"
 #include <crackvis/common/log.hpp>
+#include <crackvis/render/probe_scene.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 
 namespace crackvis::service {
@@ -94,9 +95,15 @@ Status Session::Worker::start() {
   // of the first picture (EGL, llvmpipe and VTK's first frame; the file's
   // lattice and first step through crackvis-data and the bond graph), and
   // they need different cores, not one after the other.
-  auto making = std::async(std::launch::async, [w = width, h = height] {
-    auto created = render::SceneRenderer::create(w, h);
+  // The thread also draws the session's description once on a small
+  // specimen: the first frame then finds its shader programs compiled
+  // (about 30 ms in VTK and Mesa, and llvmpipe's code for them). A
+  // rehearsal that fails costs nothing but its time: the first frame
+  // compiles what it needs, as before.
+  auto making = std::async(std::launch::async, [d] {
+    auto created = render::SceneRenderer::create(d.view.width, d.view.height);
     if (created) {
+      (void)render::rehearseOnProbe(**created, d);
       (*created)->releaseContext();
     }
     return created;

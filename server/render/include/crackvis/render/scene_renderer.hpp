@@ -70,6 +70,13 @@ class SceneRenderer {
   // view size: a snapshot.
   Status render(const pipeline::PipelineDescription& description, const SceneInput& input,
                 Image& out);
+  // Draws `input` as `description` says, once, at the description's view
+  // size, and forgets it: the camera is as before and the next setScene
+  // replaces what it made, as the first one would. What stays is what a first frame otherwise
+  // waits for: the window's shader programs (VTK compiles them at an
+  // actor's first draw and keeps them per window, by their source) with
+  // llvmpipe's code for them, the frame buffers and the read-back buffer.
+  Status rehearse(const pipeline::PipelineDescription& description, const SceneInput& input);
 
   // kRotate: dx, dy drag the scene (trackball); kPan: the scene follows the
   // drag; kZoom: dx > 0 zooms in (factor exp(dx)); kReset: fit the scene.
