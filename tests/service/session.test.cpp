@@ -13,6 +13,7 @@
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/service/render_turns.hpp>
+#include <crackvis/service/renderer_shelf.hpp>
 #include <crackvis/service/session.hpp>
 
 namespace crackvis {
@@ -420,6 +421,66 @@ TEST_CASE("a drag that waited for its render turn goes on with reduced frames",
   REQUIRE(frame.lastEventId == id);
   CHECK(full == 0);
   session.detach(attachment);
+}
+
+TEST_CASE(
+    "a session's renderer serves the next session of its size, which sees nothing of the "
+    "first",
+    "[session][render]") {
+  const Fixture fixture;
+  auto shelf = std::make_shared<service::RendererShelf>();
+  auto own = Session::open("own", smallView(0), fixture.opener(-1), {});
+  REQUIRE(own);
+  const auto expected = (*own)->snapshot(0, 0);
+  REQUIRE(expected);
+  own->reset();
+  {
+    // A first user sees another step, the bonds, another colour-by, and
+    // turns the camera.
+    pipeline::PipelineDescription other = smallView(2);
+    other.bonds.show = pipeline::BondSelection::kAll;
+    other.particles.colourBy = pipeline::ParticleColourBy::kRadius;
+    auto first = Session::open("first", other, fixture.opener(-1), {}, nullptr, shelf);
+    REQUIRE(first);
+    (*first)->post({1, service::Clock::now(),
+                    service::CameraEvent{render::CameraMove::kRotate, 0.2, 0.1, true}});
+    const auto seen = (*first)->snapshot(0, 0);
+    REQUIRE(seen);
+    CHECK(seen->rgb != expected->rgb);
+    CHECK(shelf->size() == 0);
+  }
+  // Its renderer waits, its scene dropped; the next session of its size
+  // takes it and draws what a renderer of its own draws.
+  auto drawsOnTheKeptRenderer = [&](const std::string& id) {
+    REQUIRE(shelf->size() == 1);
+    auto session = Session::open(id, smallView(0), fixture.opener(-1), {}, nullptr, shelf);
+    REQUIRE(session);
+    CHECK(shelf->size() == 0);
+    const auto got = (*session)->snapshot(0, 0);
+    REQUIRE(got);
+    CHECK(got->rgb == expected->rgb);
+  };
+  drawsOnTheKeptRenderer("second");
+  REQUIRE(shelf->size() == 1);
+
+  // A session of another size makes its own and leaves the waiting one,
+  // which its own then replaces (the newest is kept).
+  pipeline::PipelineDescription larger = smallView(0);
+  larger.view.width = 80;
+  larger.view.height = 60;
+  auto third = Session::open("third", larger, fixture.opener(-1), {}, nullptr, shelf);
+  REQUIRE(third);
+  CHECK(shelf->size() == 1);
+  third->reset();
+  CHECK(shelf->size() == 1);
+
+  // A session whose file does not open shelves the renderer it made.
+  pipeline::PipelineDescription missing = smallView(0);
+  missing.file = "missing.h5";
+  auto failed = Session::open("failed", missing, fixture.opener(-1), {}, nullptr, shelf);
+  CHECK_FALSE(failed);
+  CHECK(shelf->size() == 1);
+  drawsOnTheKeptRenderer("again");
 }
 
 }  // namespace crackvis

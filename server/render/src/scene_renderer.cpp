@@ -258,12 +258,35 @@ Status SceneRenderer::rehearse(const pipeline::PipelineDescription& d, const Sce
   if (drawn) {
     drawn = renderFrame(d.view.width, d.view.height, frame);
   }
-  impl.renderer->RemoveAllViewProps();
-  impl.impostors = nullptr;
+  const ImpostorOptions options = impl.impostorOptions;
+  clearScene();
+  impl.impostorOptions = options;
   impl.renderer->GetActiveCamera()->DeepCopy(camera);
   impl.cameraSet = cameraSet;
-  impl.specimenBounds = {0, -1, 0, -1, 0, -1};
   return drawn;
+}
+
+void SceneRenderer::clearScene() {
+  Impl& impl = *m_impl;
+  if (!impl.egl->makeCurrent()) {
+    return;  // nothing can be released without the context; the next scene replaces it
+  }
+  impl.renderer->RemoveAllViewProps();
+  impl.impostors = nullptr;
+  impl.impostorOptions = {};
+  pipeline::PipelineDescription empty;
+  empty.view.width = impl.width;
+  empty.view.height = impl.height;
+  empty.view.scalarBar = false;
+  empty.annotations.show = false;
+  impl.overlays->setScene(empty, SceneInput{}, {});
+  vtkNew<vtkCamera> fresh;
+  impl.renderer->GetActiveCamera()->DeepCopy(fresh);
+  impl.cameraSet = false;
+  impl.specimenBounds = {0, -1, 0, -1, 0, -1};
+  // An empty frame, so that llvmpipe lets go of the last scene's binned
+  // geometry before the renderer waits for another session.
+  impl.window->Render();
 }
 
 void SceneRenderer::setImpostorOptions(const ImpostorOptions& options) {

@@ -110,6 +110,9 @@ int RenderServer::webPort() const {
 int RenderServer::sessionCount() const {
   return m_impl->service->sessions().count();
 }
+int RenderServer::keptRenderers() const {
+  return static_cast<int>(m_impl->service->renderers().size());
+}
 
 void RenderServer::shutdown(double graceSeconds) {
   m_impl->host->shutdown(graceSeconds);  // closes the sessions, so the web streams end too

@@ -336,7 +336,8 @@ Status RenderServiceImpl::openSession(const Caller& caller, const v1::OpenSessio
   }
   Result<std::shared_ptr<Session>> session = internalError("the session did not open");
   try {
-    session = Session::open(newSessionId(), *description, opener(caller), m_config.limits, m_turns);
+    session = Session::open(newSessionId(), *description, opener(caller), m_config.limits, m_turns,
+                            m_renderers);
   } catch (...) {
     m_sessions.add(nullptr, caller.name);  // the reservation is given back, then rethrown
     throw;

@@ -6,6 +6,8 @@
 // it. Private to the service library.
 #pragma once
 
+#include <algorithm>
+
 #include <grpcpp/grpcpp.h>
 
 #include "crack_history.hpp"
@@ -49,9 +51,18 @@ class RenderServiceImpl final : public v1::RenderService::Service {
         m_log(log),
         m_sessions(config.maxSessions, config.maxSessionsPerUser, config.sessionGraceSeconds),
         m_attaching(config.attachSeconds),
-        m_turns(std::make_shared<RenderTurns>(config.limits.rendersAtOnce)) {}
+        m_turns(std::make_shared<RenderTurns>(config.limits.rendersAtOnce)),
+        m_renderers(std::make_shared<RendererShelf>(
+            static_cast<std::size_t>(std::max(0, config.keptRenderers)))) {
+    if (config.keptRenderers > 0) {
+      // One renderer of the default view's size waits for the first session.
+      const pipeline::ViewDescription view;
+      m_renderers->stock(view.width, view.height);
+    }
+  }
 
   SessionRegistry& sessions() { return m_sessions; }
+  const RendererShelf& renderers() const { return *m_renderers; }
   // Drops the crack histories of live files no call has used for a while.
   void reapCrackHistories();
   AttachWatch& attaching() { return m_attaching; }
@@ -122,7 +133,8 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   AttachWatch m_attaching;
   CrackHistories m_crackHistories;
   FinishedSeries m_finishedSeries;
-  std::shared_ptr<RenderTurns> m_turns;  // shared by every session's frames
+  std::shared_ptr<RenderTurns> m_turns;        // shared by every session's frames
+  std::shared_ptr<RendererShelf> m_renderers;  // the renderers of ended sessions
 };
 
 }  // namespace crackvis::service

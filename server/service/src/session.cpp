@@ -23,20 +23,24 @@ const char* eventName(const SessionEvent& event) {
 }  // namespace
 
 Session::Session(std::string id, pipeline::PipelineDescription description, SourceOpener opener,
-                 SessionLimits limits, std::shared_ptr<RenderTurns> turns)
+                 SessionLimits limits, std::shared_ptr<RenderTurns> turns,
+                 std::shared_ptr<RendererShelf> renderers)
     : m_id(std::move(id)),
       m_limits(limits),
       m_initial(std::move(description)),
       m_opener(std::move(opener)),
       m_turns(std::move(turns)),
+      m_renderers(std::move(renderers)),
       m_detachedSince(Clock::now()) {}
 
 Result<std::shared_ptr<Session>> Session::open(std::string id,
                                                pipeline::PipelineDescription description,
                                                SourceOpener opener, SessionLimits limits,
-                                               std::shared_ptr<RenderTurns> turns) {
+                                               std::shared_ptr<RenderTurns> turns,
+                                               std::shared_ptr<RendererShelf> renderers) {
   std::shared_ptr<Session> session(new Session(std::move(id), std::move(description),
-                                               std::move(opener), limits, std::move(turns)));
+                                               std::move(opener), limits, std::move(turns),
+                                               std::move(renderers)));
   std::promise<Status> started;
   auto result = started.get_future();
   session->m_thread = std::thread(
@@ -76,6 +80,7 @@ void Session::runWorker(std::promise<Status>& started) {
   if (Status status = guarded(m_id, "the session loop", [&] { return serve(worker); }); !status) {
     fail(status);
   }
+  worker.shelveRenderer();
   // Tasks that will not run break their promises: a waiting snapshot
   // returns UNAVAILABLE.
   std::lock_guard lock(m_mutex);

@@ -100,8 +100,14 @@ Status Session::Worker::start() {
   // (about 30 ms in VTK and Mesa, and llvmpipe's code for them). A
   // rehearsal that fails costs nothing but its time: the first frame
   // compiles what it needs, as before.
-  auto making = std::async(std::launch::async, [d] {
-    auto created = render::SceneRenderer::create(d.view.width, d.view.height);
+  // A renderer left by an earlier session is taken when one of this size
+  // waits (RendererShelf).
+  auto making = std::async(std::launch::async, [d, shelf = session.m_renderers] {
+    Result<std::unique_ptr<render::SceneRenderer>> created =
+        shelf ? shelf->take(d.view.width, d.view.height) : nullptr;
+    if (!*created) {
+      created = render::SceneRenderer::create(d.view.width, d.view.height);
+    }
     if (created) {
       (void)render::rehearseOnProbe(**created, d);
       (*created)->releaseContext();
@@ -114,6 +120,10 @@ Status Session::Worker::start() {
   auto created = making.get();
   const double rendererMs = millisecondsSince(rendererWait);
   if (!opened) {
+    if (created) {
+      renderer = std::move(created).value();
+      shelveRenderer();
+    }
     return opened.status();
   }
   scene = std::move(opened).value();
@@ -134,6 +144,15 @@ Status Session::Worker::start() {
   following = scene->source().beingWritten() && d.step == -1;
   scheduleLook();
   return Status::ok();
+}
+
+void Session::Worker::shelveRenderer() {
+  if (!session.m_renderers || !renderer || !rendererSound) {
+    return;
+  }
+  renderer->clearScene();
+  renderer->releaseContext();
+  session.m_renderers->put(std::move(renderer));
 }
 
 void Session::Worker::scheduleLook() {
@@ -442,6 +461,7 @@ void Session::Worker::renderIfDirty() {
     start = Clock::now();
     frame.timings.turnWaitMs = millisecondsSince(asked);
     rendered = renderer->renderFrame(w, h, image, factor > 1);
+    rendererSound = rendererSound && rendered.isOk();
   }
   if (Status status = rendered; !status) {
     session.notify({lastEventId, status, std::nullopt});
@@ -501,7 +521,9 @@ Result<render::Image> Session::Worker::snapshot(int w, int h, int& step,
     }
   }
   render::Image image;
-  CRACKVIS_RETURN_IF_ERROR(renderer->renderFrame(w, h, image));
+  const Status rendered = renderer->renderFrame(w, h, image);
+  rendererSound = rendererSound && rendered.isOk();
+  CRACKVIS_RETURN_IF_ERROR(rendered);
   step = scene->step();
   dirty = true;  // the stream's next frame is rendered again at its own size
   return image;

@@ -29,7 +29,8 @@ struct Session::Worker {
   Session& session;
   std::unique_ptr<scene::ScenePipeline> scene;
   std::unique_ptr<render::SceneRenderer> renderer;
-  FrameTimings stepTimings;  // of the last step change (reported with the next frame)
+  bool rendererSound = true;  // no frame of it failed: it may serve another session
+  FrameTimings stepTimings;   // of the last step change (reported with the next frame)
 
   int width = 0;
   int height = 0;
@@ -76,6 +77,9 @@ struct Session::Worker {
   Status buildScene(bool resetCamera);
   Status showStep(int step);
   Status start();
+  // Puts a sound renderer on the server's shelf for the next session, its
+  // scene dropped (on this thread, whose the context is).
+  void shelveRenderer();
   // Looks for a live file's new steps when due; shows the last while
   // following, and tells the stream of every change.
   void follow();

@@ -77,6 +77,11 @@ class SceneRenderer {
   // actor's first draw and keeps them per window, by their source) with
   // llvmpipe's code for them, the frame buffers and the read-back buffer.
   Status rehearse(const pipeline::PipelineDescription& description, const SceneInput& input);
+  // Drops the scene (its actors, their arrays, the overlays) and resets the
+  // camera and the impostor options to a new renderer's, keeping the
+  // context, its frame buffers and its compiled shader programs: for a
+  // renderer handed on to another user's session.
+  void clearScene();
 
   // kRotate: dx, dy drag the scene (trackball); kPan: the scene follows the
   // drag; kZoom: dx > 0 zooms in (factor exp(dx)); kReset: fit the scene.

@@ -44,6 +44,9 @@ struct RenderServerConfig {
   int maxSessionsPerUser = 4;  // of maxSessions, for one configured user (none without users)
   double sessionGraceSeconds = 30.0;  // a session without a stream lives this long
   double attachSeconds = 10.0;        // a stream must attach to a session within this time
+  // Renderers of ended sessions kept for the next session of their view
+  // size, one stocked at start (RendererShelf; 0: every session makes its own).
+  int keptRenderers = 1;
   SessionLimits limits;
   std::string accessLog = "-";  // "-": stderr; "": none
   WebConfig web;
@@ -53,7 +56,7 @@ struct RenderServerConfig {
 // tls {ca, cert, key}, insecure, users_from (a crackvis-data configuration
 // whose users apply here too), data_service {target, ca, cert, key, token,
 // insecure, server_name}, limits {max_sessions, max_sessions_per_user,
-// session_grace_seconds, attach_seconds, refine_after_ms,
+// session_grace_seconds, attach_seconds, kept_renderers, refine_after_ms,
 // interactive_frame_ms, max_width, max_height, max_particles, max_bonds},
 // access_log, web {listen, root, origins}.
 // Unknown keys are errors; values are range-checked by
@@ -83,6 +86,9 @@ class RenderServer {
   std::string webAddress() const;
   int webPort() const;
   int sessionCount() const;
+  // Renderers of ended sessions (or stocked at start) waiting for the next
+  // session: each holds a GL context (RendererShelf).
+  int keptRenderers() const;
 
   // Closes every session, ends the streams, stops serving (NOT_SERVING
   // first) and waits for the calls to end; idempotent.

@@ -33,6 +33,7 @@
 #include <crackvis/scene/scene_pipeline.hpp>
 #include <crackvis/scene_model/scene_pick.hpp>
 #include <crackvis/service/render_turns.hpp>
+#include <crackvis/service/renderer_shelf.hpp>
 #include <crackvis/service/session_event.hpp>
 #include <crackvis/source/step_source.hpp>
 
@@ -113,10 +114,13 @@ class Session {
   // unknown file, OUT_OF_RANGE for a step outside the file, ...).
   // `turns`: the server's, shared by its sessions so that their frames take
   // turns (none: this session renders whenever it has a frame to draw).
+  // `renderers`: where the session takes its renderer from if one of its
+  // view size waits there, and puts it when it ends (none: it makes its own).
   static Result<std::shared_ptr<Session>> open(std::string id,
                                                pipeline::PipelineDescription description,
                                                SourceOpener opener, SessionLimits limits,
-                                               std::shared_ptr<RenderTurns> turns = nullptr);
+                                               std::shared_ptr<RenderTurns> turns = nullptr,
+                                               std::shared_ptr<RendererShelf> renderers = nullptr);
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
   ~Session();  // closes and joins the thread (the GL context goes with it)
@@ -167,7 +171,8 @@ class Session {
 
  private:
   Session(std::string id, pipeline::PipelineDescription description, SourceOpener opener,
-          SessionLimits limits, std::shared_ptr<RenderTurns> turns);
+          SessionLimits limits, std::shared_ptr<RenderTurns> turns,
+          std::shared_ptr<RendererShelf> renderers);
   struct Worker;  // the thread's state: scene pipeline, renderer, view
 
   void run(std::promise<Status> started);
@@ -183,6 +188,7 @@ class Session {
   pipeline::PipelineDescription m_initial;
   SourceOpener m_opener;
   std::shared_ptr<RenderTurns> m_turns;
+  std::shared_ptr<RendererShelf> m_renderers;
 
   mutable std::mutex m_mutex;
   std::condition_variable m_wake;      // the session thread

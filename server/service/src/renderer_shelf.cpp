@@ -1,0 +1,59 @@
+#include <crackvis/service/renderer_shelf.hpp>
+
+namespace crackvis::service {
+
+RendererShelf::~RendererShelf() {
+  if (m_stocking.joinable()) {
+    m_stocking.join();
+  }
+}
+
+void RendererShelf::stock(int width, int height) {
+  std::lock_guard lock(m_mutex);
+  if (m_stocking.joinable()) {
+    return;
+  }
+  m_stocking = std::thread([this, width, height] {
+    auto made = render::SceneRenderer::create(width, height);
+    if (made) {
+      (*made)->releaseContext();
+      put(std::move(made).value());
+    }
+  });
+}
+
+std::unique_ptr<render::SceneRenderer> RendererShelf::take(int width, int height) {
+  std::lock_guard lock(m_mutex);
+  for (auto it = m_kept.begin(); it != m_kept.end(); ++it) {
+    if ((*it)->capacityWidth() == width && (*it)->capacityHeight() == height) {
+      auto renderer = std::move(*it);
+      m_kept.erase(it);
+      return renderer;
+    }
+  }
+  return nullptr;
+}
+
+void RendererShelf::put(std::unique_ptr<render::SceneRenderer> renderer) {
+  std::unique_ptr<render::SceneRenderer> dropped;
+  {
+    std::lock_guard lock(m_mutex);
+    if (m_capacity == 0) {
+      dropped = std::move(renderer);
+    } else {
+      if (m_kept.size() == m_capacity) {
+        dropped = std::move(m_kept.front());
+        m_kept.erase(m_kept.begin());
+      }
+      m_kept.push_back(std::move(renderer));
+    }
+  }
+  dropped.reset();  // outside the lock: it makes its context current to go
+}
+
+std::size_t RendererShelf::size() const {
+  std::lock_guard lock(m_mutex);
+  return m_kept.size();
+}
+
+}  // namespace crackvis::service
