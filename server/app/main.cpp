@@ -271,8 +271,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--kept-renderers", config.keptRenderers,
                  "renderers (GL contexts, about 35 MB each at 1280x720) of ended sessions kept "
-                 "for the next session of the same view size, one made at start: a first "
-                 "picture 60-130 ms sooner (0: every session makes its own)")
+                 "for the next session of the same view size, one made at start, so that a "
+                 "first picture does not wait for making one (0: every session makes its own)")
       ->capture_default_str();
   app.add_option("--refine-after-ms", config.limits.refineAfterMs,
                  "full-resolution frame this long after the last event")

@@ -170,10 +170,10 @@ TEST_CASE("crackvis-render refuses out-of-range limits from flags and file at st
        "--renders-at-once must be between 0 and 256, got 1000 (limits.renders_at_once in the "
        "configuration file)"},
       {"negative kept renderers", with({"--kept-renderers", "-1"}), "",
-       "--kept-renderers must be between 0 and 256, got -1 (limits.kept_renderers in the "
+       "--kept-renderers must be between 0 and 16, got -1 (limits.kept_renderers in the "
        "configuration file)"},
       {"too many kept renderers in the file", base, R"({"limits": {"kept_renderers": 300}})",
-       "--kept-renderers must be between 0 and 256, got 300 (limits.kept_renderers in the "
+       "--kept-renderers must be between 0 and 16, got 300 (limits.kept_renderers in the "
        "configuration file)"},
       {"listen address",
        {"--insecure", "--listen", "[::1]50052", "--data-server", "127.0.0.1:1", "--data-insecure"},

@@ -473,6 +473,11 @@ TEST_CASE(
   CHECK(shelf->size() == 1);
   third->reset();
   CHECK(shelf->size() == 1);
+  auto fourth = Session::open("fourth", larger, fixture.opener(-1), {}, nullptr, shelf);
+  REQUIRE(fourth);
+  CHECK(shelf->size() == 0);  // the one kept was the 80x60 one
+  fourth->reset();
+  CHECK(shelf->size() == 1);
 
   // A session whose file does not open shelves the renderer it made.
   pipeline::PipelineDescription missing = smallView(0);

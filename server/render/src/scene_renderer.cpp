@@ -259,18 +259,17 @@ Status SceneRenderer::rehearse(const pipeline::PipelineDescription& d, const Sce
     drawn = renderFrame(d.view.width, d.view.height, frame);
   }
   const ImpostorOptions options = impl.impostorOptions;
-  clearScene();
+  const Status cleared = clearScene();
   impl.impostorOptions = options;
   impl.renderer->GetActiveCamera()->DeepCopy(camera);
   impl.cameraSet = cameraSet;
-  return drawn;
+  return drawn ? cleared : drawn;
 }
 
-void SceneRenderer::clearScene() {
+Status SceneRenderer::clearScene() {
   Impl& impl = *m_impl;
-  if (!impl.egl->makeCurrent()) {
-    return;  // nothing can be released without the context; the next scene replaces it
-  }
+  CRACKVIS_RETURN_IF_ERROR(impl.egl->makeCurrent());
+  const VtkErrorScope vtkErrors;
   impl.renderer->RemoveAllViewProps();
   impl.impostors = nullptr;
   impl.impostorOptions = {};
@@ -284,9 +283,19 @@ void SceneRenderer::clearScene() {
   impl.renderer->GetActiveCamera()->DeepCopy(fresh);
   impl.cameraSet = false;
   impl.specimenBounds = {0, -1, 0, -1, 0, -1};
-  // An empty frame, so that llvmpipe lets go of the last scene's binned
-  // geometry before the renderer waits for another session.
+  // The last frame read back is overwritten, not freed: its pages stay
+  // mapped for the next frame.
+  std::fill_n(impl.pixels->GetPointer(0), impl.pixels->GetNumberOfValues(), std::uint8_t{0});
+  // An empty frame at full size, as a new renderer's: the frame buffers hold
+  // the background only, and llvmpipe lets go of the last scene's binned
+  // geometry. A window left inside a Render (an exception through one) no
+  // longer draws at all: such a renderer is refused.
+  if (impl.window->CheckInRenderStatus()) {
+    return internalError("the renderer was left inside a frame");
+  }
+  impl.window->SetSize(impl.width, impl.height);
   impl.window->Render();
+  return vtkErrors.status("clearing the scene");
 }
 
 void SceneRenderer::setImpostorOptions(const ImpostorOptions& options) {

@@ -140,7 +140,7 @@ Status validateRenderServerConfig(const RenderServerConfig& config) {
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--attach-seconds", "limits.attach_seconds"},
                                         config.attachSeconds, 0.1, 3600.0));
   CRACKVIS_RETURN_IF_ERROR(
-      checkSetting({"--kept-renderers", "limits.kept_renderers"}, config.keptRenderers, 0, 256));
+      checkSetting({"--kept-renderers", "limits.kept_renderers"}, config.keptRenderers, 0, 16));
   const SessionLimits& limits = config.limits;
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--refine-after-ms", "limits.refine_after_ms"},
                                         limits.refineAfterMs, 0.0, 5000.0));

@@ -111,7 +111,8 @@ int RenderServer::sessionCount() const {
   return m_impl->service->sessions().count();
 }
 int RenderServer::keptRenderers() const {
-  return static_cast<int>(m_impl->service->renderers().size());
+  const RendererShelf* shelf = m_impl->service->renderers();
+  return shelf ? static_cast<int>(shelf->size()) : 0;
 }
 
 void RenderServer::shutdown(double graceSeconds) {

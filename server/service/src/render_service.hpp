@@ -52,9 +52,10 @@ class RenderServiceImpl final : public v1::RenderService::Service {
         m_sessions(config.maxSessions, config.maxSessionsPerUser, config.sessionGraceSeconds),
         m_attaching(config.attachSeconds),
         m_turns(std::make_shared<RenderTurns>(config.limits.rendersAtOnce)),
-        m_renderers(std::make_shared<RendererShelf>(
-            static_cast<std::size_t>(std::max(0, config.keptRenderers)))) {
-    if (config.keptRenderers > 0) {
+        m_renderers(config.keptRenderers > 0 ? std::make_shared<RendererShelf>(
+                                                   static_cast<std::size_t>(config.keptRenderers))
+                                             : nullptr) {
+    if (m_renderers) {
       // One renderer of the default view's size waits for the first session.
       const pipeline::ViewDescription view;
       m_renderers->stock(view.width, view.height);
@@ -62,7 +63,8 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   }
 
   SessionRegistry& sessions() { return m_sessions; }
-  const RendererShelf& renderers() const { return *m_renderers; }
+  // Null with --kept-renderers 0.
+  const RendererShelf* renderers() const { return m_renderers.get(); }
   // Drops the crack histories of live files no call has used for a while.
   void reapCrackHistories();
   AttachWatch& attaching() { return m_attaching; }
@@ -134,7 +136,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   CrackHistories m_crackHistories;
   FinishedSeries m_finishedSeries;
   std::shared_ptr<RenderTurns> m_turns;        // shared by every session's frames
-  std::shared_ptr<RendererShelf> m_renderers;  // the renderers of ended sessions
+  std::shared_ptr<RendererShelf> m_renderers;  // the renderers of ended sessions; may be null
 };
 
 }  // namespace crackvis::service

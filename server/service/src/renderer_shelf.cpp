@@ -14,10 +14,15 @@ void RendererShelf::stock(int width, int height) {
     return;
   }
   m_stocking = std::thread([this, width, height] {
-    auto made = render::SceneRenderer::create(width, height);
-    if (made) {
-      (*made)->releaseContext();
-      put(std::move(made).value());
+    // Nothing stocked, whatever went wrong: the first session makes its own
+    // and reports why if it cannot.
+    try {
+      auto made = render::SceneRenderer::create(width, height);
+      if (made) {
+        (*made)->releaseContext();
+        put(std::move(made).value());
+      }
+    } catch (...) {
     }
   });
 }

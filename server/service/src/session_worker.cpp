@@ -109,7 +109,15 @@ Status Session::Worker::start() {
       created = render::SceneRenderer::create(d.view.width, d.view.height);
     }
     if (created) {
-      (void)render::rehearseOnProbe(**created, d);
+      try {
+        (void)render::rehearseOnProbe(**created, d);
+      } catch (...) {
+        // A renderer that a throw left inside a frame draws nothing more.
+        created->reset();
+        created = render::SceneRenderer::create(d.view.width, d.view.height);
+      }
+    }
+    if (created) {
       (*created)->releaseContext();
     }
     return created;
@@ -150,9 +158,24 @@ void Session::Worker::shelveRenderer() {
   if (!session.m_renderers || !renderer || !rendererSound) {
     return;
   }
-  renderer->clearScene();
-  renderer->releaseContext();
-  session.m_renderers->put(std::move(renderer));
+  // One that cannot be cleared, or a throw on the way, and the renderer goes
+  // with the worker instead.
+  (void)guarded(session.m_id, "keeping its renderer", [&] {
+    CRACKVIS_RETURN_IF_ERROR(renderer->clearScene());
+    renderer->releaseContext();
+    session.m_renderers->put(std::move(renderer));
+    return Status::ok();
+  });
+}
+
+Status Session::Worker::drawFrame(int w, int h, render::Image& image, bool interactive) {
+  // Unsound until the frame has come back well: a throw out of it leaves
+  // the renderer unfit for another session.
+  const bool sound = rendererSound;
+  rendererSound = false;
+  const Status drawn = renderer->renderFrame(w, h, image, interactive);
+  rendererSound = sound && drawn.isOk();
+  return drawn;
 }
 
 void Session::Worker::scheduleLook() {
@@ -460,8 +483,7 @@ void Session::Worker::renderIfDirty() {
     const RenderTurns::Turn turn = session.m_turns ? session.m_turns->take() : RenderTurns::Turn();
     start = Clock::now();
     frame.timings.turnWaitMs = millisecondsSince(asked);
-    rendered = renderer->renderFrame(w, h, image, factor > 1);
-    rendererSound = rendererSound && rendered.isOk();
+    rendered = drawFrame(w, h, image, factor > 1);
   }
   if (Status status = rendered; !status) {
     session.notify({lastEventId, status, std::nullopt});
@@ -521,9 +543,7 @@ Result<render::Image> Session::Worker::snapshot(int w, int h, int& step,
     }
   }
   render::Image image;
-  const Status rendered = renderer->renderFrame(w, h, image);
-  rendererSound = rendererSound && rendered.isOk();
-  CRACKVIS_RETURN_IF_ERROR(rendered);
+  CRACKVIS_RETURN_IF_ERROR(drawFrame(w, h, image, false));
   step = scene->step();
   dirty = true;  // the stream's next frame is rendered again at its own size
   return image;

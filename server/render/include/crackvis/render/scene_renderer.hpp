@@ -80,8 +80,11 @@ class SceneRenderer {
   // Drops the scene (its actors, their arrays, the overlays) and resets the
   // camera and the impostor options to a new renderer's, keeping the
   // context, its frame buffers and its compiled shader programs: for a
-  // renderer handed on to another user's session.
-  void clearScene();
+  // renderer handed on to another user's session. The read-back buffer is
+  // zeroed and an empty frame drawn at full size, so neither holds the last
+  // picture. An error (no context, VTK's) means the renderer must not be
+  // handed on.
+  Status clearScene();
 
   // kRotate: dx, dy drag the scene (trackball); kPan: the scene follows the
   // drag; kZoom: dx > 0 zooms in (factor exp(dx)); kReset: fit the scene.

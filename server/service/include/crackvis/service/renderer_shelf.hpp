@@ -9,7 +9,8 @@
 //
 // Only renderers none of whose frames failed come back, so a context that
 // failed is not handed on. At most `capacity` wait here: each holds its
-// frame buffers (about 15 MB at 1280x720).
+// context and frame buffers (crackvis-render idle: 181 MB resident with one
+// kept at 1280x720, 147 MB without).
 #pragma once
 
 #include <cstddef>
