@@ -12,7 +12,6 @@ namespace crackvis::cracks {
 namespace {
 
 using dem::axisCoordinate;
-using dem::longestAxis;
 
 // Calls visit(k, ids, count) for each primitive in VTK order: vertices,
 // lines, polygons, volume cells.
@@ -115,7 +114,7 @@ void holdCellNeighbourhood(const Triangulation& triangulation, std::span<const d
 Piece partitionPiece(std::span<const Vec3> reference, std::span<const dem::Bond> bonds, int piece,
                      int pieces, double ghostWidth, const Triangulation* triangulation) {
   const std::size_t n = reference.size();
-  const int axis = longestAxis(dem::boundingBox(reference));
+  const int axis = dem::sliceAxis(reference);
   // Equal counts per slab: the particles in order along the axis (index
   // breaks ties, so every piece draws the same lines).
   std::vector<dem::ParticleIndex> order(n);

@@ -14,6 +14,43 @@ int longestAxis(const Bounds& box) {
   return size.y >= size.z ? 1 : 2;
 }
 
+namespace {
+
+// How often the coordinate along `axis` falls from one particle to the next.
+std::size_t descents(std::span<const Vec3> positions, int axis) {
+  std::size_t count = 0;
+  for (std::size_t i = 1; i < positions.size(); ++i) {
+    if (axisCoordinate(positions[i], axis) < axisCoordinate(positions[i - 1], axis)) {
+      ++count;
+    }
+  }
+  return count;
+}
+
+double extent(const Bounds& box, int axis) {
+  return axisCoordinate(box.hi, axis) - axisCoordinate(box.lo, axis);
+}
+
+}  // namespace
+
+int sliceAxis(std::span<const Vec3> reference) {
+  const Bounds box = boundingBox(reference);
+  const int longest = longestAxis(box);
+  const double reach = (1.0 - kSliceAxisTolerance) * extent(box, longest);
+  int best = -1;
+  std::size_t fewest = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (extent(box, axis) >= reach && extent(box, axis) > 0.0) {
+      const std::size_t count = descents(reference, axis);
+      if (best < 0 || count < fewest) {
+        best = axis;
+        fewest = count;
+      }
+    }
+  }
+  return best < 0 ? longest : best;
+}
+
 const char* decompositionName(CellDecomposition decomposition) {
   switch (decomposition) {
     case CellDecomposition::kLattice:
@@ -64,7 +101,7 @@ SpatialIndex buildSpatialIndex(std::span<const Vec3> reference, const Lattice& l
   SpatialIndex index;
   SpatialIndexInfo& info = index.info;
   info.box = boundingBox(reference);
-  info.axis = longestAxis(info.box);
+  info.axis = sliceAxis(reference);
   info.largestRadius = lattice.radius.empty()
                            ? 0.0
                            : *std::max_element(lattice.radius.begin(), lattice.radius.end());

@@ -435,6 +435,38 @@ TEST_CASE("a piece read through the file's spatial index is the piece cut from t
   }
 }
 
+TEST_CASE("a cube written x fastest is cut across z: each piece is one run of the file's rows",
+          "[cracks][vtk][pieces][index]") {
+  // Cut across x, every piece would hold part of every row of particles,
+  // and each rank would read nearly the whole step (issue 34 point 4).
+  testing::TempDir dir;
+  dem::BlockSpec spec;
+  spec.sites = {13, 13, 13};
+  auto block = dem::generateBlock(spec);
+  REQUIRE(block.isOk());
+  const std::string path = dir.file("cube.h5");
+  writeSpecimen(block->lattice, block->positions, path, true);
+  auto file = dem::DemFileReader::open(path);
+  REQUIRE(file.isOk());
+  const int pieces = GENERATE(2, 3);
+  INFO(pieces << " pieces");
+  for (int p = 0; p < pieces; ++p) {
+    auto read = cracks::readIndexedPiece(*file, p, pieces, 1.0);
+    REQUIRE(read.isOk());
+    REQUIRE(read->has_value());
+    const cracks::IndexedPiece& piece = **read;
+    CHECK(piece.index.axis == 2);
+    const std::vector<dem::ParticleIndex>& held = piece.part.particles;
+    REQUIRE(held.size() > 1);
+    CHECK(held.size() < block->positions.size());
+    CHECK(held.back() - held.front() + 1 == static_cast<dem::ParticleIndex>(held.size()));
+    const cracks::Piece cut =
+        cracks::partitionPiece(block->positions, block->lattice.bonds, p, pieces,
+                               cracks::longestBond(block->positions, block->lattice.bonds));
+    CHECK(cut.particles == held);
+  }
+}
+
 TEST_CASE("a triangulated packing's pieces are not read through the index, and say why not",
           "[cracks][vtk][pieces][index]") {
   testing::TempDir dir;

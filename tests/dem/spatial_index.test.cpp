@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <numeric>
 #include <random>
+#include <tuple>
 
 #include <catch2/catch.hpp>
 
@@ -12,6 +13,7 @@
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/dem/dem_file.hpp>
+#include <crackvis/dem/lattice_generator.hpp>
 #include <crackvis/dem/spatial_index.hpp>
 
 using namespace crackvis;
@@ -80,7 +82,7 @@ TEST_CASE("the writer stores the first step's spatial index: the order along the
   REQUIRE(info->has_value());
   const std::vector<Vec3>& reference = sample.steps[0].positions;
   const Bounds box = boundingBox(reference);
-  CHECK((*info)->axis == longestAxis(box));
+  CHECK((*info)->axis == sliceAxis(reference));
   CHECK((*info)->axis == 0);  // the sample is stretched along x
   CHECK((*info)->box.lo.x == box.lo.x);
   CHECK((*info)->box.hi.z == box.hi.z);
@@ -123,6 +125,58 @@ TEST_CASE("the writer stores the first step's spatial index: the order along the
       CHECK(sample.lattice.bonds[static_cast<std::size_t>(b)].first == static_cast<int>(i));
     }
   }
+}
+
+TEST_CASE(
+    "the slice axis is the longest, and among near ties the one the file's order runs slowest "
+    "along",
+    "[dem][index]") {
+  BlockSpec spec;
+  spec.sites = {9, 9, 9};  // a cube, written x fastest and z slowest
+  auto cube = generateBlock(spec);
+  REQUIRE(cube.isOk());
+  const std::vector<Vec3>& written = cube->positions;
+  CHECK(longestAxis(boundingBox(written)) == 0);
+  CHECK(sliceAxis(written) == 2);
+
+  // The same cube written z fastest, x slowest: cut across x.
+  std::vector<Vec3> zFastest = written;
+  std::sort(zFastest.begin(), zFastest.end(), [](const Vec3& a, const Vec3& b) {
+    return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+  });
+  CHECK(sliceAxis(zFastest) == 0);
+  // y slowest, then z, then x.
+  std::vector<Vec3> ySlowest = written;
+  std::sort(ySlowest.begin(), ySlowest.end(), [](const Vec3& a, const Vec3& b) {
+    return std::tie(a.y, a.z, a.x) < std::tie(b.y, b.z, b.x);
+  });
+  CHECK(sliceAxis(ySlowest) == 1);
+
+  // An axis clearly the longest wins whatever the order: a slab's ghost
+  // layer is then the thinnest.
+  spec.sites = {12, 9, 9};
+  auto stretched = generateBlock(spec);
+  REQUIRE(stretched.isOk());
+  CHECK(sliceAxis(stretched->positions) == 0);
+  // Within the tolerance, the order decides.
+  std::vector<Vec3> squeezed = written;
+  for (Vec3& p : squeezed) {
+    p.z *= 1.0 - 0.5 * kSliceAxisTolerance;
+  }
+  CHECK(sliceAxis(squeezed) == 2);
+  for (Vec3& p : squeezed) {
+    p.z *= 1.0 - 2.0 * kSliceAxisTolerance;
+  }
+  CHECK(sliceAxis(squeezed) == 1);  // of x and y, the order runs slower along y
+
+  // A plane (2D) is never cut across its empty axis; nothing to cut is x.
+  spec.kind = LatticeKind::kTriangular;
+  spec.sites = {9, 9, 1};
+  auto plane = generateBlock(spec);
+  REQUIRE(plane.isOk());
+  CHECK(sliceAxis(plane->positions) != 2);
+  CHECK(sliceAxis(std::vector<Vec3>{}) == 0);
+  CHECK(sliceAxis(std::vector<Vec3>{{1.0, 2.0, 3.0}}) == 0);
 }
 
 TEST_CASE("files without an index, or with unsorted bonds, say so and still read whole",

@@ -96,7 +96,7 @@ run() {
   local tag=$1 ranks=$2 input=$3
   local timed=(/usr/bin/time -a -o "$out/$tag.rss" -f "%M %e")
   rm -f "$out/$tag.rss"
-  local script=("$here/mpi_ranks.py" "$plugin" "$input" "$first" "$count" "$size" "$out/$tag.json")
+  local script=("$here/mpi_ranks.py" "$plugin" "$input" "first=$first" "$count" "$size" "$out/$tag.json")
   if ((ranks == 1)); then
     "${timed[@]}" "$pvbatch" --no-mpi "${script[@]}" >"$out/$tag.log" 2>&1
   else

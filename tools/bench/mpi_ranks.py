@@ -8,7 +8,10 @@ frame, then each following step of COUNT: update (read + extract), frame
 plugin and renders an empty view: the fixed part of a rank's memory.
 Writes the timings (ms) as JSON to OUT.
 
-    pvbatch mpi_ranks.py PLUGIN FILE FIRST COUNT WIDTHxHEIGHT OUT
+    pvbatch mpi_ranks.py PLUGIN FILE first=FIRST COUNT WIDTHxHEIGHT OUT
+
+FIRST comes as first=FIRST: pvbatch takes a bare negative number of two
+digits (-10) for one of its own options.
 """
 import json
 import sys
@@ -19,7 +22,7 @@ from paraview.simple import (CreateRenderView, GetActiveCamera, LoadPlugin, Rend
 from paraview import servermanager
 
 plugin, path, first, count, size, out = sys.argv[1:7]
-first, count = int(first), int(count)
+first, count = int(first.removeprefix("first=")), int(count)
 width, height = (int(v) for v in size.split("x"))
 LoadPlugin(plugin, ns=globals())
 view = CreateRenderView()

@@ -449,7 +449,7 @@ Status cutPieceFromWholeSet(DemReaderCache& cache, int piece, int pieces, double
   cache.pieceBreakSteps = pick(cache.breakSteps, part.bonds);
   cache.pieceReference = pick(cache.reference, part.particles);
   cache.box = dem::boundingBox(cache.reference);
-  cache.axis = dem::longestAxis(cache.box);
+  cache.axis = dem::sliceAxis(cache.reference);
   const auto& radius = whole.radius;
   cache.largestRadius = radius.empty() ? 0.0 : *std::max_element(radius.begin(), radius.end());
   if (cache.triangulation) {

@@ -37,7 +37,8 @@ struct Piece {
 // The longest reference bond (the unit of the default ghost width).
 using dem::longestBond;
 
-// Piece `piece` of `pieces` (0 <= piece < pieces); ghostWidth in metres.
+// Piece `piece` of `pieces` (0 <= piece < pieces): a slab across
+// dem::sliceAxis(reference) with equal particle counts; ghostWidth in metres.
 // With the whole set's triangulation (a packing that is no lattice), the
 // ghost layer also holds every node of a cell that touches the slab and
 // ghost layer, and those nodes' bonded neighbours: at the specimen's surface

@@ -1,11 +1,11 @@
 // The spatial index of a crackvis-dem file (/index, v1.3): the particles in
-// order along the reference configuration's longest axis, with what a reader
+// order along the reference configuration's slice axis (sliceAxis), with what a reader
 // of one slab of the specimen (an MPI rank of the ParaView plugin) needs to
 // find its particles and bonds without reading every particle
 // (docs/data-format.md, "The spatial index").
 //
 // The order is the one cracks::partitionPiece cuts: by the coordinate along
-// the longest axis of the reference box, ties by index. So slab k of R holds
+// the slice axis, ties by index. So slab k of R holds
 // order[k N / R, (k + 1) N / R), and its ghost layer, every particle within a
 // width of the slab, is the range of order around it that a binary search of
 // `coordinate` finds.
@@ -40,7 +40,7 @@ const char* decompositionName(CellDecomposition decomposition);
 
 // The index's scalar part (attributes of /index).
 struct SpatialIndexInfo {
-  int axis = 0;  // 0 x, 1 y, 2 z: the longest axis of the reference box
+  int axis = 0;  // 0 x, 1 y, 2 z: the slice axis of the reference configuration
   Bounds box;    // of the reference configuration (step 0)
   double largestRadius = 0.0;
   double longestBond = 0.0;  // the longest bond's length in the reference configuration
@@ -61,6 +61,18 @@ struct SpatialIndex {
 
 // The longest axis of a box: x, then y, then z on ties.
 int longestAxis(const Bounds& box);
+// The axis a specimen is cut across into slabs (the spatial index's, and
+// cracks::partitionPiece's): the longest of the reference box, since slabs
+// across it carry the thinnest ghost layers. Among the axes within
+// kSliceAxisTolerance of the longest, the one along which the particles'
+// order runs slowest (the fewest descents of the coordinate from one
+// particle to the next; x, then y, then z on ties): a cube written x fastest
+// is cut across z, and a slab is then one run of rows of every per-particle
+// array, not part of every row (issue 34 point 4).
+int sliceAxis(std::span<const Vec3> reference);
+// Axes this close to the longest (relative) count as equally long: a slab's
+// ghost layer grows by as much, a read by less than a row per row.
+inline constexpr double kSliceAxisTolerance = 0.05;
 // A point's coordinate along an axis (0 x, 1 y, 2 z).
 inline double axisCoordinate(const Vec3& p, int axis) {
   return axis == 0 ? p.x : (axis == 1 ? p.y : p.z);
