@@ -13,6 +13,7 @@
 #include <grpcpp/grpcpp.h>
 #include <hdf5.h>
 
+#include <crackvis/common/huge_pages.hpp>
 #include <crackvis/common/log.hpp>
 #include <crackvis/common/service_manager.hpp>
 #include <crackvis/common/termination.hpp>
@@ -207,6 +208,8 @@ int serve(const ServerConfig& config) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Before anything else: tunables are read when a process starts.
+  crackvis::reexecWithHugePages(argv);
   CLI::App app{
       "crackvis-data: partial reads of HDF5 DEM results over gRPC with mutual TLS.\n"
       "Serves the files under a data root: ListFiles, Describe (a file's whole tree in one\n"

@@ -16,6 +16,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include <crackvis/common/data_root.hpp>
+#include <crackvis/common/huge_pages.hpp>
 #include <crackvis/common/log.hpp>
 #include <crackvis/common/service_manager.hpp>
 #include <crackvis/common/termination.hpp>
@@ -207,6 +208,8 @@ static std::string configPath(int argc, char** argv) {
 }
 
 int main(int argc, char** argv) {
+  // Before anything else: tunables are read when a process starts.
+  crackvis::reexecWithHugePages(argv);
   CLI::App app{
       "crackvis-render: remote rendering of DEM data and crack surfaces over gRPC with mutual\n"
       "TLS. Sessions assemble a pipeline description (pipeline-schemas/pipeline.xsd), read\n"

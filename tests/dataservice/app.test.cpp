@@ -1,10 +1,13 @@
 // crackvis-data as a user runs it: a child process with flags or a config
 // file, on a loopback port the OS chooses, stopped with SIGTERM; and the
 // one-line errors it gives instead of starting.
+#include <algorithm>
 #include <csignal>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 #include <thread>
+#include <vector>
 
 #include <catch2/catch.hpp>
 #include <fcntl.h>
@@ -30,7 +33,8 @@ std::string readText(const std::string& path) {
 // A crackvis-data child with stdout and stderr in files; SIGTERM at the end.
 class ServerProcess {
  public:
-  explicit ServerProcess(std::vector<std::string> args) {
+  // `environment`: the child's, default this process's.
+  explicit ServerProcess(std::vector<std::string> args, char** environment = environ) {
     args.insert(args.begin(), CRACKVIS_DATA);
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
@@ -44,7 +48,7 @@ class ServerProcess {
       argv.push_back(arg.data());
     }
     argv.push_back(nullptr);
-    const int spawned = posix_spawn(&m_pid, argv[0], &actions, nullptr, argv.data(), environ);
+    const int spawned = posix_spawn(&m_pid, argv[0], &actions, nullptr, argv.data(), environment);
     posix_spawn_file_actions_destroy(&actions);
     REQUIRE(spawned == 0);
   }
@@ -55,6 +59,7 @@ class ServerProcess {
     }
   }
 
+  pid_t pid() const { return m_pid; }
   std::string out() const { return m_dir.file("stdout"); }
   std::string err() const { return m_dir.file("stderr"); }
 
@@ -173,6 +178,60 @@ TEST_CASE("crackvis-data --insecure warns and serves loopback", "[dataservice][i
   auto client = connect(options);
   CHECK(client.checkHealth().isOk());
   CHECK(server.terminate() == 0);
+}
+
+TEST_CASE("crackvis-data re-executes itself once with glibc's huge pages where THP is on request",
+          "[dataservice][integration][huge-pages]") {
+  const bool onRequest =
+      readText("/sys/kernel/mm/transparent_hugepage/enabled").find("[madvise]") !=
+      std::string::npos;
+  INFO("THP " << (onRequest ? "on request (madvise)" : "always or never"));
+  // This process's environment without the variables the cases set.
+  std::vector<std::string> base;
+  for (char** v = environ; *v != nullptr; ++v) {
+    const std::string_view variable = *v;
+    if (!variable.starts_with("GLIBC_TUNABLES=") && !variable.starts_with("CRACKVIS_HUGE_PAGES=")) {
+      base.emplace_back(variable);
+    }
+  }
+  struct Case {
+    std::string extra;  // a variable added to the child's environment
+    bool hugePages;     // whether the running server asked for them
+  };
+  for (const Case& c : std::vector<Case>{{"", onRequest},
+                                         {"GLIBC_TUNABLES=glibc.malloc.arena_max=4", onRequest},
+                                         {"GLIBC_TUNABLES=glibc.malloc.hugetlb=0", false},
+                                         {"CRACKVIS_HUGE_PAGES=0", false}}) {
+    std::vector<std::string> variables = base;
+    if (!c.extra.empty()) {
+      variables.push_back(c.extra);
+    }
+    std::vector<char*> environment;
+    for (std::string& variable : variables) {
+      environment.push_back(variable.data());
+    }
+    environment.push_back(nullptr);
+    INFO("extra variable: " << (c.extra.empty() ? "none" : c.extra));
+    ServerProcess server({"--root", sampleRoot().root.path().string(), "--insecure", "--listen",
+                          "127.0.0.1:0", "--access-log", ""},
+                         environment.data());
+    const std::string address = server.waitForAddress();  // serves after the re-execution
+    // The environment the running program started with. glibc ends each
+    // tunable it reads with a NUL there, so the tunables are looked for
+    // as text, not as whole variables.
+    const std::string started = readText("/proc/" + std::to_string(server.pid()) + "/environ");
+    CHECK((started.find("glibc.malloc.hugetlb=1") != std::string::npos) == c.hugePages);
+    if (c.extra.starts_with("GLIBC_TUNABLES=")) {
+      CHECK(started.find(c.extra) != std::string::npos);  // what the user set is kept
+    }
+    // The same process, with the same arguments: it still serves.
+    dataservice::ClientOptions options;
+    options.target = address;
+    options.insecure = true;
+    auto client = connect(options);
+    CHECK(client.checkHealth().isOk());
+    CHECK(server.terminate() == 0);
+  }
 }
 
 }  // namespace

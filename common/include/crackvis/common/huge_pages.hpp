@@ -1,0 +1,34 @@
+// Transparent huge pages for the services' large arrays. A step of 10^7
+// particles is hundreds of MB of fresh memory, and on kernels whose THP mode
+// is "madvise" (Debian's default) each 4 KiB page of it costs a page fault:
+// on a virtual machine a quarter of a first picture's time at 10^7 went to
+// faults (docs/benchmarks.md, "Huge pages"). glibc's malloc asks the kernel
+// for huge pages (madvise(MADV_HUGEPAGE) on its heap and mappings) when the
+// tunable glibc.malloc.hugetlb=1 is set, and tunables are read only when a
+// process starts: so a service re-executes itself once with it.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace crackvis {
+
+// The environment variable that turns the re-execution off ("0").
+inline constexpr const char* kHugePagesVariable = "CRACKVIS_HUGE_PAGES";
+
+// What GLIBC_TUNABLES should become, or nothing when the process should go
+// on as it is: THP's mode (/sys/kernel/mm/transparent_hugepage/enabled,
+// "always [madvise] never") is not madvise (always: every process has them;
+// never: nobody does), GLIBC_TUNABLES (`tunables`, null when unset) already
+// names glibc.malloc.hugetlb, or CRACKVIS_HUGE_PAGES (`setting`) is "0".
+std::optional<std::string> hugePageTunables(std::string_view thpMode, const char* tunables,
+                                            const char* setting);
+
+// Call first in main, before any thread starts: re-executes the program
+// (/proc/self/exe, the same arguments) with GLIBC_TUNABLES from
+// hugePageTunables, or returns when there is nothing to do or the
+// re-execution fails (the process then runs on small pages, as before).
+void reexecWithHugePages(char** argv);
+
+}  // namespace crackvis

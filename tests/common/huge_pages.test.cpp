@@ -1,0 +1,28 @@
+// When a service re-executes itself to get transparent huge pages from
+// glibc's malloc (common/huge_pages.hpp): the decision, case by case. The
+// re-execution itself is tested on crackvis-data (tests/dataservice/app.test.cpp).
+#include <catch2/catch.hpp>
+
+#include <crackvis/common/huge_pages.hpp>
+
+using crackvis::hugePageTunables;
+
+TEST_CASE("huge pages are asked for only where the kernel gives them on request",
+          "[common][huge-pages]") {
+  constexpr const char* kMadvise = "always [madvise] never\n";
+  // THP on request: ask, keeping what GLIBC_TUNABLES already says.
+  CHECK(hugePageTunables(kMadvise, nullptr, nullptr) == "glibc.malloc.hugetlb=1");
+  CHECK(hugePageTunables(kMadvise, "", nullptr) == "glibc.malloc.hugetlb=1");
+  CHECK(hugePageTunables(kMadvise, "glibc.malloc.arena_max=2", nullptr) ==
+        "glibc.malloc.arena_max=2:glibc.malloc.hugetlb=1");
+  CHECK(hugePageTunables(kMadvise, nullptr, "1") == "glibc.malloc.hugetlb=1");
+  // Nothing to do: every process has them, or nobody does.
+  CHECK_FALSE(hugePageTunables("[always] madvise never\n", nullptr, nullptr));
+  CHECK_FALSE(hugePageTunables("always madvise [never]\n", nullptr, nullptr));
+  CHECK_FALSE(hugePageTunables("", nullptr, nullptr));  // no THP in this kernel
+  // Already decided: by the user (either way), or by the first start.
+  CHECK_FALSE(hugePageTunables(kMadvise, "glibc.malloc.hugetlb=0", nullptr));
+  CHECK_FALSE(hugePageTunables(kMadvise, "glibc.malloc.hugetlb=1", nullptr));
+  // Turned off.
+  CHECK_FALSE(hugePageTunables(kMadvise, nullptr, "0"));
+}
