@@ -1,7 +1,9 @@
+#include <array>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 
+#include <sys/auxv.h>
 #include <unistd.h>
 
 #include <crackvis/common/huge_pages.hpp>
@@ -10,12 +12,37 @@ namespace crackvis {
 namespace {
 
 constexpr std::string_view kHugetlbTunable = "glibc.malloc.hugetlb";
+// Set before the re-execution: the re-executed program never tries again,
+// even where glibc drops the tunable from GLIBC_TUNABLES.
+constexpr const char* kReexecutedVariable = "CRACKVIS_HUGE_PAGES_REEXECUTED";
 
 std::string readThpMode() {
   std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
+}
+
+std::string_view baseName(std::string_view path) {
+  const auto slash = path.rfind('/');
+  return slash == std::string_view::npos ? path : path.substr(slash + 1);
+}
+
+// The running program's own file, when it is the program argv[0] names:
+// not a loader (ld.so, valgrind) that runs it, whose re-execution with
+// these arguments would fail. Its real path, not /proc/self/exe, so that
+// the process keeps its name in ps and the logs.
+std::string programFile(const char* argv0) {
+  std::array<char, 4096> path{};
+  const ssize_t length = readlink("/proc/self/exe", path.data(), path.size() - 1);
+  if (length <= 0) {
+    return {};
+  }
+  const std::string file(path.data(), static_cast<std::size_t>(length));
+  if (baseName(file) != baseName(argv0) || access(file.c_str(), X_OK) != 0) {
+    return {};  // another program, a renamed link, or a file replaced since
+  }
+  return file;
 }
 
 }  // namespace
@@ -30,24 +57,31 @@ std::optional<std::string> hugePageTunables(std::string_view thpMode, const char
   }
   const std::string_view present = tunables != nullptr ? tunables : "";
   if (present.find(kHugetlbTunable) != std::string_view::npos) {
-    return std::nullopt;  // set by the user, or by this process's first start
+    return std::nullopt;  // the user's choice
   }
   std::string wanted = std::string(kHugetlbTunable) + "=1";
   return present.empty() ? wanted : std::string(present) + ":" + wanted;
 }
 
 void reexecWithHugePages(char** argv) {
+  // A set-user-id or capability-raised program gets no tunables from the
+  // environment (glibc drops them): nothing to gain.
+  if (argv == nullptr || argv[0] == nullptr || std::getenv(kReexecutedVariable) != nullptr ||
+      getauxval(AT_SECURE) != 0) {
+    return;
+  }
   const auto tunables = hugePageTunables(readThpMode(), std::getenv("GLIBC_TUNABLES"),
                                          std::getenv(kHugePagesVariable));
-  if (!tunables || argv == nullptr || argv[0] == nullptr) {
+  if (!tunables) {
     return;
   }
-  if (setenv("GLIBC_TUNABLES", tunables->c_str(), 1) != 0) {
+  const std::string file = programFile(argv[0]);
+  if (file.empty() || setenv(kReexecutedVariable, "1", 1) != 0 ||
+      setenv("GLIBC_TUNABLES", tunables->c_str(), 1) != 0) {
     return;
   }
-  execv("/proc/self/exe", argv);
-  // Only a failed exec returns: run on, on small pages. The variable stays
-  // set, so that a child this process starts does not try again.
+  execv(file.c_str(), argv);
+  // Only a failed exec returns: run on, on small pages.
 }
 
 }  // namespace crackvis

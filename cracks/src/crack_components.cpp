@@ -136,12 +136,12 @@ struct Moments {
   // each step.
   double addPolygon(const std::vector<Vec3>& points, const std::int32_t* ids, std::size_t count) {
     const Vec3 a = points[static_cast<std::size_t>(ids[0])];
-    Vec3 newell{};
+    Vec3 polygonNewell{};
     for (std::size_t k = 1; k + 1 < count; ++k) {
       const Vec3 b = points[static_cast<std::size_t>(ids[k])];
       const Vec3 c = points[static_cast<std::size_t>(ids[k + 1])];
       const Vec3 n = cross(b - a, c - a);
-      newell = newell + n;
+      polygonNewell = polygonNewell + n;
       const double weight = 0.5 * dem::norm(n);
       if (weight <= 0.0) {
         continue;
@@ -168,8 +168,8 @@ struct Moments {
       second[1][2] += yz;
       second[2][1] += yz;
     }
-    this->newell = this->newell + newell;
-    return 0.5 * dem::norm(newell);
+    newell = newell + polygonNewell;
+    return 0.5 * dem::norm(polygonNewell);
   }
   void addTetrahedron(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
     addWeighted(std::abs(dem::dot(b - a, cross(c - a, d - a))) / 6.0, {a, b, c, d});

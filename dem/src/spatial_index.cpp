@@ -16,15 +16,17 @@ int longestAxis(const Bounds& box) {
 
 namespace {
 
-// How often the coordinate along `axis` falls from one particle to the next.
-std::size_t descents(std::span<const Vec3> positions, int axis) {
-  std::size_t count = 0;
+// How far the coordinate along `axis` falls in all, from one particle to the
+// next in the file's order. Summed, not counted: jitter makes many tiny
+// falls along the axis that runs slowest, a row's end one large fall along
+// the fastest.
+double descent(std::span<const Vec3> positions, int axis) {
+  double fall = 0.0;
   for (std::size_t i = 1; i < positions.size(); ++i) {
-    if (axisCoordinate(positions[i], axis) < axisCoordinate(positions[i - 1], axis)) {
-      ++count;
-    }
+    fall +=
+        std::max(0.0, axisCoordinate(positions[i - 1], axis) - axisCoordinate(positions[i], axis));
   }
-  return count;
+  return fall;
 }
 
 double extent(const Bounds& box, int axis) {
@@ -38,13 +40,13 @@ int sliceAxis(std::span<const Vec3> reference) {
   const int longest = longestAxis(box);
   const double reach = (1.0 - kSliceAxisTolerance) * extent(box, longest);
   int best = -1;
-  std::size_t fewest = 0;
+  double least = 0.0;
   for (int axis = 0; axis < 3; ++axis) {
     if (extent(box, axis) >= reach && extent(box, axis) > 0.0) {
-      const std::size_t count = descents(reference, axis);
-      if (best < 0 || count < fewest) {
+      const double fall = descent(reference, axis);
+      if (best < 0 || fall < least) {
         best = axis;
-        fewest = count;
+        least = fall;
       }
     }
   }

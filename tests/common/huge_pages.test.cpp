@@ -20,7 +20,7 @@ TEST_CASE("huge pages are asked for only where the kernel gives them on request"
   CHECK_FALSE(hugePageTunables("[always] madvise never\n", nullptr, nullptr));
   CHECK_FALSE(hugePageTunables("always madvise [never]\n", nullptr, nullptr));
   CHECK_FALSE(hugePageTunables("", nullptr, nullptr));  // no THP in this kernel
-  // Already decided: by the user (either way), or by the first start.
+  // Already decided by the user, either way.
   CHECK_FALSE(hugePageTunables(kMadvise, "glibc.malloc.hugetlb=0", nullptr));
   CHECK_FALSE(hugePageTunables(kMadvise, "glibc.malloc.hugetlb=1", nullptr));
   // Turned off.

@@ -97,6 +97,15 @@ class ServerProcess {
   pid_t m_pid = 0;
 };
 
+// Whether an --insecure server at `address` answers its health check.
+bool healthyWithoutTls(const std::string& address) {
+  dataservice::ClientOptions options;
+  options.target = address;
+  options.insecure = true;
+  auto client = connect(options);
+  return client.checkHealth().isOk();
+}
+
 TEST_CASE("crackvis-data explains itself and refuses bad setups in one line",
           "[dataservice][integration]") {
   const std::string root = sampleRoot().root.path().string();
@@ -172,11 +181,7 @@ TEST_CASE("crackvis-data --insecure warns and serves loopback", "[dataservice][i
   const std::string address = server.waitForAddress();
   CHECK_THAT(readText(server.out()), Catch::Contains("INSECURE"));
   CHECK_THAT(readText(server.err()), Catch::Contains("WARNING") && Catch::Contains("--insecure"));
-  dataservice::ClientOptions options;
-  options.target = address;
-  options.insecure = true;
-  auto client = connect(options);
-  CHECK(client.checkHealth().isOk());
+  CHECK(healthyWithoutTls(address));
   CHECK(server.terminate() == 0);
 }
 
@@ -190,7 +195,7 @@ TEST_CASE("crackvis-data re-executes itself once with glibc's huge pages where T
   std::vector<std::string> base;
   for (char** v = environ; *v != nullptr; ++v) {
     const std::string_view variable = *v;
-    if (!variable.starts_with("GLIBC_TUNABLES=") && !variable.starts_with("CRACKVIS_HUGE_PAGES=")) {
+    if (!variable.starts_with("GLIBC_TUNABLES=") && !variable.starts_with("CRACKVIS_HUGE_PAGES")) {
       base.emplace_back(variable);
     }
   }
@@ -201,7 +206,8 @@ TEST_CASE("crackvis-data re-executes itself once with glibc's huge pages where T
   for (const Case& c : std::vector<Case>{{"", onRequest},
                                          {"GLIBC_TUNABLES=glibc.malloc.arena_max=4", onRequest},
                                          {"GLIBC_TUNABLES=glibc.malloc.hugetlb=0", false},
-                                         {"CRACKVIS_HUGE_PAGES=0", false}}) {
+                                         {"CRACKVIS_HUGE_PAGES=0", false},
+                                         {"CRACKVIS_HUGE_PAGES_REEXECUTED=1", false}}) {
     std::vector<std::string> variables = base;
     if (!c.extra.empty()) {
       variables.push_back(c.extra);
@@ -224,12 +230,9 @@ TEST_CASE("crackvis-data re-executes itself once with glibc's huge pages where T
     if (c.extra.starts_with("GLIBC_TUNABLES=")) {
       CHECK(started.find(c.extra) != std::string::npos);  // what the user set is kept
     }
-    // The same process, with the same arguments: it still serves.
-    dataservice::ClientOptions options;
-    options.target = address;
-    options.insecure = true;
-    auto client = connect(options);
-    CHECK(client.checkHealth().isOk());
+    // Re-executed from its own file, not /proc/self/exe: ps still names it.
+    CHECK(readText("/proc/" + std::to_string(server.pid()) + "/comm") == "crackvis-data\n");
+    CHECK(healthyWithoutTls(address));  // the same process and arguments: it still serves
     CHECK(server.terminate() == 0);
   }
 }

@@ -26,9 +26,11 @@ std::optional<std::string> hugePageTunables(std::string_view thpMode, const char
                                             const char* setting);
 
 // Call first in main, before any thread starts: re-executes the program
-// (/proc/self/exe, the same arguments) with GLIBC_TUNABLES from
-// hugePageTunables, or returns when there is nothing to do or the
-// re-execution fails (the process then runs on small pages, as before).
+// (its own file, the same arguments and process id) with GLIBC_TUNABLES
+// from hugePageTunables, once. Returns when there is nothing to do, when the
+// process is run by another program (ld.so, valgrind) or is set-user-id,
+// or when the re-execution fails: the process then runs on small pages, as
+// before.
 void reexecWithHugePages(char** argv);
 
 }  // namespace crackvis

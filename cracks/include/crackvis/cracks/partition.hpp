@@ -2,8 +2,9 @@
 // MPI rank under ParaView's pvbatch or pvserver), and the rule that makes the
 // pieces' crack meshes add up to the whole set's, face for face.
 //
-// The pieces are slabs across the longest axis of the reference
-// configuration with equal particle counts. A piece holds the particles it
+// The pieces are slabs across the slice axis of the reference configuration
+// (dem::sliceAxis: the longest, or among near ties the one the file's order
+// runs slowest along) with equal particle counts. A piece holds the particles it
 // owns plus a ghost layer: every particle within `ghostWidth` of its slab,
 // so that each primitive it owns is made from the same neighbourhood as in
 // the whole set. Every primitive has an owner particle, the smallest particle

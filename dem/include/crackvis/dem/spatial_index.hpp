@@ -65,8 +65,8 @@ int longestAxis(const Bounds& box);
 // cracks::partitionPiece's): the longest of the reference box, since slabs
 // across it carry the thinnest ghost layers. Among the axes within
 // kSliceAxisTolerance of the longest, the one along which the particles'
-// order runs slowest (the fewest descents of the coordinate from one
-// particle to the next; x, then y, then z on ties): a cube written x fastest
+// order runs slowest (the coordinate falls least in all from one particle to
+// the next; x, then y, then z on ties): a cube written x fastest
 // is cut across z, and a slab is then one run of rows of every per-particle
 // array, not part of every row (issue 34 point 4).
 int sliceAxis(std::span<const Vec3> reference);
