@@ -33,10 +33,11 @@ TEST_CASE("crackvis info prints the counts of a generated FCC block", "[cli][inf
   CHECK_THAT(info.out, Catch::Contains("particles     N = 172"));
   CHECK_THAT(info.out, Catch::Contains("bonds         M = 756 (mean coordination 8.791)"));
   CHECK_THAT(info.out, Catch::Contains("crack cells   lattice"));
-  // generate writes the spatial index (v1.3), with the lattice decided.
+  // generate writes the spatial index (v1.3), with the lattice decided;
+  // the block is a cube written x fastest, so its slabs run across z.
   CHECK_THAT(info.out, Catch::Contains("format        crackvis-dem v1.3"));
   CHECK_THAT(info.out,
-             Catch::Contains("index         order along x: MPI ranks read only their slab"));
+             Catch::Contains("index         order along z: MPI ranks read only their slab"));
   CHECK_THAT(info.out, Catch::Contains("steps         1 (time 0 .. 0 s)"));
   CHECK_THAT(info.out,
              Catch::Contains("broken bonds  first step: 0 (0.00 %), last step: 0 (0.00 %)"));
