@@ -1,10 +1,13 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
+#include <unordered_map>
 #include <utility>
 
 #include <fmt/format.h>
 
+#include <crackvis/cracks/extractor.hpp>
 #include <crackvis/cracks/partition.hpp>
 #include <crackvis/cracks/surface_primitives.hpp>
 
@@ -308,14 +311,325 @@ Status readPieceRows(const dem::DemFileReader& reader, IndexedPiece& piece) {
 
 }  // namespace
 
+namespace {
+
+// A rank's slab in the order: positions [first, last) own, [held0, held1)
+// lie within the ghost width of the slab (partitionPiece's held zone).
+struct SlabRange {
+  std::int64_t first = 0;
+  std::int64_t last = 0;
+  std::int64_t held0 = 0;
+  std::int64_t held1 = 0;
+  double from = 0.0;  // the zone's coordinates along the axis
+  double to = 0.0;
+};
+
+Result<SlabRange> findSlab(const dem::DemFileReader& reader, std::int64_t first, std::int64_t last,
+                           double width) {
+  const auto n = static_cast<std::int64_t>(reader.info().particleCount);
+  auto lo = reader.readIndexCoordinate(first);
+  auto hi = reader.readIndexCoordinate(last - 1);
+  if (!lo || !hi) {
+    return !lo ? lo.status() : hi.status();
+  }
+  SlabRange slab{first, last, 0, 0, *lo - width, *hi + width};
+  auto held0 = searchIndex(reader, 0, first, [&](double c) { return c < slab.from; });
+  auto held1 = searchIndex(reader, last, n, [&](double c) { return c <= slab.to; });
+  if (!held0 || !held1) {
+    return !held0 ? held0.status() : held1.status();
+  }
+  slab.held0 = *held0;
+  slab.held1 = *held1;
+  return slab;
+}
+
+bool contains(const std::vector<dem::ParticleIndex>& sorted, dem::ParticleIndex i) {
+  return std::binary_search(sorted.begin(), sorted.end(), i);
+}
+
+// The order's particles at positions [first, last), ascending.
+Result<std::vector<dem::ParticleIndex>> sortedOrder(const dem::DemFileReader& reader,
+                                                    std::int64_t first, std::int64_t last) {
+  auto order = reader.readIndexOrder(first, last);
+  if (!order) {
+    return order.status();
+  }
+  std::sort(order->begin(), order->end());
+  return std::move(*order);
+}
+
+// The whole set's cells that touch the zone (sorted, whole-set indices):
+// the cells of the triangulation of every particle within `margin` of the
+// zone whose reach stays inside it, and the stored wide cells. Nullopt when
+// those particles cannot be triangulated alone.
+Result<std::optional<std::vector<std::array<dem::ParticleIndex, 4>>>> zoneCells(
+    const dem::DemFileReader& reader, const dem::SpatialIndexInfo& index,
+    const dem::WideCells& wide, const SlabRange& slab,
+    const std::vector<dem::ParticleIndex>& zone) {
+  using Cells = std::vector<std::array<dem::ParticleIndex, 4>>;
+  const auto n = static_cast<std::int64_t>(reader.info().particleCount);
+  // A cell of reach r touching the zone lies, with every particle that
+  // could unmake it, within 2 r of the zone; half as much again for the
+  // rounding of the centre.
+  const double margin = 2.5 * wide.reach;
+  auto near0 = searchIndex(reader, 0, slab.held0, [&](double c) { return c < slab.from - margin; });
+  auto near1 = searchIndex(reader, slab.held1, n, [&](double c) { return c <= slab.to + margin; });
+  if (!near0 || !near1) {
+    return !near0 ? near0.status() : near1.status();
+  }
+  auto near = sortedOrder(reader, *near0, *near1);
+  if (!near) {
+    return near.status();
+  }
+  auto positions = reader.readStepRows(0, *near, {});
+  auto rows = reader.readLatticeRows(*near, {});
+  if (!positions || !rows) {
+    return !positions ? positions.status() : rows.status();
+  }
+  auto local =
+      triangulate(positions->positions, rows->radius, reader.info().dimension, wide.weighted);
+  if (!local) {
+    return std::optional<Cells>{};
+  }
+  const std::vector<double> reach =
+      cellReach(*local, positions->positions, rows->radius, index.largestRadius);
+  auto touches = [&](const std::array<dem::ParticleIndex, 4>& cell) {
+    return std::any_of(cell.begin(), cell.end(),
+                       [&](dem::ParticleIndex i) { return i >= 0 && contains(zone, i); });
+  };
+  Cells cells;
+  for (std::size_t c = 0; c < local->cells.size(); ++c) {
+    std::array<dem::ParticleIndex, 4> cell = local->cells[c];
+    for (dem::ParticleIndex& node : cell) {
+      node = node < 0 ? -1 : (*near)[static_cast<std::size_t>(node)];
+    }
+    if (reach[c] <= wide.reach && touches(cell)) {
+      cells.push_back(cell);
+    }
+  }
+  for (const auto& cell : wide.cells) {
+    if (touches(cell)) {
+      cells.push_back(cell);
+    }
+  }
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  return std::optional<Cells>{std::move(cells)};
+}
+
+// Union-find over every particle without path compression, by size, so
+// that the links it makes stay the forest's (BreakForest).
+struct ForestBuilder {
+  std::vector<std::int32_t> parent;
+  std::vector<std::int32_t> size;
+  std::vector<std::int32_t> holdsBefore;
+
+  explicit ForestBuilder(std::size_t n) : parent(n, -1), size(n, 1), holdsBefore(n, 0) {}
+
+  std::int32_t root(std::int32_t x) const {
+    while (parent[static_cast<std::size_t>(x)] >= 0) {
+      x = parent[static_cast<std::size_t>(x)];
+    }
+    return x;
+  }
+  void join(std::int32_t a, std::int32_t b, std::int32_t until) {
+    a = root(a);
+    b = root(b);
+    if (a == b) {
+      return;
+    }
+    if (size[static_cast<std::size_t>(a)] < size[static_cast<std::size_t>(b)]) {
+      std::swap(a, b);
+    }
+    parent[static_cast<std::size_t>(b)] = a;
+    holdsBefore[static_cast<std::size_t>(b)] = until;
+    size[static_cast<std::size_t>(a)] += size[static_cast<std::size_t>(b)];
+  }
+};
+
+// One pass over every bond, in spans: the forest of the whole set (bonds
+// that never break first, then the others by falling break step), and the
+// bonded neighbours of the particles `far` marks.
+struct BondPass {
+  ForestBuilder forest;
+  std::vector<dem::ParticleIndex> neighbours;  // of the far particles, unsorted
+};
+
+Result<BondPass> passOverBonds(const dem::DemFileReader& reader,
+                               const std::vector<std::uint8_t>& far) {
+  constexpr std::int64_t kSpan = std::int64_t{1} << 20;
+  const auto m = static_cast<std::int64_t>(reader.info().bondCount);
+  BondPass pass{ForestBuilder(static_cast<std::size_t>(reader.info().particleCount)), {}};
+  struct Broken {
+    std::int32_t step;
+    dem::Bond bond;
+  };
+  std::vector<Broken> broken;
+  std::vector<dem::BondIndex> rows;
+  for (std::int64_t begin = 0; begin < m; begin += kSpan) {
+    rows.resize(static_cast<std::size_t>(std::min(kSpan, m - begin)));
+    std::iota(rows.begin(), rows.end(), static_cast<dem::BondIndex>(begin));
+    auto pairs = reader.readBondRows(rows);
+    auto steps = reader.readBreakStepRows(rows);
+    if (!pairs || !steps) {
+      return !pairs ? pairs.status() : steps.status();
+    }
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      const dem::Bond bond = (*pairs)[k];
+      const std::int32_t step = (*steps)[k];
+      if (step < 0) {
+        pass.forest.join(bond.first, bond.second, std::numeric_limits<std::int32_t>::max());
+      } else {
+        broken.push_back({step, bond});
+      }
+      if (far[static_cast<std::size_t>(bond.first)] != 0) {
+        pass.neighbours.push_back(bond.second);
+      }
+      if (far[static_cast<std::size_t>(bond.second)] != 0) {
+        pass.neighbours.push_back(bond.first);
+      }
+    }
+  }
+  std::stable_sort(broken.begin(), broken.end(),
+                   [](const Broken& a, const Broken& b) { return a.step > b.step; });
+  for (const Broken& b : broken) {
+    pass.forest.join(b.bond.first, b.bond.second, b.step);
+  }
+  return pass;
+}
+
+// The forest kept along the paths from the piece's particles to their roots.
+BreakForest keepPaths(const ForestBuilder& whole, const std::vector<dem::ParticleIndex>& held) {
+  BreakForest forest;
+  std::unordered_map<std::int32_t, std::int32_t> slotOf;
+  auto slot = [&](std::int32_t x) {
+    auto [at, added] = slotOf.try_emplace(x, static_cast<std::int32_t>(forest.parent.size()));
+    if (added) {
+      forest.parent.push_back(-1);
+      forest.holdsBefore.push_back(whole.holdsBefore[static_cast<std::size_t>(x)]);
+    }
+    return std::pair{at->second, added};
+  };
+  for (dem::ParticleIndex i : held) {
+    auto [node, added] = slot(i);
+    forest.particleSlot.push_back(node);
+    std::int32_t x = i;
+    while (added && whole.parent[static_cast<std::size_t>(x)] >= 0) {
+      x = whole.parent[static_cast<std::size_t>(x)];
+      auto [up, upAdded] = slot(x);
+      forest.parent[static_cast<std::size_t>(node)] = up;
+      node = up;
+      added = upAdded;
+    }
+  }
+  return forest;
+}
+
+// The cells in piece indices, and their edges.
+Triangulation pieceTriangulation(const std::vector<std::array<dem::ParticleIndex, 4>>& cells,
+                                 const std::vector<dem::ParticleIndex>& held, int dimension,
+                                 bool weighted) {
+  Triangulation out;
+  out.dimension = dimension;
+  out.weighted = weighted;
+  auto local = [&](dem::ParticleIndex i) -> dem::ParticleIndex {
+    return i < 0 ? -1
+                 : static_cast<dem::ParticleIndex>(std::lower_bound(held.begin(), held.end(), i) -
+                                                   held.begin());
+  };
+  const int nodes = dimension == 3 ? 4 : 3;
+  for (const auto& cell : cells) {
+    std::array<dem::ParticleIndex, 4> mapped{};
+    std::transform(cell.begin(), cell.end(), mapped.begin(), local);
+    out.cells.push_back(mapped);
+    for (int a = 0; a < nodes; ++a) {
+      for (int b = a + 1; b < nodes; ++b) {
+        out.edges.push_back(
+            {mapped[static_cast<std::size_t>(a)], mapped[static_cast<std::size_t>(b)]});
+      }
+    }
+  }
+  auto before = [](dem::Bond a, dem::Bond b) {
+    return a.first != b.first ? a.first < b.first : a.second < b.second;
+  };
+  std::sort(out.edges.begin(), out.edges.end(), before);
+  out.edges.erase(std::unique(out.edges.begin(), out.edges.end(),
+                              [](dem::Bond a, dem::Bond b) {
+                                return a.first == b.first && a.second == b.second;
+                              }),
+                  out.edges.end());
+  return out;
+}
+
+// A triangulated packing's held particles (partitionPiece's: the zone, the
+// nodes of the cells touching it, and those nodes' bonded neighbours), with
+// the cells and the forest. False when the slab cannot be triangulated
+// alone.
+Result<bool> holdTriangulatedPiece(const dem::DemFileReader& reader, const SlabRange& slab,
+                                   IndexedPiece& result) {
+  auto wide = reader.readWideCells();
+  if (!wide) {
+    return wide.status();
+  }
+  auto zoneOrder = reader.readIndexOrder(slab.held0, slab.held1);
+  if (!zoneOrder) {
+    return zoneOrder.status();
+  }
+  std::vector<dem::ParticleIndex> zone = *zoneOrder;
+  std::sort(zone.begin(), zone.end());
+  auto cells = zoneCells(reader, result.index, **wide, slab, zone);
+  if (!cells) {
+    return cells.status();
+  }
+  if (!*cells) {
+    return false;
+  }
+  std::vector<std::uint8_t> far(static_cast<std::size_t>(reader.info().particleCount), 0);
+  std::vector<dem::ParticleIndex> held = zone;
+  for (const auto& cell : **cells) {
+    for (dem::ParticleIndex i : cell) {
+      if (i >= 0 && !contains(zone, i)) {
+        far[static_cast<std::size_t>(i)] = 1;
+        held.push_back(i);
+      }
+    }
+  }
+  auto pass = passOverBonds(reader, far);
+  if (!pass) {
+    return pass.status();
+  }
+  held.insert(held.end(), pass->neighbours.begin(), pass->neighbours.end());
+  std::sort(held.begin(), held.end());
+  held.erase(std::unique(held.begin(), held.end()), held.end());
+  const std::vector<dem::ParticleIndex> owned(zoneOrder->begin() + (slab.first - slab.held0),
+                                              zoneOrder->begin() + (slab.last - slab.held0));
+  std::vector<dem::ParticleIndex> ownedSorted = owned;
+  std::sort(ownedSorted.begin(), ownedSorted.end());
+  for (dem::ParticleIndex i : held) {
+    result.part.particles.push_back(i);
+    result.part.owned.push_back(contains(ownedSorted, i) ? 1 : 0);
+  }
+  PieceTriangulation triangulated;
+  triangulated.triangulation =
+      pieceTriangulation(**cells, held, reader.info().dimension, (*wide)->weighted);
+  triangulated.forest = keepPaths(pass->forest, held);
+  result.triangulated = std::move(triangulated);
+  return true;
+}
+
+}  // namespace
+
 Result<std::optional<IndexedPiece>> readIndexedPiece(const dem::DemFileReader& reader, int piece,
                                                      int pieces, double ghostBonds) {
   auto index = reader.readSpatialIndexInfo();
   if (!index) {
     return index.status();
   }
-  if (!*index || !(*index)->hasBondStart ||
-      (*index)->decomposition != dem::CellDecomposition::kLattice) {
+  const bool lattice = *index && (*index)->decomposition == dem::CellDecomposition::kLattice;
+  const bool triangulated = *index &&
+                            (*index)->decomposition == dem::CellDecomposition::kTriangulation &&
+                            (*index)->hasWideCells;
+  if (!*index || !(*index)->hasBondStart || (!lattice && !triangulated)) {
     return std::optional<IndexedPiece>{};
   }
   IndexedPiece result;
@@ -329,20 +643,22 @@ Result<std::optional<IndexedPiece>> readIndexedPiece(const dem::DemFileReader& r
   }
   // partitionPiece's slab: order [first, last), and every particle whose
   // coordinate lies within the ghost width of it, a range of the order.
-  const double width = ghostBonds * result.index.longestBond;
-  auto lo = reader.readIndexCoordinate(first);
-  auto hi = reader.readIndexCoordinate(last - 1);
-  if (!lo || !hi) {
-    return !lo ? lo.status() : hi.status();
+  auto slab = findSlab(reader, first, last, ghostBonds * result.index.longestBond);
+  if (!slab) {
+    return slab.status();
   }
-  const double from = *lo - width;
-  const double to = *hi + width;
-  auto held0 = searchIndex(reader, 0, first, [&](double c) { return c < from; });
-  auto held1 = searchIndex(reader, last, n, [&](double c) { return c <= to; });
-  if (!held0 || !held1) {
-    return !held0 ? held0.status() : held1.status();
+  if (triangulated) {
+    auto held = holdTriangulatedPiece(reader, *slab, result);
+    if (!held) {
+      return held.status();
+    }
+    if (!*held) {
+      return std::optional<IndexedPiece>{};
+    }
+  } else {
+    CRACKVIS_RETURN_IF_ERROR(
+        heldParticles(reader, slab->held0, slab->held1, first, last, result.part));
   }
-  CRACKVIS_RETURN_IF_ERROR(heldParticles(reader, *held0, *held1, first, last, result.part));
   std::vector<dem::ParticleIndex> firstEnds;
   auto candidates = bondsFromHeld(reader, result.part.particles, firstEnds);
   if (!candidates) {
@@ -351,6 +667,49 @@ Result<std::optional<IndexedPiece>> readIndexedPiece(const dem::DemFileReader& r
   CRACKVIS_RETURN_IF_ERROR(keepHeldBonds(reader, *candidates, firstEnds, result.part));
   CRACKVIS_RETURN_IF_ERROR(readPieceRows(reader, result));
   return std::optional<IndexedPiece>{std::move(result)};
+}
+
+std::vector<std::int32_t> componentsAt(const BreakForest& forest, int step) {
+  std::vector<std::int32_t> labels;
+  labels.reserve(forest.particleSlot.size());
+  for (std::int32_t node : forest.particleSlot) {
+    while (forest.parent[static_cast<std::size_t>(node)] >= 0 &&
+           step < forest.holdsBefore[static_cast<std::size_t>(node)]) {
+      node = forest.parent[static_cast<std::size_t>(node)];
+    }
+    labels.push_back(node);
+  }
+  return labels;
+}
+
+Result<dem::WideCells> wideCellsOf(std::span<const Vec3> first, const dem::Lattice& lattice) {
+  auto triangulation = triangulate(first, lattice.radius, lattice.dimension);
+  if (!triangulation) {
+    return triangulation.status();
+  }
+  const double largest = lattice.radius.empty()
+                             ? 0.0
+                             : *std::max_element(lattice.radius.begin(), lattice.radius.end());
+  dem::WideCells wide;
+  wide.weighted = triangulation->weighted;
+  wide.reach = kWideCellReach * dem::longestBond(first, lattice.bonds);
+  if (!(wide.reach > 0.0)) {
+    wide.reach = 4.0 * largest;  // no bonds: the particles' size sets the scale
+  }
+  const std::vector<double> reach = cellReach(*triangulation, first, lattice.radius, largest);
+  for (std::size_t c = 0; c < reach.size(); ++c) {
+    if (!(reach[c] <= wide.reach)) {
+      wide.cells.push_back(triangulation->cells[c]);
+    }
+  }
+  return wide;
+}
+
+void describeCells(dem::DemMetadata& metadata, const dem::Lattice& lattice) {
+  metadata.decomposition = decompositionOf(lattice);
+  if (metadata.decomposition == dem::CellDecomposition::kTriangulation) {
+    metadata.wideCells = wideCellsOf;
+  }
 }
 
 std::vector<std::int32_t> connectedComponents(std::size_t particleCount,

@@ -1,6 +1,7 @@
 // CGAL is used here alone, so its heavy headers are compiled once.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Delaunay_triangulation_3.h>
@@ -40,12 +41,35 @@ using Regular2 = CGAL::Regular_triangulation_2<
                     Index, Kernel, CGAL::Regular_triangulation_vertex_base_2<Kernel>>,
                 CGAL::Regular_triangulation_face_base_2<Kernel>>>;
 
-bool unequal(std::span<const double> radius) {
-  if (radius.empty()) {
-    return false;
+// The squared radius of the ball that holds every particle able to unmake
+// the cell with these (point, weight) nodes: circumradius^2, or the power
+// centre's power distance plus the largest weight.
+double reachSquared(const std::array<Kernel::Point_3, 4>& p, const std::array<double, 4>& w,
+                    int nodes, bool weighted, double largestWeight) {
+  using Weighted = Kernel::Weighted_point_3;
+  Kernel::Point_3 centre;
+  if (nodes == 4) {
+    centre = weighted ? Kernel().construct_weighted_circumcenter_3_object()(
+                            Weighted(p[0], w[0]), Weighted(p[1], w[1]), Weighted(p[2], w[2]),
+                            Weighted(p[3], w[3]))
+                      : CGAL::circumcenter(p[0], p[1], p[2], p[3]);
+  } else {
+    const Kernel::Point_2 a(p[0].x(), p[0].y());
+    const Kernel::Point_2 b(p[1].x(), p[1].y());
+    const Kernel::Point_2 c(p[2].x(), p[2].y());
+    using Weighted2 = Kernel::Weighted_point_2;
+    const Kernel::Point_2 centre2 =
+        weighted ? Kernel().construct_weighted_circumcenter_2_object()(
+                       Weighted2(a, w[0]), Weighted2(b, w[1]), Weighted2(c, w[2]))
+                 : CGAL::circumcenter(a, b, c);
+    centre = Kernel::Point_3(centre2.x(), centre2.y(), 0.0);
   }
-  const auto [lo, hi] = std::minmax_element(radius.begin(), radius.end());
-  return *hi - *lo > 1e-9 * *hi;
+  double power = -std::numeric_limits<double>::infinity();
+  for (int k = 0; k < nodes; ++k) {
+    const auto at = static_cast<std::size_t>(k);
+    power = std::max(power, CGAL::squared_distance(centre, p[at]) - (weighted ? w[at] : 0.0));
+  }
+  return power + (weighted ? largestWeight : 0.0);
 }
 
 template <typename T, typename Point>
@@ -110,11 +134,45 @@ void collect2(const T& t, Triangulation& out) {
 
 }  // namespace
 
+bool needsRegularTriangulation(std::span<const double> radius) {
+  if (radius.empty()) {
+    return false;
+  }
+  const auto [lo, hi] = std::minmax_element(radius.begin(), radius.end());
+  return *hi - *lo > 1e-9 * *hi;
+}
+
+std::vector<double> cellReach(const Triangulation& triangulation,
+                              std::span<const dem::Vec3> positions, std::span<const double> radius,
+                              double largestRadius) {
+  const int nodes = triangulation.dimension == 3 ? 4 : 3;
+  const bool weighted = triangulation.weighted && radius.size() == positions.size();
+  std::vector<double> reach;
+  reach.reserve(triangulation.cells.size());
+  for (const auto& cell : triangulation.cells) {
+    std::array<Kernel::Point_3, 4> p;
+    std::array<double, 4> w{};
+    for (int k = 0; k < nodes; ++k) {
+      const auto at = static_cast<std::size_t>(k);
+      const auto i = static_cast<std::size_t>(cell[at]);
+      p[at] = Kernel::Point_3(positions[i].x, positions[i].y, positions[i].z);
+      w[at] = weighted ? radius[i] * radius[i] : 0.0;
+    }
+    const double squared = reachSquared(p, w, nodes, weighted, largestRadius * largestRadius);
+    // NaN (a flat cell's centre at infinity) fails the test: +infinity.
+    reach.push_back(squared >= 0.0 && std::isfinite(squared)
+                        ? std::sqrt(squared)
+                        : (squared < 0.0 ? 0.0 : std::numeric_limits<double>::infinity()));
+  }
+  return reach;
+}
+
 Result<Triangulation> triangulate(std::span<const dem::Vec3> positions,
-                                  std::span<const double> radius, int dimension) {
+                                  std::span<const double> radius, int dimension,
+                                  std::optional<bool> weighted) {
   Triangulation out;
   out.dimension = dimension;
-  out.weighted = unequal(radius);
+  out.weighted = weighted.value_or(needsRegularTriangulation(radius));
   out.hiddenParticles = positions.size();
   if (dimension == 3) {
     if (out.weighted) {

@@ -815,7 +815,76 @@ Result<std::optional<SpatialIndexInfo>> DemFileReader::readSpatialIndexInfo() co
     }
     info.hasBondStart = true;
   }
+  if (h5::linkExists(m_file.get(), kIndexWideCellsPath)) {
+    CRACKVIS_RETURN_IF_ERROR(readWideCellsInfo(group.get(), info));
+  }
   return std::optional<SpatialIndexInfo>{info};
+}
+
+// /index/wide_cells' shape and the attributes that go with it.
+Status DemFileReader::readWideCellsInfo(hid_t group, SpatialIndexInfo& info) const {
+  auto opened = openInFile(kIndexWideCellsPath);
+  if (!opened) {
+    return opened.status();
+  }
+  const h5::DatasetShape& shape = opened->shape;
+  if (shape.type != ElementType::kInt32 || shape.dims.size() != 2 || shape.dims[1] != 4) {
+    return fail(failedPrecondition(fmt::format("dataset {} is {} {}, expected int32 [K, 4]",
+                                               kIndexWideCellsPath, shape.typeName,
+                                               h5::formatDims(shape.dims))));
+  }
+  auto reach = h5::readDoubleAttribute(group, "wide_cell_reach");
+  auto weighted = h5::readIntAttribute(group, "weighted_triangulation");
+  if (!reach || !std::isfinite(*reach) || *reach < 0.0 || !weighted ||
+      (*weighted != 0 && *weighted != 1)) {
+    return fail(failedPrecondition(
+        fmt::format("group {} holds {} but not its attributes wide_cell_reach (finite, >= 0) and "
+                    "weighted_triangulation (0 or 1)",
+                    kSpatialIndexGroup, kIndexWideCellsPath)));
+  }
+  info.hasWideCells = true;
+  info.wideCellReach = *reach;
+  info.weightedTriangulation = *weighted == 1;
+  return Status::ok();
+}
+
+Result<std::optional<WideCells>> DemFileReader::readWideCells() const {
+  auto index = readSpatialIndexInfo();
+  if (!index) {
+    return index.status();
+  }
+  if (!*index || !(*index)->hasWideCells) {
+    return std::optional<WideCells>{};
+  }
+  auto opened = openInFile(kIndexWideCellsPath);
+  if (!opened) {
+    return opened.status();
+  }
+  WideCells wide;
+  wide.reach = (*index)->wideCellReach;
+  wide.weighted = (*index)->weightedTriangulation;
+  wide.cells.resize(static_cast<std::size_t>(opened->shape.dims[0]));
+  if (Status read = h5::readDataset(opened->dataset.get(), ElementType::kInt32, wide.cells.data());
+      !read) {
+    return fail(read);
+  }
+  const auto last = static_cast<ParticleIndex>(m_info.particleCount - 1);
+  const int nodes = m_info.dimension == 3 ? 4 : 3;
+  for (std::size_t c = 0; c < wide.cells.size(); ++c) {
+    const auto& cell = wide.cells[c];
+    bool good = nodes == 4 || cell[3] == -1;
+    for (int k = 0; k < nodes && good; ++k) {
+      const ParticleIndex node = cell[static_cast<std::size_t>(k)];
+      good = node >= 0 && node <= last && (k == 0 || cell[static_cast<std::size_t>(k) - 1] < node);
+    }
+    if (!good) {
+      return fail(failedPrecondition(fmt::format(
+          "{} row {} is [{}, {}, {}, {}]: expected {} ascending particle indices in 0..{}{}",
+          kIndexWideCellsPath, c, cell[0], cell[1], cell[2], cell[3], nodes, last,
+          nodes == 3 ? ", then -1" : "")));
+    }
+  }
+  return std::optional<WideCells>{std::move(wide)};
 }
 
 Result<std::vector<ParticleIndex>> DemFileReader::readIndexOrder(std::int64_t first,

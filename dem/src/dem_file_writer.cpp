@@ -94,6 +94,7 @@ Result<DemFileWriter> DemFileWriter::create(const std::string& path, const Latti
   writer.m_storage = metadata.storage;
   writer.m_spatialIndex = metadata.spatialIndex;
   writer.m_decomposition = metadata.decomposition;
+  writer.m_wideCells = metadata.wideCells;
   if (Status written = writer.writeTimeIndependent(metadata); !written) {
     // Every message names the file (a full disk fails any of the writes).
     return written.message().starts_with(path)
@@ -286,7 +287,25 @@ Status DemFileWriter::writeSpatialIndex(const StepState& first) {
     CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(root, kIndexBondStartPath, ElementType::kInt64,
                                               {n + 1}, index.bondStart.data()));
   }
+  if (info.decomposition == CellDecomposition::kTriangulation && m_wideCells) {
+    return writeWideCells(group.get(), first);
+  }
   return Status::ok();
+}
+
+// A triangulated packing's wide cells (/index/wide_cells), found on the
+// first step as written. A packing that cannot be triangulated gets none:
+// its ranks then read the whole set, and report what extraction reports.
+Status DemFileWriter::writeWideCells(hid_t group, const StepState& first) {
+  auto wide = m_wideCells(first.positions, m_lattice);
+  if (!wide) {
+    return Status::ok();
+  }
+  CRACKVIS_RETURN_IF_ERROR(h5::writeDoubleAttribute(group, "wide_cell_reach", wide->reach));
+  CRACKVIS_RETURN_IF_ERROR(
+      h5::writeIntAttribute(group, "weighted_triangulation", wide->weighted ? 1 : 0));
+  return h5::writeDataset(m_file.get(), kIndexWideCellsPath, ElementType::kInt32,
+                          {static_cast<std::uint64_t>(wide->cells.size()), 4}, wide->cells.data());
 }
 
 Status DemFileWriter::writeStepData(const StepState& step, bool breaksChanged) {

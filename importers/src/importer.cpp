@@ -18,6 +18,7 @@
 #include <crackvis/common/pending_file.hpp>
 #include <crackvis/common/progress.hpp>
 #include <crackvis/cracks/extractor.hpp>
+#include <crackvis/cracks/partition.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/step_range.hpp>
 #include <crackvis/importers/importer.hpp>
@@ -662,7 +663,7 @@ Status writeSeries(StepSource& source, SeriesConverter& converter, SourceStep fi
                    const std::string& path, const dem::DemMetadata& metadata,
                    const ImportOptions& options, ImportSummary& summary) {
   dem::DemMetadata indexed = metadata;
-  indexed.decomposition = cracks::decompositionOf(converter.lattice());
+  cracks::describeCells(indexed, converter.lattice());
   auto writer = dem::DemFileWriter::create(path, converter.lattice(), indexed);
   if (!writer) {
     return writer.status();
@@ -854,7 +855,7 @@ class LiveOutput {
     metadata.sourceFiles = m_source.files;
     metadata.storage = m_options.storage;
     metadata.stepLayout = dem::StepLayout::kAppendable;
-    metadata.decomposition = cracks::decompositionOf(lattice);
+    cracks::describeCells(metadata, lattice);
     if (!converter.timeKnown(first) && !(m_options.timestep > 0.0)) {
       metadata.timeUnit = dem::kTimeInIterations;
     }

@@ -16,6 +16,7 @@
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/extractor.hpp>
 #include <crackvis/cracks/metrics.hpp>
+#include <crackvis/cracks/triangulation.hpp>
 #include <crackvis/dem/planted_crack.hpp>
 #include <crackvis/dem/random_packing.hpp>
 
@@ -304,5 +305,41 @@ TEST_CASE("cell attribute's cells are right side out, as VTK counts volume", "[c
     const StepInput step{packing.positions, state, packing.lattice.radius, {}, {}, {}, {}, {}};
     REQUIRE(extractor->extract(step, mesh).isOk());
     requireRightSideOut(mesh);
+  }
+}
+
+TEST_CASE("a cell's reach is its circumradius, or its power radius widened by the largest weight",
+          "[cracks][packing][triangulation]") {
+  const std::vector<dem::Vec3> tetrahedron{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  SECTION("equal radii: the circumsphere") {
+    const std::vector<double> radius(4, 0.1);
+    auto triangulation = cracks::triangulate(tetrahedron, radius, 3);
+    REQUIRE(triangulation.isOk());
+    REQUIRE(triangulation->cells.size() == 1);
+    CHECK_FALSE(triangulation->weighted);
+    const auto reach = cracks::cellReach(*triangulation, tetrahedron, radius, 0.1);
+    CHECK(reach.at(0) == Approx(std::sqrt(0.75)).epsilon(1e-12));
+  }
+  SECTION("unequal radii: the power centre (0.485, 0.5, 0.5), power 0.725225, plus 0.2^2") {
+    const std::vector<double> radius{0.1, 0.2, 0.1, 0.1};
+    auto triangulation = cracks::triangulate(tetrahedron, radius, 3);
+    REQUIRE(triangulation.isOk());
+    REQUIRE(triangulation->cells.size() == 1);
+    CHECK(triangulation->weighted);
+    const auto reach = cracks::cellReach(*triangulation, tetrahedron, radius, 0.2);
+    CHECK(reach.at(0) == Approx(std::sqrt(0.725225 + 0.04)).epsilon(1e-12));
+    // A piece triangulates as the whole set does, whatever its own radii.
+    auto forced = cracks::triangulate(tetrahedron, std::vector<double>(4, 0.1), 3, true);
+    REQUIRE(forced.isOk());
+    CHECK(forced->weighted);
+  }
+  SECTION("a triangle in 2D: its circumcircle") {
+    const std::vector<dem::Vec3> triangle{{0, 0, 0}, {2, 0, 0}, {0, 2, 0}};
+    const std::vector<double> radius(3, 0.1);
+    auto triangulation = cracks::triangulate(triangle, radius, 2);
+    REQUIRE(triangulation.isOk());
+    REQUIRE(triangulation->cells.size() == 1);
+    const auto reach = cracks::cellReach(*triangulation, triangle, radius, 0.1);
+    CHECK(reach.at(0) == Approx(std::sqrt(2.0)).epsilon(1e-12));
   }
 }

@@ -7,6 +7,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <set>
 
 #include <catch2/catch.hpp>
 #include <vtkCellAttributeCrackFilter.h>
@@ -40,9 +42,10 @@ using namespace crackvis;
 namespace {
 
 // A planted through crack (6 steps after the intact one) written as a file,
-// with its spatial index as `crackvis generate` writes it, or without one.
+// with its spatial index as `crackvis generate` writes it, or without one,
+// or (a triangulated packing) without its wide cells.
 void writeSpecimen(const dem::Lattice& lattice, const std::vector<dem::Vec3>& positions,
-                   const std::string& path, bool index = true) {
+                   const std::string& path, bool index = true, bool wideCells = true) {
   dem::PlantedCrackSpec spec;
   spec.steps = 6;
   spec.opening = 1.0;
@@ -52,7 +55,10 @@ void writeSpecimen(const dem::Lattice& lattice, const std::vector<dem::Vec3>& po
   dem::DemMetadata metadata;
   metadata.source = "vtk_pieces test";
   metadata.spatialIndex = index;
-  metadata.decomposition = cracks::decompositionOf(lattice);
+  cracks::describeCells(metadata, lattice);
+  if (!wideCells) {
+    metadata.wideCells = nullptr;
+  }
   auto writer = dem::DemFileWriter::create(path, lattice, metadata);
   REQUIRE(writer.isOk());
   for (int k = 0; k < crack->stepCount(); ++k) {
@@ -71,15 +77,22 @@ std::string latticeFile(const testing::TempDir& dir, bool index = true) {
   return path;
 }
 
-std::string randomFile(const testing::TempDir& dir) {
+// A polydisperse sphere packing (a regular triangulation), or in 2D a
+// monodisperse disk packing (a Delaunay triangulation).
+std::string randomFile(const testing::TempDir& dir, bool index = true, bool wideCells = true,
+                       int dimension = 3) {
   dem::RandomPackingSpec spec;
-  spec.box = {0.03, 0.008, 0.008};
+  spec.dimension = dimension;
+  spec.box = {0.03, 0.008, dimension == 3 ? 0.008 : 0.0};
   spec.radiusMin = 4e-4;
-  spec.radiusMax = 6e-4;  // polydisperse: a regular triangulation
+  spec.radiusMax = dimension == 3 ? 6e-4 : 4e-4;
+  spec.solidFraction = dimension == 3 ? 0.55 : 0.75;
   auto packing = dem::generateRandomPacking(spec);
   REQUIRE(packing.isOk());
-  const std::string path = dir.file("random.h5");
-  writeSpecimen(packing->lattice, packing->positions, path);
+  const std::string path = dir.file(
+      std::to_string(dimension) + "d-" +
+      (!index ? "random-without-index.h5" : (wideCells ? "random.h5" : "random-no-wide.h5")));
+  writeSpecimen(packing->lattice, packing->positions, path, index, wideCells);
   return path;
 }
 
@@ -263,14 +276,16 @@ void checkPiecesAddUp(const std::string& path, int pieces, double openingShare =
 TEST_CASE("the reader's pieces through each filter add up to the whole set, face for face",
           "[cracks][vtk][pieces]") {
   testing::TempDir dir;
-  // The lattice's pieces read through its spatial index, or cut from the
-  // whole set (a file without one); the random packing's always the latter.
-  const int kind = GENERATE(0, 1, 2);
-  const bool random = kind == 2;
-  const std::string path = random ? randomFile(dir) : latticeFile(dir, kind == 0);
+  // Each packing's pieces read through its spatial index (a random
+  // packing's triangulated per piece), or cut from the whole set (a file
+  // without one).
+  const int kind = GENERATE(0, 1, 2, 3);
+  const bool random = kind >= 2;
+  const bool index = kind % 2 == 0;
+  const std::string path = random ? randomFile(dir, index) : latticeFile(dir, index);
   const int pieces = GENERATE(2, 3);
-  INFO((random ? "random packing" : (kind == 0 ? "FCC lattice" : "FCC lattice, no index"))
-       << ", " << pieces << " pieces");
+  INFO((random ? "random packing" : "FCC lattice")
+       << (index ? "" : ", no index") << ", " << pieces << " pieces");
   // A lattice's openings to rounding; a random packing's near the cut as
   // measured (checkPiecesAddUp).
   const double opening = random ? 0.02 : 0.0;
@@ -467,19 +482,171 @@ TEST_CASE("a cube written x fastest is cut across z: each piece is one run of th
   }
 }
 
-TEST_CASE("a triangulated packing's pieces are not read through the index, and say why not",
+namespace {
+
+// Whether two labellings of the same particles make the same partition.
+bool samePartition(const std::vector<std::int32_t>& a, const std::vector<std::int32_t>& b) {
+  std::map<std::int32_t, std::int32_t> ab;
+  std::map<std::int32_t, std::int32_t> ba;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    if (ab.try_emplace(a[k], b[k]).first->second != b[k] ||
+        ba.try_emplace(b[k], a[k]).first->second != a[k]) {
+      return false;
+    }
+  }
+  return a.size() == b.size();
+}
+
+}  // namespace
+
+TEST_CASE(
+    "a triangulated packing's piece read through the index is the one cut with the whole "
+    "set's triangulation",
+    "[cracks][vtk][pieces][index]") {
+  testing::TempDir dir;
+  const int dimension = GENERATE(3, 2);
+  INFO(dimension << "D");
+  const std::string path = randomFile(dir, true, true, dimension);
+  auto file = dem::DemFileReader::open(path);
+  REQUIRE(file.isOk());
+  auto lattice = file->readLattice();
+  auto first = file->readStep(0);
+  REQUIRE(lattice.isOk());
+  REQUIRE(first.isOk());
+  auto wide = file->readWideCells();
+  REQUIRE(wide.isOk());
+  REQUIRE(wide->has_value());
+  // The flat cells at the specimen's surface, which no slab can find alone.
+  CHECK_FALSE((*wide)->cells.empty());
+  CHECK((*wide)->weighted == (dimension == 3));
+  auto whole = cracks::triangulate(first->positions, lattice->radius, dimension);
+  REQUIRE(whole.isOk());
+  const int pieces = GENERATE(2, 3, 5);
+  const double ghost = GENERATE(1.0, 4.0);
+  INFO(pieces << " pieces, ghost width " << ghost << " bonds");
+  const double width = ghost * cracks::longestBond(first->positions, lattice->bonds);
+  bool split = false;
+  int usedWide = 0;  // stored cells a piece took
+  for (int p = 0; p < pieces; ++p) {
+    INFO("piece " << p);
+    const cracks::Piece cut =
+        cracks::partitionPiece(first->positions, lattice->bonds, p, pieces, width, &*whole);
+    auto read = cracks::readIndexedPiece(*file, p, pieces, ghost);
+    REQUIRE(read.isOk());
+    REQUIRE(read->has_value());
+    const cracks::IndexedPiece& piece = **read;
+    REQUIRE(piece.triangulated.has_value());
+    CHECK(piece.part.particles == cut.particles);
+    CHECK(piece.part.owned == cut.owned);
+    CHECK(piece.part.bonds == cut.bonds);
+    CHECK(piece.part.localBonds == cut.localBonds);
+    // Its cells: every cell of the whole set's with a node in the slab and
+    // ghost layer (the piece cut without the triangulation), in its indices.
+    const cracks::Piece zone =
+        cracks::partitionPiece(first->positions, lattice->bonds, p, pieces, width);
+    std::vector<std::array<dem::ParticleIndex, 4>> expected;
+    auto local = [&](dem::ParticleIndex i) {
+      if (i < 0) {
+        return dem::ParticleIndex{-1};  // a triangle's fourth node
+      }
+      const auto at = std::lower_bound(cut.particles.begin(), cut.particles.end(), i);
+      return at != cut.particles.end() && *at == i
+                 ? static_cast<dem::ParticleIndex>(at - cut.particles.begin())
+                 : -2;
+    };
+    for (const auto& cell : whole->cells) {
+      if (std::any_of(cell.begin(), cell.end(), [&](dem::ParticleIndex i) {
+            return std::binary_search(zone.particles.begin(), zone.particles.end(), i);
+          })) {
+        std::array<dem::ParticleIndex, 4> mapped{};
+        std::transform(cell.begin(), cell.end(), mapped.begin(), local);
+        expected.push_back(mapped);
+      }
+    }
+    std::sort(expected.begin(), expected.end());
+    CHECK(piece.triangulated->triangulation.cells == expected);
+    for (const auto& cell : (*wide)->cells) {
+      usedWide += std::any_of(cell.begin(), cell.end(), [&](dem::ParticleIndex i) {
+        return std::binary_search(zone.particles.begin(), zone.particles.end(), i);
+      });
+    }
+    // Its components at every step: the whole set's, restricted to it.
+    for (int step = -1; step < file->stepCount(); ++step) {
+      INFO("step " << step);
+      std::vector<std::uint8_t> state;
+      if (step >= 0) {
+        auto states = file->readBondState(step);
+        REQUIRE(states.isOk());
+        state = std::move(*states);
+      }
+      std::vector<std::int32_t> wholeLabels;
+      for (std::int32_t label :
+           cracks::connectedComponents(first->positions.size(), lattice->bonds, state)) {
+        wholeLabels.push_back(label);
+      }
+      std::vector<std::int32_t> expectedLabels;
+      for (dem::ParticleIndex i : cut.particles) {
+        expectedLabels.push_back(wholeLabels[static_cast<std::size_t>(i)]);
+      }
+      const auto labels = cracks::componentsAt(piece.triangulated->forest, step);
+      CHECK(samePartition(labels, expectedLabels));
+      std::set<std::int32_t> distinct(labels.begin(), labels.end());
+      split = split || distinct.size() > 1;
+    }
+  }
+  CHECK(split);  // the planted crack parts some piece's particles
+  CHECK(usedWide > 0);
+}
+
+TEST_CASE("a triangulated packing without stored wide cells is read whole by every rank",
           "[cracks][vtk][pieces][index]") {
   testing::TempDir dir;
-  const std::string path = randomFile(dir);
+  const std::string path = randomFile(dir, true, false);
   auto file = dem::DemFileReader::open(path);
   REQUIRE(file.isOk());
   auto index = file->readSpatialIndexInfo();
   REQUIRE(index.isOk());
   REQUIRE(index->has_value());
   CHECK((*index)->decomposition == dem::CellDecomposition::kTriangulation);
+  CHECK_FALSE((*index)->hasWideCells);
   auto read = cracks::readIndexedPiece(*file, 0, 2, 4.0);
   REQUIRE(read.isOk());
   CHECK_FALSE(read->has_value());
+  // The reader then cuts the piece from the whole set: it still has points.
+  vtkNew<vtkCrackvisDemReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->UpdatePiece(0, 2, 0);
+  CHECK(reader->GetOutput()->GetNumberOfPoints() > 0);
+}
+
+TEST_CASE("damaged wide cells fail a triangulated piece with a clear error",
+          "[cracks][vtk][pieces][index]") {
+  testing::TempDir dir;
+  const std::string path = randomFile(dir);
+  std::int32_t n = 0;
+  {
+    auto file = dem::DemFileReader::open(path);
+    REQUIRE(file.isOk());
+    n = static_cast<std::int32_t>(file->info().particleCount);
+  }
+  // A node beyond N, then nodes out of order.
+  const auto [values, what] =
+      GENERATE_COPY(std::pair{std::vector<std::int32_t>{n + 3}, std::string("outside")},
+                    std::pair{std::vector<std::int32_t>{n - 1, 0}, std::string("descending")});
+  INFO(what);
+  testing::setInt32Elements(path, dem::kIndexWideCellsPath, values, 0);
+  auto file = dem::DemFileReader::open(path);
+  REQUIRE(file.isOk());
+  auto read = cracks::readIndexedPiece(*file, 0, 2, 4.0);
+  REQUIRE_FALSE(read.isOk());
+  CHECK(read.status().code() == StatusCode::kFailedPrecondition);
+  CHECK_THAT(read.status().message(), Catch::Contains(dem::kIndexWideCellsPath));
+  vtkObject::GlobalWarningDisplayOff();
+  vtkNew<vtkCrackvisDemReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->UpdatePiece(0, 2, 0);
+  CHECK(reader->GetOutput()->GetNumberOfPoints() == 0);
+  vtkObject::GlobalWarningDisplayOn();
 }
 
 TEST_CASE("a piece's reader reads the index: a damaged one fails the piece, not the whole read",

@@ -94,10 +94,10 @@ TEST_CASE("crackvis info says which cells the crack methods use on a random pack
                                          "span no lattice"));
     const auto json = nlohmann::json::parse(runProcess({kCli, "info", path, "--json"}).out);
     CHECK_THAT(json["cells"].get<std::string>(), Catch::StartsWith(cells + " triangulation"));
-    // Its pieces need the whole set's triangulation: no per-rank reads.
+    // Its ranks triangulate their slabs, with the wide cells it stores.
     CHECK(json["spatial_index"]["decomposition"] == "triangulation");
-    CHECK(json["spatial_index"]["per_rank_reads"] == false);
-    CHECK_THAT(info.out, Catch::Contains("MPI ranks read every particle (a triangulated packing"));
+    CHECK(json["spatial_index"]["per_rank_reads"] == true);
+    CHECK_THAT(info.out, Catch::Contains("MPI ranks read only their slab"));
   }
 }
 

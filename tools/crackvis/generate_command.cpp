@@ -9,6 +9,7 @@
 #include <crackvis/common/pending_file.hpp>
 #include <crackvis/common/progress.hpp>
 #include <crackvis/cracks/extractor.hpp>
+#include <crackvis/cracks/partition.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/dem/lattice_generator.hpp>
 #include <crackvis/dem/planted_crack.hpp>
@@ -177,7 +178,7 @@ Status writeStepsTo(const std::string& path, const GenerateOptions& options,
   metadata.source = invocation();
   metadata.sourceCode = "crackvis generate";
   metadata.sourceVersion = CRACKVIS_VERSION;
-  metadata.decomposition = cracks::decompositionOf(generated.lattice);
+  cracks::describeCells(metadata, generated.lattice);
   auto writer = dem::DemFileWriter::create(path, generated.lattice, metadata);
   if (!writer) {
     return writer.status();

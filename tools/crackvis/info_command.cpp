@@ -52,7 +52,9 @@ struct FileSummary {
 // Whether the ParaView plugin's MPI ranks read only their slab of this file
 // (cracks::readIndexedPiece's conditions).
 bool perRankReads(const dem::SpatialIndexInfo& index) {
-  return index.hasBondStart && index.decomposition == dem::CellDecomposition::kLattice;
+  return index.hasBondStart &&
+         (index.decomposition == dem::CellDecomposition::kLattice ||
+          (index.decomposition == dem::CellDecomposition::kTriangulation && index.hasWideCells));
 }
 
 nlohmann::json indexJson(const std::optional<dem::SpatialIndexInfo>& index) {
@@ -71,8 +73,9 @@ std::string indexText(const std::optional<dem::SpatialIndexInfo>& index) {
   }
   return fmt::format("order along {}: MPI ranks read {}", analysis::axisName(index->axis),
                      perRankReads(*index) ? "only their slab"
-                                          : "every particle (a triangulated packing, or bonds "
-                                            "not sorted by first end)");
+                                          : "every particle (bonds not sorted by first end, no "
+                                            "decomposition recorded, or a triangulated packing "
+                                            "without its wide cells)");
 }
 
 double percent(std::int64_t part, std::int64_t whole) {

@@ -16,6 +16,7 @@
 #include "commands.hpp"
 #include <crackvis/common/progress.hpp>
 #include <crackvis/cracks/extractor.hpp>
+#include <crackvis/cracks/partition.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/sim/presets.hpp>
 #include <crackvis/sim/run.hpp>
@@ -143,7 +144,7 @@ int runSim(const SimOptions& options, bool setGiven) {
   run.metadata.sourceCode = "crackvis sim";
   run.metadata.sourceVersion = CRACKVIS_VERSION;
   run.metadata.storage.deflateLevel = options.compress;
-  run.metadata.decomposition = cracks::decompositionOf(preset->setup.lattice);
+  cracks::describeCells(run.metadata, preset->setup.lattice);
   run.stepsPerSave = preset->stepsPerSave;
   run.savedSteps = preset->savedSteps;
   run.writeVelocities = !options.noVelocities;

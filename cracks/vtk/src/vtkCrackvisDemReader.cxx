@@ -77,6 +77,9 @@ struct DemReaderCache {
   std::vector<std::int32_t> pieceCells;        // its cells and edges in the piece
   std::vector<std::int32_t> pieceEdges;
   std::vector<std::int32_t> pieceIntactComponents;
+  // A triangulated piece read through the index: which of its particles the
+  // whole set's intact bonds join, at any step.
+  std::optional<BreakForest> forest;
   // The arrays every step of the piece shares (ghost marks, global ids, the
   // whole set's box, decomposition and triangulation), made once and added
   // by reference: an unchanged array tells the filters nothing changed.
@@ -424,7 +427,21 @@ Result<bool> readPieceThroughIndex(DemReaderCache& cache, int piece, int pieces,
   cache.box = read.index.box;
   cache.axis = read.index.axis;
   cache.largestRadius = read.index.largestRadius;
-  cache.decomposition = 0;
+  cache.decomposition = read.index.decomposition == dem::CellDecomposition::kTriangulation ? 1 : 0;
+  cache.pieceCells.clear();
+  cache.pieceEdges.clear();
+  cache.forest.reset();
+  if (read.triangulated) {
+    for (const auto& cell : read.triangulated->triangulation.cells) {
+      cache.pieceCells.insert(cache.pieceCells.end(), cell.begin(), cell.end());
+    }
+    for (const dem::Bond& edge : read.triangulated->triangulation.edges) {
+      cache.pieceEdges.push_back(edge.first);
+      cache.pieceEdges.push_back(edge.second);
+    }
+    cache.forest = std::move(read.triangulated->forest);
+    cache.pieceIntactComponents = componentsAt(*cache.forest, -1);
+  }
   return true;
 }
 
@@ -562,6 +579,15 @@ void addComponents(const DemReaderCache& cache, const dem::StepState& whole, vtk
            cache.part.particles));
 }
 
+// The step's components of the whole set, for a triangulated piece read
+// through the index: from its forest, without the whole set's bonds.
+void addIndexedComponents(const DemReaderCache& cache, int step, vtkPolyData* output) {
+  if (cache.forest) {
+    addArray<vtkIntArray>(output->GetPointData(), kComponentArray,
+                          componentsAt(*cache.forest, step));
+  }
+}
+
 }  // namespace
 
 }  // namespace crackvis::cracks::vtkadapter
@@ -692,6 +718,7 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
     adapter::fill(*cache.wholeArrays, step, *state, output);
   } else {
     if (cache.indexed) {
+      adapter::addIndexedComponents(cache, step, output);
       adapter::fill(*cache.pieceArrays, step, *state, output);
     } else {
       adapter::addComponents(cache, *state, output);

@@ -48,6 +48,34 @@ using dem::longestBond;
 Piece partitionPiece(std::span<const Vec3> reference, std::span<const dem::Bond> bonds, int piece,
                      int pieces, double ghostWidth, const Triangulation* triangulation = nullptr);
 
+// When the whole set's intact bonds stop joining a piece's particles, for a
+// rank that holds only its piece: the union-find forest of every bond,
+// joined in the reverse order of breaking (bonds never heal, so the bonds
+// intact at step s are those whose break step is later, or none), kept
+// only along the paths from the piece's particles to their roots. Going up,
+// the steps before which the links hold only fall, so a particle's
+// component at step s is the highest node it reaches by links that hold
+// at s.
+struct BreakForest {
+  std::vector<std::int32_t> parent;        // per kept node: its parent's slot; -1 a root
+  std::vector<std::int32_t> holdsBefore;   // per kept node: its link holds at steps < this
+  std::vector<std::int32_t> particleSlot;  // per piece particle: its node's slot
+};
+// Each piece particle's component of the whole set by the bonds intact at
+// `step` (a label: equal labels, one component); step -1: the intact
+// packing's, every bond counted. As connectedComponents gives the whole
+// set's, compared label for label within the piece.
+std::vector<std::int32_t> componentsAt(const BreakForest& forest, int step);
+
+// The part of the whole set's triangulation a triangulated piece holds, in
+// piece indices: every cell with a node in the slab and ghost layer, and
+// those cells' edges; and the forest that answers which particles the
+// intact bonds still join.
+struct PieceTriangulation {
+  Triangulation triangulation;
+  BreakForest forest;
+};
+
 // A piece read from a file through its spatial index (/index, v1.3;
 // dem::SpatialIndex): the piece partitionPiece cuts, found by binary searches
 // of the stored coordinates and read row by row, so that a rank holds its
@@ -60,12 +88,34 @@ struct IndexedPiece {
   std::vector<std::int32_t> breakSteps;  // of the piece's bonds
   std::vector<Vec3> reference;           // the piece's particles at the first step
   dem::SpatialIndexInfo index;           // the whole set's box, largest radius, decomposition
+  // A triangulated packing's (index.decomposition kTriangulation).
+  std::optional<PieceTriangulation> triangulated;
 };
 // nullopt when the file cannot be read so: it has no index, no bond_start
-// (bonds not sorted by first end), or a decomposition other than a lattice
-// (a triangulated packing's pieces need the whole set's triangulation).
+// (bonds not sorted by first end), no recorded decomposition, or a
+// triangulated packing without /index/wide_cells, or whose slab and margin
+// cannot be triangulated alone (too few particles, or all in one plane).
+//
+// A triangulated piece holds what partitionPiece holds with the whole set's
+// triangulation. The rank triangulates its slab, its ghost layer and a
+// margin of twice the wide-cell reach around them, and keeps the cells
+// that touch the slab and ghost layer and reach no farther than the
+// margin: those are the whole set's. The cells that reach farther (the
+// flat cells at the specimen's surface) come from /index/wide_cells. The
+// forest (BreakForest) comes from one pass over every bond's ends and
+// break step, read in spans, whose memory is freed before return.
 Result<std::optional<IndexedPiece>> readIndexedPiece(const dem::DemFileReader& reader, int piece,
                                                      int pieces, double ghostBonds);
+
+// A triangulated packing's wide cells (dem::WideCells) from its first
+// step: the cells whose reach exceeds kWideCellReach longest bonds.
+Result<dem::WideCells> wideCellsOf(std::span<const Vec3> first, const dem::Lattice& lattice);
+inline constexpr double kWideCellReach = 1.5;
+
+// What a writer's metadata says of the cells: the decomposition
+// (decompositionOf), and for a triangulated packing the maker of its wide
+// cells, so that its MPI ranks read only their pieces.
+void describeCells(dem::DemMetadata& metadata, const dem::Lattice& lattice);
 
 // Each particle's connected component by the bonds that are intact in
 // `bondState` (all of them when it is empty), labelled by a member's index.

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -29,9 +30,26 @@ struct Triangulation {
 };
 
 // Radii that differ by more than a relative 1e-9 make the triangulation
-// regular. Fails on fewer than dimension + 1 particles or all of them
-// coplanar (collinear in 2D).
+// regular, unless `weighted` says (a piece of a set triangulates as the
+// whole set does). Fails on fewer than dimension + 1 particles or all of
+// them coplanar (collinear in 2D).
 Result<Triangulation> triangulate(std::span<const dem::Vec3> positions,
-                                  std::span<const double> radius, int dimension);
+                                  std::span<const double> radius, int dimension,
+                                  std::optional<bool> weighted = std::nullopt);
+
+// Whether radii differ enough to make the triangulation regular.
+bool needsRegularTriangulation(std::span<const double> radius);
+
+// Each cell's reach: the radius of the ball around its circumcentre (a
+// regular triangulation's power centre) that holds every particle able to
+// unmake the cell, one inside its circumsphere or whose weight (up to
+// largestRadius^2) makes its power distance negative. So a cell of the
+// triangulation of a subset whose ball holds no particle outside the subset
+// is a cell of the whole set's (Delaunay and regular triangulations are
+// local). +infinity for a degenerate cell. The nodes are taken in ascending
+// order, so equal input gives equal reach, bit for bit.
+std::vector<double> cellReach(const Triangulation& triangulation,
+                              std::span<const dem::Vec3> positions, std::span<const double> radius,
+                              double largestRadius);
 
 }  // namespace crackvis::cracks

@@ -56,6 +56,9 @@ struct DemMetadata {
   // (cracks::decompositionOf), lets a reader of one slab skip that decision.
   bool spatialIndex = true;
   CellDecomposition decomposition = CellDecomposition::kUnknown;
+  // For a triangulated packing, what makes /index/wide_cells (unset: not
+  // written, and each rank then reads the whole set).
+  WideCellsMaker wideCells;
 };
 
 // Metadata naming only what produced the file.
@@ -160,6 +163,9 @@ class DemFileReader {
   Result<double> readIndexCoordinate(std::int64_t k) const;
   // /index/bond_start at `rows` (ascending particle indices, N included).
   Result<std::vector<std::int64_t>> readBondStarts(std::span<const std::int32_t> rows) const;
+  // /index/wide_cells with its attributes, checked (nodes in range and
+  // ascending); nullopt when the file has none.
+  Result<std::optional<WideCells>> readWideCells() const;
 
   // Partial reads, for a reader of one piece of the specimen (an MPI rank;
   // cracks::readIndexedPiece): rows `particles` of the per-particle arrays
@@ -214,6 +220,7 @@ class DemFileReader {
   Status readOptional(DemDataset id, std::uint64_t count, std::vector<T>& out) const;
   Status readProvenance();
   Status checkIndexable() const;
+  Status readWideCellsInfo(hid_t group, SpatialIndexInfo& info) const;
   Status checkStored(DemDataset id, std::int64_t rows) const;
   Status listExtras();
   Result<OpenedDataset> openExtra(const ExtraInfo& extra, int step) const;
@@ -253,6 +260,7 @@ class DemFileWriter {
   Status writeStepData(const StepState& step, bool breaksChanged);
   Status writeExtras(hid_t location, const std::vector<ExtraArray>& extras);
   Status writeSpatialIndex(const StepState& first);
+  Status writeWideCells(hid_t group, const StepState& first);
   // One step in the appendable layout, or as a step group; the commit last.
   Status writeAppendableStep(const StepState& step, bool breaksChanged);
   Status writeGroupStep(const StepState& step, bool breaksChanged);
@@ -277,6 +285,7 @@ class DemFileWriter {
   StepLayout m_layout = StepLayout::kGroups;
   bool m_spatialIndex = true;
   CellDecomposition m_decomposition = CellDecomposition::kUnknown;
+  WideCellsMaker m_wideCells;
   std::shared_ptr<StepAxis> m_axis;  // appendable, from the first step on
 };
 

@@ -11,10 +11,13 @@
 // `coordinate` finds.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
+#include <crackvis/common/status.hpp>
 #include <crackvis/dem/model.hpp>
 
 namespace crackvis::dem {
@@ -34,6 +37,7 @@ inline constexpr const char* kIndexOrderPath = "/index/order";
 inline constexpr const char* kIndexCoordinatePath = "/index/coordinate";
 inline constexpr const char* kIndexBondStartPath = "/index/bond_start";
 inline constexpr const char* kIndexBoxPath = "/index/box";
+inline constexpr const char* kIndexWideCellsPath = "/index/wide_cells";
 
 // "lattice", "triangulation" (the attribute /index@decomposition); "" unknown.
 const char* decompositionName(CellDecomposition decomposition);
@@ -48,7 +52,34 @@ struct SpatialIndexInfo {
   // Whether /index/bond_start is stored: only when the bonds are sorted by
   // their first end, as crackvis writes them.
   bool hasBondStart = false;
+  // Whether /index/wide_cells is stored (a triangulated packing's part of
+  // the index, WideCells), with its attributes.
+  bool hasWideCells = false;
+  double wideCellReach = 0.0;
+  bool weightedTriangulation = false;
 };
+
+// A triangulated packing's part of the index (/index/wide_cells): what a
+// rank cannot learn from its slab. A rank triangulates its slab and a margin
+// around it; a cell of that triangulation whose reach (the radius of the
+// ball around its circumcentre, or power centre, that holds every particle
+// able to unmake it: cracks::cellReach) lies inside the margin is a cell of
+// the whole set's triangulation. Cells whose reach exceeds `reach` (the flat
+// cells at the specimen's surface, which reach far along it) are stored
+// here, found once on the whole set by its writer.
+struct WideCells {
+  double reach = 0.0;     // metres: every cell of larger reach is listed
+  bool weighted = false;  // a regular (power) triangulation: the radii differ
+  // Nodes ascending; in 2D the fourth is -1. Sorted.
+  std::vector<std::array<ParticleIndex, 4>> cells;
+};
+
+// Makes a triangulated packing's WideCells from its first step (the writer
+// calls it with the step it writes, so the cells match the stored
+// positions exactly); set by cracks::describeCells, since dem knows no
+// triangulation.
+using WideCellsMaker =
+    std::function<Result<WideCells>(std::span<const Vec3> first, const Lattice& lattice)>;
 
 struct SpatialIndex {
   SpatialIndexInfo info;
