@@ -403,7 +403,10 @@ Result<std::optional<std::vector<std::array<dem::ParticleIndex, 4>>>> zoneCells(
     for (dem::ParticleIndex& node : cell) {
       node = node < 0 ? -1 : (*near)[static_cast<std::size_t>(node)];
     }
-    if (reach[c] <= wide.reach && touches(cell)) {
+    // The writer stored the cells of reach above wide.reach, computed from
+    // the same numbers; the slack keeps a cell at the threshold found even
+    // if another build rounds its reach otherwise (the margin allows it).
+    if (reach[c] <= wide.reach * (1.0 + 1e-9) && touches(cell)) {
       cells.push_back(cell);
     }
   }
@@ -449,7 +452,7 @@ struct ForestBuilder {
 
 // One pass over every bond, in spans: the forest of the whole set (bonds
 // that never break first, then the others by falling break step), and the
-// bonded neighbours of the particles `far` marks.
+// bonded neighbours of the particles `far` marks (none when it is empty).
 struct BondPass {
   ForestBuilder forest;
   std::vector<dem::ParticleIndex> neighbours;  // of the far particles, unsorted
@@ -482,10 +485,10 @@ Result<BondPass> passOverBonds(const dem::DemFileReader& reader,
       } else {
         broken.push_back({step, bond});
       }
-      if (far[static_cast<std::size_t>(bond.first)] != 0) {
+      if (!far.empty() && far[static_cast<std::size_t>(bond.first)] != 0) {
         pass.neighbours.push_back(bond.second);
       }
-      if (far[static_cast<std::size_t>(bond.second)] != 0) {
+      if (!far.empty() && far[static_cast<std::size_t>(bond.second)] != 0) {
         pass.neighbours.push_back(bond.first);
       }
     }
@@ -667,6 +670,15 @@ Result<std::optional<IndexedPiece>> readIndexedPiece(const dem::DemFileReader& r
   CRACKVIS_RETURN_IF_ERROR(keepHeldBonds(reader, *candidates, firstEnds, result.part));
   CRACKVIS_RETURN_IF_ERROR(readPieceRows(reader, result));
   return std::optional<IndexedPiece>{std::move(result)};
+}
+
+Result<BreakForest> readBreakForest(const dem::DemFileReader& reader,
+                                    const std::vector<dem::ParticleIndex>& particles) {
+  auto pass = passOverBonds(reader, {});
+  if (!pass) {
+    return pass.status();
+  }
+  return keepPaths(pass->forest, particles);
 }
 
 std::vector<std::int32_t> componentsAt(const BreakForest& forest, int step) {

@@ -341,5 +341,13 @@ TEST_CASE("a cell's reach is its circumradius, or its power radius widened by th
     REQUIRE(triangulation->cells.size() == 1);
     const auto reach = cracks::cellReach(*triangulation, triangle, radius, 0.1);
     CHECK(reach.at(0) == Approx(std::sqrt(2.0)).epsilon(1e-12));
+    // Unequal radii: the power centre (0.9925, 1), power 1.97505625, plus 0.2^2.
+    const std::vector<double> unequal{0.1, 0.2, 0.1};
+    auto regular = cracks::triangulate(triangle, unequal, 2);
+    REQUIRE(regular.isOk());
+    REQUIRE(regular->cells.size() == 1);
+    CHECK(regular->weighted);
+    const auto power = cracks::cellReach(*regular, triangle, unequal, 0.2);
+    CHECK(power.at(0) == Approx(std::sqrt(1.97505625 + 0.04)).epsilon(1e-12));
   }
 }

@@ -11,6 +11,8 @@
 #include <set>
 
 #include <catch2/catch.hpp>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <vtkCellAttributeCrackFilter.h>
 #include <vtkCellCentreCrackFilter.h>
 #include <vtkCellCutCrackFilter.h>
@@ -28,6 +30,7 @@
 #include <vtkSmartPointer.h>
 #include <vtkStreamingDemandDrivenPipeline.h>
 
+#include "crackvis_vtk_conversion.h"
 #include "support/h5_tamper.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/cracks/extractor.hpp>
@@ -486,6 +489,9 @@ namespace {
 
 // Whether two labellings of the same particles make the same partition.
 bool samePartition(const std::vector<std::int32_t>& a, const std::vector<std::int32_t>& b) {
+  if (a.size() != b.size()) {
+    return false;
+  }
   std::map<std::int32_t, std::int32_t> ab;
   std::map<std::int32_t, std::int32_t> ba;
   for (std::size_t k = 0; k < a.size(); ++k) {
@@ -494,7 +500,7 @@ bool samePartition(const std::vector<std::int32_t>& a, const std::vector<std::in
       return false;
     }
   }
-  return a.size() == b.size();
+  return true;
 }
 
 }  // namespace
@@ -596,6 +602,90 @@ TEST_CASE(
   }
   CHECK(split);  // the planted crack parts some piece's particles
   CHECK(usedWide > 0);
+}
+
+TEST_CASE("a live triangulated packing's piece sees the bonds broken after it was read",
+          "[cracks][vtk][pieces][index][live]") {
+  // The writer runs in a child, as a simulation beside ParaView would: HDF5
+  // shares one open file between the opens of a process.
+  dem::RandomPackingSpec spec;
+  spec.box = {0.03, 0.008, 0.008};
+  spec.radiusMin = 4e-4;
+  spec.radiusMax = 6e-4;
+  auto packing = dem::generateRandomPacking(spec);
+  REQUIRE(packing.isOk());
+  dem::PlantedCrackSpec crackSpec;
+  crackSpec.steps = 6;
+  crackSpec.opening = 1.0;
+  auto crack = dem::PlantedCrack::create(packing->lattice, packing->positions, crackSpec);
+  REQUIRE(crack.isOk());
+  testing::TempDir dir;
+  const std::string path = dir.file("live-random.h5");
+  int go[2];
+  int done[2];
+  REQUIRE(pipe(go) == 0);
+  REQUIRE(pipe(done) == 0);
+  const pid_t writer = fork();
+  if (writer == 0) {
+    dem::DemMetadata metadata = dem::metadataFrom("vtk_pieces test");
+    metadata.stepLayout = dem::StepLayout::kAppendable;
+    cracks::describeCells(metadata, packing->lattice);
+    auto file = dem::DemFileWriter::create(path, packing->lattice, metadata);
+    char byte = 0;
+    // Two steps, then the rest when told.
+    for (int k = 0; k < crack->stepCount() && file; ++k) {
+      if (!file->appendStep(crack->step(k)) ||
+          (k == 1 && (write(done[1], "s", 1) != 1 || read(go[0], &byte, 1) != 1))) {
+        _exit(1);
+      }
+    }
+    _exit(file && file->close() ? 0 : 1);
+  }
+  REQUIRE(writer > 0);
+  char byte = 0;
+  REQUIRE(read(done[0], &byte, 1) == 1);  // steps 0 and 1 are in
+  vtkNew<vtkCrackvisDemReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->UpdateInformation();
+  reader->UpdateTimeStep(1.0, 0, 2, 0);
+  REQUIRE(reader->GetOutput()->GetPointData()->GetArray(cracks::vtkadapter::kComponentArray) !=
+          nullptr);
+  REQUIRE(write(go[1], "g", 1) == 1);
+  int status = 0;
+  REQUIRE(waitpid(writer, &status, 0) == writer);
+  REQUIRE((WIFEXITED(status) && WEXITSTATUS(status) == 0));
+  for (int fd : {go[0], go[1], done[0], done[1]}) {
+    close(fd);
+  }
+  // ParaView's Reload Files, then the last step.
+  reader->Modified();
+  reader->UpdateInformation();
+  vtkInformation* info = reader->GetOutputInformation(0);
+  const int steps = info->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+  REQUIRE(steps == crack->stepCount());
+  reader->UpdateTimeStep(info->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS())[steps - 1], 0, 2,
+                         0);
+  vtkPolyData* piece = reader->GetOutput();
+  vtkDataArray* components = piece->GetPointData()->GetArray(cracks::vtkadapter::kComponentArray);
+  vtkDataArray* ids = piece->GetPointData()->GetGlobalIds();
+  REQUIRE(components != nullptr);
+  REQUIRE(ids != nullptr);
+  // The whole set's components at that step, restricted to the piece.
+  auto file = dem::DemFileReader::open(path);
+  REQUIRE(file.isOk());
+  auto state = file->readBondState(steps - 1);
+  REQUIRE(state.isOk());
+  const auto whole =
+      cracks::connectedComponents(packing->positions.size(), packing->lattice.bonds, *state);
+  std::vector<std::int32_t> expected;
+  std::vector<std::int32_t> labels;
+  for (vtkIdType k = 0; k < ids->GetNumberOfTuples(); ++k) {
+    expected.push_back(whole[static_cast<std::size_t>(ids->GetComponent(k, 0))]);
+    labels.push_back(static_cast<std::int32_t>(components->GetComponent(k, 0)));
+  }
+  CHECK(samePartition(labels, expected));
+  // The planted crack runs across the cut: it parts the piece.
+  CHECK(std::set<std::int32_t>(labels.begin(), labels.end()).size() > 1);
 }
 
 TEST_CASE("a triangulated packing without stored wide cells is read whole by every rank",

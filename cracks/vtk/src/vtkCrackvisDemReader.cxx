@@ -412,6 +412,11 @@ void addPieceData(const DemReaderCache& cache, vtkPolyData* output) {
 // index this can use (cracks::readIndexedPiece).
 Result<bool> readPieceThroughIndex(DemReaderCache& cache, int piece, int pieces,
                                    double ghostBonds) {
+  // Nothing of the piece asked for before may outlive it.
+  cache.pieceCells.clear();
+  cache.pieceEdges.clear();
+  cache.pieceIntactComponents.clear();
+  cache.forest.reset();
   auto indexed = readIndexedPiece(*cache.reader, piece, pieces, ghostBonds);
   if (!indexed) {
     return indexed.status();
@@ -428,9 +433,6 @@ Result<bool> readPieceThroughIndex(DemReaderCache& cache, int piece, int pieces,
   cache.axis = read.index.axis;
   cache.largestRadius = read.index.largestRadius;
   cache.decomposition = read.index.decomposition == dem::CellDecomposition::kTriangulation ? 1 : 0;
-  cache.pieceCells.clear();
-  cache.pieceEdges.clear();
-  cache.forest.reset();
   if (read.triangulated) {
     for (const auto& cell : read.triangulated->triangulation.cells) {
       cache.pieceCells.insert(cache.pieceCells.end(), cell.begin(), cell.end());
@@ -540,6 +542,14 @@ Status refreshBreakSteps(DemReaderCache& cache) {
       rows = pick(cache.breakSteps, cache.part.bonds);
     }
     replaceCellArray(*cache.pieceArrays, makeArray<vtkIntArray>("break_step", rows));
+  }
+  if (cache.forest) {
+    // Bonds broken since it was built were read as never breaking.
+    auto forest = readBreakForest(*cache.reader, cache.part.particles);
+    if (!forest) {
+      return forest.status();
+    }
+    cache.forest = std::move(*forest);
   }
   cache.breakStepsStale = false;
   return Status::ok();

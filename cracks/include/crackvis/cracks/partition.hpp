@@ -66,6 +66,13 @@ struct BreakForest {
 // packing's, every bond counted. As connectedComponents gives the whole
 // set's, compared label for label within the piece.
 std::vector<std::int32_t> componentsAt(const BreakForest& forest, int step);
+// The forest for `particles` (ascending) from one pass over every bond's
+// ends and break step, read in spans: transient memory of 13 bytes per
+// particle and 12 per broken bond of the whole set. Again after a live
+// file's writer added steps, since bonds broken since then were read as
+// never breaking.
+Result<BreakForest> readBreakForest(const dem::DemFileReader& reader,
+                                    const std::vector<dem::ParticleIndex>& particles);
 
 // The part of the whole set's triangulation a triangulated piece holds, in
 // piece indices: every cell with a node in the slab and ghost layer, and
@@ -96,14 +103,17 @@ struct IndexedPiece {
 // triangulated packing without /index/wide_cells, or whose slab and margin
 // cannot be triangulated alone (too few particles, or all in one plane).
 //
-// A triangulated piece holds what partitionPiece holds with the whole set's
-// triangulation. The rank triangulates its slab, its ghost layer and a
-// margin of twice the wide-cell reach around them, and keeps the cells
-// that touch the slab and ghost layer and reach no farther than the
-// margin: those are the whole set's. The cells that reach farther (the
-// flat cells at the specimen's surface) come from /index/wide_cells. The
-// forest (BreakForest) comes from one pass over every bond's ends and
-// break step, read in spans, whose memory is freed before return.
+// A triangulated piece holds the particles and bonds partitionPiece holds
+// with the whole set's triangulation, and of that triangulation the cells
+// with a node in the slab and ghost layer, with their edges (not the other
+// cells among its particles, which make no primitive it owns). The rank
+// triangulates its slab, its ghost layer and a margin of 2.5 wide-cell
+// reaches (dem::WideCells::reach) around them, and keeps the cells that
+// touch the slab and ghost layer and whose reach (cellReach) is at most
+// that: with every particle able to unmake them within two reaches of the
+// zone, they are the whole set's. The cells of larger reach (the flat
+// cells at the specimen's surface) come from /index/wide_cells. The forest
+// comes from readBreakForest's pass; its memory is freed before return.
 Result<std::optional<IndexedPiece>> readIndexedPiece(const dem::DemFileReader& reader, int piece,
                                                      int pieces, double ghostBonds);
 
