@@ -2,7 +2,6 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
-#include <unordered_map>
 #include <utility>
 
 #include <fmt/format.h>
@@ -393,29 +392,43 @@ Result<std::optional<std::vector<std::array<dem::ParticleIndex, 4>>>> zoneCells(
   }
   const std::vector<double> reach =
       cellReach(*local, positions->positions, rows->radius, index.largestRadius);
-  auto touches = [&](const std::array<dem::ParticleIndex, 4>& cell) {
-    return std::any_of(cell.begin(), cell.end(),
-                       [&](dem::ParticleIndex i) { return i >= 0 && contains(zone, i); });
-  };
+  // Zone membership by local index (both lists ascending).
+  std::vector<std::uint8_t> inZone(near->size(), 0);
+  auto z = zone.begin();
+  for (std::size_t k = 0; k < near->size(); ++k) {
+    while (z != zone.end() && *z < (*near)[k]) {
+      ++z;
+    }
+    inZone[k] = z != zone.end() && *z == (*near)[k] ? 1 : 0;
+  }
   Cells cells;
   for (std::size_t c = 0; c < local->cells.size(); ++c) {
-    std::array<dem::ParticleIndex, 4> cell = local->cells[c];
-    for (dem::ParticleIndex& node : cell) {
-      node = node < 0 ? -1 : (*near)[static_cast<std::size_t>(node)];
-    }
+    const std::array<dem::ParticleIndex, 4>& cell = local->cells[c];
     // The writer stored the cells of reach above wide.reach, computed from
     // the same numbers; the slack keeps a cell at the threshold found even
     // if another build rounds its reach otherwise (the margin allows it).
-    if (reach[c] <= wide.reach * (1.0 + 1e-9) && touches(cell)) {
-      cells.push_back(cell);
+    if (reach[c] <= wide.reach * (1.0 + 1e-9) &&
+        std::any_of(cell.begin(), cell.end(), [&](dem::ParticleIndex i) {
+          return i >= 0 && inZone[static_cast<std::size_t>(i)] != 0;
+        })) {
+      std::array<dem::ParticleIndex, 4> global{};
+      std::transform(cell.begin(), cell.end(), global.begin(), [&](dem::ParticleIndex i) {
+        return i < 0 ? -1 : (*near)[static_cast<std::size_t>(i)];
+      });
+      cells.push_back(global);
     }
   }
+  // The local cells come sorted (near is ascending, so the mapping keeps
+  // their order): the wide cells are merged in.
+  const auto localCount = static_cast<std::ptrdiff_t>(cells.size());
   for (const auto& cell : wide.cells) {
-    if (touches(cell)) {
+    if (std::any_of(cell.begin(), cell.end(),
+                    [&](dem::ParticleIndex i) { return i >= 0 && contains(zone, i); })) {
       cells.push_back(cell);
     }
   }
-  std::sort(cells.begin(), cells.end());
+  std::sort(cells.begin() + localCount, cells.end());
+  std::inplace_merge(cells.begin(), cells.begin() + localCount, cells.end());
   cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
   return std::optional<Cells>{std::move(cells)};
 }
@@ -504,14 +517,17 @@ Result<BondPass> passOverBonds(const dem::DemFileReader& reader,
 // The forest kept along the paths from the piece's particles to their roots.
 BreakForest keepPaths(const ForestBuilder& whole, const std::vector<dem::ParticleIndex>& held) {
   BreakForest forest;
-  std::unordered_map<std::int32_t, std::int32_t> slotOf;
+  std::vector<std::int32_t> slotOf(whole.parent.size(), -1);
+  // The node's slot, and whether it is new.
   auto slot = [&](std::int32_t x) {
-    auto [at, added] = slotOf.try_emplace(x, static_cast<std::int32_t>(forest.parent.size()));
+    std::int32_t& at = slotOf[static_cast<std::size_t>(x)];
+    const bool added = at < 0;
     if (added) {
+      at = static_cast<std::int32_t>(forest.parent.size());
       forest.parent.push_back(-1);
       forest.holdsBefore.push_back(whole.holdsBefore[static_cast<std::size_t>(x)]);
     }
-    return std::pair{at->second, added};
+    return std::pair{at, added};
   };
   for (dem::ParticleIndex i : held) {
     auto [node, added] = slot(i);
@@ -528,39 +544,50 @@ BreakForest keepPaths(const ForestBuilder& whole, const std::vector<dem::Particl
   return forest;
 }
 
-// The cells in piece indices, and their edges.
+// The cells in piece indices, and their edges (sorted, each once: gathered
+// per first end, since a particle has few).
 Triangulation pieceTriangulation(const std::vector<std::array<dem::ParticleIndex, 4>>& cells,
-                                 const std::vector<dem::ParticleIndex>& held, int dimension,
-                                 bool weighted) {
+                                 const std::vector<dem::ParticleIndex>& held,
+                                 std::size_t particleCount, int dimension, bool weighted) {
   Triangulation out;
   out.dimension = dimension;
   out.weighted = weighted;
-  auto local = [&](dem::ParticleIndex i) -> dem::ParticleIndex {
-    return i < 0 ? -1
-                 : static_cast<dem::ParticleIndex>(std::lower_bound(held.begin(), held.end(), i) -
-                                                   held.begin());
-  };
-  const int nodes = dimension == 3 ? 4 : 3;
+  std::vector<dem::ParticleIndex> localOf(particleCount, -1);
+  for (std::size_t k = 0; k < held.size(); ++k) {
+    localOf[static_cast<std::size_t>(held[k])] = static_cast<dem::ParticleIndex>(k);
+  }
+  const auto nodes = static_cast<std::size_t>(dimension == 3 ? 4 : 3);
+  out.cells.reserve(cells.size());
+  std::vector<std::int32_t> start(held.size() + 1, 0);
   for (const auto& cell : cells) {
     std::array<dem::ParticleIndex, 4> mapped{};
-    std::transform(cell.begin(), cell.end(), mapped.begin(), local);
-    out.cells.push_back(mapped);
-    for (int a = 0; a < nodes; ++a) {
-      for (int b = a + 1; b < nodes; ++b) {
-        out.edges.push_back(
-            {mapped[static_cast<std::size_t>(a)], mapped[static_cast<std::size_t>(b)]});
+    std::transform(cell.begin(), cell.end(), mapped.begin(), [&](dem::ParticleIndex i) {
+      return i < 0 ? -1 : localOf[static_cast<std::size_t>(i)];
+    });
+    out.cells.push_back(mapped);  // ascending still: the mapping keeps order
+    for (std::size_t a = 0; a + 1 < nodes; ++a) {
+      start[static_cast<std::size_t>(mapped[a]) + 1] += static_cast<std::int32_t>(nodes - 1 - a);
+    }
+  }
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<dem::ParticleIndex> other(static_cast<std::size_t>(start.back()));
+  std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
+  for (const auto& cell : out.cells) {
+    for (std::size_t a = 0; a + 1 < nodes; ++a) {
+      for (std::size_t b = a + 1; b < nodes; ++b) {
+        other[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell[a])]++)] = cell[b];
       }
     }
   }
-  auto before = [](dem::Bond a, dem::Bond b) {
-    return a.first != b.first ? a.first < b.first : a.second < b.second;
-  };
-  std::sort(out.edges.begin(), out.edges.end(), before);
-  out.edges.erase(std::unique(out.edges.begin(), out.edges.end(),
-                              [](dem::Bond a, dem::Bond b) {
-                                return a.first == b.first && a.second == b.second;
-                              }),
-                  out.edges.end());
+  for (std::size_t a = 0; a < held.size(); ++a) {
+    const auto first = other.begin() + start[a];
+    const auto last = other.begin() + start[a + 1];
+    std::sort(first, last);
+    const auto unique = std::unique(first, last);
+    for (auto b = first; b != unique; ++b) {
+      out.edges.push_back({static_cast<dem::ParticleIndex>(a), *b});
+    }
+  }
   return out;
 }
 
@@ -587,17 +614,25 @@ Result<bool> holdTriangulatedPiece(const dem::DemFileReader& reader, const SlabR
   if (!*cells) {
     return false;
   }
-  std::vector<std::uint8_t> far(static_cast<std::size_t>(reader.info().particleCount), 0);
+  const auto n = static_cast<std::size_t>(reader.info().particleCount);
+  // 1: in the zone; 2: a node of a cell, outside the zone (far).
+  std::vector<std::uint8_t> mark(n, 0);
+  for (dem::ParticleIndex i : zone) {
+    mark[static_cast<std::size_t>(i)] = 1;
+  }
   std::vector<dem::ParticleIndex> held = zone;
   for (const auto& cell : **cells) {
     for (dem::ParticleIndex i : cell) {
-      if (i >= 0 && !contains(zone, i)) {
-        far[static_cast<std::size_t>(i)] = 1;
+      if (i >= 0 && mark[static_cast<std::size_t>(i)] == 0) {
+        mark[static_cast<std::size_t>(i)] = 2;
         held.push_back(i);
       }
     }
   }
-  auto pass = passOverBonds(reader, far);
+  for (std::uint8_t& m : mark) {
+    m = m == 2 ? 1 : 0;
+  }
+  auto pass = passOverBonds(reader, mark);
   if (!pass) {
     return pass.status();
   }
@@ -614,7 +649,7 @@ Result<bool> holdTriangulatedPiece(const dem::DemFileReader& reader, const SlabR
   }
   PieceTriangulation triangulated;
   triangulated.triangulation =
-      pieceTriangulation(**cells, held, reader.info().dimension, (*wide)->weighted);
+      pieceTriangulation(**cells, held, n, reader.info().dimension, (*wide)->weighted);
   triangulated.forest = keepPaths(pass->forest, held);
   result.triangulated = std::move(triangulated);
   return true;

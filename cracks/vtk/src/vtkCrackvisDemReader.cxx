@@ -74,7 +74,7 @@ struct DemReaderCache {
   double largestRadius = 0.0;  // the whole set's
   int decomposition = -1;      // of the whole set: 0 lattice, 1 triangulation; -1 not decided
   std::optional<Triangulation> triangulation;  // the whole set's, when it is triangulated
-  std::vector<std::int32_t> pieceCells;        // its cells and edges in the piece
+  std::vector<std::int32_t> pieceCells;        // its cells and edges in the piece, while prepared
   std::vector<std::int32_t> pieceEdges;
   std::vector<std::int32_t> pieceIntactComponents;
   // A triangulated piece read through the index: which of its particles the
@@ -499,7 +499,11 @@ Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBo
   addPieceData(cache, cache.pieceData);
   cache.pieceArrays =
       makeStaticArrays(cache.pieceLattice, cache.pieceBreakSteps, cache.pieceReference);
-  // The arrays hold them now: a rank keeps one copy of its piece.
+  // The arrays hold them now: a rank keeps one copy of its piece (a random
+  // packing's cells and edges are a tenth of a rank's memory).
+  cache.pieceCells = {};
+  cache.pieceEdges = {};
+  cache.pieceIntactComponents = {};
   cache.pieceLattice = dem::Lattice{};
   cache.pieceBreakSteps = {};
   cache.pieceReference = {};

@@ -67,7 +67,7 @@ struct BreakForest {
 // set's, compared label for label within the piece.
 std::vector<std::int32_t> componentsAt(const BreakForest& forest, int step);
 // The forest for `particles` (ascending) from one pass over every bond's
-// ends and break step, read in spans: transient memory of 13 bytes per
+// ends and break step, read in spans: transient memory of 16 bytes per
 // particle and 12 per broken bond of the whole set. Again after a live
 // file's writer added steps, since bonds broken since then were read as
 // never breaking.
