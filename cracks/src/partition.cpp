@@ -506,8 +506,13 @@ Result<BondPass> passOverBonds(const dem::DemFileReader& reader,
       }
     }
   }
-  std::stable_sort(broken.begin(), broken.end(),
-                   [](const Broken& a, const Broken& b) { return a.step > b.step; });
+  // Latest break first; ties by the bond's ends, so the forest does not
+  // depend on the sort.
+  std::sort(broken.begin(), broken.end(), [](const Broken& a, const Broken& b) {
+    return a.step != b.step ? a.step > b.step
+                            : (a.bond.first != b.bond.first ? a.bond.first < b.bond.first
+                                                            : a.bond.second < b.bond.second);
+  });
   for (const Broken& b : broken) {
     pass.forest.join(b.bond.first, b.bond.second, b.step);
   }
@@ -558,7 +563,8 @@ Triangulation pieceTriangulation(const std::vector<std::array<dem::ParticleIndex
   }
   const auto nodes = static_cast<std::size_t>(dimension == 3 ? 4 : 3);
   out.cells.reserve(cells.size());
-  std::vector<std::int32_t> start(held.size() + 1, 0);
+  // Six edges a tetrahedron: counted in 64 bits, past 2^31 at 5e7 particles.
+  std::vector<std::int64_t> start(held.size() + 1, 0);
   for (const auto& cell : cells) {
     std::array<dem::ParticleIndex, 4> mapped{};
     std::transform(cell.begin(), cell.end(), mapped.begin(), [&](dem::ParticleIndex i) {
@@ -566,12 +572,12 @@ Triangulation pieceTriangulation(const std::vector<std::array<dem::ParticleIndex
     });
     out.cells.push_back(mapped);  // ascending still: the mapping keeps order
     for (std::size_t a = 0; a + 1 < nodes; ++a) {
-      start[static_cast<std::size_t>(mapped[a]) + 1] += static_cast<std::int32_t>(nodes - 1 - a);
+      start[static_cast<std::size_t>(mapped[a]) + 1] += static_cast<std::int64_t>(nodes - 1 - a);
     }
   }
   std::partial_sum(start.begin(), start.end(), start.begin());
   std::vector<dem::ParticleIndex> other(static_cast<std::size_t>(start.back()));
-  std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
+  std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
   for (const auto& cell : out.cells) {
     for (std::size_t a = 0; a + 1 < nodes; ++a) {
       for (std::size_t b = a + 1; b < nodes; ++b) {

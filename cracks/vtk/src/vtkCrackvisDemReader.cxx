@@ -484,6 +484,9 @@ Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBo
   if (cache.pieces == pieces && cache.piece == piece && cache.ghostBonds == ghostBonds) {
     return Status::ok();
   }
+  // No piece is held until this one is: a failed read leaves nothing that a
+  // later request for the previous piece would take for whole.
+  cache.pieces = 0;
   auto indexed = readPieceThroughIndex(cache, piece, pieces, ghostBonds);
   if (!indexed) {
     return indexed.status();

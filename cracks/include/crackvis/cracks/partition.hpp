@@ -68,7 +68,7 @@ struct BreakForest {
 std::vector<std::int32_t> componentsAt(const BreakForest& forest, int step);
 // The forest for `particles` (ascending) from one pass over every bond's
 // ends and break step, read in spans: transient memory of 16 bytes per
-// particle and 12 per broken bond of the whole set. Again after a live
+// particle and up to 36 per broken bond of the whole set. Again after a live
 // file's writer added steps, since bonds broken since then were read as
 // never breaking.
 Result<BreakForest> readBreakForest(const dem::DemFileReader& reader,
