@@ -123,4 +123,18 @@ client_passes "$work/beside-client.log" "$work/beside.log" \
   "$work/beside.png" || failed=1
 kill "$beside_pid" 2>/dev/null || true
 wait "$beside_pid" 2>/dev/null || true
+
+# paraview-plugin/run.sh asks glibc for huge pages where THP is madvise, and
+# not when told not to.
+if grep -q '\[madvise\]' /sys/kernel/mm/transparent_hugepage/enabled 2>/dev/null; then
+  echo "== paraview-plugin/run.sh sets the huge-pages tunable"
+  printf 'import os\nprint("tunables=" + os.environ.get("GLIBC_TUNABLES", ""))\n' >"$work/env.py"
+  with=$(env -u GLIBC_TUNABLES "$root/paraview-plugin/run.sh" pvpython "$work/env.py" 2>/dev/null)
+  without=$(env -u GLIBC_TUNABLES CRACKVIS_HUGE_PAGES=0 "$root/paraview-plugin/run.sh" pvpython \
+    "$work/env.py" 2>/dev/null)
+  [[ $with == *"tunables=glibc.malloc.hugetlb=1"* ]] ||
+    { echo "run.sh: expected the tunable, got: $with" >&2; failed=1; }
+  [[ $without == *"tunables="* && $without != *hugetlb* ]] ||
+    { echo "run.sh: CRACKVIS_HUGE_PAGES=0 still set it: $without" >&2; failed=1; }
+fi
 exit "$failed"
