@@ -10,8 +10,8 @@
 #
 #   --port P        the port pvserver listens on (default 11111, ParaView's)
 #   --ranks R       MPI ranks (default 1); R >= 2 gives ParaView's parallel
-#                   rendering and compositing (the reader does not partition
-#                   yet: paraview-plugin/README.md)
+#                   rendering and compositing, each rank reading and
+#                   extracting its own slab (paraview-plugin/README.md)
 #
 # pvserver listens on every interface, and ParaView's connection is neither
 # encrypted nor authenticated (unlike crackvis's mutual TLS): firewall the
@@ -50,6 +50,10 @@ env_lines=$("$root/deploy/paraview-prefix.sh" --env)
 eval "$env_lines"
 PV_PLUGIN_PATH=$(dirname "$plugin")
 export PV_PLUGIN_PATH
+# Huge pages for pvserver's arrays where THP is madvise; CRACKVIS_HUGE_PAGES=0
+# leaves them off (deploy/huge-pages.sh).
+source "$root/deploy/huge-pages.sh"
+crackvis_huge_pages
 
 xvfb_pid=""
 server_pid=""
@@ -94,7 +98,7 @@ start_server() {
     # Debian's ParaView is built against Open MPI: its mpiexec, which wants
     # --allow-run-as-root for root and --oversubscribe beyond the cores.
     mpiexec --allow-run-as-root --oversubscribe -np "$ranks" -x LD_LIBRARY_PATH -x PYTHONPATH \
-      -x PV_PLUGIN_PATH -x DISPLAY "${server[@]}" > >(tee -a "$run_log") 2>&1 &
+      -x PV_PLUGIN_PATH -x DISPLAY "${crackvis_huge_pages_mpi[@]}" "${server[@]}" > >(tee -a "$run_log") 2>&1 &
   fi
   server_pid=$!
 }

@@ -37,20 +37,16 @@ eval "$env_lines"
 export PV_PLUGIN_PATH=$(dirname "$plugin")${PV_PLUGIN_PATH:+:$PV_PLUGIN_PATH}
 binary=$CRACKVIS_PARAVIEW_PREFIX/usr/bin/$tool
 # glibc's malloc asks for transparent huge pages where the kernel gives them
-# only on request (THP mode madvise), as crackvis-data and crackvis-render do
-# (docs/deploy.md, "Huge pages"): a 1e6 rank's first update took half the
-# time (docs/benchmarks.md). CRACKVIS_HUGE_PAGES=0 leaves it off.
-if [[ ${CRACKVIS_HUGE_PAGES:-1} != 0 && ${GLIBC_TUNABLES:-} != *hugetlb* ]] &&
-  grep -q '\[madvise\]' /sys/kernel/mm/transparent_hugepage/enabled 2>/dev/null; then
-  export GLIBC_TUNABLES=${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1
-fi
+# only on request (deploy/huge-pages.sh). CRACKVIS_HUGE_PAGES=0 leaves it off.
+source "$root/deploy/huge-pages.sh"
+crackvis_huge_pages
 if ((ranks > 1)); then
   command -v mpiexec >/dev/null || { echo "run.sh: --ranks needs mpiexec (openmpi-bin)" >&2; exit 1; }
   as_root=()
   ((EUID == 0)) && as_root=(--allow-run-as-root)  # Open MPI refuses root without it
   exported=(-x LD_LIBRARY_PATH -x PYTHONPATH -x PV_PLUGIN_PATH)
   [[ -n ${DISPLAY:-} ]] && exported+=(-x DISPLAY)
-  [[ -n ${GLIBC_TUNABLES:-} ]] && exported+=(-x GLIBC_TUNABLES)
+  exported+=("${crackvis_huge_pages_mpi[@]}")
   exec mpiexec "${as_root[@]}" --oversubscribe -np "$ranks" "${exported[@]}" "$binary" "$@"
 fi
 exec "$binary" "$@"

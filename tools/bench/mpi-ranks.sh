@@ -68,13 +68,9 @@ env_lines=$("$root/deploy/paraview-prefix.sh" --env) || die "no ParaView prefix"
 eval "$env_lines"
 pvbatch=$CRACKVIS_PARAVIEW_PREFIX/usr/bin/pvbatch
 # As paraview-plugin/run.sh: glibc's malloc asks for huge pages where THP is
-# madvise, unless CRACKVIS_HUGE_PAGES=0 (docs/benchmarks.md, "Huge pages for pvbatch").
-if [[ ${CRACKVIS_HUGE_PAGES:-1} != 0 && ${GLIBC_TUNABLES:-} != *hugetlb* ]] &&
-  grep -q '\[madvise\]' /sys/kernel/mm/transparent_hugepage/enabled 2>/dev/null; then
-  export GLIBC_TUNABLES=${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1
-fi
-tunables=()
-[[ -n ${GLIBC_TUNABLES:-} ]] && tunables=(-x GLIBC_TUNABLES)
+# madvise, unless CRACKVIS_HUGE_PAGES=0 (deploy/huge-pages.sh).
+source "$root/deploy/huge-pages.sh"
+crackvis_huge_pages
 
 work=$(mktemp -d -t crackvis-mpi-ranks.XXXXXX)
 [[ -n $out ]] || out=$work
@@ -109,7 +105,7 @@ run() {
     "${timed[@]}" "$pvbatch" --no-mpi "${script[@]}" >"$out/$tag.log" 2>&1
   else
     mpiexec --allow-run-as-root --oversubscribe -np "$ranks" -x LD_LIBRARY_PATH -x PYTHONPATH \
-      -x DISPLAY "${tunables[@]}" "${timed[@]}" "$pvbatch" "${script[@]}" >"$out/$tag.log" 2>&1
+      -x DISPLAY "${crackvis_huge_pages_mpi[@]}" "${timed[@]}" "$pvbatch" "${script[@]}" >"$out/$tag.log" 2>&1
   fi || die "$tag failed: $(grep -v '^HDF5-DIAG\|^  ' "$out/$tag.log" | tail -3)"
   cut -d' ' -f1 /proc/loadavg >"$out/$tag.load"
 }
