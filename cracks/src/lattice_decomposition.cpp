@@ -48,9 +48,8 @@ std::uint64_t above(std::size_t index) {
 
 }  // namespace
 
-ExplicitCells::ExplicitCells(std::size_t particleCount,
-                             std::vector<std::array<dem::ParticleIndex, 4>> list)
-    : cells(std::move(list)), offsets(particleCount + 1, 0) {
+ExplicitCells::ExplicitCells(std::size_t particleCount, std::shared_ptr<const CellList> shared)
+    : list(std::move(shared)), cells(*list), offsets(particleCount + 1, 0) {
   for (const auto& cell : cells) {
     for (ParticleIndex p : cell) {
       if (p >= 0) {
@@ -74,7 +73,7 @@ ExplicitCells::ExplicitCells(std::size_t particleCount,
 }
 
 std::size_t ExplicitCells::memoryBytes() const {
-  return cells.capacity() * sizeof(cells[0]) +
+  return cells.size_bytes() +
          (offsets.capacity() + cellsOfParticle.capacity()) * sizeof(std::int32_t);
 }
 

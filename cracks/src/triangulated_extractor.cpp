@@ -92,14 +92,24 @@ class TriangulatedExtractor final : public CrackExtractor {
       return invalidArgument(fmt::format("{} reference positions for N = {} particles",
                                          reference.size(), m_graph.particleCount()));
     }
-    auto triangulation = m_options.triangulation ? given(*m_options.triangulation)
-                                                 : triangulate(reference, step.radius, m_dimension);
-    if (!triangulation) {
-      return triangulation.status();
+    // A given triangulation is used where it is, not copied: its caller
+    // keeps it (ExtractOptions::triangulation), and its cells are shared. One
+    // made here keeps only its cells; the edges go once read.
+    const std::shared_ptr<const Triangulation>& given = m_options.triangulation;
+    Triangulation made;
+    if (given) {
+      CRACKVIS_RETURN_IF_ERROR(checkGiven(*given));
+    } else {
+      auto triangulated = triangulate(reference, step.radius, m_dimension);
+      if (!triangulated) {
+        return triangulated.status();
+      }
+      made = std::move(*triangulated);
     }
+    const Triangulation& triangulation = given ? *given : made;
     m_bonds.assign(m_graph.bonds().begin(), m_graph.bonds().end());
     m_supportStart.assign(1, 0);
-    for (const dem::Bond& edge : triangulation->edges) {
+    for (const dem::Bond& edge : triangulation.edges) {
       if (!m_graph.bonded(edge.first, edge.second)) {
         m_bonds.push_back(edge);
         addSupport(edge);
@@ -119,14 +129,17 @@ class TriangulatedExtractor final : public CrackExtractor {
       m_joinedCount += m_joined[v];
     }
     m_extended.emplace(m_graph.particleCount(), m_bonds);
-    m_cells = ExplicitCells(m_graph.particleCount(), std::move(triangulation->cells));
+    m_cells = given ? ExplicitCells(m_graph.particleCount(),
+                                    std::shared_ptr<const ExplicitCells::CellList>(
+                                        given, &given->cells))  // aliasing: kept alive by it
+                    : ExplicitCells(m_graph.particleCount(), std::move(made.cells));
     m_inner = makeInner();
     return Status::ok();
   }
 
   // A triangulation the caller gives (ExtractOptions::triangulation),
   // checked against the particles.
-  Result<Triangulation> given(const Triangulation& triangulation) const {
+  Status checkGiven(const Triangulation& triangulation) const {
     const auto n = static_cast<dem::ParticleIndex>(m_graph.particleCount());
     auto outside = [n](dem::ParticleIndex i) { return i < -1 || i >= n; };
     for (const auto& cell : triangulation.cells) {
@@ -141,7 +154,7 @@ class TriangulatedExtractor final : public CrackExtractor {
             fmt::format("a given triangulation edge names a particle beyond N = {}", n));
       }
     }
-    return triangulation;
+    return Status::ok();
   }
 
   // The two-bond paths i-k-j between the ends of a never-bonded edge (both

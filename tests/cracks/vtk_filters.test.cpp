@@ -5,8 +5,6 @@
 #include <fstream>
 
 #include <catch2/catch.hpp>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <vtkCallbackCommand.h>
 #include <vtkCellAttributeCrackFilter.h>
 #include <vtkCellCentreCrackFilter.h>
@@ -32,6 +30,7 @@
 #include <vtkXMLUnstructuredGridReader.h>
 
 #include "crack_fixtures.hpp"
+#include "support/paced_writer.hpp"
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/cracks/mesh_writers.hpp>
@@ -388,38 +387,32 @@ TEST_CASE("the crackvis-dem reader shows a live file's new steps on the next upd
   const auto crack = sampleCrack();
   testing::TempDir dir;
   const std::string path = dir.file("live.h5");
-  int go[2];
-  int done[2];
-  REQUIRE(pipe(go) == 0);
-  REQUIRE(pipe(done) == 0);
-  const pid_t writer = fork();
-  if (writer == 0) {
+  testing::PacedWriter writer([&](const testing::PacedWriter::Pause& pause) {
     dem::DemMetadata metadata = dem::metadataFrom("vtk_filters test");
     metadata.stepLayout = dem::StepLayout::kAppendable;
     auto file = dem::DemFileWriter::create(path, crack.block.lattice, metadata);
     dem::StepState step;
     step.positions = crack.block.positions;
     step.bondState.assign(crack.state.size(), 0);
-    char byte = 0;
+    // Each step, then a pause.
     for (int k = 0; k < 3 && file; ++k) {
       step.time = 0.5 + k;
       if (k == 2) {
         step.bondState = crack.state;
       }
-      if (!file->appendStep(step) || write(done[1], "s", 1) != 1 || read(go[0], &byte, 1) != 1) {
-        _exit(1);
+      if (!file->appendStep(step) || !pause()) {
+        return false;
       }
     }
-    _exit(file && file->close() ? 0 : 1);
-  }
-  REQUIRE(writer > 0);
-  char byte = 0;
+    return file && file->close();
+  });
+  REQUIRE(writer.started());
   auto nextStep = [&] {
-    REQUIRE(write(go[1], "g", 1) == 1);
-    REQUIRE(read(done[0], &byte, 1) == 1);
+    REQUIRE(writer.resume());
+    REQUIRE(writer.waitForPause());
   };
-  REQUIRE(read(done[0], &byte, 1) == 1);  // step 0 is in
-  nextStep();                             // and step 1
+  REQUIRE(writer.waitForPause());  // step 0 is in
+  nextStep();                      // and step 1
   vtkNew<vtkCrackvisDemReader> reader;
   reader->SetFileName(path.c_str());
   reader->UpdateInformation();
@@ -440,13 +433,8 @@ TEST_CASE("the crackvis-dem reader shows a live file's new steps on the next upd
   CHECK(cracked->GetCellData()->GetArray("bond_state")->GetRange()[1] == 1.0);
   // The bonds broken at step 2 say so, though the lattice was read before.
   CHECK(cracked->GetCellData()->GetArray("break_step")->GetRange()[1] == 2.0);
-  REQUIRE(write(go[1], "g", 1) == 1);
-  int status = 0;
-  REQUIRE(waitpid(writer, &status, 0) == writer);
-  CHECK((WIFEXITED(status) && WEXITSTATUS(status) == 0));
-  for (int fd : {go[0], go[1], done[0], done[1]}) {
-    close(fd);
-  }
+  REQUIRE(writer.resume());
+  CHECK(writer.finish());
 }
 
 TEST_CASE("the crack filters give each surface element its opening and slip as cell data",

@@ -11,8 +11,6 @@
 #include <set>
 
 #include <catch2/catch.hpp>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <vtkCellAttributeCrackFilter.h>
 #include <vtkCellCentreCrackFilter.h>
 #include <vtkCellCutCrackFilter.h>
@@ -21,8 +19,10 @@
 #include <vtkDataArray.h>
 #include <vtkDataSet.h>
 #include <vtkDataSetAttributes.h>
+#include <vtkFieldData.h>
 #include <vtkIdList.h>
 #include <vtkInformation.h>
+#include <vtkIntArray.h>
 #include <vtkLocalVoronoiCrackFilter.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
@@ -30,8 +30,10 @@
 #include <vtkSmartPointer.h>
 #include <vtkStreamingDemandDrivenPipeline.h>
 
+#include "crack_filter_state.h"
 #include "crackvis_vtk_conversion.h"
 #include "support/h5_tamper.hpp"
+#include "support/paced_writer.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/cracks/extractor.hpp>
 #include <crackvis/cracks/partition.hpp>
@@ -621,42 +623,29 @@ TEST_CASE("a live triangulated packing's piece sees the bonds broken after it wa
   REQUIRE(crack.isOk());
   testing::TempDir dir;
   const std::string path = dir.file("live-random.h5");
-  int go[2];
-  int done[2];
-  REQUIRE(pipe(go) == 0);
-  REQUIRE(pipe(done) == 0);
-  const pid_t writer = fork();
-  if (writer == 0) {
+  testing::PacedWriter writer([&](const testing::PacedWriter::Pause& pause) {
     dem::DemMetadata metadata = dem::metadataFrom("vtk_pieces test");
     metadata.stepLayout = dem::StepLayout::kAppendable;
     cracks::describeCells(metadata, packing->lattice);
     auto file = dem::DemFileWriter::create(path, packing->lattice, metadata);
-    char byte = 0;
     // Two steps, then the rest when told.
     for (int k = 0; k < crack->stepCount() && file; ++k) {
-      if (!file->appendStep(crack->step(k)) ||
-          (k == 1 && (write(done[1], "s", 1) != 1 || read(go[0], &byte, 1) != 1))) {
-        _exit(1);
+      if (!file->appendStep(crack->step(k)) || (k == 1 && !pause())) {
+        return false;
       }
     }
-    _exit(file && file->close() ? 0 : 1);
-  }
-  REQUIRE(writer > 0);
-  char byte = 0;
-  REQUIRE(read(done[0], &byte, 1) == 1);  // steps 0 and 1 are in
+    return file && file->close();
+  });
+  REQUIRE(writer.started());
+  REQUIRE(writer.waitForPause());  // steps 0 and 1 are in
   vtkNew<vtkCrackvisDemReader> reader;
   reader->SetFileName(path.c_str());
   reader->UpdateInformation();
   reader->UpdateTimeStep(1.0, 0, 2, 0);
   REQUIRE(reader->GetOutput()->GetPointData()->GetArray(cracks::vtkadapter::kComponentArray) !=
           nullptr);
-  REQUIRE(write(go[1], "g", 1) == 1);
-  int status = 0;
-  REQUIRE(waitpid(writer, &status, 0) == writer);
-  REQUIRE((WIFEXITED(status) && WEXITSTATUS(status) == 0));
-  for (int fd : {go[0], go[1], done[0], done[1]}) {
-    close(fd);
-  }
+  REQUIRE(writer.resume());
+  REQUIRE(writer.finish());
   // ParaView's Reload Files, then the last step.
   reader->Modified();
   reader->UpdateInformation();
@@ -759,4 +748,74 @@ TEST_CASE("a piece's reader reads the index: a damaged one fails the piece, not 
   reader->UpdatePiece(0, 1, 0);  // one process reads the file whole, without the index
   CHECK(reader->GetOutput()->GetNumberOfPoints() == n);
   vtkObject::GlobalWarningDisplayOn();
+}
+
+TEST_CASE("a piece's triangulation is held once: its arrays view it, and a filter shares it",
+          "[cracks][vtk][pieces]") {
+  using cracks::vtkadapter::addTriangulationArrays;
+  using cracks::vtkadapter::viewedTriangulation;
+  auto made = std::make_shared<cracks::Triangulation>();
+  made->cells = {{0, 1, 2, 3}, {1, 2, 3, 4}};
+  made->edges = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {1, 4}, {2, 3}, {2, 4}, {3, 4}};
+  const std::weak_ptr<const cracks::Triangulation> watched = made;
+  const auto expectedCells = made->cells;
+  vtkNew<vtkFieldData> field;
+  addTriangulationArrays(std::move(made), field);
+  vtkDataArray* cells = field->GetArray(cracks::vtkadapter::kTriangulationCellsArray);
+  vtkDataArray* edges = field->GetArray(cracks::vtkadapter::kTriangulationEdgesArray);
+  REQUIRE(cells != nullptr);
+  REQUIRE(edges != nullptr);
+  // The arrays keep it alive, and read as its values.
+  REQUIRE_FALSE(watched.expired());
+  CHECK(cells->GetNumberOfTuples() == 2);
+  CHECK(cells->GetNumberOfComponents() == 4);
+  CHECK(edges->GetNumberOfTuples() == 9);
+  CHECK(cells->GetComponent(1, 3) == 4.0);
+  CHECK(edges->GetComponent(5, 1) == 4.0);
+  CHECK(viewedTriangulation(cells, edges) == watched.lock());
+  CHECK(viewedTriangulation(cells, edges)->cells == expectedCells);
+  // Shallow copies (VTK's pipeline passes field data so) view it too; a
+  // deep copy has values of its own and is copied by the filter.
+  {
+    vtkNew<vtkFieldData> shallow;
+    shallow->ShallowCopy(field);
+    CHECK(viewedTriangulation(shallow->GetArray(0), shallow->GetArray(1)) == watched.lock());
+    vtkNew<vtkIntArray> deep;
+    deep->DeepCopy(cells);
+    CHECK(viewedTriangulation(deep, edges) == nullptr);
+    CHECK(viewedTriangulation(edges, cells) == nullptr);  // cells and edges swapped
+    field->Initialize();                                  // the first arrays go
+    REQUIRE_FALSE(watched.expired());                     // the copy still views it
+    CHECK(shallow->GetArray(0)->GetComponent(0, 2) == 2.0);
+  }
+  CHECK(watched.expired());  // the last view gone, nothing holds it
+
+  // Through the pipeline: a random packing's piece read through the index.
+  testing::TempDir dir;
+  const std::string path = randomFile(dir);
+  vtkNew<vtkCrackvisDemReader> reader;
+  reader->SetFileName(path.c_str());
+  vtkNew<vtkLocalVoronoiCrackFilter> filter;
+  filter->SetInputConnection(reader->GetOutputPort());
+  reader->UpdatePiece(0, 2, 0);
+  vtkFieldData* pieceField = reader->GetOutput()->GetFieldData();
+  const auto viewed =
+      viewedTriangulation(pieceField->GetArray(cracks::vtkadapter::kTriangulationCellsArray),
+                          pieceField->GetArray(cracks::vtkadapter::kTriangulationEdgesArray));
+  REQUIRE(viewed != nullptr);
+  CHECK_FALSE(viewed->cells.empty());
+  const long before = viewed.use_count();
+  vtkInformation* info = reader->GetOutputInformation(0);
+  const int steps = info->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+  filter->UpdateTimeStep(info->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS())[steps - 1], 0, 2,
+                         0);
+  REQUIRE(filter->GetOutput()->GetNumberOfCells() > 0);
+  // The same piece at another step: the same arrays, the same triangulation.
+  pieceField = reader->GetOutput()->GetFieldData();
+  CHECK(viewedTriangulation(pieceField->GetArray(cracks::vtkadapter::kTriangulationCellsArray),
+                            pieceField->GetArray(cracks::vtkadapter::kTriangulationEdgesArray)) ==
+        viewed);
+  // The filter's state and its extractor hold the reader's triangulation
+  // itself, not a copy of its values.
+  CHECK(viewed.use_count() > before);
 }

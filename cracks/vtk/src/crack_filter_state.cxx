@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cstring>
+#include <mutex>
+#include <unordered_map>
 
 #include <fmt/format.h>
 #include <vtkCellArray.h>
@@ -16,6 +18,7 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
 #include <vtkTypeInt32Array.h>
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
@@ -26,6 +29,55 @@
 
 namespace crackvis::cracks::vtkadapter {
 namespace {
+
+// Which triangulation each viewing array's memory belongs to. An entry
+// lives exactly as long as VTK uses that memory: VTK calls
+// releaseViewedMemory when the last array sharing the buffer lets it go (or
+// moves its values elsewhere), and the entry's reference keeps the
+// triangulation alive until then.
+struct ViewedTriangulations {
+  struct Views {
+    std::shared_ptr<const Triangulation> owner;
+    int buffers = 0;  // VTK buffers viewing the memory; each is released once
+  };
+  std::mutex mutex;
+  std::unordered_map<const void*, Views> of;
+};
+
+ViewedTriangulations& viewed() {
+  static ViewedTriangulations* registry = new ViewedTriangulations;  // outlives every array
+  return *registry;
+}
+
+void releaseViewedMemory(void* memory) {
+  ViewedTriangulations& registry = viewed();
+  const std::scoped_lock lock(registry.mutex);
+  const auto found = registry.of.find(memory);
+  if (found != registry.of.end() && --found->second.buffers == 0) {
+    registry.of.erase(found);
+  }
+}
+
+// An int array of `tuples` x `components` viewing `memory`, which belongs to
+// `owner`. VTK's arrays are not const; field data is only read downstream.
+vtkSmartPointer<vtkIntArray> viewingArray(const char* name, const void* memory, vtkIdType tuples,
+                                          int components,
+                                          std::shared_ptr<const Triangulation> owner) {
+  static_assert(sizeof(int) == sizeof(dem::ParticleIndex));
+  {
+    ViewedTriangulations& registry = viewed();
+    const std::scoped_lock lock(registry.mutex);
+    ViewedTriangulations::Views& views = registry.of[memory];
+    views.owner = std::move(owner);
+    ++views.buffers;
+  }
+  auto array = vtkSmartPointer<vtkIntArray>::New();
+  array->SetName(name);
+  array->SetNumberOfComponents(components);
+  array->SetArray(static_cast<int*>(const_cast<void*>(memory)), tuples * components, 0);
+  array->SetArrayFreeFunction(releaseViewedMemory);
+  return array;
+}
 
 vtkDataArray* cellArray(vtkPolyData* input, const char* name) {
   return input->GetCellData() != nullptr ? input->GetCellData()->GetArray(name) : nullptr;
@@ -272,6 +324,46 @@ void CrackFilterState::readReference(vtkPolyData* input, vtkIdType n) {
   }
 }
 
+void addTriangulationArrays(std::shared_ptr<const Triangulation> triangulation,
+                            vtkFieldData* field) {
+  static_assert(sizeof(triangulation->cells[0]) == 4 * sizeof(int) &&
+                sizeof(triangulation->edges[0]) == 2 * sizeof(int));
+  if (triangulation == nullptr || triangulation->cells.empty()) {
+    return;
+  }
+  const auto cells = static_cast<vtkIdType>(triangulation->cells.size());
+  const auto edges = static_cast<vtkIdType>(triangulation->edges.size());
+  field->AddArray(
+      viewingArray(kTriangulationCellsArray, triangulation->cells.data(), cells, 4, triangulation));
+  if (edges > 0) {
+    field->AddArray(viewingArray(kTriangulationEdgesArray, triangulation->edges.data(), edges, 2,
+                                 triangulation));
+  } else {
+    auto none = vtkSmartPointer<vtkIntArray>::New();  // a set without edges has no cells either
+    none->SetName(kTriangulationEdgesArray);
+    none->SetNumberOfComponents(2);
+    field->AddArray(none);
+  }
+}
+
+std::shared_ptr<const Triangulation> viewedTriangulation(vtkDataArray* cells, vtkDataArray* edges) {
+  if (cells == nullptr || edges == nullptr || cells->GetNumberOfTuples() == 0) {
+    return nullptr;
+  }
+  ViewedTriangulations& registry = viewed();
+  const std::scoped_lock lock(registry.mutex);
+  const auto found = registry.of.find(cells->GetVoidPointer(0));
+  if (found == registry.of.end()) {
+    return nullptr;
+  }
+  const std::shared_ptr<const Triangulation>& triangulation = found->second.owner;
+  const bool same =
+      cells->GetNumberOfTuples() == static_cast<vtkIdType>(triangulation->cells.size()) &&
+      edges->GetNumberOfTuples() == static_cast<vtkIdType>(triangulation->edges.size()) &&
+      (triangulation->edges.empty() || edges->GetVoidPointer(0) == triangulation->edges.data());
+  return same ? triangulation : nullptr;
+}
+
 bool CrackFilterState::readPiece(vtkPolyData* input, ExtractOptions& options) {
   vtkDataArray* ghost = input->GetPointData()->GetArray(vtkDataSetAttributes::GhostArrayName());
   vtkDataArray* particles = input->GetPointData()->GetGlobalIds();
@@ -343,27 +435,38 @@ void CrackFilterState::readTriangulation(vtkPolyData* input, ExtractOptions& opt
     return;
   }
   m_triangulationStamp = stamp;
-  Triangulation given;
-  given.dimension = m_dimension;
-  given.cells.resize(static_cast<std::size_t>(cells->GetNumberOfTuples()));
+  // The reader's arrays view its triangulation: shared, not copied.
+  std::shared_ptr<const Triangulation> given = viewedTriangulation(cells, edges);
+  if (given == nullptr) {
+    given = copyTriangulation(cells, edges);
+  }
+  // The same cells as last step keep the extractor (and its increments).
+  if (m_triangulation == nullptr ||
+      (m_triangulation != given &&
+       (m_triangulation->cells != given->cells || m_triangulation->edges != given->edges))) {
+    m_triangulation = std::move(given);
+  }
+  options.triangulation = m_triangulation;
+}
+
+std::shared_ptr<const Triangulation> CrackFilterState::copyTriangulation(
+    vtkDataArray* cells, vtkDataArray* edges) const {
+  auto copy = std::make_shared<Triangulation>();
+  copy->dimension = m_dimension;
+  copy->cells.resize(static_cast<std::size_t>(cells->GetNumberOfTuples()));
   for (vtkIdType c = 0; c < cells->GetNumberOfTuples(); ++c) {
     for (int k = 0; k < 4; ++k) {
-      given.cells[static_cast<std::size_t>(c)][static_cast<std::size_t>(k)] =
+      copy->cells[static_cast<std::size_t>(c)][static_cast<std::size_t>(k)] =
           static_cast<dem::ParticleIndex>(cells->GetComponent(c, k));
     }
   }
-  given.edges.resize(static_cast<std::size_t>(edges->GetNumberOfTuples()));
+  copy->edges.resize(static_cast<std::size_t>(edges->GetNumberOfTuples()));
   for (vtkIdType e = 0; e < edges->GetNumberOfTuples(); ++e) {
-    given.edges[static_cast<std::size_t>(e)] = {
+    copy->edges[static_cast<std::size_t>(e)] = {
         static_cast<dem::ParticleIndex>(edges->GetComponent(e, 0)),
         static_cast<dem::ParticleIndex>(edges->GetComponent(e, 1))};
   }
-  // The same cells as last step keep the extractor (and its increments).
-  if (m_triangulation == nullptr || m_triangulation->cells != given.cells ||
-      m_triangulation->edges != given.edges) {
-    m_triangulation = std::make_shared<const Triangulation>(std::move(given));
-  }
-  options.triangulation = m_triangulation;
+  return copy;
 }
 
 // Keeps the piece's own primitives and gives their particle and bond ids in

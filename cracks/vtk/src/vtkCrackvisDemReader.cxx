@@ -27,6 +27,7 @@
 #include <vtkTypeInt64Array.h>
 #include <vtkUnsignedCharArray.h>
 
+#include "crack_filter_state.h"
 #include "crackvis_vtk_conversion.h"
 #include <crackvis/cracks/bond_graph.hpp>
 #include <crackvis/cracks/extractor.hpp>
@@ -74,8 +75,9 @@ struct DemReaderCache {
   double largestRadius = 0.0;  // the whole set's
   int decomposition = -1;      // of the whole set: 0 lattice, 1 triangulation; -1 not decided
   std::optional<Triangulation> triangulation;  // the whole set's, when it is triangulated
-  std::vector<std::int32_t> pieceCells;        // its cells and edges in the piece, while prepared
-  std::vector<std::int32_t> pieceEdges;
+  // Its cells and edges in the piece, while prepared: the piece's field
+  // arrays then hold them (addTriangulationArrays).
+  std::shared_ptr<const Triangulation> pieceTriangulation;
   std::vector<std::int32_t> pieceIntactComponents;
   // A triangulated piece read through the index: which of its particles the
   // whole set's intact bonds join, at any step.
@@ -316,8 +318,9 @@ Status decideDecomposition(DemReaderCache& cache) {
 // The whole set's triangulation in piece indices: the cells and edges whose
 // nodes the piece holds, and the intact packing's components.
 void restrictTriangulation(DemReaderCache& cache) {
-  cache.pieceCells.clear();
-  cache.pieceEdges.clear();
+  auto restricted = std::make_shared<Triangulation>();
+  restricted->dimension = cache.triangulation->dimension;
+  restricted->weighted = cache.triangulation->weighted;
   std::vector<std::int32_t> local(cache.reference.size(), -1);
   for (std::size_t k = 0; k < cache.part.particles.size(); ++k) {
     local[static_cast<std::size_t>(cache.part.particles[k])] = static_cast<std::int32_t>(k);
@@ -330,17 +333,16 @@ void restrictTriangulation(DemReaderCache& cache) {
   };
   for (const auto& cell : cache.triangulation->cells) {
     if (std::all_of(cell.begin(), cell.end(), held)) {
-      for (dem::ParticleIndex i : cell) {
-        cache.pieceCells.push_back(toLocal(i));
-      }
+      restricted->cells.push_back(
+          {toLocal(cell[0]), toLocal(cell[1]), toLocal(cell[2]), toLocal(cell[3])});
     }
   }
   for (const dem::Bond& edge : cache.triangulation->edges) {
     if (held(edge.first) && held(edge.second)) {
-      cache.pieceEdges.push_back(toLocal(edge.first));
-      cache.pieceEdges.push_back(toLocal(edge.second));
+      restricted->edges.push_back({toLocal(edge.first), toLocal(edge.second)});
     }
   }
+  cache.pieceTriangulation = std::move(restricted);
   cache.pieceIntactComponents = pick(
       connectedComponents(cache.reference.size(), cache.lattice.bonds, {}), cache.part.particles);
 }
@@ -402,8 +404,7 @@ void addPieceData(const DemReaderCache& cache, vtkPolyData* output) {
   addArray<vtkDoubleArray>(field, kSpecimenCentresArray, centres, 6);
   addArray<vtkDoubleArray>(field, kLargestRadiusArray, std::vector<double>{cache.largestRadius});
   addArray<vtkIntArray>(field, kDecompositionArray, std::vector<int>{cache.decomposition});
-  addArray<vtkIntArray>(field, kTriangulationCellsArray, cache.pieceCells, 4);
-  addArray<vtkIntArray>(field, kTriangulationEdgesArray, cache.pieceEdges, 2);
+  addTriangulationArrays(cache.pieceTriangulation, field);
   addArray<vtkIntArray>(output->GetPointData(), kIntactComponentArray, cache.pieceIntactComponents);
 }
 
@@ -413,8 +414,7 @@ void addPieceData(const DemReaderCache& cache, vtkPolyData* output) {
 Result<bool> readPieceThroughIndex(DemReaderCache& cache, int piece, int pieces,
                                    double ghostBonds) {
   // Nothing of the piece asked for before may outlive it.
-  cache.pieceCells.clear();
-  cache.pieceEdges.clear();
+  cache.pieceTriangulation.reset();
   cache.pieceIntactComponents.clear();
   cache.forest.reset();
   auto indexed = readIndexedPiece(*cache.reader, piece, pieces, ghostBonds);
@@ -434,13 +434,8 @@ Result<bool> readPieceThroughIndex(DemReaderCache& cache, int piece, int pieces,
   cache.largestRadius = read.index.largestRadius;
   cache.decomposition = read.index.decomposition == dem::CellDecomposition::kTriangulation ? 1 : 0;
   if (read.triangulated) {
-    for (const auto& cell : read.triangulated->triangulation.cells) {
-      cache.pieceCells.insert(cache.pieceCells.end(), cell.begin(), cell.end());
-    }
-    for (const dem::Bond& edge : read.triangulated->triangulation.edges) {
-      cache.pieceEdges.push_back(edge.first);
-      cache.pieceEdges.push_back(edge.second);
-    }
+    cache.pieceTriangulation =
+        std::make_shared<const Triangulation>(std::move(read.triangulated->triangulation));
     cache.forest = std::move(read.triangulated->forest);
     cache.pieceIntactComponents = componentsAt(*cache.forest, -1);
   }
@@ -504,8 +499,7 @@ Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBo
       makeStaticArrays(cache.pieceLattice, cache.pieceBreakSteps, cache.pieceReference);
   // The arrays hold them now: a rank keeps one copy of its piece (a random
   // packing's cells and edges are a tenth of a rank's memory).
-  cache.pieceCells = {};
-  cache.pieceEdges = {};
+  cache.pieceTriangulation.reset();
   cache.pieceIntactComponents = {};
   cache.pieceLattice = dem::Lattice{};
   cache.pieceBreakSteps = {};
