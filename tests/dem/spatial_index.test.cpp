@@ -3,12 +3,19 @@
 // describing the first step's configuration, and rows read through it equal
 // the same rows of a whole read.
 #include <algorithm>
+#include <csignal>
+#include <filesystem>
 #include <numeric>
+#include <optional>
 #include <random>
+#include <span>
 #include <tuple>
 
 #include <catch2/catch.hpp>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include "support/full_disk.hpp"
 #include "support/h5_tamper.hpp"
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
@@ -356,4 +363,83 @@ TEST_CASE("h5::readRowsAt reads far-apart rows and long runs in several spans, e
         StatusCode::kOutOfRange);
   CHECK(h5::readRowsAt(dataset.get(), h5::ElementType::kInt32, 0, rows, read.data()).code() ==
         StatusCode::kFailedPrecondition);  // no step axis
+}
+
+// What a reader makes of a file whose writer failed or died at the wide
+// cells: an error that says so, or the file without steps; never a crash,
+// and never cells it takes for good that are not.
+void checkFaultedFile(const std::string& path) {
+  auto reader = DemFileReader::open(path);
+  if (!reader) {
+    CHECK_FALSE(reader.status().message().empty());
+    return;
+  }
+  CHECK(reader->stepCount() == 0);  // the first step was never committed
+  auto wide = reader->readWideCells();
+  if (wide && wide->has_value()) {
+    // Whatever rows are there were checked: nodes ascending, in range.
+    for (const auto& cell : (*wide)->cells) {
+      CHECK(std::is_sorted(cell.begin(), cell.end()));
+    }
+  }
+}
+
+TEST_CASE("a writer that fails or dies writing the wide cells leaves a file no reader misreads",
+          "[dem][index][write]") {
+  testing::TempDir dir;
+  const bool live = GENERATE(false, true);
+  INFO((live ? "appendable" : "group") << " layout");
+  const SampleData sample = makeSample(3, 3);
+  DemMetadata metadata = metadataFrom("wide cells fault test");
+  metadata.decomposition = CellDecomposition::kTriangulation;
+  metadata.stepLayout = live ? StepLayout::kAppendable : StepLayout::kGroups;
+  const std::string path = dir.file("faulted.h5");
+  // Cells far larger than the room left: 16 MiB.
+  auto manyCells = [] {
+    WideCells wide;
+    wide.reach = 1.0;
+    wide.cells.assign(std::size_t{1} << 20, {0, 1, 2, 3});
+    return wide;
+  };
+
+  SECTION("the disk fills while the cells are written") {
+    // The limit starts once the cells are made, just before they are
+    // written: 64 KiB beyond the file as it is then.
+    std::optional<testing::FileSizeLimit> full;
+    metadata.wideCells = [&](std::span<const Vec3>, const Lattice&) -> Result<WideCells> {
+      full.emplace(std::filesystem::file_size(path) + 64 * 1024);
+      return manyCells();
+    };
+    {
+      auto writer = DemFileWriter::create(path, sample.lattice, metadata);
+      REQUIRE(writer.isOk());
+      const Status appended = writer->appendStep(sample.steps[0]);
+      full.reset();  // before any CHECK: Catch writes nothing under the limit
+      REQUIRE_FALSE(appended.isOk());
+      CHECK_THAT(appended.message(), Catch::Contains(kIndexWideCellsPath));
+      // A second try fails too: no step is written over a half-made index.
+      CHECK_FALSE(writer->appendStep(sample.steps[0]).isOk());
+    }  // the writer closes the file
+    checkFaultedFile(path);
+  }
+
+  SECTION("the writer is killed while it makes the cells") {
+    metadata.wideCells = [&](std::span<const Vec3>, const Lattice&) -> Result<WideCells> {
+      raise(SIGKILL);
+      return manyCells();
+    };
+    const pid_t child = fork();
+    REQUIRE(child >= 0);
+    if (child == 0) {
+      auto writer = DemFileWriter::create(path, sample.lattice, metadata);
+      if (writer) {
+        (void)writer->appendStep(sample.steps[0]);
+      }
+      _exit(3);
+    }
+    int status = 0;
+    REQUIRE(waitpid(child, &status, 0) == child);
+    REQUIRE(WIFSIGNALED(status));
+    checkFaultedFile(path);
+  }
 }
