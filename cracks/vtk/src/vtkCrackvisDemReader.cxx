@@ -474,10 +474,10 @@ Status cutPieceFromWholeSet(DemReaderCache& cache, int piece, int pieces, double
 
 // Piece `piece` of `pieces` (once per request: the partition depends only
 // on the reference configuration): through the file's spatial index when it
-// has one, else cut from the whole set.
-Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBonds) {
+// has one, else cut from the whole set. True when it was read now.
+Result<bool> preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBonds) {
   if (cache.pieces == pieces && cache.piece == piece && cache.ghostBonds == ghostBonds) {
-    return Status::ok();
+    return false;
   }
   // No piece is held until this one is: a failed read leaves nothing that a
   // later request for the previous piece would take for whole.
@@ -504,7 +504,7 @@ Status preparePiece(DemReaderCache& cache, int piece, int pieces, double ghostBo
   cache.pieceLattice = dem::Lattice{};
   cache.pieceBreakSteps = {};
   cache.pieceReference = {};
-  return Status::ok();
+  return true;
 }
 
 void replaceCellArray(StaticArrays& arrays, vtkSmartPointer<vtkAbstractArray> array) {
@@ -518,8 +518,9 @@ void replaceCellArray(StaticArrays& arrays, vtkSmartPointer<vtkAbstractArray> ar
 }
 
 // The break steps again, after a live file's writer added steps: the whole
-// set's, and the piece's rows of them.
-Status refreshBreakSteps(DemReaderCache& cache) {
+// set's, and the piece's rows of them and its forest, unless the piece was
+// read after the steps were added (`pieceCurrent`).
+Status refreshBreakSteps(DemReaderCache& cache, bool pieceCurrent) {
   if (cache.loaded) {
     auto breakSteps = cache.reader->readBreakSteps();
     if (!breakSteps) {
@@ -530,6 +531,10 @@ Status refreshBreakSteps(DemReaderCache& cache) {
     if (array && cache.wholeArrays) {
       replaceCellArray(*cache.wholeArrays, array);
     }
+  }
+  if (pieceCurrent) {
+    cache.breakStepsStale = false;
+    return Status::ok();
   }
   if (cache.pieceArrays && !cache.part.bonds.empty()) {
     std::vector<std::int32_t> rows;
@@ -698,12 +703,17 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
           ? adapter::stepAt(cache.times,
                             out->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
           : 0;
+  // A piece read now through the index: its break steps and forest are the
+  // file's as it is (one cut from the whole set picks from the whole set's,
+  // which may be older).
+  bool pieceCurrent = false;
   if (pieces > 1) {
-    if (crackvis::Status prepared = adapter::preparePiece(cache, piece, pieces, this->GhostWidth);
-        !prepared) {
-      vtkErrorMacro(<< this->FileName << ": " << prepared.message());
+    auto prepared = adapter::preparePiece(cache, piece, pieces, this->GhostWidth);
+    if (!prepared) {
+      vtkErrorMacro(<< this->FileName << ": " << prepared.status().message());
       return 0;
     }
+    pieceCurrent = *prepared && cache.indexed;
   } else if (crackvis::Status loaded = adapter::loadLattice(cache); !loaded) {
     vtkErrorMacro(<< loaded.message());
     return 0;
@@ -711,7 +721,7 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
     cache.wholeArrays = adapter::makeStaticArrays(cache.lattice, cache.breakSteps, cache.reference);
   }
   if (cache.breakStepsStale) {
-    if (crackvis::Status refreshed = adapter::refreshBreakSteps(cache); !refreshed) {
+    if (crackvis::Status refreshed = adapter::refreshBreakSteps(cache, pieceCurrent); !refreshed) {
       vtkErrorMacro(<< refreshed.message());
       return 0;
     }
