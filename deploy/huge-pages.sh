@@ -10,6 +10,10 @@
 #   crackvis_huge_pages          # exports GLIBC_TUNABLES when it applies
 #   mpiexec ... "${crackvis_huge_pages_mpi[@]}" pvbatch ...   # passes it to every rank
 #
+# (Under `set -u` in bash before 4.4, an empty array must be written
+# ${crackvis_huge_pages_mpi[@]+"${crackvis_huge_pages_mpi[@]}"}, as the
+# scripts here do.)
+#
 # CRACKVIS_HUGE_PAGES=0 leaves it off; a GLIBC_TUNABLES that already names
 # hugetlb is kept as it is, and other tunables in it are kept.
 crackvis_huge_pages() {

@@ -98,7 +98,7 @@ start_server() {
     # Debian's ParaView is built against Open MPI: its mpiexec, which wants
     # --allow-run-as-root for root and --oversubscribe beyond the cores.
     mpiexec --allow-run-as-root --oversubscribe -np "$ranks" -x LD_LIBRARY_PATH -x PYTHONPATH \
-      -x PV_PLUGIN_PATH -x DISPLAY "${crackvis_huge_pages_mpi[@]}" "${server[@]}" > >(tee -a "$run_log") 2>&1 &
+      -x PV_PLUGIN_PATH -x DISPLAY ${crackvis_huge_pages_mpi[@]+"${crackvis_huge_pages_mpi[@]}"} "${server[@]}" > >(tee -a "$run_log") 2>&1 &
   fi
   server_pid=$!
 }

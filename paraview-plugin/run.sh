@@ -46,7 +46,7 @@ if ((ranks > 1)); then
   ((EUID == 0)) && as_root=(--allow-run-as-root)  # Open MPI refuses root without it
   exported=(-x LD_LIBRARY_PATH -x PYTHONPATH -x PV_PLUGIN_PATH)
   [[ -n ${DISPLAY:-} ]] && exported+=(-x DISPLAY)
-  exported+=("${crackvis_huge_pages_mpi[@]}")
+  exported+=(${crackvis_huge_pages_mpi[@]+"${crackvis_huge_pages_mpi[@]}"})
   exec mpiexec "${as_root[@]}" --oversubscribe -np "$ranks" "${exported[@]}" "$binary" "$@"
 fi
 exec "$binary" "$@"

@@ -49,8 +49,9 @@ std::uint64_t above(std::size_t index) {
 }  // namespace
 
 ExplicitCells::ExplicitCells(std::size_t particleCount, std::shared_ptr<const CellList> shared)
-    : list(std::move(shared)), cells(*list), offsets(particleCount + 1, 0) {
-  for (const auto& cell : cells) {
+    : list(std::move(shared)), offsets(particleCount + 1, 0) {
+  const auto all = cells();
+  for (const auto& cell : all) {
     for (ParticleIndex p : cell) {
       if (p >= 0) {
         ++offsets[static_cast<std::size_t>(p) + 1];
@@ -62,8 +63,8 @@ ExplicitCells::ExplicitCells(std::size_t particleCount, std::shared_ptr<const Ce
   }
   cellsOfParticle.resize(static_cast<std::size_t>(offsets.back()));
   std::vector<std::int32_t> fill(offsets.begin(), offsets.end() - 1);
-  for (std::size_t c = 0; c < cells.size(); ++c) {
-    for (ParticleIndex p : cells[c]) {
+  for (std::size_t c = 0; c < all.size(); ++c) {
+    for (ParticleIndex p : all[c]) {
       if (p >= 0) {
         cellsOfParticle[static_cast<std::size_t>(fill[static_cast<std::size_t>(p)]++)] =
             static_cast<std::int32_t>(c);
@@ -73,7 +74,7 @@ ExplicitCells::ExplicitCells(std::size_t particleCount, std::shared_ptr<const Ce
 }
 
 std::size_t ExplicitCells::memoryBytes() const {
-  return cells.size_bytes() +
+  return cells().size_bytes() +
          (offsets.capacity() + cellsOfParticle.capacity()) * sizeof(std::int32_t);
 }
 
@@ -90,7 +91,7 @@ void LatticeDecomposition::enumerateCandidates(ParticleIndex v, std::vector<Cand
   if (m_explicit != nullptr) {
     const CellType type = m_dimension == 2 ? CellType::kTriangle : CellType::kTetrahedron;
     for (std::int32_t c : m_explicit->of(v)) {
-      const auto& nodes = m_explicit->cells[static_cast<std::size_t>(c)];
+      const auto& nodes = m_explicit->cells()[static_cast<std::size_t>(c)];
       out.push_back({type, {nodes[0], nodes[1], nodes[2], nodes[3], -1, -1}});
     }
     return;

@@ -585,11 +585,21 @@ Triangulation pieceTriangulation(const std::vector<std::array<dem::ParticleIndex
       }
     }
   }
+  // Each particle's partners once, counted first: the edges are reserved
+  // exactly, as a rank holds them for as long as it shows the piece.
+  std::vector<std::int64_t> uniqueEnd(held.size());
+  std::size_t edgeCount = 0;
   for (std::size_t a = 0; a < held.size(); ++a) {
     const auto first = other.begin() + start[a];
     const auto last = other.begin() + start[a + 1];
     std::sort(first, last);
-    const auto unique = std::unique(first, last);
+    uniqueEnd[a] = std::unique(first, last) - other.begin();
+    edgeCount += static_cast<std::size_t>(uniqueEnd[a] - start[a]);
+  }
+  out.edges.reserve(edgeCount);
+  for (std::size_t a = 0; a < held.size(); ++a) {
+    const auto first = other.begin() + start[a];
+    const auto unique = other.begin() + uniqueEnd[a];
     for (auto b = first; b != unique; ++b) {
       out.edges.push_back({static_cast<dem::ParticleIndex>(a), *b});
     }

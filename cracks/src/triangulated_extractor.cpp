@@ -93,8 +93,7 @@ class TriangulatedExtractor final : public CrackExtractor {
                                          reference.size(), m_graph.particleCount()));
     }
     // A given triangulation is used where it is, not copied: its caller
-    // keeps it (ExtractOptions::triangulation), and its cells are shared. One
-    // made here keeps only its cells; the edges go once read.
+    // keeps it (ExtractOptions::triangulation), and its cells are shared.
     const std::shared_ptr<const Triangulation>& given = m_options.triangulation;
     Triangulation made;
     if (given) {
@@ -115,6 +114,7 @@ class TriangulatedExtractor final : public CrackExtractor {
         addSupport(edge);
       }
     }
+    made.edges = {};  // read: a triangulation made here keeps only its cells
     if (!step.intactComponents.empty()) {
       usePieces(step.intactComponents);
     } else {

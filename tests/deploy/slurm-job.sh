@@ -205,14 +205,16 @@ if [[ $scenario == pvserver ]]; then
   [[ $(squeue -h -j "$job" -o %T 2>/dev/null) == RUNNING ]] ||
     fail "job $job ended when its client left: $(tail -5 "$work/job-$job.out")"
   # The pvserver started for the next client asks for huge pages where THP is
-  # madvise (deploy/huge-pages.sh, sourced by pvserver-beside-data.sh).
-  if grep -q '\[madvise\]' /sys/kernel/mm/transparent_hugepage/enabled 2>/dev/null; then
+  # madvise (deploy/huge-pages.sh, sourced by pvserver-beside-data.sh), unless
+  # the environment the job inherits says otherwise.
+  if grep -q '\[madvise\]' /sys/kernel/mm/transparent_hugepage/enabled 2>/dev/null &&
+    [[ ${CRACKVIS_HUGE_PAGES:-1} != 0 && ${GLIBC_TUNABLES:-} != *hugetlb* ]]; then
     servers=$(for pid in $(descendants "${pids[@]}"); do
       if [[ $(cat "/proc/$pid/comm" 2>/dev/null) == pvserver ]]; then echo "$pid"; fi
     done)
     [[ -n $servers ]] || fail "job $job runs no pvserver for the next client"
     for pid in $servers; do
-      tr '\0' '\n' <"/proc/$pid/environ" | grep -qx 'GLIBC_TUNABLES=.*glibc.malloc.hugetlb=1.*' ||
+      grep -qz '^GLIBC_TUNABLES=.*glibc\.malloc\.hugetlb=1' "/proc/$pid/environ" ||
         fail "pvserver $pid of job $job runs without the huge-pages tunable"
     done
     echo "role pvserver: the job's pvserver ($servers) asks for huge pages"

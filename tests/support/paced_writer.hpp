@@ -4,6 +4,7 @@
 // not show what a reader elsewhere sees of a file being written.
 #pragma once
 
+#include <csignal>
 #include <functional>
 
 #include <sys/types.h>
@@ -34,8 +35,9 @@ class PacedWriter {
 
  private:
   pid_t m_child = -1;
-  int m_paused[2] = {-1, -1};  // child -> test: "I paused"
-  int m_go[2] = {-1, -1};      // test -> child: "go on"
+  void (*m_sigpipe)(int) = SIG_ERR;  // the handler before: SIGPIPE is ignored while a writer lives
+  int m_paused[2] = {-1, -1};        // child -> test: "I paused"
+  int m_go[2] = {-1, -1};            // test -> child: "go on"
 };
 
 }  // namespace crackvis::testing

@@ -105,7 +105,7 @@ run() {
     "${timed[@]}" "$pvbatch" --no-mpi "${script[@]}" >"$out/$tag.log" 2>&1
   else
     mpiexec --allow-run-as-root --oversubscribe -np "$ranks" -x LD_LIBRARY_PATH -x PYTHONPATH \
-      -x DISPLAY "${crackvis_huge_pages_mpi[@]}" "${timed[@]}" "$pvbatch" "${script[@]}" >"$out/$tag.log" 2>&1
+      -x DISPLAY ${crackvis_huge_pages_mpi[@]+"${crackvis_huge_pages_mpi[@]}"} "${timed[@]}" "$pvbatch" "${script[@]}" >"$out/$tag.log" 2>&1
   fi || die "$tag failed: $(grep -v '^HDF5-DIAG\|^  ' "$out/$tag.log" | tail -3)"
   cut -d' ' -f1 /proc/loadavg >"$out/$tag.load"
 }

@@ -1,6 +1,7 @@
 #include "crack_filter_state.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <mutex>
 #include <unordered_map>
@@ -49,33 +50,38 @@ ViewedTriangulations& viewed() {
   return *registry;
 }
 
+// VTK's free function of a viewing array's buffer. VTK keeps it for a
+// buffer it later allocates itself (vtkBuffer::Allocate, after Initialize or
+// SetNumberOfTuples on the array): such memory is VTK's malloc's, and freed.
 void releaseViewedMemory(void* memory) {
   ViewedTriangulations& registry = viewed();
   const std::scoped_lock lock(registry.mutex);
   const auto found = registry.of.find(memory);
-  if (found != registry.of.end() && --found->second.buffers == 0) {
+  if (found == registry.of.end()) {
+    std::free(memory);
+  } else if (--found->second.buffers == 0) {
     registry.of.erase(found);
   }
 }
 
 // An int array of `tuples` x `components` viewing `memory`, which belongs to
-// `owner`. VTK's arrays are not const; field data is only read downstream.
+// `owner`. VTK's arrays are not const: these are read-only by contract (field
+// data is only read downstream; nothing may write into them).
 vtkSmartPointer<vtkIntArray> viewingArray(const char* name, const void* memory, vtkIdType tuples,
                                           int components,
                                           std::shared_ptr<const Triangulation> owner) {
   static_assert(sizeof(int) == sizeof(dem::ParticleIndex));
-  {
-    ViewedTriangulations& registry = viewed();
-    const std::scoped_lock lock(registry.mutex);
-    ViewedTriangulations::Views& views = registry.of[memory];
-    views.owner = std::move(owner);
-    ++views.buffers;
-  }
   auto array = vtkSmartPointer<vtkIntArray>::New();
   array->SetName(name);
   array->SetNumberOfComponents(components);
   array->SetArray(static_cast<int*>(const_cast<void*>(memory)), tuples * components, 0);
   array->SetArrayFreeFunction(releaseViewedMemory);
+  // Registered once the array is made: it releases the memory once.
+  ViewedTriangulations& registry = viewed();
+  const std::scoped_lock lock(registry.mutex);
+  ViewedTriangulations::Views& views = registry.of[memory];
+  views.owner = std::move(owner);
+  ++views.buffers;
   return array;
 }
 
@@ -339,7 +345,8 @@ void addTriangulationArrays(std::shared_ptr<const Triangulation> triangulation,
     field->AddArray(viewingArray(kTriangulationEdgesArray, triangulation->edges.data(), edges, 2,
                                  triangulation));
   } else {
-    auto none = vtkSmartPointer<vtkIntArray>::New();  // a set without edges has no cells either
+    // Cells without edges cannot be; an empty array keeps the pair whole.
+    auto none = vtkSmartPointer<vtkIntArray>::New();
     none->SetName(kTriangulationEdgesArray);
     none->SetNumberOfComponents(2);
     field->AddArray(none);
@@ -347,20 +354,27 @@ void addTriangulationArrays(std::shared_ptr<const Triangulation> triangulation,
 }
 
 std::shared_ptr<const Triangulation> viewedTriangulation(vtkDataArray* cells, vtkDataArray* edges) {
-  if (cells == nullptr || edges == nullptr || cells->GetNumberOfTuples() == 0) {
+  // Only int arrays can view one (and asking another kind for its pointer
+  // would copy its values).
+  auto* cellInts = vtkIntArray::FastDownCast(cells);
+  auto* edgeInts = vtkIntArray::FastDownCast(edges);
+  if (cellInts == nullptr || edgeInts == nullptr || cellInts->GetNumberOfTuples() == 0 ||
+      cellInts->GetNumberOfComponents() != 4 || edgeInts->GetNumberOfComponents() != 2) {
     return nullptr;
   }
   ViewedTriangulations& registry = viewed();
   const std::scoped_lock lock(registry.mutex);
-  const auto found = registry.of.find(cells->GetVoidPointer(0));
+  const auto found = registry.of.find(cellInts->GetPointer(0));
   if (found == registry.of.end()) {
     return nullptr;
   }
   const std::shared_ptr<const Triangulation>& triangulation = found->second.owner;
   const bool same =
-      cells->GetNumberOfTuples() == static_cast<vtkIdType>(triangulation->cells.size()) &&
-      edges->GetNumberOfTuples() == static_cast<vtkIdType>(triangulation->edges.size()) &&
-      (triangulation->edges.empty() || edges->GetVoidPointer(0) == triangulation->edges.data());
+      static_cast<const void*>(cellInts->GetPointer(0)) == triangulation->cells.data() &&
+      cellInts->GetNumberOfTuples() == static_cast<vtkIdType>(triangulation->cells.size()) &&
+      edgeInts->GetNumberOfTuples() == static_cast<vtkIdType>(triangulation->edges.size()) &&
+      (triangulation->edges.empty() ||
+       static_cast<const void*>(edgeInts->GetPointer(0)) == triangulation->edges.data());
   return same ? triangulation : nullptr;
 }
 

@@ -42,8 +42,9 @@ class ArrayStamp {
 // rather than copy it, and keep it alive while they do; a filter in the same
 // process takes it back from them (viewedTriangulation) and shares it with
 // its extractor. Copies were two of the three a rank held of its cells and
-// edges (about 90 MB each at 10^6 particles on 2 ranks). Nothing is added
-// for a triangulation without cells.
+// edges (about 90 MB each at 10^6 particles on 2 ranks). The arrays are
+// read-only: nothing may write into them. Nothing is added for a
+// triangulation without cells.
 void addTriangulationArrays(std::shared_ptr<const Triangulation> triangulation,
                             vtkFieldData* field);
 // The triangulation that `cells` and `edges` view, when both were made by

@@ -342,6 +342,9 @@ void restrictTriangulation(DemReaderCache& cache) {
       restricted->edges.push_back({toLocal(edge.first), toLocal(edge.second)});
     }
   }
+  // Held as long as the piece is shown: no slack.
+  restricted->cells.shrink_to_fit();
+  restricted->edges.shrink_to_fit();
   cache.pieceTriangulation = std::move(restricted);
   cache.pieceIntactComponents = pick(
       connectedComponents(cache.reference.size(), cache.lattice.bonds, {}), cache.part.particles);

@@ -37,15 +37,18 @@ using CellIndex = std::int32_t;
 // 10^6 particles 60 MB of cells) exists once.
 struct ExplicitCells {
   using CellList = std::vector<std::array<dem::ParticleIndex, 4>>;
-  std::shared_ptr<const CellList> list;
-  std::span<const std::array<dem::ParticleIndex, 4>> cells;  // *list; nodes ascending
-  std::vector<std::int32_t> offsets;                         // [N + 1]
-  std::vector<std::int32_t> cellsOfParticle;                 // ids into cells
+  std::shared_ptr<const CellList> list;       // nodes ascending in each cell
+  std::vector<std::int32_t> offsets;          // [N + 1]
+  std::vector<std::int32_t> cellsOfParticle;  // ids into the list
 
   ExplicitCells() = default;
   ExplicitCells(std::size_t particleCount, std::shared_ptr<const CellList> shared);
   ExplicitCells(std::size_t particleCount, CellList owned)
       : ExplicitCells(particleCount, std::make_shared<const CellList>(std::move(owned))) {}
+  std::span<const std::array<dem::ParticleIndex, 4>> cells() const {
+    return list ? std::span<const std::array<dem::ParticleIndex, 4>>(*list)
+                : std::span<const std::array<dem::ParticleIndex, 4>>();
+  }
   std::span<const std::int32_t> of(dem::ParticleIndex p) const {
     return {cellsOfParticle.data() + offsets[static_cast<std::size_t>(p)],
             cellsOfParticle.data() + offsets[static_cast<std::size_t>(p) + 1]};
