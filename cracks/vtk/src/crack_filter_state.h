@@ -9,13 +9,14 @@
 #include <utility>
 #include <vector>
 
+#include <vtkDataArray.h>
+#include <vtkSmartPointer.h>
 #include <vtkType.h>
 
 #include "crackvis_vtk_conversion.h"
 #include <crackvis/cracks/extractor.hpp>
 
 class vtkCellArray;
-class vtkDataArray;
 class vtkFieldData;
 class vtkObject;
 class vtkPolyData;
@@ -82,8 +83,6 @@ class CrackFilterState {
   ArrayStamp m_breakStepStamp;
   ArrayStamp m_referenceStamp;
   ArrayStamp m_ghostStamp;
-  ArrayStamp m_particleIdStamp;
-  ArrayStamp m_bondIdStamp;
   std::vector<Vec3> m_positions;
   std::vector<double> m_radius;
   std::vector<std::uint8_t> m_state;
@@ -92,8 +91,8 @@ class CrackFilterState {
   std::vector<Vec3> m_reference;  // empty: the input has no reference configuration
   // A piece's: 1 for its own particles, and the whole set's indices.
   std::vector<std::uint8_t> m_owned;
-  std::vector<vtkIdType> m_globalParticle;
-  std::vector<vtkIdType> m_globalBond;
+  vtkSmartPointer<vtkDataArray> m_globalParticle;  // the input's global ids
+  vtkSmartPointer<vtkDataArray> m_globalBond;
   std::shared_ptr<const Triangulation> m_triangulation;  // a piece's, kept while it is the same
   std::pair<vtkMTimeType, vtkMTimeType> m_triangulationStamp{0, 0};  // its arrays' times
   std::vector<std::int32_t> m_components;  // a piece's (StepInput), else empty
