@@ -613,7 +613,7 @@ Triangulation pieceTriangulation(const std::vector<std::array<dem::ParticleIndex
 // alone.
 Result<bool> holdTriangulatedPiece(const dem::DemFileReader& reader, const SlabRange& slab,
                                    IndexedPiece& result) {
-  auto wide = reader.readWideCells();
+  auto wide = reader.readWideCells(result.index);  // the index info is read already
   if (!wide) {
     return wide.status();
   }

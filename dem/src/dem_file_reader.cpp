@@ -853,7 +853,14 @@ Result<std::optional<WideCells>> DemFileReader::readWideCells() const {
   if (!index) {
     return index.status();
   }
-  if (!*index || !(*index)->hasWideCells) {
+  if (!*index) {
+    return std::optional<WideCells>{};
+  }
+  return readWideCells(**index);
+}
+
+Result<std::optional<WideCells>> DemFileReader::readWideCells(const SpatialIndexInfo& index) const {
+  if (!index.hasWideCells) {
     return std::optional<WideCells>{};
   }
   auto opened = openInFile(kIndexWideCellsPath);
@@ -861,8 +868,8 @@ Result<std::optional<WideCells>> DemFileReader::readWideCells() const {
     return opened.status();
   }
   WideCells wide;
-  wide.reach = (*index)->wideCellReach;
-  wide.weighted = (*index)->weightedTriangulation;
+  wide.reach = index.wideCellReach;
+  wide.weighted = index.weightedTriangulation;
   wide.cells.resize(static_cast<std::size_t>(opened->shape.dims[0]));
   if (Status read = h5::readDataset(opened->dataset.get(), ElementType::kInt32, wide.cells.data());
       !read) {

@@ -166,6 +166,8 @@ class DemFileReader {
   // /index/wide_cells with its attributes, checked (nodes in range and
   // ascending); nullopt when the file has none.
   Result<std::optional<WideCells>> readWideCells() const;
+  // The same with the index's information already read (readSpatialIndexInfo).
+  Result<std::optional<WideCells>> readWideCells(const SpatialIndexInfo& index) const;
 
   // Partial reads, for a reader of one piece of the specimen (an MPI rank;
   // cracks::readIndexedPiece): rows `particles` of the per-particle arrays
