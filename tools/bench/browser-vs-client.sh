@@ -142,6 +142,13 @@ print(f"  browser: first frame after choosing the file     {med(p['first_frame_m
 print(f"  browser: frames per second while dragging        {med(p['drag_fps'] for p in page):9.1f}")
 print(f"  browser: bitrate while dragging                  {med(p['bitrate_mbps'] for p in page):9.2f} Mbit/s")
 print(f"  browser: Chromium's CPU time per painted frame   {med(p['browser_cpu_ms_per_frame'] for p in page):9.2f} ms (all its processes)")
+by_process = {}
+for p in page:
+    for kind, ms in (p.get("browser_cpu_ms_per_frame_by_process") or {}).items():
+        if kind != "all" and ms is not None:
+            by_process.setdefault(kind, []).append(ms)
+print("  browser: of which, by Chromium's process type   " +
+      ", ".join(f"{kind} {statistics.median(ms):.2f}" for kind, ms in sorted(by_process.items())) + " ms")
 print(f"  load before each run (1 min): client {load('client')}, browser {load('browser')}")
 goal = rows[0][2] <= rows[0][1] + 5 and rows[2][2] <= rows[2][1] + 5
 print(f"  goal browser p50 <= client p50 + 5 ms (drag and still): {'met' if goal else 'NOT met'}; "

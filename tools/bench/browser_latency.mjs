@@ -38,11 +38,21 @@ const summary = (values) => ({
 });
 const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
 
-// CPU time of every Chromium process (browser, renderer, GPU, utility), in ms.
+// CPU time of Chromium's processes in ms, by type (browser, renderer, GPU,
+// utility) and in all.
 async function browserCpuMs(cdp) {
   const { processInfo } = await cdp.send("SystemInfo.getProcessInfo");
-  return processInfo.reduce((sum, p) => sum + p.cpuTime * 1000, 0);
+  const byType = { all: 0 };
+  for (const p of processInfo) {
+    byType[p.type] = (byType[p.type] ?? 0) + p.cpuTime * 1000;
+    byType.all += p.cpuTime * 1000;
+  }
+  return byType;
 }
+const perFrame = (after, before, frames) =>
+  Object.fromEntries(
+    Object.keys(after).map((type) => [type, frames > 0 ? (after[type] - (before[type] ?? 0)) / frames : null]),
+  );
 
 const browser = await chromium.launch({
   executablePath: env("CRACKVIS_CHROMIUM", "/usr/bin/chromium"),
@@ -174,7 +184,8 @@ try {
     decode_ms: summary(dragged.decodeMs),
     bitrate_mbps: dragged.stats ? dragged.stats.bitrateBps / 1e6 : null,
     server_frames_dropped: dragged.stats ? dragged.stats.framesDropped : null,
-    browser_cpu_ms_per_frame: dragFrames > 0 ? (cpuAfter - cpuBefore) / dragFrames : null,
+    browser_cpu_ms_per_frame: dragFrames > 0 ? (cpuAfter.all - cpuBefore.all) / dragFrames : null,
+    browser_cpu_ms_per_frame_by_process: perFrame(cpuAfter, cpuBefore, dragFrames),
     chromium: browser.version(),
   };
   console.log(JSON.stringify(result));

@@ -3,6 +3,13 @@
 // configured from the first keyframe's SPS and again whenever a keyframe
 // carries a different SPS (a resize restarts the server's encoder); after a
 // decoder error it drops frames until a keyframe, which it asks for.
+//
+// A picture of the canvas's size is converted to RGBA by VideoFrame.copyTo
+// and put on the canvas: drawImage of a VideoFrame took 15-20 ms of the
+// page's main thread per 1280x720 frame in headless Chromium 156 (software
+// compositing), copyTo and putImageData about 1 ms (docs/benchmarks.md,
+// "The browser page"). Other sizes (a resize in flight), and browsers whose
+// copyTo cannot convert, are drawn scaled with drawImage.
 import type { Frame } from "./gen/crackvis/v1/render_pb.js";
 
 export const kNoWebCodecs =
@@ -22,7 +29,9 @@ export interface PaintedFrame {
   height: number;
   keyframe: boolean;
   fullResolution: boolean;
-  decodeMs: number; // from handing the access unit to the decoder to its picture
+  decodeMs: number; // from handing the access unit to the decoder to its picture painted
+  // "copy": converted by VideoFrame.copyTo and put; "scaled": drawImage.
+  paintedBy: "copy" | "scaled";
 }
 
 export interface DecoderHooks {
@@ -80,6 +89,10 @@ export class FrameDecoder {
   private timestamp = 0;
   private readonly pending = new Map<number, Pending>();
   private readonly context: CanvasRenderingContext2D;
+  // Pictures are painted in decode order, each after the one before.
+  private painting: Promise<void> = Promise.resolve();
+  private rgba: ImageData | null = null;
+  private copyConverts = true; // until a copyTo with a format fails
 
   constructor(
     private readonly canvas: HTMLCanvasElement,
@@ -145,22 +158,47 @@ export class FrameDecoder {
   private paint(picture: VideoFrame): void {
     const entry = this.pending.get(picture.timestamp);
     this.pending.delete(picture.timestamp);
-    // The canvas has the view's size; reduced frames are scaled up to it.
-    this.context.drawImage(picture, 0, 0, this.canvas.width, this.canvas.height);
-    picture.close();
     this.failures = 0;
-    if (!entry) return;
-    const f = entry.frame;
-    this.hooks.painted({
-      frameId: f.frameId,
-      lastEventId: f.lastEventId,
-      step: f.step,
-      width: f.width,
-      height: f.height,
-      keyframe: f.keyframe,
-      fullResolution: f.fullResolution,
-      decodeMs: performance.now() - entry.handedAt,
+    this.painting = this.painting.then(async () => {
+      let paintedBy: PaintedFrame["paintedBy"];
+      try {
+        paintedBy = await this.draw(picture);
+      } finally {
+        picture.close();
+      }
+      if (!entry) return;
+      const f = entry.frame;
+      this.hooks.painted({
+        frameId: f.frameId,
+        lastEventId: f.lastEventId,
+        step: f.step,
+        width: f.width,
+        height: f.height,
+        keyframe: f.keyframe,
+        fullResolution: f.fullResolution,
+        decodeMs: performance.now() - entry.handedAt,
+        paintedBy,
+      });
     });
+  }
+
+  private async draw(picture: VideoFrame): Promise<PaintedFrame["paintedBy"]> {
+    const { width, height } = this.canvas;
+    if (this.copyConverts && picture.displayWidth === width && picture.displayHeight === height) {
+      if (this.rgba === null || this.rgba.width !== width || this.rgba.height !== height) {
+        this.rgba = new ImageData(width, height);
+      }
+      try {
+        // TypeScript's DOM types lack copyTo's format option (Chrome 127+).
+        await picture.copyTo(this.rgba.data, { format: "RGBA" } as VideoFrameCopyToOptions);
+        this.context.putImageData(this.rgba, 0, 0);
+        return "copy";
+      } catch {
+        this.copyConverts = false; // this browser's copyTo keeps the decoder's format
+      }
+    }
+    this.context.drawImage(picture, 0, 0, width, height);
+    return "scaled";
   }
 
   // The decoder closes itself after an error; the next keyframe makes a new one.

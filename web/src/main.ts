@@ -496,6 +496,7 @@ class App {
     }
     recent(this.decodeMs, frame.decodeMs);
     keep(t.decodeMs, frame.decodeMs);
+    t.paintedBy[frame.paintedBy]++;
   }
 
   private picked(result: PickResult): void {

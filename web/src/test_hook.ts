@@ -28,6 +28,8 @@ export interface CrackvisTest {
   lastError: string;
   latencies: number[]; // ms, event sent -> first frame reflecting it painted
   decodeMs: number[];
+  // Frames put on the canvas by VideoFrame.copyTo and by drawImage (decoder.ts).
+  paintedBy: { copy: number; scaled: number };
   readonly sessionId: string;
   readonly attaches: number; // streams attached in this session (1 + reconnects)
   lastEventId: number; // of the last event the page sent
@@ -70,6 +72,7 @@ export function installTestHook(live: () => Live, faults: Faults): CrackvisTest 
     lastError: "",
     latencies: [],
     decodeMs: [],
+    paintedBy: { copy: 0, scaled: 0 },
     lastEventId: 0,
     state: null,
     stats: null,
