@@ -1462,6 +1462,10 @@ TEST_CASE(
     CHECK(frame.at("reduction").get<int>() >= 1);
   }
   CHECK(json.at("targets").at("interactive_spheres_at_most_2x_reduction").is_boolean());
+  // The server's part of the drag frames' latency, from their timings.
+  const auto& serverPart = json.at("server_event_to_send_ms");
+  CHECK(serverPart.at("count").get<int>() >= 1);
+  CHECK(serverPart.at("p50").get<double>() > 0.0);
   CHECK(json.at("load_before").size() == 3);
   // The time to the first picture (issue 34 point 1): three sessions opened
   // and closed, each timed from OpenSession to its first full-resolution

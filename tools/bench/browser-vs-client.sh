@@ -130,6 +130,9 @@ rows = [
     ("still move: event to full-resolution frame, p95 ms",
      med(c["full_resolution_event_to_frame_ms"]["p95"] for c in client),
      med(p["still_event_to_paint_ms"]["p95"] for p in page)),
+    ("drag: the server's part (last event received to frame sent), p50 ms",
+     med(c["server_event_to_send_ms"]["p50"] for c in client),
+     med(p["server_event_to_send_ms"]["p50"] for p in page)),
     ("decode p50 ms", med(c["client_decode_ms"]["p50"] for c in client), med(p["decode_ms"]["p50"] for p in page)),
 ]
 print(f"browser page vs crackvis bench render (C++ gRPC client), {page[0]['size']}, "

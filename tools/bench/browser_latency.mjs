@@ -131,6 +131,7 @@ try {
   const cy = view.y + view.height / 2;
   await hook(() => {
     window.crackvisTest.latencies.length = 0;
+    window.crackvisTest.serverMs.length = 0;
   });
   const cpuBefore = await browserCpuMs(cdp);
   const receivedBefore = framesReceived;
@@ -153,6 +154,7 @@ try {
     frames: window.crackvisTest.framesPainted,
     stats: window.crackvisTest.stats,
     decodeMs: [...window.crackvisTest.decodeMs],
+    serverMs: [...window.crackvisTest.serverMs],
   }));
   const cpuAfter = await browserCpuMs(cdp);
   const dragReceived = framesReceived - receivedBefore;
@@ -182,6 +184,7 @@ try {
     drag_fps_received: (dragReceived * 1000) / dragMs,
     reductions_received: reductions,
     decode_ms: summary(dragged.decodeMs),
+    server_event_to_send_ms: summary(dragged.serverMs),
     bitrate_mbps: dragged.stats ? dragged.stats.bitrateBps / 1e6 : null,
     server_frames_dropped: dragged.stats ? dragged.stats.framesDropped : null,
     browser_cpu_ms_per_frame: dragFrames > 0 ? (cpuAfter.all - cpuBefore.all) / dragFrames : null,

@@ -207,6 +207,9 @@ struct Report {
   std::vector<double> reducedRenderMs;
   std::vector<double> fullRenderMs;
   std::vector<double> encodeMs;
+  // The server's part of a drag frame's latency: from receiving the last
+  // event the frame reflects to handing the frame to gRPC.
+  std::vector<double> serverEventToSendMs;
   std::vector<double> isolatedEncodeMs;  // the same frames encoded here, nothing else running
   std::vector<double> decodeMs;
   std::vector<int> reductions;
@@ -645,6 +648,9 @@ Result<Report> run(const RenderBenchOptions& options) {
       report.dragSpheresAtMost2x =
           report.dragSpheresAtMost2x && frame.reduction() <= 2 && frame.particles() == "spheres";
       bytes += frames[k].bytes;
+      if (frame.timings().event_to_send_ms() > 0.0) {
+        report.serverEventToSendMs.push_back(frame.timings().event_to_send_ms());
+      }
     }
     (frame.full_resolution() ? report.fullRenderMs : report.reducedRenderMs)
         .push_back(frame.timings().render_ms());
@@ -856,6 +862,7 @@ nlohmann::json toJson(const Report& r) {
                      {"render_reduced_ms", summaryJson(r.reducedRenderMs)},
                      {"render_full_ms", summaryJson(r.fullRenderMs)},
                      {"encode_ms", summaryJson(r.encodeMs)},
+                     {"server_event_to_send_ms", summaryJson(r.serverEventToSendMs)},
                      {"encode_alone_ms", summaryJson(r.isolatedEncodeMs)},
                      {"client_decode_ms", summaryJson(r.decodeMs)},
                      {"reduction", summaryJson(reductions)},

@@ -30,6 +30,9 @@ export interface PaintedFrame {
   keyframe: boolean;
   fullResolution: boolean;
   decodeMs: number; // from handing the access unit to the decoder to its picture painted
+  // The server's part: from receiving the last event this frame reflects
+  // to sending it (FrameTimings.event_to_send_ms; 0: no new event).
+  serverMs: number;
   // "copy": converted by VideoFrame.copyTo and put; "scaled": drawImage.
   paintedBy: "copy" | "scaled";
 }
@@ -177,6 +180,7 @@ export class FrameDecoder {
         keyframe: f.keyframe,
         fullResolution: f.fullResolution,
         decodeMs: performance.now() - entry.handedAt,
+        serverMs: f.timings?.eventToSendMs ?? 0,
         paintedBy,
       });
     });

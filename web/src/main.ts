@@ -497,6 +497,7 @@ class App {
     recent(this.decodeMs, frame.decodeMs);
     keep(t.decodeMs, frame.decodeMs);
     t.paintedBy[frame.paintedBy]++;
+    if (frame.serverMs > 0) keep(t.serverMs, frame.serverMs);
   }
 
   private picked(result: PickResult): void {

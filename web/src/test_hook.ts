@@ -28,6 +28,7 @@ export interface CrackvisTest {
   lastError: string;
   latencies: number[]; // ms, event sent -> first frame reflecting it painted
   decodeMs: number[];
+  serverMs: number[]; // of frames reflecting a new event: the server's part of their latency
   // Frames put on the canvas by VideoFrame.copyTo and by drawImage (decoder.ts).
   paintedBy: { copy: number; scaled: number };
   readonly sessionId: string;
@@ -72,6 +73,7 @@ export function installTestHook(live: () => Live, faults: Faults): CrackvisTest 
     lastError: "",
     latencies: [],
     decodeMs: [],
+    serverMs: [],
     paintedBy: { copy: 0, scaled: 0 },
     lastEventId: 0,
     state: null,
