@@ -454,6 +454,30 @@ await check("a file name with markup in it is shown as text, never parsed", asyn
   if (after.images !== 0 || after.pwned) fail("the description parsed the name as HTML");
 });
 
+await check("a double click opens a file with one Describe, and the page times its first frame", async () => {
+  const describes = [];
+  const count = (request) => {
+    if (request.url().endsWith("/Describe")) describes.push(request.url());
+  };
+  page.on("request", count);
+  try {
+    const entry = page.locator(`#files .file[data-path="${file}"]`);
+    await entry.waitFor({ timeout: kWaitMs });
+    await page.evaluate(() => {
+      window.crackvisTest.firstFrameMs = null;
+    });
+    await entry.dblclick();
+    await waitFor("the first frame of the file opened", () => window.crackvisTest.firstFrameMs !== null);
+    const firstFrameMs = await page.evaluate(() => window.crackvisTest.firstFrameMs);
+    console.log(`     first frame ${firstFrameMs.toFixed(0)} ms after the double click; ${describes.length} Describe`);
+    if (!(firstFrameMs > 0)) fail(`the first frame's time is ${firstFrameMs}`);
+    // Each click describes and so does the open: one call is shared by all three.
+    if (describes.length !== 1) fail(`${describes.length} Describe calls for one double click`);
+  } finally {
+    page.off("request", count);
+  }
+});
+
 await check("a foreign Origin is refused (403) for sign-in and the stream's upgrade", async () => {
   const origin = url.origin;
   const evil = "https://evil.example";

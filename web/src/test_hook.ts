@@ -23,6 +23,9 @@ export interface StateSeen {
 
 export interface CrackvisTest {
   framesPainted: number;
+  // From a file chosen to open (the Data pane's double click or Open) to its
+  // session's first frame painted, in ms; null until that frame.
+  firstFrameMs: number | null;
   lastFrame: FrameSeen | null;
   lastPick: { kind: string; index: number; text: string } | null;
   lastError: string;
@@ -68,6 +71,7 @@ type Faults = Pick<
 export function installTestHook(live: () => Live, faults: Faults): CrackvisTest {
   const hook: CrackvisTest = {
     framesPainted: 0,
+    firstFrameMs: null,
     lastFrame: null,
     lastPick: null,
     lastError: "",
