@@ -118,7 +118,9 @@ out, runs = sys.argv[1], int(sys.argv[2])
 client = [json.load(open(f"{out}/client-{k}.json")) for k in range(1, runs + 1)]
 page = [json.load(open(f"{out}/browser-{k}.json")) for k in range(1, runs + 1)]
 load = lambda kind: [float(open(f"{out}/{kind}-{k}.load").read()) for k in range(1, runs + 1)]
-med = lambda values: statistics.median(v for v in values if v is not None)
+def med(values):
+    known = [v for v in values if v is not None]
+    return statistics.median(known) if known else float("nan")
 rows = [
     ("drag: event to frame, p50 ms", med(c["event_to_frame_ms"]["p50"] for c in client),
      med(p["drag_event_to_paint_ms"]["p50"] for p in page)),
@@ -131,8 +133,8 @@ rows = [
      med(c["full_resolution_event_to_frame_ms"]["p95"] for c in client),
      med(p["still_event_to_paint_ms"]["p95"] for p in page)),
     ("drag: the server's part (last event received to frame sent), p50 ms",
-     med(c["server_event_to_send_ms"]["p50"] for c in client),
-     med(p["server_event_to_send_ms"]["p50"] for p in page)),
+     med(c.get("server_event_to_send_ms", {}).get("p50") for c in client),
+     med(p.get("server_event_to_send_ms", {}).get("p50") for p in page)),
     ("decode p50 ms", med(c["client_decode_ms"]["p50"] for c in client), med(p["decode_ms"]["p50"] for p in page)),
 ]
 print(f"browser page vs crackvis bench render (C++ gRPC client), {page[0]['size']}, "

@@ -96,6 +96,7 @@ export class FrameDecoder {
   private painting: Promise<void> = Promise.resolve();
   private rgba: ImageData | null = null;
   private copyConverts = true; // until a copyTo with a format fails
+  private generation = 0; // counts close(): a closed decoder's pictures are not painted
 
   constructor(
     private readonly canvas: HTMLCanvasElement,
@@ -144,6 +145,7 @@ export class FrameDecoder {
     if (this.decoder && this.decoder.state !== "closed") this.decoder.close();
     this.decoder = null;
     this.pending.clear();
+    this.generation++;
   }
 
   private configure(sps: Uint8Array): void {
@@ -162,46 +164,70 @@ export class FrameDecoder {
     const entry = this.pending.get(picture.timestamp);
     this.pending.delete(picture.timestamp);
     this.failures = 0;
-    this.painting = this.painting.then(async () => {
-      let paintedBy: PaintedFrame["paintedBy"];
-      try {
-        paintedBy = await this.draw(picture);
-      } finally {
-        picture.close();
-      }
-      if (!entry) return;
-      const f = entry.frame;
-      this.hooks.painted({
-        frameId: f.frameId,
-        lastEventId: f.lastEventId,
-        step: f.step,
-        width: f.width,
-        height: f.height,
-        keyframe: f.keyframe,
-        fullResolution: f.fullResolution,
-        decodeMs: performance.now() - entry.handedAt,
-        serverMs: f.timings?.eventToSendMs ?? 0,
-        paintedBy,
-      });
+    const generation = this.generation;
+    this.painting = this.painting
+      .then(() => this.show(picture, entry, generation))
+      // A picture that cannot be painted is skipped; the next one paints.
+      .catch(() => undefined);
+  }
+
+  private async show(
+    picture: VideoFrame,
+    entry: Pending | undefined,
+    generation: number,
+  ): Promise<void> {
+    let paintedBy: PaintedFrame["paintedBy"];
+    try {
+      // Pictures of a closed decoder stay off the canvas (a new session's).
+      if (generation !== this.generation) return;
+      paintedBy = await this.draw(picture);
+    } finally {
+      picture.close();
+    }
+    if (!entry) return;
+    const f = entry.frame;
+    this.hooks.painted({
+      frameId: f.frameId,
+      lastEventId: f.lastEventId,
+      step: f.step,
+      width: f.width,
+      height: f.height,
+      keyframe: f.keyframe,
+      fullResolution: f.fullResolution,
+      decodeMs: performance.now() - entry.handedAt,
+      serverMs: f.timings?.eventToSendMs ?? 0,
+      paintedBy,
     });
   }
 
   private async draw(picture: VideoFrame): Promise<PaintedFrame["paintedBy"]> {
-    const { width, height } = this.canvas;
-    if (this.copyConverts && picture.displayWidth === width && picture.displayHeight === height) {
-      if (this.rgba === null || this.rgba.width !== width || this.rgba.height !== height) {
-        this.rgba = new ImageData(width, height);
-      }
-      try {
-        // TypeScript's DOM types lack copyTo's format option (Chrome 127+).
-        await picture.copyTo(this.rgba.data, { format: "RGBA" } as VideoFrameCopyToOptions);
-        this.context.putImageData(this.rgba, 0, 0);
-        return "copy";
-      } catch {
-        this.copyConverts = false; // this browser's copyTo keeps the decoder's format
+    const fits = () =>
+      picture.displayWidth === this.canvas.width && picture.displayHeight === this.canvas.height;
+    if (this.copyConverts && fits()) {
+      const { width, height } = this.canvas;
+      // TypeScript's DOM types lack copyTo's format option (Chrome 127+).
+      // Browsers before it ignore the option and would copy the decoder's
+      // own format (I420): its size tells.
+      const rgba = { format: "RGBA" } as VideoFrameCopyToOptions;
+      if (picture.allocationSize(rgba) !== width * height * 4) {
+        this.copyConverts = false;
+      } else {
+        if (this.rgba === null || this.rgba.width !== width || this.rgba.height !== height) {
+          this.rgba = new ImageData(width, height);
+        }
+        try {
+          await picture.copyTo(this.rgba.data, rgba);
+        } catch {
+          this.copyConverts = false;
+        }
+        // The canvas may have been resized meanwhile (a new view size).
+        if (this.copyConverts && fits()) {
+          this.context.putImageData(this.rgba, 0, 0);
+          return "copy";
+        }
       }
     }
-    this.context.drawImage(picture, 0, 0, width, height);
+    this.context.drawImage(picture, 0, 0, this.canvas.width, this.canvas.height);
     return "scaled";
   }
 

@@ -84,6 +84,8 @@ const kMaxHeight = 2160;
 const kResizeDebounceMs = 150;
 const kStatusEveryMs = 500;
 const kRecent = 30;
+// How long a Describe answer is reused for the same file (describing()).
+const kDescribeKeptMs = 2000;
 
 function evenWithin(value: number, most: number): number {
   return Math.min(most, Math.max(kMinSize, Math.floor(value) & ~1));
@@ -138,9 +140,14 @@ class App {
   private stats: StreamStats | null = null;
   private readonly latencies: number[] = [];
   private readonly decodeMs: number[] = [];
-  private inFlightDescribe: { file: string; reply: Promise<DescribeResponse> } | null = null;
-  // When a file was chosen to open, until its first frame is painted.
-  private chosenAt: number | null = null;
+  // The last Describe, shared while on its way and for kDescribeKeptMs after
+  // its answer (a double click's three Describes: see describing()).
+  private lastDescribe: {
+    file: string;
+    reply: Promise<DescribeResponse>;
+    answeredAt: number | null;
+  } | null = null;
+  private opens = 0; // views asked for: the last one wins (openView)
   private shownPanelKey = "";
   private crackCause = "";
   private sentSize = { width: 0, height: 0 };
@@ -285,20 +292,29 @@ class App {
     }
   }
 
-  // A Describe of `file`, or the one already on its way: a double click
-  // describes on each click and again to open, and the session waits for
-  // the last (three Describes of one file at once, 60-90 ms on cuboid A).
+  // A Describe of `file`, or the last one while it is on its way or just
+  // answered: a double click describes on each click and again to open, and
+  // the session waited for the last (three Describes of one file, 60-90 ms
+  // on cuboid A). A refusal is shared only with those already waiting.
   private describing(file: string): Promise<DescribeResponse> {
-    if (this.inFlightDescribe?.file !== file) {
-      const reply = api.describe(file);
-      const entry = { file, reply };
-      this.inFlightDescribe = entry;
-      const settled = () => {
-        if (this.inFlightDescribe === entry) this.inFlightDescribe = null;
-      };
-      reply.then(settled, settled);
-    }
-    return this.inFlightDescribe!.reply;
+    const last = this.lastDescribe;
+    const fresh =
+      last !== null &&
+      last.file === file &&
+      (last.answeredAt === null || performance.now() - last.answeredAt < kDescribeKeptMs);
+    if (fresh) return last.reply;
+    const reply = api.describe(file);
+    const entry = { file, reply, answeredAt: null as number | null };
+    this.lastDescribe = entry;
+    reply.then(
+      () => {
+        entry.answeredAt = performance.now();
+      },
+      () => {
+        if (this.lastDescribe === entry) this.lastDescribe = null;
+      },
+    );
+    return reply;
   }
 
   // --- sessions
@@ -318,26 +334,39 @@ class App {
   // camera fitted to this file (the Qt client's File > Open).
   private async openFile(file: string): Promise<void> {
     if (!file) return;
-    this.chosenAt = performance.now();
+    const chosenAt = performance.now();
     this.test.firstFrameMs = null;
     const doc = this.panel.description();
     setData(doc, file, -1);
     removeCamera(doc);
-    await this.openView(doc);
+    await this.openView(doc, chosenAt);
   }
 
-  private async openView(doc: XMLDocument): Promise<void> {
+  // `chosenAt`: when the user chose the file, to time the new session's
+  // first frame painted (crackvisTest.firstFrameMs).
+  private async openView(doc: XMLDocument, chosenAt: number | null = null): Promise<void> {
     const file = fileOf(doc);
+    // The last view asked for wins: an open overtaken by a newer one while
+    // it waits closes its session (it would paint on the same canvas).
+    const open = ++this.opens;
     // A file Describe refuses (a foreign folder, a typo) would be refused
     // again by OpenSession: one message is enough.
-    if (!(await this.describe(file))) return;
+    if (!(await this.describe(file)) || open !== this.opens) return;
     const size = this.viewSize();
     setViewSize(doc, size.width, size.height);
     await this.closeSession();
+    const firstFrame = { chosenAt };
+    let session: RenderSession;
     try {
-      this.session = await RenderSession.open(serializePipeline(doc), ui.view, {
+      session = await RenderSession.open(serializePipeline(doc), ui.view, {
         state: (state) => this.stateChanged(state),
-        painted: (frame, latencies) => this.painted(frame, latencies),
+        painted: (frame, latencies) => {
+          if (firstFrame.chosenAt !== null) {
+            this.test.firstFrameMs = performance.now() - firstFrame.chosenAt;
+            firstFrame.chosenAt = null;
+          }
+          this.painted(frame, latencies);
+        },
         pick: (result) => this.picked(result),
         eventError: (error) => this.eventFailed(error),
         stats: (stats) => {
@@ -354,9 +383,14 @@ class App {
         viewSize: () => this.viewSize(),
       });
     } catch (e) {
-      this.report(`cannot open ${file}: ${messageOf(e)}`, "error");
+      if (open === this.opens) this.report(`cannot open ${file}: ${messageOf(e)}`, "error");
       return;
     }
+    if (open !== this.opens) {
+      await session.close();
+      return;
+    }
+    this.session = session;
     if (file !== this.file) this.historyCracks = "";
     this.file = file;
     this.sentSize = size;
@@ -364,7 +398,7 @@ class App {
     this.shownPanelKey = "";
     ui.view.width = size.width;
     ui.view.height = size.height;
-    const info = this.session.info;
+    const info = session.info;
     const first = Number(layer(doc, "data")?.getAttribute("step") ?? "0");
     this.live = { live: false, following: false, ended: false, steps: info.stepCount, lastStepAt: 0, plotAt: 0 };
     this.setStepRange(info.stepCount, first < 0 ? info.stepCount - 1 : first);
@@ -503,10 +537,6 @@ class App {
   private painted(frame: PaintedFrame, latencies: number[]): void {
     const t = this.test;
     t.framesPainted++;
-    if (this.chosenAt !== null) {
-      t.firstFrameMs = performance.now() - this.chosenAt;
-      this.chosenAt = null;
-    }
     t.lastFrame = {
       step: frame.step,
       width: frame.width,
