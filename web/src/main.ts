@@ -86,6 +86,8 @@ const kStatusEveryMs = 500;
 const kRecent = 30;
 // How long a Describe answer is reused for the same file (describing()).
 const kDescribeKeptMs = 2000;
+// The longest a new view's Steps plot waits for its first frame (openView).
+const kHistoryAfterMs = 3000;
 
 function evenWithin(value: number, most: number): number {
   return Math.min(most, Math.max(kMinSize, Math.floor(value) & ~1));
@@ -355,7 +357,9 @@ class App {
     const size = this.viewSize();
     setViewSize(doc, size.width, size.height);
     await this.closeSession();
-    const firstFrame = { chosenAt };
+    // The Steps plot's StepHistory waits for the first frame (or
+    // kHistoryAfterMs): the server computes it while it would draw that frame.
+    const firstFrame = { chosenAt, history: () => {} };
     let session: RenderSession;
     try {
       session = await RenderSession.open(serializePipeline(doc), ui.view, {
@@ -365,6 +369,7 @@ class App {
             this.test.firstFrameMs = performance.now() - firstFrame.chosenAt;
             firstFrame.chosenAt = null;
           }
+          firstFrame.history();
           this.painted(frame, latencies);
         },
         pick: (result) => this.picked(result),
@@ -407,7 +412,13 @@ class App {
     const sizes = `N = ${info.particleCount}, M = ${info.bondCount}`;
     this.report(`opened ${file} (${info.stepCount} steps, ${sizes}; ${info.backend})`);
     ui.view.focus();
-    void this.showHistory(file);
+    let historyAsked = false;
+    firstFrame.history = () => {
+      if (historyAsked) return;
+      historyAsked = true;
+      void this.showHistory(file);
+    };
+    window.setTimeout(firstFrame.history, kHistoryAfterMs);
   }
 
   private async closeSession(): Promise<void> {

@@ -87,7 +87,40 @@ void Session::runWorker(std::promise<Status>& started) {
   m_tasks.clear();
 }
 
+// The first frame is drawn as soon as the session has opened, before its
+// stream attaches, and waits for it: the client's answer to OpenSession and
+// its stream's set-up (a browser's WebSocket: a TLS handshake and the
+// upgrade) overlap the first render instead of preceding it. Its state
+// notice waits in the queue like any other.
+Status Session::renderEarly(Worker& worker) {
+  std::optional<RenderedFrame> early;
+  worker.stateDue = true;  // the fitted camera, known after the render
+  const Status status = guarded(m_id, "the first frame", [&] {
+    worker.renderIfDirty(&early);
+    return Status::ok();
+  });
+  if (!status) {
+    notify({worker.lastEventId, status, std::nullopt});
+    return worker.recover();  // the stream's attach asks for a frame again
+  }
+  if (!early) {
+    return Status::ok();  // it failed and said so; the attach asks again
+  }
+  std::lock_guard lock(m_mutex);
+  if (m_attachment != 0) {
+    // Attached during the render: this is the keyframe the stream asked
+    // for (drawing another would also make the first move's frame a full one).
+    m_latest = std::move(early);
+    m_needFrame = false;
+    m_outgoing.notify_all();
+  } else {
+    m_early = std::move(early);
+  }
+  return Status::ok();
+}
+
 Status Session::serve(Worker& worker) {
+  CRACKVIS_RETURN_IF_ERROR(renderEarly(worker));
   std::unique_lock lock(m_mutex);
   while (!m_closing) {
     auto ready = [&] {
@@ -114,6 +147,9 @@ Status Session::serve(Worker& worker) {
       worker.stateDue = true;
     }
     const bool attached = m_attachment != 0;
+    if (!events.empty()) {
+      m_early.reset();  // drawn before these events changed the view
+    }
     lock.unlock();
     for (const SessionEvent& event : events) {
       const Status status = guarded(m_id, eventName(event), [&] {
@@ -215,7 +251,15 @@ std::uint64_t Session::attach() {
     m_lastActive = Clock::now();
     m_detachedSince.reset();
     m_latest.reset();  // a frame encoded for another stream's decoder
-    m_needFrame = true;
+    if (m_early) {
+      // The first frame, drawn while the client connected; its state
+      // notice is queued already. A new stream's encoder starts with a
+      // keyframe.
+      m_latest = std::move(m_early);
+      m_early.reset();
+    } else {
+      m_needFrame = true;
+    }
   }
   m_wake.notify_one();
   m_outgoing.notify_all();  // the superseded stream ends

@@ -448,7 +448,7 @@ void Session::Worker::tick() {
   scene->prefetch(step + 1 < stepCount() ? step + 1 : 0);
 }
 
-void Session::Worker::renderIfDirty() {
+void Session::Worker::renderIfDirty(std::optional<RenderedFrame>* hold) {
   const auto now = Clock::now();
   if (refineAt && now >= *refineAt) {
     refineAt.reset();
@@ -504,7 +504,11 @@ void Session::Worker::renderIfDirty() {
   }
   frame.frameId = ++frameId;
   const bool settled = frame.fullResolution && stateDue;
-  session.publish(std::move(frame));
+  if (hold != nullptr) {
+    *hold = std::move(frame);
+  } else {
+    session.publish(std::move(frame));
+  }
   if (settled) {  // the camera came to rest, or a new stream: the state carries it
     stateDue = false;
     session.notify({0, Status::ok(), state()});

@@ -114,8 +114,9 @@ struct Session::Worker {
   // Advances a playing session by one step when its tick is due.
   void tick();
   // Renders a frame when something changed: reduced while interacting or
-  // playing, full resolution otherwise.
-  void renderIfDirty();
+  // playing, full resolution otherwise. Published for the stream, or kept
+  // in `hold` (the first frame, drawn before a stream attached).
+  void renderIfDirty(std::optional<RenderedFrame>* hold = nullptr);
   std::string particleDrawing() const;
 
   // A full-resolution picture of the current state (0: the view's size).

@@ -177,7 +177,8 @@ class Session {
 
   void run(std::promise<Status> started);
   void runWorker(std::promise<Status>& started);
-  Status serve(Worker& worker);  // the event loop; an error ends the session
+  Status serve(Worker& worker);        // the event loop; an error ends the session
+  Status renderEarly(Worker& worker);  // the first frame, before a stream attaches
   void fail(const Status& status);
   void publish(RenderedFrame frame);
   void notify(SessionNotice notice);
@@ -196,6 +197,9 @@ class Session {
   std::deque<SessionEvent> m_events;
   std::deque<std::function<void(Worker&)>> m_tasks;
   std::optional<RenderedFrame> m_latest;
+  // The first frame, drawn before any stream attached; the first attach
+  // takes it (renderEarly).
+  std::optional<RenderedFrame> m_early;
   std::deque<SessionNotice> m_notices;
   std::uint64_t m_attachment = 0;  // current; 0: none
   std::uint64_t m_nextAttachment = 1;
