@@ -414,7 +414,8 @@ class App {
     ui.view.focus();
     let historyAsked = false;
     firstFrame.history = () => {
-      if (historyAsked) return;
+      // Not for a view replaced meanwhile (its timer still fires).
+      if (historyAsked || this.session !== session) return;
       historyAsked = true;
       void this.showHistory(file);
     };
@@ -435,6 +436,7 @@ class App {
   private async showHistory(file: string): Promise<void> {
     try {
       const history = await api.stepHistory(file, this.historyCracks);
+      if (file !== this.file) return; // another file opened meanwhile
       const names = this.plot.setHistory(history);
       this.test.brokenBonds = history.brokenBonds.map((b) => Number(b));
       const chosen = ui.plotScalar.value;

@@ -93,6 +93,12 @@ void Session::runWorker(std::promise<Status>& started) {
 // upgrade) overlap the first render instead of preceding it. Its state
 // notice waits in the queue like any other.
 Status Session::renderEarly(Worker& worker) {
+  {
+    std::lock_guard lock(m_mutex);
+    if (m_closing) {
+      return Status::ok();  // closed before it was seen (an overtaken open)
+    }
+  }
   std::optional<RenderedFrame> early;
   worker.stateDue = true;  // the fitted camera, known after the render
   const Status status = guarded(m_id, "the first frame", [&] {
@@ -186,6 +192,9 @@ Status Session::serve(Worker& worker) {
       worker.dirty = false;  // no frame until the next event: it may throw again
     }
     lock.lock();
+    if (worker.dirty) {
+      m_early.reset();  // a live file's new step, a snapshot's step: drawn anew
+    }
   }
   return Status::ok();
 }
@@ -257,6 +266,7 @@ std::uint64_t Session::attach() {
       // keyframe.
       m_latest = std::move(m_early);
       m_early.reset();
+      m_needFrame = false;  // an attach that left during the render asked for it
     } else {
       m_needFrame = true;
     }
