@@ -454,6 +454,29 @@ TEST_CASE("A bond list asked for with the description is the one read with a ste
   auto again = listOnly->bonds();
   REQUIRE(again.isOk());
   CHECK(**again == sample.sample3d.lattice.bonds);
+  // Handed over: moved out when nobody shares it, copied when someone does;
+  // later steps do not read it again, and it is not handed over twice.
+  for (const bool shared : {false, true}) {
+    INFO("the list shared: " << shared);
+    auto handed = dataservice::RemoteDemFile::open(client, "run.h5", {.prefetchBondList = true});
+    REQUIRE(handed.isOk());
+    std::shared_ptr<const std::vector<dem::Bond>> holder;
+    if (shared) {
+      holder = handed->bonds().value();
+    }
+    auto taken = handed->takeBonds();
+    REQUIRE(taken.isOk());
+    CHECK(*taken == sample.sample3d.lattice.bonds);
+    if (shared) {
+      CHECK(*holder == sample.sample3d.lattice.bonds);
+    }
+    CHECK(handed->bondsLoaded());
+    auto later = handed->readStep(2);
+    REQUIRE(later.isOk());
+    CHECK(later->positions == plain->readStep(2)->positions);
+    CHECK(handed->takeBonds().status().code() == StatusCode::kFailedPrecondition);
+    CHECK(handed->bonds().status().code() == StatusCode::kFailedPrecondition);
+  }
 
   // A file dropped before its first step cancels the list's stream.
   {

@@ -43,7 +43,16 @@ TEST_CASE("the step cache reads once, hits after, and prefetches in the backgrou
   CHECK(prefetched->loadMs == 0.0);
   CHECK(prefetched->step->positions == sample.steps[3].positions);
 
-  // Capacity 2: steps 2 and 3 are held; reading 4 and 5 evicts them.
+  // A step asked for just before: its prefetch is waited for, not read twice.
+  cache.prefetch(1);
+  auto asked = cache.get(1);
+  REQUIRE(asked.isOk());
+  CHECK(asked->step->positions == sample.steps[1].positions);
+  CHECK(cache.stats().misses == 1);
+  CHECK(cache.stats().prefetched == 2);
+  CHECK(asked->loadMs >= 0.0);
+
+  // Capacity 2: steps 3 and 1 are held; reading 4 and 5 evicts them.
   REQUIRE(cache.get(4).isOk());
   REQUIRE(cache.get(5).isOk());
   auto evicted = cache.get(2);

@@ -211,7 +211,7 @@ Status RemoteDemFile::takePrefetchedBonds() {
   if ((!arrived && m != 0) || !check.complete()) {
     return internalError(fmt::format("{}: /bonds/pairs arrived incomplete", m_file));
   }
-  m_bondList = std::make_shared<const std::vector<dem::Bond>>(std::move(bonds));
+  m_bondList = std::make_shared<std::vector<dem::Bond>>(std::move(bonds));
   return Status::ok();
 }
 
@@ -259,7 +259,7 @@ Result<std::vector<std::uint8_t>> RemoteDemFile::toBondState(const TypedArray& a
   return values;
 }
 
-Result<std::shared_ptr<const std::vector<dem::Bond>>> RemoteDemFile::bonds() {
+Status RemoteDemFile::loadBonds() {
   CRACKVIS_RETURN_IF_ERROR(takePrefetchedBonds());
   if (!m_bondList) {
     auto arrays = m_client->read(m_file, {Hyperslab::whole("/bonds/pairs")});
@@ -270,9 +270,34 @@ Result<std::shared_ptr<const std::vector<dem::Bond>>> RemoteDemFile::bonds() {
     if (!bonds) {
       return bonds.status();
     }
-    m_bondList = std::make_shared<const std::vector<dem::Bond>>(std::move(*bonds));
+    m_bondList = std::make_shared<std::vector<dem::Bond>>(std::move(*bonds));
   }
-  return m_bondList;
+  return Status::ok();
+}
+
+Result<std::shared_ptr<const std::vector<dem::Bond>>> RemoteDemFile::bonds() {
+  if (m_bondsTaken) {
+    return failedPrecondition(fmt::format("{}: the bond list was handed over", m_file));
+  }
+  CRACKVIS_RETURN_IF_ERROR(loadBonds());
+  return std::shared_ptr<const std::vector<dem::Bond>>(m_bondList);
+}
+
+Result<std::vector<dem::Bond>> RemoteDemFile::takeBonds() {
+  if (m_bondsTaken) {
+    return failedPrecondition(fmt::format("{}: the bond list was handed over", m_file));
+  }
+  CRACKVIS_RETURN_IF_ERROR(loadBonds());
+  // 8 bytes a bond: 475 MB at 1e7 particles, not to be copied when not shared.
+  std::vector<dem::Bond> bonds;
+  if (m_bondList.use_count() == 1) {
+    bonds = std::move(*m_bondList);
+  } else {
+    bonds = *m_bondList;
+  }
+  m_bondList.reset();
+  m_bondsTaken = true;
+  return bonds;
 }
 
 Result<std::vector<std::int32_t>> RemoteDemFile::breakSteps() const {
@@ -335,7 +360,7 @@ Result<RemoteStep> RemoteDemFile::readStepOnce(int step, StepExtras extras) {
   std::vector<Hyperslab> slabs = {
       stepSlab(positionsPath, step, {n, 3}),
       stepSlab(demStepDatasetPath(*m_description, dem::DemDataset::kBondState, step), step, {m})};
-  const bool withBonds = !m_bondList && !m_prefetchedBonds;
+  const bool withBonds = !m_bondList && !m_prefetchedBonds && !m_bondsTaken;
   const std::size_t bondsSlab = withBonds ? slabs.size() : SIZE_MAX;
   if (withBonds) {
     slabs.push_back(Hyperslab::whole("/bonds/pairs"));
@@ -461,7 +486,7 @@ Result<RemoteStep> RemoteDemFile::readStepOnce(int step, StepExtras extras) {
     if (!bondCheck.complete()) {
       return internalError(fmt::format("{}: /bonds/pairs arrived incomplete", m_file));
     }
-    m_bondList = std::make_shared<const std::vector<dem::Bond>>(std::move(bonds));
+    m_bondList = std::make_shared<std::vector<dem::Bond>>(std::move(bonds));
   }
   return result;
 }

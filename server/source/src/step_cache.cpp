@@ -1,3 +1,5 @@
+#include <chrono>
+
 #include <crackvis/source/step_source.hpp>
 
 namespace crackvis::source {
@@ -40,12 +42,20 @@ void StepCache::insert(std::shared_ptr<const SourceStep> step) {
 Result<CachedStep> StepCache::get(int step) {
   {
     std::unique_lock lock(m_mutex);
-    // A prefetch of this very step is under way: wait for it instead of
-    // reading the same bytes twice.
-    m_changed.wait(lock, [&] { return m_reading != step || m_stopping; });
+    // A prefetch of this very step is asked for or under way: wait for it
+    // instead of reading the same bytes twice. The wait is the part of its
+    // read that the caller's other work did not hide: the step's load time.
+    const auto inFlight = [&] { return (m_reading == step || m_wanted == step) && !m_stopping; };
+    double waitedMs = 0.0;
+    if (inFlight()) {
+      const auto start = std::chrono::steady_clock::now();
+      m_changed.wait(lock, [&] { return !inFlight(); });
+      waitedMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                     .count();
+    }
     if (auto cached = lookup(step)) {
       ++m_stats.hits;
-      return CachedStep{std::move(cached), 0.0};
+      return CachedStep{std::move(cached), waitedMs};
     }
     ++m_stats.misses;
   }
@@ -99,6 +109,7 @@ void StepCache::prefetchLoop() {
     const int step = m_wanted;
     m_wanted = -1;
     if (lookup(step) != nullptr) {
+      m_changed.notify_all();  // a get() may wait for this step
       continue;
     }
     m_reading = step;

@@ -162,7 +162,7 @@ class RemoteSource final : public FileSource {
   explicit RemoteSource(dataservice::RemoteDemFile remote) : m_remote(std::move(remote)) {}
 
   Status load() {
-    auto bonds = m_remote.bonds();
+    auto bonds = m_remote.takeBonds();  // the lattice keeps them: not copied
     if (!bonds) {
       return bonds.status();
     }
@@ -171,7 +171,7 @@ class RemoteSource final : public FileSource {
       return radii.status();
     }
     m_lattice.dimension = m_remote.dimension();
-    m_lattice.bonds = **bonds;
+    m_lattice.bonds = std::move(bonds).value();
     m_lattice.radius = std::move(radii).value();
     // The bond list's range was checked as it arrived (RemoteDemFile).
     if (Status valid = dem::validateTopology(m_lattice, dem::BondEnds::kCheckedAlready); !valid) {

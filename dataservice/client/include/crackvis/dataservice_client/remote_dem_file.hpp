@@ -94,7 +94,11 @@ class RemoteDemFile {
   // The fixed lattice topology, read on first use (alone, or with the first
   // readStep) and kept.
   Result<std::shared_ptr<const std::vector<dem::Bond>>> bonds();
-  bool bondsLoaded() const { return m_bondList != nullptr; }
+  // The bond list handed over to a caller that keeps it (a step source's
+  // lattice): moved when nobody else holds it, else copied. Later steps are
+  // read without it, and bonds() is not to be called after.
+  Result<std::vector<dem::Bond>> takeBonds();
+  bool bondsLoaded() const { return m_bondList != nullptr || m_bondsTaken; }
   Result<std::vector<double>> radii() const;
 
   // Positions and bond states of a step in one Read (with the bond list in
@@ -127,6 +131,8 @@ class RemoteDemFile {
   // Receives the prefetched bond list, if one is on its way; a refused or
   // cut stream leaves the list to be read again.
   Status takePrefetchedBonds();
+  // The bond list into m_bondList: the prefetched one, or read now.
+  Status loadBonds();
   Result<RemoteStep> readStepOnce(int step, StepExtras extras);
   // The slab of step `step` of a per-step dataset whose one step has
   // `rowShape`, and the shape it arrives in: the whole dataset of a step
@@ -146,7 +152,8 @@ class RemoteDemFile {
   bool m_beingWritten = false;
   std::int64_t m_particles = 0;
   std::int64_t m_bonds = 0;
-  std::shared_ptr<const std::vector<dem::Bond>> m_bondList;
+  std::shared_ptr<std::vector<dem::Bond>> m_bondList;
+  bool m_bondsTaken = false;  // takeBonds() gave the list away
   // OpenOptions::prefetchBondList; it makes the file move-only (one reader).
   std::unique_ptr<DataClient::PendingRead> m_prefetchedBonds;
 };

@@ -132,7 +132,10 @@ class ScenePipeline {
   ScenePipeline(SourceOpener opener, std::size_t cacheSteps);
   Status apply(pipeline::PipelineDescription next);
   void restore(State&& state);
-  Status openFile(const pipeline::PipelineDescription& description);
+  // Opens the description's file; `stepShownIn(stepCount)` names the step
+  // that will be shown, read ahead while the rest of the file is prepared.
+  Status openFile(const pipeline::PipelineDescription& description,
+                  const std::function<int(int)>& stepShownIn);
   Status extract(std::shared_ptr<const source::SourceStep> step);
   // Reads every step once (aside from the cache) for the series ranges.
   Status scanSeries();
