@@ -12,6 +12,13 @@ namespace crackvis {
 namespace {
 
 constexpr std::string_view kHugetlbTunable = "glibc.malloc.hugetlb";
+// glibc (2.36) asks for huge pages on its main heap and on its own mappings
+// of 2 MiB and more, but not on the heaps ("arenas") it makes for other
+// threads; below its mmap threshold (which grows to 32 MiB as large blocks
+// are freed) a session thread's arrays landed there, on small pages. With
+// one arena every thread allocates from the main heap, which also reuses
+// what another thread freed instead of faulting in fresh pages.
+constexpr std::string_view kArenaTunable = "glibc.malloc.arena_max";
 // Set before the re-execution: the re-executed program never tries again,
 // even where glibc drops the tunable from GLIBC_TUNABLES.
 constexpr const char* kReexecutedVariable = "CRACKVIS_HUGE_PAGES_REEXECUTED";
@@ -60,6 +67,9 @@ std::optional<std::string> hugePageTunables(std::string_view thpMode, const char
     return std::nullopt;  // the user's choice
   }
   std::string wanted = std::string(kHugetlbTunable) + "=1";
+  if (present.find(kArenaTunable) == std::string_view::npos) {
+    wanted += ":" + std::string(kArenaTunable) + "=1";
+  }
   return present.empty() ? wanted : std::string(present) + ":" + wanted;
 }
 

@@ -227,6 +227,9 @@ TEST_CASE("crackvis-data re-executes itself once with glibc's huge pages where T
     // as text, not as whole variables.
     const std::string started = readText("/proc/" + std::to_string(server.pid()) + "/environ");
     CHECK((started.find("glibc.malloc.hugetlb=1") != std::string::npos) == c.hugePages);
+    // With them, one malloc arena, unless the user chose a count.
+    CHECK((started.find("glibc.malloc.arena_max=1") != std::string::npos) ==
+          (c.hugePages && c.extra.find("arena_max") == std::string::npos));
     if (c.extra.starts_with("GLIBC_TUNABLES=")) {
       CHECK(started.find(c.extra) != std::string::npos);  // what the user set is kept
     }
