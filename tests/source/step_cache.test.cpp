@@ -1,6 +1,7 @@
 // The render server's step sources and cache: reads of a real file, cache
 // hits and misses, the background prefetch, and a step out of range.
 #include <chrono>
+#include <future>
 #include <thread>
 
 #include <catch2/catch.hpp>
@@ -65,6 +66,68 @@ TEST_CASE("the step cache reads once, hits after, and prefetches in the backgrou
   CHECK(outside.status().message().find("step 6 out of range (the file has steps 0..5)") !=
         std::string::npos);
   cache.prefetch(99);  // ignored
+}
+
+namespace {
+
+// A source whose read of one step blocks until released: the prefetch
+// thread can be held in a read while the cache answers other calls.
+class HeldSource final : public source::StepSource {
+ public:
+  explicit HeldSource(int held) : m_held(held) {}
+  const std::string& file() const override { return m_file; }
+  const dem::Lattice& lattice() const override { return m_lattice; }
+  int stepCount() const override { return 8; }
+  Status setExtraArrays(const source::ExtraArrays&) override { return Status::ok(); }
+  const std::vector<std::int32_t>& breakSteps() const override { return m_breakSteps; }
+  Result<source::SourceStep> read(int step) override {
+    if (step == m_held) {
+      m_entered.set_value();
+      m_release.get_future().wait();
+    }
+    source::SourceStep out;
+    out.index = step;
+    return out;
+  }
+  std::future<void> entered() { return m_entered.get_future(); }
+  void release() { m_release.set_value(); }
+
+ private:
+  int m_held;
+  std::string m_file = "held.h5";
+  dem::Lattice m_lattice;
+  std::vector<std::int32_t> m_breakSteps;
+  std::promise<void> m_entered;
+  std::promise<void> m_release;
+};
+
+}  // namespace
+
+TEST_CASE("a cached step is answered at once while the prefetch thread reads another", "[source]") {
+  auto held = std::make_unique<HeldSource>(6);
+  HeldSource& source = *held;
+  auto entered = source.entered();
+  source::StepCache cache(std::move(held), 4);
+  REQUIRE(cache.get(4).isOk());
+  cache.prefetch(6);
+  REQUIRE(entered.wait_for(std::chrono::seconds(10)) == std::future_status::ready);
+  // Asked for again while step 6's read holds the prefetch thread: still a
+  // hit, not a wait for that read.
+  cache.prefetch(4);
+  auto again = std::async(std::launch::async, [&] { return cache.get(4); });
+  const bool answered = again.wait_for(std::chrono::seconds(5)) == std::future_status::ready;
+  source.release();
+  REQUIRE(answered);
+  auto hit = again.get();
+  REQUIRE(hit.isOk());
+  CHECK(hit->step->index == 4);
+  CHECK(hit->loadMs == 0.0);
+  CHECK(cache.stats().misses == 1);
+  // Step 6 itself, once its read ends: the prefetched one.
+  auto six = cache.get(6);
+  REQUIRE(six.isOk());
+  CHECK(six->step->index == 6);
+  CHECK(cache.stats().misses == 1);
 }
 
 TEST_CASE("a step source brings velocities, bond forces and break steps only when asked",

@@ -1,8 +1,17 @@
+#include <algorithm>
 #include <chrono>
 
 #include <crackvis/source/step_source.hpp>
 
 namespace crackvis::source {
+namespace {
+
+double millisecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+}  // namespace
 
 StepCache::StepCache(std::unique_ptr<StepSource> source, std::size_t capacity)
     : m_source(std::move(source)),
@@ -39,23 +48,31 @@ void StepCache::insert(std::shared_ptr<const SourceStep> step) {
   }
 }
 
+bool StepCache::cached(int step) const {
+  return std::any_of(m_steps.begin(), m_steps.end(),
+                     [&](const auto& held) { return held->index == step; });
+}
+
 Result<CachedStep> StepCache::get(int step) {
+  double waitedMs = 0.0;
   {
     std::unique_lock lock(m_mutex);
     // A prefetch of this very step is asked for or under way: wait for it
-    // instead of reading the same bytes twice. The wait is the part of its
-    // read that the caller's other work did not hide: the step's load time.
-    const auto inFlight = [&] { return (m_reading == step || m_wanted == step) && !m_stopping; };
-    double waitedMs = 0.0;
+    // instead of reading the same bytes twice. A step the cache holds is
+    // never waited for, whatever the prefetch thread is reading. The wait
+    // is the part of the read that the caller's other work did not hide,
+    // counted as the step's load time.
+    const auto inFlight = [&] {
+      return !m_stopping && (m_reading == step || m_wanted == step) && !cached(step);
+    };
     if (inFlight()) {
       const auto start = std::chrono::steady_clock::now();
       m_changed.wait(lock, [&] { return !inFlight(); });
-      waitedMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                     .count();
+      waitedMs = millisecondsSince(start);
     }
-    if (auto cached = lookup(step)) {
+    if (auto found = lookup(step)) {
       ++m_stats.hits;
-      return CachedStep{std::move(cached), waitedMs};
+      return CachedStep{std::move(found), waitedMs};
     }
     ++m_stats.misses;
   }
@@ -67,7 +84,8 @@ Result<CachedStep> StepCache::get(int step) {
   auto shared = std::make_shared<const SourceStep>(std::move(loaded).value());
   std::lock_guard lock(m_mutex);
   insert(shared);
-  return CachedStep{shared, shared->loadMs};
+  // A prefetch that failed or was replaced by another: its wait counts too.
+  return CachedStep{shared, waitedMs + shared->loadMs};
 }
 
 Result<SourceStep> StepCache::readAside(int step) {
@@ -86,7 +104,7 @@ Result<bool> StepCache::refresh() {
 void StepCache::prefetch(int step) {
   {
     std::lock_guard lock(m_mutex);
-    if (step < 0 || step >= m_source->stepCount()) {
+    if (step < 0 || step >= m_source->stepCount() || cached(step)) {
       return;
     }
     m_wanted = step;

@@ -55,7 +55,9 @@ struct ExtraArrays {
 // A step from the cache: the data and what getting it cost now.
 struct CachedStep {
   std::shared_ptr<const SourceStep> step;
-  double loadMs = 0.0;  // 0 for a cache hit
+  // 0 for a cache hit; for a step whose prefetch was under way, the wait
+  // for it (the part of the read nothing else hid).
+  double loadMs = 0.0;
 };
 
 // Not thread-safe; StepCache serialises its calls.
@@ -136,6 +138,7 @@ class StepCache {
 
  private:
   std::shared_ptr<const SourceStep> lookup(int step);   // under m_mutex
+  bool cached(int step) const;                          // under m_mutex, order kept
   void insert(std::shared_ptr<const SourceStep> step);  // under m_mutex
   void prefetchLoop();
 
