@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <crackvis/analysis/opening.hpp>
+#include <crackvis/common/elapsed.hpp>
 #include <crackvis/common/exception_boundary.hpp>
 #include <crackvis/cracks/bond_graph.hpp>
 #include <crackvis/cracks/bond_mapping.hpp>
@@ -16,11 +17,6 @@
 
 namespace crackvis::scene {
 namespace {
-
-double millisecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
-}
 
 // A description's step in a file of `stepCount` steps: -1 is the last; any
 // other step is itself, so that checkStepInRange refuses one the file lacks

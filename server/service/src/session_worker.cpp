@@ -7,19 +7,12 @@
 #include <fmt/format.h>
 
 #include "session_guard.hpp"
+#include <crackvis/common/elapsed.hpp>
 #include <crackvis/common/log.hpp>
 #include <crackvis/render/probe_scene.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 
 namespace crackvis::service {
-namespace {
-
-double millisecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-}  // namespace
-
 Status Session::Worker::ensureRenderer(int w, int h) {
   if (renderer && renderer->capacityWidth() >= w && renderer->capacityHeight() >= h) {
     return Status::ok();

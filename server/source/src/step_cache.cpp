@@ -1,17 +1,10 @@
 #include <algorithm>
 #include <chrono>
 
+#include <crackvis/common/elapsed.hpp>
 #include <crackvis/source/step_source.hpp>
 
 namespace crackvis::source {
-namespace {
-
-double millisecondsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
-}
-
-}  // namespace
 
 StepCache::StepCache(std::unique_ptr<StepSource> source, std::size_t capacity)
     : m_source(std::move(source)),
@@ -27,15 +20,22 @@ StepCache::~StepCache() {
   m_prefetcher.join();
 }
 
+namespace {
+
+auto holding(int step) {
+  return [step](const std::shared_ptr<const SourceStep>& held) { return held->index == step; };
+}
+
+}  // namespace
+
 std::shared_ptr<const SourceStep> StepCache::lookup(int step) {
-  for (auto it = m_steps.begin(); it != m_steps.end(); ++it) {
-    if ((*it)->index == step) {
-      auto found = *it;
-      m_steps.splice(m_steps.begin(), m_steps, it);  // most recently used first
-      return found;
-    }
+  const auto it = std::find_if(m_steps.begin(), m_steps.end(), holding(step));
+  if (it == m_steps.end()) {
+    return nullptr;
   }
-  return nullptr;
+  auto found = *it;
+  m_steps.splice(m_steps.begin(), m_steps, it);  // most recently used first
+  return found;
 }
 
 void StepCache::insert(std::shared_ptr<const SourceStep> step) {
@@ -49,8 +49,7 @@ void StepCache::insert(std::shared_ptr<const SourceStep> step) {
 }
 
 bool StepCache::cached(int step) const {
-  return std::any_of(m_steps.begin(), m_steps.end(),
-                     [&](const auto& held) { return held->index == step; });
+  return std::any_of(m_steps.begin(), m_steps.end(), holding(step));
 }
 
 Result<CachedStep> StepCache::get(int step) {

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <crackvis/common/elapsed.hpp>
 #include <crackvis/dataservice_client/remote_dem_file.hpp>
 #include <crackvis/dem/dem_file.hpp>
 #include <crackvis/source/step_source.hpp>
@@ -12,10 +13,6 @@ namespace crackvis::source {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double millisecondsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 // A file's data enters a session here, checked by the rules `crackvis info`
 // and `extract` apply (dem::validateTopology, dem::validateStep): whatever a
