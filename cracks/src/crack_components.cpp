@@ -1,7 +1,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <numbers>
@@ -941,19 +940,12 @@ double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::s
       paintPrimitive(crack, mesh, k, project);
     }
   }
-  if (std::getenv("CV_DEBUG")) {
-    std::fprintf(stderr, "G %g %g %g %g %g\n", u0, w0, u1, w1, cell);
-    for (auto& p : section)
-      std::fprintf(stderr, "S %g %g\n", p[0], p[1]);
-  }
   std::size_t inside = 0;
   std::size_t covered = 0;
   for (std::size_t k = 0; k < specimen.cells().size(); ++k) {
     if (specimen.cells()[k] != 0) {
       ++inside;
       covered += crack.cells()[k] != 0 ? 1 : 0;
-      if (std::getenv("CV_DEBUG") && crack.cells()[k] == 0)
-        std::fprintf(stderr, "U %zu\n", k);
     }
   }
   return inside == 0 ? 0.0 : static_cast<double>(covered) / static_cast<double>(inside);
