@@ -129,6 +129,7 @@ TEST_CASE("Describe is bounded in depth, objects and time, and stops when cancel
   TempDir root;
   writeNestedGroups(root.file("deep.h5"), 1000);
   writeNestedGroups(root.file("shallow.h5"), 60);
+  writeWideGroups(root.file("wide.h5"), 10'000);  // about 0.15 s of walking
   Catalogue catalogue(DataRoot::open(root.path().string()).value());
   const auto deep = catalogue.root().resolveFile("deep.h5").value();
 
@@ -159,11 +160,26 @@ TEST_CASE("Describe is bounded in depth, objects and time, and stops when cancel
     CHECK(objects.status().code() == StatusCode::kResourceExhausted);
     CHECK_THAT(objects.status().message(), Catch::Contains("more than 10 objects"));
     options = {};
-    options.limits.maxDepth = 2000;
     options.limits.maxTime = std::chrono::milliseconds(50);
-    auto timed = catalogue.describe(deep, options);
+    auto timed = catalogue.describe(catalogue.root().resolveFile("wide.h5").value(), options);
     CHECK(timed.status().code() == StatusCode::kResourceExhausted);
     CHECK_THAT(timed.status().message(), Catch::Contains("longer than 0.05 s"));
+  }
+  SECTION("the chain unbounded is walked in linear time") {
+    // Objects are opened by the address their link holds: a lookup by path
+    // walked every level above, and this walk took seconds.
+    DescribeOptions options;
+    options.limits.maxDepth = 2000;
+    const auto start = std::chrono::steady_clock::now();
+    auto description = catalogue.describe(deep, options);
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    INFO(description.status().message());
+    REQUIRE(description.isOk());
+    CHECK(description->groups.size() == 1001);  // the root and 1,000 levels
+    REQUIRE(description->datasets.size() == 1);
+    CHECK(description->datasets[0].path.size() == 1000 * 2 + std::string("/bottom").size());
+    CHECK(seconds < 2.0);
   }
   SECTION("a cancelled caller stops the walk") {
     DescribeOptions options;

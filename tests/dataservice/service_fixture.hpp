@@ -88,8 +88,9 @@ class HeldFetch {
 void requireServerHealthy(const dataservice::DataServer& server);
 
 // A hostile file: a chain of `levels` nested groups /g/g/g/... with a
-// dataset at the bottom (every lookup walks the whole path, so describing
-// it unbounded costs levels^2).
+// dataset at the bottom (deeper than Describe's depth limit from 65 on;
+// before the walk opened objects by address, every lookup walked the whole
+// path and describing it unbounded cost levels^2).
 void writeNestedGroups(const std::string& path, int levels);
 // A file of `count` empty sibling groups under the root: a Describe walks
 // all of them (40,000 take about 0.6 s).

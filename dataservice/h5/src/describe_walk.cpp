@@ -126,9 +126,9 @@ std::string shortPath(const std::string& path) {
   return path.size() <= kShown ? path : path.substr(0, kShown) + "...";
 }
 
-// Whether the walk may go on: a chain of 1,000 nested groups took 9 s under
-// the HDF5 lock (every lookup walks the whole path), so depth, objects and
-// time are bounded, and a caller that went away stops it.
+// Whether the walk may go on: a file can hold millions of objects (40,000
+// sibling groups take about 0.6 s), so depth, objects and time are bounded,
+// and a caller that went away stops it.
 bool withinBounds(TreeWalk& walk, const std::string& path) {
   const DescribeLimits& limits = walk.options->limits;
   const auto depth = static_cast<int>(std::count(path.begin(), path.end(), '/'));
@@ -159,27 +159,26 @@ herr_t visitLink(hid_t root, const char* name, const H5L_info_t* link, void* dat
     return 0;
   }
   const std::string path = std::string("/") + name;
-  H5O_info_t object{};
-  if (H5Oget_info_by_name2(root, name, &object, H5O_INFO_BASIC, H5P_DEFAULT) < 0) {
-    walk->status =
-        failedPrecondition(fmt::format("cannot inspect {} ({})", path, h5::lastHdf5Error()));
-    return 1;
-  }
-  if (object.type != H5O_TYPE_GROUP && object.type != H5O_TYPE_DATASET) {
-    return 0;  // named datatypes
-  }
-  h5::Handle handle = {H5Oopen(root, name, H5P_DEFAULT), H5Oclose};
+  // Opened by the address the link holds, not by its path: a lookup by
+  // path walks every group on the way (twice per object: its type, then the
+  // open), so a chain of 1,000 nested groups took 6.7 s to walk, against
+  // 0.06 s now (tests/dataservice/catalogue.test.cpp).
+  h5::Handle handle = {H5Oopen_by_addr(root, link->u.address), H5Oclose};
   if (!handle.valid()) {
     walk->status =
         failedPrecondition(fmt::format("cannot open {} ({})", path, h5::lastHdf5Error()));
     return 1;
+  }
+  const H5I_type_t kind = H5Iget_type(handle.get());
+  if (kind != H5I_GROUP && kind != H5I_DATASET) {
+    return 0;  // named datatypes
   }
   auto attributes = readAttributes(handle.get(), path);
   if (!attributes) {
     walk->status = attributes.status();
     return 1;
   }
-  if (object.type == H5O_TYPE_GROUP) {
+  if (kind == H5I_GROUP) {
     walk->description->groups.push_back({path, std::move(*attributes)});
     return 0;
   }
