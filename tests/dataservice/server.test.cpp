@@ -17,6 +17,7 @@
 
 #include "crackvis/v1/data.grpc.pb.h"
 #include "service_fixture.hpp"
+#include "support/process.hpp"
 #include <crackvis/dataservice_client/remote_dem_file.hpp>
 #include <crackvis/dem/dem_file.hpp>
 
@@ -26,6 +27,21 @@ namespace {
 namespace v1 = crackvis::v1;
 using dataservice::DataType;
 using dataservice::Hyperslab;
+
+TEST_CASE("A client makes its connection before its first call when asked to",
+          "[dataservice][integration]") {
+  auto server = startServer(baseConfig());
+  auto lazy = connect(clientOptions(*server));
+  auto eager = connect(clientOptions(*server));
+  eager.startConnecting();
+  // crackvis-render does this as it starts: its first user's first picture
+  // does not wait for the TLS handshake.
+  CHECK(waitUntil([&] { return eager.connected(); }, 10.0));
+  CHECK_FALSE(lazy.connected());  // each client its own connection, made on the first call
+  CHECK(lazy.checkHealth().isOk());
+  CHECK(lazy.connected());
+  CHECK(eager.checkHealth().isOk());
+}
 
 TEST_CASE("ListFiles lists the data root and never a link out of it",
           "[dataservice][integration]") {

@@ -2,7 +2,9 @@
 // goes to the wrong place (issue 18, errors that say what to do): real
 // crackvis-data and crackvis-render in this process on loopback, the CLI as
 // a user runs it. The advice itself is crackvis/rpc/connection_advice.hpp.
+#include <chrono>
 #include <fstream>
+#include <thread>
 
 #include <catch2/catch.hpp>
 #include <grpcpp/grpcpp.h>
@@ -104,6 +106,27 @@ TEST_CASE("crackvis-render says what is wrong with its data service's address",
   }
   // The working connection, for contrast: the same check passes it.
   CHECK(openCrackView(*services.render).ok());
+}
+
+TEST_CASE("crackvis-render started before its data service serves once that is up",
+          "[server][integration]") {
+  // crackvis-render connects to crackvis-data as it starts; a data service
+  // that is not up yet (or restarts) is reached within a second of its start.
+  auto services = startServices();
+  const int port = closedPort();
+  auto render = startRenderServer(renderTo(*services.data, fmt::format("127.0.0.1:{}", port)));
+  // Its tries failed; gRPC's own schedule would try next 8-10.6 s after
+  // the start (1 s, then 1.6 times longer each time, +-20 %).
+  std::this_thread::sleep_for(std::chrono::milliseconds(6500));
+  CHECK(openCrackView(*render).error_code() == grpc::StatusCode::UNAVAILABLE);
+  auto config = baseConfig();
+  config.listen = fmt::format("127.0.0.1:{}", port);
+  config.dataRoot = crackRoot().path().string();
+  auto late = startServer(config);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // one try of ours at most
+  const grpc::Status opened = openCrackView(*render);
+  INFO(opened.error_message());
+  CHECK(opened.ok());
 }
 
 TEST_CASE("A data client that reached a crackvis-render says so", "[server][integration]") {

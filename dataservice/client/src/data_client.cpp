@@ -125,6 +125,14 @@ struct DataClient::Impl {
   }
 };
 
+void DataClient::startConnecting() const {
+  (void)m_impl->channel->GetState(/*try_to_connect=*/true);
+}
+
+bool DataClient::connected() const {
+  return m_impl->channel->GetState(false) == GRPC_CHANNEL_READY;
+}
+
 Result<DataClient> DataClient::connect(const ClientOptions& options) {
   auto impl = std::make_shared<Impl>();
   impl->options = options;
@@ -139,6 +147,12 @@ Result<DataClient> DataClient::connect(const ClientOptions& options) {
   // A view's Read is a few MiB on a fresh stream: a large initial window
   // lets the server send it without waiting for window updates.
   channel.streamWindowBytes = 16 << 20;
+  // Between failed connection attempts at most a second (gRPC's default
+  // grows to 2 minutes): a client connecting early (startConnecting) to a
+  // crackvis-data that starts later, or restarts, reaches it within a
+  // second of its start instead of failing its calls until the next try.
+  channel.initialReconnectBackoffMs = 250;
+  channel.maxReconnectBackoffMs = 1000;
   auto created = tls::createChannel(channel);
   if (!created) {
     return created.status();

@@ -88,6 +88,12 @@ class DataClient {
   static Result<DataClient> connect(const ClientOptions& options);
 
   const ClientOptions& options() const;
+  // Starts making the connection (TCP and the TLS handshake) now, without
+  // waiting for it, so that the first call finds it made. A server that is
+  // not up yet is reached by the first call, as before.
+  void startConnecting() const;
+  // Whether the connection is made and ready for calls now.
+  bool connected() const;
   // The data bytes all Reads of this client (and its copies) have received
   // so far as they travelled, packed or not: for benchmarks.
   std::uint64_t readWireBytes() const;
