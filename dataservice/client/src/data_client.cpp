@@ -147,12 +147,13 @@ Result<DataClient> DataClient::connect(const ClientOptions& options) {
   // A view's Read is a few MiB on a fresh stream: a large initial window
   // lets the server send it without waiting for window updates.
   channel.streamWindowBytes = 16 << 20;
-  // Between failed connection attempts at most a second (gRPC's default
-  // grows to 2 minutes): a client connecting early (startConnecting) to a
-  // crackvis-data that starts later, or restarts, reaches it within a
-  // second of its start instead of failing its calls until the next try.
-  channel.initialReconnectBackoffMs = 250;
-  channel.maxReconnectBackoffMs = 1000;
+  // Between failed connection attempts at most 5 s (gRPC's default grows to
+  // 2 minutes): a client connecting early (startConnecting) to a
+  // crackvis-data that starts later, or comes back, reaches it within 5 s
+  // instead of failing its calls until the next try. Each failed try is one
+  // line of gRPC's in the log (a TLS misconfiguration: one every 5 s), so
+  // not more often.
+  channel.maxReconnectBackoffMs = 5000;
   auto created = tls::createChannel(channel);
   if (!created) {
     return created.status();
