@@ -131,8 +131,11 @@ TEST_CASE("A caller that gives up on a slow Describe frees its worker",
   config.dataRoot = root.path().string();
   auto server = startServer(config);
   auto options = clientOptions(*server);
-  options.timeoutSeconds = 0.2;
+  options.timeoutSeconds = 0.15;
   auto impatient = connect(options);
+  // Connected first: the deadline is the walk's, not the TLS handshake's.
+  impatient.startConnecting();
+  REQUIRE(waitUntil([&] { return impatient.connected(); }, 10.0));
   CHECK(impatient.describe("wide.h5").status().code() == StatusCode::kDeadlineExceeded);
   // The walk is not left running for nobody: the one worker is free again.
   REQUIRE(waitUntil([&] { return server->hdf5WorkersReplaced() == 1; }, 2.0));

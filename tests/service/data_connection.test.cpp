@@ -108,26 +108,24 @@ TEST_CASE("crackvis-render says what is wrong with its data service's address",
   CHECK(openCrackView(*services.render).ok());
 }
 
-TEST_CASE("crackvis-render started before its data service serves once that is up",
+TEST_CASE("crackvis-render connects to its data service as it starts, or once that is up",
           "[server][integration]") {
-  // crackvis-render connects to crackvis-data as it starts; a data service
-  // that is not up yet (or comes back) is reached at the next try, at most
-  // 5 s later.
   auto services = startServices();
+  // Before any call: the first user's file open does not make the connection.
+  CHECK(waitUntil([&] { return services.render->dataServiceConnected(); }, 10.0));
+  // A data service that starts after crackvis-render: sessions fail while it
+  // is down and open once it is up (at the next try, about 5 s apart at most).
   const int port = closedPort();
   auto render = startRenderServer(renderTo(*services.data, fmt::format("127.0.0.1:{}", port)));
-  // Its first tries failed (gRPC's schedule: 1 s, then 1.6
-  // times longer each time, +-20 % each): the next is at most 6.2 s after.
-  std::this_thread::sleep_for(std::chrono::milliseconds(3000));
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  CHECK_FALSE(render->dataServiceConnected());
   CHECK(openCrackView(*render).error_code() == grpc::StatusCode::UNAVAILABLE);
   auto config = baseConfig();
   config.listen = fmt::format("127.0.0.1:{}", port);
   config.dataRoot = crackRoot().path().string();
   auto late = startServer(config);
-  std::this_thread::sleep_for(std::chrono::milliseconds(4000));  // past that try
-  const grpc::Status opened = openCrackView(*render);
-  INFO(opened.error_message());
-  CHECK(opened.ok());
+  CHECK(waitUntil([&] { return openCrackView(*render).ok(); }, 20.0));
+  CHECK(render->dataServiceConnected());
 }
 
 TEST_CASE("A data client that reached a crackvis-render says so", "[server][integration]") {

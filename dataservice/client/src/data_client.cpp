@@ -147,12 +147,13 @@ Result<DataClient> DataClient::connect(const ClientOptions& options) {
   // A view's Read is a few MiB on a fresh stream: a large initial window
   // lets the server send it without waiting for window updates.
   channel.streamWindowBytes = 16 << 20;
-  // Between failed connection attempts at most 5 s (gRPC's default grows to
-  // 2 minutes): a client connecting early (startConnecting) to a
-  // crackvis-data that starts later, or comes back, reaches it within 5 s
-  // instead of failing its calls until the next try. Each failed try is one
-  // line of gRPC's in the log (a TLS misconfiguration: one every 5 s), so
-  // not more often.
+  // Failed connection attempts are retried about 5 s apart at most (4-6 s
+  // with gRPC's jitter; its default grows to 2 minutes): a client connecting
+  // early (startConnecting) to a crackvis-data that starts later reaches it
+  // at the next try instead of failing its calls for minutes. Each failed
+  // try is one line of gRPC's in the log (a TLS misconfiguration: one every
+  // 5 s or so), so not more often. A connection that worked and was lost is
+  // made again by the next call.
   channel.maxReconnectBackoffMs = 5000;
   auto created = tls::createChannel(channel);
   if (!created) {

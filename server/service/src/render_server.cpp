@@ -55,8 +55,8 @@ Result<std::unique_ptr<RenderServer>> RenderServer::start(const RenderServerConf
     return Status(data.status().code(),
                   fmt::format("the data service client: {}", data.status().message()));
   }
-  // Connected before the first user opens a file: the handshake with
-  // crackvis-data (about 20 ms here) is not part of anyone's first picture.
+  // Connected before the first user opens a file: the connection's set-up
+  // is not part of anyone's first picture (docs/benchmarks.md).
   data->startConnecting();
   auto log = rpc::AccessLog::open(config.accessLog);
   if (!log) {
@@ -113,6 +113,10 @@ int RenderServer::webPort() const {
 int RenderServer::sessionCount() const {
   return m_impl->service->sessions().count();
 }
+bool RenderServer::dataServiceConnected() const {
+  return m_impl->service->dataConnected();
+}
+
 int RenderServer::keptRenderers() const {
   const RendererShelf* shelf = m_impl->service->renderers();
   return shelf ? static_cast<int>(shelf->size()) : 0;

@@ -63,6 +63,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   }
 
   SessionRegistry& sessions() { return m_sessions; }
+  bool dataConnected() const { return m_data.connected(); }
   // Null with --kept-renderers 0.
   const RendererShelf* renderers() const { return m_renderers.get(); }
   // Drops the crack histories of live files no call has used for a while.

@@ -90,7 +90,7 @@ class DataClient {
   const ClientOptions& options() const;
   // Starts making the connection (TCP and the TLS handshake) now, without
   // waiting for it, so that the first call finds it made. A server that is
-  // not up yet is tried again, at most 5 s apart.
+  // not up yet is tried again, about 5 s apart at most.
   void startConnecting() const;
   // Whether the connection is made and ready for calls now.
   bool connected() const;

@@ -89,6 +89,9 @@ class RenderServer {
   // Renderers of ended sessions (or stocked at start) waiting for the next
   // session: each holds a GL context (RendererShelf).
   int keptRenderers() const;
+  // Whether the connection to crackvis-data is made (it is started as the
+  // server starts, and retried while crackvis-data is unreachable).
+  bool dataServiceConnected() const;
 
   // Closes every session, ends the streams, stops serving (NOT_SERVING
   // first) and waits for the calls to end; idempotent.
