@@ -3,6 +3,7 @@
 #include <fstream>
 #include <sstream>
 
+#include <fmt/format.h>
 #include <sys/auxv.h>
 #include <unistd.h>
 
@@ -19,6 +20,19 @@ constexpr std::string_view kHugetlbTunable = "glibc.malloc.hugetlb";
 // one arena every thread allocates from the main heap, which also reuses
 // what another thread freed instead of faulting in fresh pages.
 constexpr std::string_view kArenaTunable = "glibc.malloc.arena_max";
+// A helper's heap grows by this much beyond each request (and keeps as much
+// when it shrinks), so that the kernel can back its growth by whole 2 MiB
+// pages: glibc asks for them on its heap, but a heap grown 128 KiB at a time
+// seldom spans a whole aligned 2 MiB. The memory is only reserved until
+// touched.
+constexpr std::string_view kTopPadTunable = "glibc.malloc.top_pad";
+constexpr std::size_t kTopPad = std::size_t{16} << 20;
+// Setting the padding fixes glibc's mmap threshold at 128 KiB (it grows
+// with the blocks freed otherwise): every larger block, a decompressed chunk
+// for one, would be a fresh mapping, faulted in page by page at each use.
+// Blocks up to 32 MiB (glibc's largest threshold) come from the heap.
+constexpr std::string_view kMmapThresholdTunable = "glibc.malloc.mmap_threshold";
+constexpr std::size_t kMmapThreshold = std::size_t{32} << 20;
 // Set before the re-execution: the re-executed program never tries again,
 // even where glibc drops the tunable from GLIBC_TUNABLES.
 constexpr const char* kReexecutedVariable = "CRACKVIS_HUGE_PAGES_REEXECUTED";
@@ -71,6 +85,19 @@ std::optional<std::string> hugePageTunables(std::string_view thpMode, const char
     wanted += ":" + std::string(kArenaTunable) + "=1";
   }
   return present.empty() ? wanted : std::string(present) + ":" + wanted;
+}
+
+std::optional<std::string> helperTunables(std::string_view thpMode, const char* setting) {
+  if (!hugePageTunables(thpMode, nullptr, setting)) {
+    return std::nullopt;
+  }
+  return fmt::format("{}=1:{}={}:{}={}", kHugetlbTunable, kTopPadTunable, kTopPad,
+                     kMmapThresholdTunable, kMmapThreshold);
+}
+
+std::string helperTunablesEntry() {
+  const auto tunables = helperTunables(readThpMode(), std::getenv(kHugePagesVariable));
+  return tunables ? "GLIBC_TUNABLES=" + *tunables : std::string();
 }
 
 void reexecWithHugePages(char** argv) {

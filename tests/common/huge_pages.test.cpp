@@ -7,6 +7,7 @@
 
 #include <crackvis/common/huge_pages.hpp>
 
+using crackvis::helperTunables;
 using crackvis::hugePageTunables;
 
 TEST_CASE("huge pages are asked for only where the kernel gives them on request",
@@ -32,4 +33,16 @@ TEST_CASE("huge pages are asked for only where the kernel gives them on request"
   CHECK_FALSE(hugePageTunables(kMadvise, "glibc.malloc.hugetlb=1", nullptr));
   // Turned off.
   CHECK_FALSE(hugePageTunables(kMadvise, nullptr, "0"));
+}
+
+TEST_CASE("a helper program gets huge pages and a heap grown in 16 MiB steps",
+          "[common][huge-pages]") {
+  constexpr const char* kMadvise = "always [madvise] never\n";
+  CHECK(
+      helperTunables(kMadvise, nullptr) ==
+      "glibc.malloc.hugetlb=1:glibc.malloc.top_pad=16777216:glibc.malloc.mmap_threshold=33554432");
+  CHECK(helperTunables(kMadvise, "1") == helperTunables(kMadvise, nullptr));
+  CHECK_FALSE(helperTunables(kMadvise, "0"));
+  CHECK_FALSE(helperTunables("[always] madvise never\n", nullptr));
+  CHECK_FALSE(helperTunables("always madvise [never]\n", nullptr));
 }

@@ -3,6 +3,7 @@
 // one-line errors it gives instead of starting.
 #include <algorithm>
 #include <csignal>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string_view>
@@ -233,6 +234,33 @@ TEST_CASE("crackvis-data re-executes itself once with glibc's huge pages where T
     if (c.extra.starts_with("GLIBC_TUNABLES=")) {
       CHECK(started.find(c.extra) != std::string::npos);  // what the user set is kept
     }
+    // Its HDF5 workers get huge pages and a heap that grows 16 MiB at a
+    // time, unless the user turned huge pages off: nothing else of the
+    // service's environment.
+    // (Children are listed per thread of the service.)
+    const std::string tasks = "/proc/" + std::to_string(server.pid()) + "/task";
+    const bool workersGetThem = onRequest && c.extra != "CRACKVIS_HUGE_PAGES=0";
+    int workers = 0;
+    for (const auto& task : std::filesystem::directory_iterator(tasks)) {
+      std::istringstream children(readText((task.path() / "children").string()));
+      for (std::string child; children >> child; ++workers) {
+        const std::string workerEnvironment = readText("/proc/" + child + "/environ");
+        // One variable (glibc put a NUL after each tunable's value).
+        const std::string expected =
+            "GLIBC_TUNABLES=glibc.malloc.hugetlb=1:glibc.malloc.top_pad=16777216:"
+            "glibc.malloc.mmap_threshold=33554432";
+        if (workersGetThem) {
+          CHECK(workerEnvironment.starts_with("GLIBC_TUNABLES=glibc.malloc.hugetlb=1"));
+          CHECK_THAT(workerEnvironment,
+                     Catch::Contains("glibc.malloc.top_pad=16777216") &&
+                         Catch::Contains("glibc.malloc.mmap_threshold=33554432"));
+          CHECK(workerEnvironment.size() == expected.size() + 1);
+        } else {
+          CHECK(workerEnvironment.empty());
+        }
+      }
+    }
+    CHECK(workers == 4);  // crackvis-data's default
     // Re-executed from its own file, not /proc/self/exe: ps still names it.
     CHECK(readText("/proc/" + std::to_string(server.pid()) + "/comm") == "crackvis-data\n");
     CHECK(healthyWithoutTls(address));  // the same process and arguments: it still serves

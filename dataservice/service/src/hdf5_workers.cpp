@@ -18,6 +18,7 @@
 
 #include "worker_protocol.hpp"
 #include <crackvis/common/child_process.hpp>
+#include <crackvis/common/huge_pages.hpp>
 #include <crackvis/common/log.hpp>
 #include <crackvis/common/unique_fd.hpp>
 
@@ -46,7 +47,7 @@ constexpr std::chrono::seconds kWorkerStartTime{30};
 // ------------------------------------------------------------ supervisor --
 
 Hdf5Workers::Hdf5Workers(DataRoot root, Settings settings)
-    : m_root(std::move(root)), m_settings(settings) {}
+    : m_root(std::move(root)), m_settings(settings), m_environment(helperTunablesEntry()) {}
 
 Result<std::unique_ptr<Hdf5Workers>> Hdf5Workers::start(const DataRoot& root, Settings settings) {
   if (settings.workers < 1) {
@@ -167,7 +168,9 @@ Result<Hdf5Workers::Started> Hdf5Workers::spawnWorker() {
   const std::string root = m_root.path().string();
   char* argv[] = {const_cast<char*>(m_settings.program.c_str()), const_cast<char*>(root.c_str()),
                   const_cast<char*>(service.c_str()), nullptr};
-  char* envp[] = {nullptr};  // the service's environment is none of a worker's business
+  // The service's environment is none of a worker's business; the worker
+  // gets only malloc's tunables for huge pages (common/huge_pages.hpp).
+  char* envp[] = {m_environment.empty() ? nullptr : m_environment.data(), nullptr};
   posix_spawn_file_actions_t actions;
   posix_spawnattr_t attributes;
   ::posix_spawn_file_actions_init(&actions);

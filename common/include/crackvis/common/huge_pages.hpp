@@ -25,6 +25,22 @@ inline constexpr const char* kHugePagesVariable = "CRACKVIS_HUGE_PAGES";
 std::optional<std::string> hugePageTunables(std::string_view thpMode, const char* tunables,
                                             const char* setting);
 
+// The GLIBC_TUNABLES for a helper program a service starts with an
+// environment of its own (crackvis-data's HDF5 workers, which get nothing of
+// the service's environment), under the same conditions as above
+// (`setting`: CRACKVIS_HUGE_PAGES): huge pages, a heap that grows 16 MiB at
+// a time so that huge pages can back its growth, and blocks up to 32 MiB
+// from that heap. A worker's first Describe of a file of a thousand objects
+// touched about 6 MB of fresh heap in 4 KiB pages: 1,500 page faults
+// (docs/benchmarks.md, "The HDF5 workers on huge pages"). The services
+// themselves keep glibc's adaptive mmap threshold, which a padding would fix
+// at 128 KiB (their large arrays would then be fresh mappings at each use).
+std::optional<std::string> helperTunables(std::string_view thpMode, const char* setting);
+
+// helperTunables for this machine and process, as "GLIBC_TUNABLES=..."
+// ready for an environment, or empty.
+std::string helperTunablesEntry();
+
 // Call first in main, before any thread starts: re-executes the program
 // (its own file, the same arguments and process id) with GLIBC_TUNABLES
 // from hugePageTunables, once. Returns when there is nothing to do, when the
