@@ -3,6 +3,7 @@
 // defines the message, whatever the field order), a Read can be started
 // before its buffers exist and checked chunk by chunk, and the catalogue
 // keeps files open between calls without serving a changed file stale.
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -491,6 +492,60 @@ TEST_CASE("A bond list asked for with the description is the one read with a ste
         dataservice::RemoteDemFile::open(client, "none.h5").status().message());
   REQUIRE(waitUntil([&] { return server->activeStreams() == 0; }));
   requireServerHealthy(*server);
+}
+
+TEST_CASE("The radii come in the prefetched bond list's Read: a first view takes two Reads",
+          "[dataservice][integration]") {
+  const SampleRoot& sample = sampleRoot();
+  TempDir logDir;
+  auto config = baseConfig();
+  config.accessLog = logDir.file("access.log");
+  auto server = startServer(config);
+  auto client = connect(clientOptions(*server));
+  auto view = dataservice::RemoteDemFile::open(client, "run.h5", {.prefetchBondList = true});
+  REQUIRE(view.isOk());
+  // As a step source opens: the list, the radii, then a step.
+  auto taken = view->takeBonds();
+  REQUIRE(taken.isOk());
+  CHECK(*taken == sample.sample3d.lattice.bonds);
+  auto radii = view->radii();
+  REQUIRE(radii.isOk());
+  CHECK(*radii == sample.sample3d.lattice.radius);
+  auto step = view->readStep(1);
+  REQUIRE(step.isOk());
+  CHECK(step->positions == sample.sample3d.steps[1].positions);
+  auto readsLogged = [&] {
+    std::ifstream in(config.accessLog);
+    const auto logged = lines(std::string(std::istreambuf_iterator<char>(in), {}));
+    return std::count_if(logged.begin(), logged.end(), [](const std::string& line) {
+      return line.find("method=Read ") != std::string::npos;
+    });
+  };
+  REQUIRE(waitUntil([&] { return readsLogged() >= 2; }));
+  CHECK(readsLogged() == 2);  // the list with the radii, and the step
+  // Handed over once: asked for again, they are read.
+  auto again = view->radii();
+  REQUIRE(again.isOk());
+  CHECK(*again == sample.sample3d.lattice.radius);
+  REQUIRE(waitUntil([&] { return readsLogged() == 3; }));
+
+  // A refused prefetch leaves both to be read when asked for.
+  config.limits.maxConcurrentStreams = 1;
+  auto narrow = startServer(config);
+  auto narrowClient = connect(clientOptions(*narrow));
+  auto stub = rawStub(*narrow);
+  HeldFetch holder(*stub);
+  auto refused =
+      dataservice::RemoteDemFile::open(narrowClient, "run.h5", {.prefetchBondList = true});
+  REQUIRE(refused.isOk());
+  holder.cancel();
+  holder.finish();
+  REQUIRE(waitUntil([&] { return narrow->activeStreams() == 0; }));
+  auto late = refused->radii();
+  REQUIRE(late.isOk());
+  CHECK(*late == sample.sample3d.lattice.radius);
+  requireServerHealthy(*server);
+  requireServerHealthy(*narrow);
 }
 
 TEST_CASE("A prefetched bond list needs one stream at a time, and a refused one is read again",

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -15,6 +16,8 @@
 
 namespace crackvis::dataservice {
 namespace {
+
+constexpr const char* kRadiusPath = "/particles/radius";
 
 // An optional dataset: absent is fine (false), present must be as the
 // layout says.
@@ -126,7 +129,7 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   std::unique_ptr<DataClient::PendingRead> bonds;
   if (options.prefetchBondList) {
     bonds = std::make_unique<DataClient::PendingRead>(
-        client.startRead(file, {Hyperslab::whole("/bonds/pairs")}));
+        client.startRead(file, {Hyperslab::whole("/bonds/pairs"), Hyperslab::whole(kRadiusPath)}));
   }
   auto description = client.describe(file);
   if (!description) {
@@ -179,21 +182,32 @@ Status RemoteDemFile::takePrefetchedBonds() {
   }
   const std::unique_ptr<DataClient::PendingRead> pending = std::move(m_prefetchedBonds);
   const auto m = static_cast<std::uint64_t>(m_bonds);
+  const auto n = static_cast<std::uint64_t>(m_particles);
   std::vector<dem::Bond> bonds(static_cast<std::size_t>(m));
-  bool arrived = false;
+  std::vector<double> radii(static_cast<std::size_t>(n));
+  std::array<bool, 2> arrived{};
   BondListCheck check(bonds, m_particles, m_file);
   const Status received = pending->receive(
       [&](const DataClient::SlabHeader& slab) -> Result<std::byte*> {
+        if (slab.index == 1) {
+          if (slab.dtype != DataType::kFloat64 || slab.shape != std::vector<std::uint64_t>{n}) {
+            return failedPrecondition(
+                fmt::format("{}: {} arrived as {} [{}], expected float64 [{}]", m_file, kRadiusPath,
+                            dataTypeName(slab.dtype), fmt::join(slab.shape, ","), n));
+          }
+          arrived[1] = true;
+          return reinterpret_cast<std::byte*>(radii.data());
+        }
         if (slab.dtype != DataType::kInt32 || slab.shape != std::vector<std::uint64_t>{m, 2}) {
           return failedPrecondition(
               fmt::format("{}: /bonds/pairs arrived as {} [{}], expected int32 [{},2]", m_file,
                           dataTypeName(slab.dtype), fmt::join(slab.shape, ","), m));
         }
-        arrived = true;
+        arrived[0] = true;
         return reinterpret_cast<std::byte*>(bonds.data());
       },
-      [&](std::size_t /*slab*/, std::uint64_t offset, std::uint64_t bytes) {
-        return check.arrived(offset, bytes);
+      [&](std::size_t slab, std::uint64_t offset, std::uint64_t bytes) {
+        return slab == 0 ? check.arrived(offset, bytes) : Status::ok();
       });
   switch (received.code()) {
     case StatusCode::kOk:
@@ -208,10 +222,12 @@ Status RemoteDemFile::takePrefetchedBonds() {
     default:
       return received;
   }
-  if ((!arrived && m != 0) || !check.complete()) {
-    return internalError(fmt::format("{}: /bonds/pairs arrived incomplete", m_file));
+  if ((!arrived[0] && m != 0) || !check.complete() || (!arrived[1] && n != 0)) {
+    return internalError(
+        fmt::format("{}: /bonds/pairs or {} arrived incomplete", m_file, kRadiusPath));
   }
   m_bondList = std::make_shared<std::vector<dem::Bond>>(std::move(bonds));
+  m_prefetchedRadii = std::move(radii);
   return Status::ok();
 }
 
@@ -315,8 +331,14 @@ Result<std::vector<std::int32_t>> RemoteDemFile::breakSteps() const {
   return arrays->front().values<std::int32_t>();
 }
 
-Result<std::vector<double>> RemoteDemFile::radii() const {
-  auto arrays = m_client->read(m_file, {Hyperslab::whole("/particles/radius")});
+Result<std::vector<double>> RemoteDemFile::radii() {
+  CRACKVIS_RETURN_IF_ERROR(takePrefetchedBonds());
+  if (m_prefetchedRadii) {
+    std::vector<double> radii = std::move(*m_prefetchedRadii);
+    m_prefetchedRadii.reset();
+    return radii;
+  }
+  auto arrays = m_client->read(m_file, {Hyperslab::whole(kRadiusPath)});
   if (!arrays) {
     return arrays.status();
   }

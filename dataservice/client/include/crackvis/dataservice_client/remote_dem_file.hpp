@@ -61,7 +61,8 @@ struct OpenOptions {
   // again once the list is in. If the server refused or cut the list's
   // stream, the list is read again when needed (bonds(), the next
   // readStep). Dropping the file before cancels it, with at most the
-  // stream's window (16 MiB) received.
+  // stream's window (16 MiB) received. The particles' radii, which a view
+  // reads next, come in the same Read.
   bool prefetchBondList = false;
 };
 
@@ -99,7 +100,9 @@ class RemoteDemFile {
   // read without it, and bonds() is not to be called after.
   Result<std::vector<dem::Bond>> takeBonds();
   bool bondsLoaded() const { return m_bondList != nullptr || m_bondsTaken; }
-  Result<std::vector<double>> radii() const;
+  // The particles' radii: the prefetched ones (handed over once), or read
+  // now.
+  Result<std::vector<double>> radii();
 
   // Positions and bond states of a step in one Read (with the bond list in
   // the same call when it has not been read yet, and the `extras` the step
@@ -156,6 +159,7 @@ class RemoteDemFile {
   bool m_bondsTaken = false;  // takeBonds() gave the list away
   // OpenOptions::prefetchBondList; it makes the file move-only (one reader).
   std::unique_ptr<DataClient::PendingRead> m_prefetchedBonds;
+  std::optional<std::vector<double>> m_prefetchedRadii;  // arrived with the list
 };
 
 }  // namespace crackvis::dataservice
