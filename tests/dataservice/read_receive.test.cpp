@@ -494,7 +494,7 @@ TEST_CASE("A bond list asked for with the description is the one read with a ste
   requireServerHealthy(*server);
 }
 
-TEST_CASE("The radii come in the prefetched bond list's Read: a first view takes two Reads",
+TEST_CASE("Radii asked for with the bond list come in its Read: a first view takes two Reads",
           "[dataservice][integration]") {
   const SampleRoot& sample = sampleRoot();
   TempDir logDir;
@@ -502,7 +502,8 @@ TEST_CASE("The radii come in the prefetched bond list's Read: a first view takes
   config.accessLog = logDir.file("access.log");
   auto server = startServer(config);
   auto client = connect(clientOptions(*server));
-  auto view = dataservice::RemoteDemFile::open(client, "run.h5", {.prefetchBondList = true});
+  auto view = dataservice::RemoteDemFile::open(client, "run.h5",
+                                               {.prefetchBondList = true, .prefetchRadii = true});
   REQUIRE(view.isOk());
   // As a step source opens: the list, the radii, then a step.
   auto taken = view->takeBonds();
@@ -528,6 +529,16 @@ TEST_CASE("The radii come in the prefetched bond list's Read: a first view takes
   REQUIRE(again.isOk());
   CHECK(*again == sample.sample3d.lattice.radius);
   REQUIRE(waitUntil([&] { return readsLogged() == 3; }));
+  // Without prefetchRadii (crackvis bench transfer's first view) the list's
+  // Read carries the list alone: the radii take a Read of their own.
+  auto listOnly = dataservice::RemoteDemFile::open(client, "run.h5", {.prefetchBondList = true});
+  REQUIRE(listOnly.isOk());
+  REQUIRE(listOnly->takeBonds().isOk());
+  auto own = listOnly->radii();
+  REQUIRE(own.isOk());
+  CHECK(*own == sample.sample3d.lattice.radius);
+  REQUIRE(waitUntil([&] { return readsLogged() >= 5; }));
+  CHECK(readsLogged() == 5);
 
   // A refused prefetch leaves both to be read when asked for.
   config.limits.maxConcurrentStreams = 1;
@@ -535,8 +546,8 @@ TEST_CASE("The radii come in the prefetched bond list's Read: a first view takes
   auto narrowClient = connect(clientOptions(*narrow));
   auto stub = rawStub(*narrow);
   HeldFetch holder(*stub);
-  auto refused =
-      dataservice::RemoteDemFile::open(narrowClient, "run.h5", {.prefetchBondList = true});
+  auto refused = dataservice::RemoteDemFile::open(
+      narrowClient, "run.h5", {.prefetchBondList = true, .prefetchRadii = true});
   REQUIRE(refused.isOk());
   holder.cancel();
   holder.finish();

@@ -128,8 +128,11 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   // Sent before the Describe: its chunks arrive while the answer is checked.
   std::unique_ptr<DataClient::PendingRead> bonds;
   if (options.prefetchBondList) {
-    bonds = std::make_unique<DataClient::PendingRead>(
-        client.startRead(file, {Hyperslab::whole("/bonds/pairs"), Hyperslab::whole(kRadiusPath)}));
+    std::vector<Hyperslab> slabs{Hyperslab::whole("/bonds/pairs")};
+    if (options.prefetchRadii) {
+      slabs.push_back(Hyperslab::whole(kRadiusPath));
+    }
+    bonds = std::make_unique<DataClient::PendingRead>(client.startRead(file, slabs));
   }
   auto description = client.describe(file);
   if (!description) {
@@ -172,6 +175,7 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   remote.m_bonds = sizes.bonds;
   remote.m_description = std::make_shared<const FileDescription>(std::move(*description));
   remote.m_prefetchedBonds = std::move(bonds);
+  remote.m_radiiAskedFor = options.prefetchBondList && options.prefetchRadii;
   CRACKVIS_RETURN_IF_ERROR(remote.readWritingFlag());
   return remote;
 }
@@ -184,12 +188,12 @@ Status RemoteDemFile::takePrefetchedBonds() {
   const auto m = static_cast<std::uint64_t>(m_bonds);
   const auto n = static_cast<std::uint64_t>(m_particles);
   std::vector<dem::Bond> bonds(static_cast<std::size_t>(m));
-  std::vector<double> radii(static_cast<std::size_t>(n));
+  std::vector<double> radii(m_radiiAskedFor ? static_cast<std::size_t>(n) : 0);
   std::array<bool, 2> arrived{};
   BondListCheck check(bonds, m_particles, m_file);
   const Status received = pending->receive(
       [&](const DataClient::SlabHeader& slab) -> Result<std::byte*> {
-        if (slab.index == 1) {
+        if (slab.index == 1) {  // the radii, asked for with the list
           if (slab.dtype != DataType::kFloat64 || slab.shape != std::vector<std::uint64_t>{n}) {
             return failedPrecondition(
                 fmt::format("{}: {} arrived as {} [{}], expected float64 [{}]", m_file, kRadiusPath,
@@ -222,12 +226,14 @@ Status RemoteDemFile::takePrefetchedBonds() {
     default:
       return received;
   }
-  if ((!arrived[0] && m != 0) || !check.complete() || (!arrived[1] && n != 0)) {
+  if ((!arrived[0] && m != 0) || !check.complete() || (m_radiiAskedFor && !arrived[1] && n != 0)) {
     return internalError(
         fmt::format("{}: /bonds/pairs or {} arrived incomplete", m_file, kRadiusPath));
   }
   m_bondList = std::make_shared<std::vector<dem::Bond>>(std::move(bonds));
-  m_prefetchedRadii = std::move(radii);
+  if (m_radiiAskedFor) {
+    m_prefetchedRadii = std::move(radii);
+  }
   return Status::ok();
 }
 

@@ -266,8 +266,10 @@ class LocalSource final : public FileSource {
 Result<std::unique_ptr<StepSource>> openRemoteSource(const dataservice::DataClient& client,
                                                      const std::string& file,
                                                      const dem::SizeLimits& limits) {
-  // A view shows a step next: its bond list streams while the file is described.
-  auto remote = dataservice::RemoteDemFile::open(client, file, {.prefetchBondList = true});
+  // A view shows a step next: its bond list and radii stream while the file
+  // is described.
+  auto remote = dataservice::RemoteDemFile::open(client, file,
+                                                 {.prefetchBondList = true, .prefetchRadii = true});
   if (!remote) {
     return remote.status();
   }

@@ -61,9 +61,13 @@ struct OpenOptions {
   // again once the list is in. If the server refused or cut the list's
   // stream, the list is read again when needed (bonds(), the next
   // readStep). Dropping the file before cancels it, with at most the
-  // stream's window (16 MiB) received. The particles' radii, which a view
-  // reads next, come in the same Read.
+  // stream's window (16 MiB) received.
   bool prefetchBondList = false;
+  // With prefetchBondList: the particles' radii as a second slab of the same
+  // Read (a render view reads them next; radii() takes them). One round trip
+  // less for the view; `crackvis bench transfer` leaves them out, its first
+  // view being the step and the bond list.
+  bool prefetchRadii = false;
 };
 
 class RemoteDemFile {
@@ -159,6 +163,7 @@ class RemoteDemFile {
   bool m_bondsTaken = false;  // takeBonds() gave the list away
   // OpenOptions::prefetchBondList; it makes the file move-only (one reader).
   std::unique_ptr<DataClient::PendingRead> m_prefetchedBonds;
+  bool m_radiiAskedFor = false;                          // OpenOptions::prefetchRadii
   std::optional<std::vector<double>> m_prefetchedRadii;  // arrived with the list
 };
 
