@@ -2,6 +2,7 @@
 #include <type_traits>
 
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 
 #include <crackvis/dem/model.hpp>
 
@@ -55,6 +56,29 @@ TEST_CASE("validateLattice accepts a good lattice and names the first bad bond",
     CHECK(validateLattice(lattice).message() == "bond 6 duplicates bond 5 (particles 7 and 0)");
     lattice.bonds[6] = {1, 7};
     CHECK(validateLattice(lattice).message() == "bond 3 duplicates bond 1 (particles 3 and 2)");
+    // One particle with two duplicated partners, the larger met first.
+    lattice.bonds = {{0, 7}, {0, 5}, {7, 0}, {5, 0}, {1, 2}};
+    lattice.strength.assign(lattice.bonds.size(), 1.0);
+    CHECK(validateLattice(lattice).message() == "bond 3 duplicates bond 1 (particles 5 and 0)");
+  }
+  SECTION("a duplicate deep in a large list") {
+    // A chain of 100,000 particles, each bonded to the next two; the last
+    // particle's bond is repeated at the end of the list.
+    constexpr int kParticles = 100'000;
+    lattice.radius.assign(kParticles, 0.5);
+    lattice.bonds.clear();
+    for (int p = 0; p + 2 < kParticles; ++p) {
+      lattice.bonds.push_back({p, p + 1});
+      lattice.bonds.push_back({p + 2, p});
+    }
+    lattice.strength.assign(lattice.bonds.size(), 1.0);
+    REQUIRE(validateLattice(lattice).isOk());
+    const std::size_t original = lattice.bonds.size() - 1;  // {99997, 99999}
+    lattice.bonds.push_back({kParticles - 3, kParticles - 1});
+    lattice.strength.push_back(1.0);
+    CHECK(validateLattice(lattice).message() ==
+          fmt::format("bond {} duplicates bond {} (particles 99997 and 99999)",
+                      lattice.bonds.size() - 1, original));
   }
   SECTION("non-positive radius") {
     lattice.radius[3] = 0.0;
