@@ -20,17 +20,19 @@ constexpr std::string_view kHugetlbTunable = "glibc.malloc.hugetlb";
 // one arena every thread allocates from the main heap, which also reuses
 // what another thread freed instead of faulting in fresh pages.
 constexpr std::string_view kArenaTunable = "glibc.malloc.arena_max";
-// A helper's heap grows by this much beyond each request (and keeps as much
-// when it shrinks), so that the kernel can back its growth by whole 2 MiB
-// pages: glibc asks for them on its heap, but a heap grown 128 KiB at a time
-// seldom spans a whole aligned 2 MiB. The memory is only reserved until
-// touched.
+// A helper's heap grows by this much beyond each request (and is trimmed
+// back only to it). Measured on a worker's first Describe of cuboid A: with
+// huge pages alone 530-930 page faults and 32-46 ms, with this padding too
+// 120-470 faults and 25-33 ms (docs/benchmarks.md, "The HDF5 workers on huge
+// pages"). The memory is only reserved until touched; a worker may keep up
+// to this much resident after a large request.
 constexpr std::string_view kTopPadTunable = "glibc.malloc.top_pad";
 constexpr std::size_t kTopPad = std::size_t{16} << 20;
 // Setting the padding fixes glibc's mmap threshold at 128 KiB (it grows
-// with the blocks freed otherwise): every larger block, a decompressed chunk
-// for one, would be a fresh mapping, faulted in page by page at each use.
-// Blocks up to 32 MiB (glibc's largest threshold) come from the heap.
+// with the blocks freed otherwise, up to 32 MiB): a larger block that the
+// heap's free space cannot hold, a decompressed chunk for one, would be a
+// fresh mapping, faulted in page by page at each use. Blocks under 32 MiB
+// (the adaptive threshold's largest) come from the heap.
 constexpr std::string_view kMmapThresholdTunable = "glibc.malloc.mmap_threshold";
 constexpr std::size_t kMmapThreshold = std::size_t{32} << 20;
 // Set before the re-execution: the re-executed program never tries again,

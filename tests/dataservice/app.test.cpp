@@ -236,31 +236,29 @@ TEST_CASE("crackvis-data re-executes itself once with glibc's huge pages where T
     }
     // Its HDF5 workers get huge pages and a heap that grows 16 MiB at a
     // time, unless the user turned huge pages off: nothing else of the
-    // service's environment.
-    // (Children are listed per thread of the service.)
+    // service's environment. A worker is not dumpable, so only root reads
+    // its /proc/PID/environ; children are listed per thread of the service.
     const std::string tasks = "/proc/" + std::to_string(server.pid()) + "/task";
-    const bool workersGetThem = onRequest && c.extra != "CRACKVIS_HUGE_PAGES=0";
-    int workers = 0;
-    for (const auto& task : std::filesystem::directory_iterator(tasks)) {
-      std::istringstream children(readText((task.path() / "children").string()));
-      for (std::string child; children >> child; ++workers) {
-        const std::string workerEnvironment = readText("/proc/" + child + "/environ");
-        // One variable (glibc put a NUL after each tunable's value).
-        const std::string expected =
-            "GLIBC_TUNABLES=glibc.malloc.hugetlb=1:glibc.malloc.top_pad=16777216:"
-            "glibc.malloc.mmap_threshold=33554432";
-        if (workersGetThem) {
-          CHECK(workerEnvironment.starts_with("GLIBC_TUNABLES=glibc.malloc.hugetlb=1"));
-          CHECK_THAT(workerEnvironment,
-                     Catch::Contains("glibc.malloc.top_pad=16777216") &&
-                         Catch::Contains("glibc.malloc.mmap_threshold=33554432"));
-          CHECK(workerEnvironment.size() == expected.size() + 1);
-        } else {
-          CHECK(workerEnvironment.empty());
+    const std::string firstTask = tasks + "/" + std::to_string(server.pid()) + "/children";
+    if (::geteuid() != 0 || !std::filesystem::exists(firstTask)) {
+      WARN("the workers' environment is not checked: needs root and /proc/PID/task/*/children");
+    } else {
+      const bool workersGetThem = onRequest && c.extra != "CRACKVIS_HUGE_PAGES=0";
+      int workers = 0;
+      for (const auto& task : std::filesystem::directory_iterator(tasks)) {
+        std::istringstream children(readText((task.path() / "children").string()));
+        for (std::string child; children >> child; ++workers) {
+          std::string workerEnvironment = readText("/proc/" + child + "/environ");
+          // glibc puts a NUL after each tunable's value it reads.
+          std::replace(workerEnvironment.begin(), workerEnvironment.end(), '\0', ':');
+          CHECK(workerEnvironment ==
+                (workersGetThem ? "GLIBC_TUNABLES=glibc.malloc.hugetlb=1:glibc.malloc.top_pad="
+                                  "16777216:glibc.malloc.mmap_threshold=33554432:"
+                                : ""));
         }
       }
+      CHECK(workers == 4);  // crackvis-data's default
     }
-    CHECK(workers == 4);  // crackvis-data's default
     // Re-executed from its own file, not /proc/self/exe: ps still names it.
     CHECK(readText("/proc/" + std::to_string(server.pid()) + "/comm") == "crackvis-data\n");
     CHECK(healthyWithoutTls(address));  // the same process and arguments: it still serves

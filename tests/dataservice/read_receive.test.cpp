@@ -542,6 +542,7 @@ TEST_CASE("Radii asked for with the bond list come in its Read: a first view tak
 
   // A refused prefetch leaves both to be read when asked for.
   config.limits.maxConcurrentStreams = 1;
+  config.accessLog = logDir.file("narrow.log");
   auto narrow = startServer(config);
   auto narrowClient = connect(clientOptions(*narrow));
   auto stub = rawStub(*narrow);
@@ -555,6 +556,10 @@ TEST_CASE("Radii asked for with the bond list come in its Read: a first view tak
   auto late = refused->radii();
   REQUIRE(late.isOk());
   CHECK(*late == sample.sample3d.lattice.radius);
+  std::ifstream narrowLog(config.accessLog);
+  const std::string narrowText(std::istreambuf_iterator<char>(narrowLog), {});
+  CHECK_THAT(narrowText, Catch::Contains("method=Read") &&
+                             Catch::Contains("status=RESOURCE_EXHAUSTED"));  // the prefetch
   requireServerHealthy(*server);
   requireServerHealthy(*narrow);
 }

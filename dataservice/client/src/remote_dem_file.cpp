@@ -161,8 +161,7 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   dem::LayoutSizes sizes;
   CRACKVIS_RETURN_IF_ERROR(
       failed(checkDemDataset(*description, dem::DemDataset::kRadius, 0, sizes)));
-  sizes.particles =
-      static_cast<std::int64_t>(description->findDataset("/particles/radius")->shape[0]);
+  sizes.particles = static_cast<std::int64_t>(description->findDataset(kRadiusPath)->shape[0]);
   CRACKVIS_RETURN_IF_ERROR(
       failed(checkDemDataset(*description, dem::DemDataset::kPairs, 0, sizes)));
   sizes.bonds = static_cast<std::int64_t>(description->findDataset("/bonds/pairs")->shape[0]);
@@ -188,7 +187,7 @@ Status RemoteDemFile::takePrefetchedBonds() {
   const auto m = static_cast<std::uint64_t>(m_bonds);
   const auto n = static_cast<std::uint64_t>(m_particles);
   std::vector<dem::Bond> bonds(static_cast<std::size_t>(m));
-  std::vector<double> radii(m_radiiAskedFor ? static_cast<std::size_t>(n) : 0);
+  std::vector<double> radii;  // sized when its slab comes
   std::array<bool, 2> arrived{};
   BondListCheck check(bonds, m_particles, m_file);
   const Status received = pending->receive(
@@ -200,6 +199,7 @@ Status RemoteDemFile::takePrefetchedBonds() {
                             dataTypeName(slab.dtype), fmt::join(slab.shape, ","), n));
           }
           arrived[1] = true;
+          radii.resize(static_cast<std::size_t>(n));
           return reinterpret_cast<std::byte*>(radii.data());
         }
         if (slab.dtype != DataType::kInt32 || slab.shape != std::vector<std::uint64_t>{m, 2}) {
@@ -608,7 +608,7 @@ Result<bool> RemoteDemFile::refresh() {
   const FileDescription& before = *m_description;
   const bool sameFile =
       runIdOf(*description) == runIdOf(before) && isAppendable(*description) == m_appendable &&
-      rowsOf(*description, "/particles/radius") == static_cast<std::uint64_t>(m_particles) &&
+      rowsOf(*description, kRadiusPath) == static_cast<std::uint64_t>(m_particles) &&
       rowsOf(*description, "/bonds/pairs") == static_cast<std::uint64_t>(m_bonds) &&
       description->steps.size() >= before.steps.size() &&
       (before.steps.empty() || description->steps.front().time == before.steps.front().time);

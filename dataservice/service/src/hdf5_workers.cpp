@@ -170,7 +170,8 @@ Result<Hdf5Workers::Started> Hdf5Workers::spawnWorker() {
                   const_cast<char*>(service.c_str()), nullptr};
   // The service's environment is none of a worker's business; the worker
   // gets only malloc's tunables for huge pages (common/huge_pages.hpp).
-  char* envp[] = {m_environment.empty() ? nullptr : m_environment.data(), nullptr};
+  char* envp[] = {m_environment.empty() ? nullptr : const_cast<char*>(m_environment.c_str()),
+                  nullptr};
   posix_spawn_file_actions_t actions;
   posix_spawnattr_t attributes;
   ::posix_spawn_file_actions_init(&actions);

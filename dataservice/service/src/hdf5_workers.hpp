@@ -167,7 +167,7 @@ class Hdf5Workers {
 
   const DataRoot m_root;
   const Settings m_settings;
-  std::string m_environment;  // a worker's one variable, or empty
+  const std::string m_environment;  // a worker's one variable, or empty
   mutable std::mutex m_mutex;
   std::condition_variable m_idle;
   std::vector<Worker> m_workers;

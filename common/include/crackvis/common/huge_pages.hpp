@@ -27,14 +27,13 @@ std::optional<std::string> hugePageTunables(std::string_view thpMode, const char
 
 // The GLIBC_TUNABLES for a helper program a service starts with an
 // environment of its own (crackvis-data's HDF5 workers, which get nothing of
-// the service's environment), under the same conditions as above
-// (`setting`: CRACKVIS_HUGE_PAGES): huge pages, a heap that grows 16 MiB at
-// a time so that huge pages can back its growth, and blocks up to 32 MiB
-// from that heap. A worker's first Describe of a file of a thousand objects
-// touched about 6 MB of fresh heap in 4 KiB pages: 1,500 page faults
-// (docs/benchmarks.md, "The HDF5 workers on huge pages"). The services
+// the service's environment): huge pages, a 16 MiB heap padding, and blocks
+// under 32 MiB from the heap. Only the THP mode and CRACKVIS_HUGE_PAGES
+// (`setting`) decide, not the service's own GLIBC_TUNABLES. A worker's first
+// Describe of a file of a thousand objects took 1,500 page faults on small
+// pages (docs/benchmarks.md, "The HDF5 workers on huge pages"). The services
 // themselves keep glibc's adaptive mmap threshold, which a padding would fix
-// at 128 KiB (their large arrays would then be fresh mappings at each use).
+// at 128 KiB.
 std::optional<std::string> helperTunables(std::string_view thpMode, const char* setting);
 
 // helperTunables for this machine and process, as "GLIBC_TUNABLES=..."

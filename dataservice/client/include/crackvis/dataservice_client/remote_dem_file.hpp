@@ -104,8 +104,8 @@ class RemoteDemFile {
   // read without it, and bonds() is not to be called after.
   Result<std::vector<dem::Bond>> takeBonds();
   bool bondsLoaded() const { return m_bondList != nullptr || m_bondsTaken; }
-  // The particles' radii: the prefetched ones (handed over once), or read
-  // now.
+  // The particles' radii: the prefetched ones (handed over once; this waits
+  // for the whole prefetched Read and may return its error), or read now.
   Result<std::vector<double>> radii();
 
   // Positions and bond states of a step in one Read (with the bond list in
@@ -135,8 +135,8 @@ class RemoteDemFile {
   Result<std::vector<dem::Bond>> toBonds(const TypedArray& array) const;
   Result<std::vector<dem::Vec3>> toPositions(const TypedArray& array, std::uint64_t expected) const;
   Result<std::vector<std::uint8_t>> toBondState(const TypedArray& array) const;
-  // Receives the prefetched bond list, if one is on its way; a refused or
-  // cut stream leaves the list to be read again.
+  // Receives the prefetched bond list (and radii, when asked for), if one is
+  // on its way; a refused or cut stream leaves them to be read again.
   Status takePrefetchedBonds();
   // The bond list into m_bondList: the prefetched one, or read now.
   Status loadBonds();
