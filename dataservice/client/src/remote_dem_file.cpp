@@ -17,7 +17,11 @@
 namespace crackvis::dataservice {
 namespace {
 
-constexpr const char* kRadiusPath = "/particles/radius";
+// The radii's path, the same in every layout.
+const std::string& radiusPath() {
+  static const std::string path = dem::datasetPath(dem::DemDataset::kRadius);
+  return path;
+}
 
 // An optional dataset: absent is fine (false), present must be as the
 // layout says.
@@ -130,7 +134,7 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   if (options.prefetchBondList) {
     std::vector<Hyperslab> slabs{Hyperslab::whole("/bonds/pairs")};
     if (options.prefetchRadii) {
-      slabs.push_back(Hyperslab::whole(kRadiusPath));
+      slabs.push_back(Hyperslab::whole(radiusPath()));
     }
     bonds = std::make_unique<DataClient::PendingRead>(client.startRead(file, slabs));
   }
@@ -161,7 +165,7 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   dem::LayoutSizes sizes;
   CRACKVIS_RETURN_IF_ERROR(
       failed(checkDemDataset(*description, dem::DemDataset::kRadius, 0, sizes)));
-  sizes.particles = static_cast<std::int64_t>(description->findDataset(kRadiusPath)->shape[0]);
+  sizes.particles = static_cast<std::int64_t>(description->findDataset(radiusPath())->shape[0]);
   CRACKVIS_RETURN_IF_ERROR(
       failed(checkDemDataset(*description, dem::DemDataset::kPairs, 0, sizes)));
   sizes.bonds = static_cast<std::int64_t>(description->findDataset("/bonds/pairs")->shape[0]);
@@ -195,8 +199,8 @@ Status RemoteDemFile::takePrefetchedBonds() {
         if (slab.index == 1) {  // the radii, asked for with the list
           if (slab.dtype != DataType::kFloat64 || slab.shape != std::vector<std::uint64_t>{n}) {
             return failedPrecondition(
-                fmt::format("{}: {} arrived as {} [{}], expected float64 [{}]", m_file, kRadiusPath,
-                            dataTypeName(slab.dtype), fmt::join(slab.shape, ","), n));
+                fmt::format("{}: {} arrived as {} [{}], expected float64 [{}]", m_file,
+                            radiusPath(), dataTypeName(slab.dtype), fmt::join(slab.shape, ","), n));
           }
           arrived[1] = true;
           radii.resize(static_cast<std::size_t>(n));
@@ -228,7 +232,7 @@ Status RemoteDemFile::takePrefetchedBonds() {
   }
   if ((!arrived[0] && m != 0) || !check.complete() || (m_radiiAskedFor && !arrived[1] && n != 0)) {
     return internalError(
-        fmt::format("{}: /bonds/pairs or {} arrived incomplete", m_file, kRadiusPath));
+        fmt::format("{}: /bonds/pairs or {} arrived incomplete", m_file, radiusPath()));
   }
   m_bondList = std::make_shared<std::vector<dem::Bond>>(std::move(bonds));
   if (m_radiiAskedFor) {
@@ -344,7 +348,7 @@ Result<std::vector<double>> RemoteDemFile::radii() {
     m_prefetchedRadii.reset();
     return radii;
   }
-  auto arrays = m_client->read(m_file, {Hyperslab::whole(kRadiusPath)});
+  auto arrays = m_client->read(m_file, {Hyperslab::whole(radiusPath())});
   if (!arrays) {
     return arrays.status();
   }
@@ -608,7 +612,7 @@ Result<bool> RemoteDemFile::refresh() {
   const FileDescription& before = *m_description;
   const bool sameFile =
       runIdOf(*description) == runIdOf(before) && isAppendable(*description) == m_appendable &&
-      rowsOf(*description, kRadiusPath) == static_cast<std::uint64_t>(m_particles) &&
+      rowsOf(*description, radiusPath().c_str()) == static_cast<std::uint64_t>(m_particles) &&
       rowsOf(*description, "/bonds/pairs") == static_cast<std::uint64_t>(m_bonds) &&
       description->steps.size() >= before.steps.size() &&
       (before.steps.empty() || description->steps.front().time == before.steps.front().time);
