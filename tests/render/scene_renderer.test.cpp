@@ -750,9 +750,15 @@ TEST_CASE("hidden spheres are left out without changing the picture", "[render][
   (*renderer)->setImpostorOptions({.geometryShader = false, .occlusionCulling = false});
   REQUIRE((*renderer)->renderFrame(kSize[0], kSize[1], all).isOk());
   INFO("culled by cells: " << cells);
-  // Only the spheres a clipping plane removes are left out.
+  // Sphere by sphere, only the spheres a clipping plane removes are left out;
+  // by cells, also the cells out of view (none from outside the block).
   const auto unculled = (*renderer)->impostorStats();
-  CHECK((unculled.drawn < unculled.spheres) == scene.description.particles.clip.has_value());
+  if (!cells) {
+    CHECK((unculled.drawn < unculled.spheres) == scene.description.particles.clip.has_value());
+  } else {
+    CHECK(unculled.drawn <= unculled.spheres);
+    CHECK(unculled.drawn > stats.drawn);
+  }
   CHECK(differingPixels(all, culled) == 0);
   // VTK's own impostors (geometry shader): the same picture but for
   // silhouette pixels and small differences of shading, away from the edges
@@ -764,9 +770,10 @@ TEST_CASE("hidden spheres are left out without changing the picture", "[render][
   CHECK(differingPixels(vtk, all, 30, 24) < count(all, notBlack) / 100);
 }
 
-TEST_CASE("occlusion culling keeps a sphere that peeks out", "[render]") {
-  // Perspective at 100x100 pixels, 100 pixels per view unit at unit depth:
-  // a sphere of radius 1 at depth 10 is about 20 pixels wide.
+namespace {
+// Perspective at 100x100 pixels, 100 pixels per view unit at unit depth: a
+// sphere of radius 1 at depth 10 is about 20 pixels wide.
+render::OcclusionView hundredPixelView() {
   render::OcclusionView view;
   view.width = 100;
   view.height = 100;
@@ -774,6 +781,18 @@ TEST_CASE("occlusion culling keeps a sphere that peeks out", "[render]") {
   view.rayOffset = {-0.5, -0.5};
   view.nearDepth = 1.0;
   view.farDepth = 100.0;
+  return view;
+}
+// Model coordinates that are the view's.
+render::ModelToView identityTransform() {
+  render::ModelToView identity;
+  identity.rows = {{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}}};
+  return identity;
+}
+}  // namespace
+
+TEST_CASE("occlusion culling keeps a sphere that peeks out", "[render]") {
+  render::OcclusionView view = hundredPixelView();
   // A large sphere in front; behind it one fully hidden, one whose rim
   // shows beside it, and one behind the first but off the screen.
   const std::vector<double> x{0.0, 0.0, 1.3, 100.0};
@@ -790,8 +809,7 @@ TEST_CASE("occlusion culling keeps a sphere that peeks out", "[render]") {
   }
   render::SphereCells cells;
   cells.build(xyz, r);
-  render::ModelToView identity;
-  identity.rows = {{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}}};
+  render::ModelToView identity = identityTransform();
   render::SphereOcclusion byCells;
   byCells.projectCells(view, cells, identity, 255.0);
   CHECK(byCells.unoccludedInCells(0) == std::vector<std::int32_t>{0, 2});
@@ -815,6 +833,68 @@ TEST_CASE("occlusion culling keeps a sphere that peeks out", "[render]") {
   view.nearDepth = 9.5;
   spheres.mayHide = {};
   CHECK(render::unoccludedSpheres(view, spheres) == std::vector<std::int32_t>{0, 1, 2});
+}
+
+TEST_CASE("without culling, cells out of view are left out and no sphere in view is", "[render]") {
+  // A 200 x 200 sheet of spheres 2 apart, facing the eye at depth 50, seen
+  // through a 100 x 100 pixel view of about 50 x 50 units: most of the sheet
+  // is outside. No sphere hides another, so the spheres unoccluded() keeps
+  // are exactly those whose points reach the viewport.
+  render::OcclusionView view = hundredPixelView();
+  std::vector<double> xyz, x, y, z;
+  std::vector<float> r;
+  for (int i = 0; i < 200; ++i) {
+    for (int j = 0; j < 200; ++j) {
+      x.push_back(2.0 * i - 200.0);
+      y.push_back(2.0 * j - 200.0);
+      z.push_back(-50.0);
+      r.push_back(0.4f);
+      xyz.insert(xyz.end(), {x.back(), y.back(), z.back()});
+    }
+  }
+  const auto shows = render::unoccludedSpheres(view, render::SphereSet{x, y, z, r, {}});
+  REQUIRE(shows.size() > 100);
+  render::SphereCells cells;
+  cells.build(xyz, r);
+  render::ModelToView identity = identityTransform();
+  render::SphereOcclusion byCells;
+  byCells.projectCells(view, cells, identity, 255.0);
+  const std::vector<std::int32_t> inView = byCells.inViewCells();
+  INFO(shows.size() << " spheres show; " << inView.size() << " of " << x.size() << " drawn");
+  CHECK(std::is_sorted(inView.begin(), inView.end()));
+  CHECK(std::includes(inView.begin(), inView.end(), shows.begin(), shows.end()));
+  CHECK(inView.size() < x.size() / 4);
+  // A clipping plane x <= -1 leaves out every sphere right of it, and no other.
+  const std::vector<render::ClipPlane> left{{-1, 0, 0, -1}};
+  identity.planes = left;
+  byCells.projectCells(view, cells, identity, 255.0);
+  const std::vector<std::int32_t> clipped = byCells.inViewCells();
+  std::vector<std::int32_t> expected;
+  for (const std::int32_t i : inView) {
+    if (x[static_cast<std::size_t>(i)] <= -1.0) {
+      expected.push_back(i);
+    }
+  }
+  CHECK(!expected.empty());
+  CHECK(clipped == expected);
+}
+
+TEST_CASE("occlusion culling is on for a software rasteriser and off for a GPU", "[render]") {
+  using render::SceneRenderer;
+  CHECK(*SceneRenderer::occlusionCullingFor("llvmpipe (LLVM 15.0.6, 256 bits)", nullptr));
+  CHECK(*SceneRenderer::occlusionCullingFor("SwiftShader Device (LLVM 10.0.0)", "auto"));
+  CHECK(!*SceneRenderer::occlusionCullingFor("NVIDIA H200/PCIe/SSE2", nullptr));
+  CHECK(!*SceneRenderer::occlusionCullingFor("AMD Radeon Pro W7800 (radeonsi, navi31)", ""));
+  // CRACKVIS_OCCLUSION_CULLING overrides the choice, and nothing else passes.
+  CHECK(*SceneRenderer::occlusionCullingFor("NVIDIA H200/PCIe/SSE2", "on"));
+  CHECK(!*SceneRenderer::occlusionCullingFor("llvmpipe (LLVM 15.0.6, 256 bits)", "off"));
+  const auto wrong = SceneRenderer::occlusionCullingFor("llvmpipe", "yes");
+  REQUIRE(!wrong.isOk());
+  CHECK_THAT(wrong.status().message(), Catch::Contains("CRACKVIS_OCCLUSION_CULLING"));
+  // The renderer here says which it chose.
+  auto renderer = SceneRenderer::create(64, 64);
+  REQUIRE(renderer.isOk());
+  CHECK_THAT((*renderer)->backend(), Catch::Contains("; occlusion culling o"));
 }
 
 TEST_CASE("a pick finds the particle or crack element under the point, as shown", "[render]") {

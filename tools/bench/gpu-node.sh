@@ -8,7 +8,10 @@
 #     second with libx264 in the loop, full-resolution still frames, the time
 #     to the first picture, jumps and playback);
 #   - the 1e6 block at 1920x1080 and 1280x720 (the frame time at 1e6);
-#   - N = 1, 4 and 8 sessions at once on cuboid A at 1280x720.
+#   - N = 1, 4 and 8 sessions at once on cuboid A at 1280x720;
+#   - occlusion culling on the CPU (CRACKVIS_OCCLUSION_CULLING=on, a second
+#     crackvis-render) against the GPU default (off), alternating, on both
+#     files at 1080p.
 # Results: RESULTS_DIR/results.jsonl (one line per run: {"run": name,
 # "report": bench render's JSON}), gpu-node.log (the machine, the tables, the
 # services' logs) and a 1080p picture of each file from crackvis snapshot.
@@ -84,24 +87,33 @@ data_pid=$!
 "$bin/crackvis-render" --listen "127.0.0.1:$render_port" --data-server "localhost:$data_port" \
   --access-log '' >>"$results/services.log" 2>&1 &
 render_pid=$!
-trap 'kill $data_pid $render_pid 2>/dev/null; wait 2>/dev/null' EXIT
-for _ in $(seq 100); do
-  "$bin/crackvis" health "localhost:$render_port" >/dev/null 2>&1 && break
-  sleep 0.2
+# A second render server that culls hidden spheres on the CPU as on
+# llvmpipe (the GPU default is off), to compare in the same run.
+culling_port=$(port)
+CRACKVIS_OCCLUSION_CULLING=on "$bin/crackvis-render" --listen "127.0.0.1:$culling_port" \
+  --data-server "localhost:$data_port" --access-log '' >>"$results/services.log" 2>&1 &
+culling_pid=$!
+trap 'kill $data_pid $render_pid $culling_pid 2>/dev/null; wait 2>/dev/null' EXIT
+for p in $render_port $culling_port; do
+  for _ in $(seq 100); do
+    "$bin/crackvis" health "localhost:$p" >/dev/null 2>&1 && break
+    sleep 0.2
+  done
+  "$bin/crackvis" health "localhost:$p" >>"$log" 2>&1 || {
+    say "crackvis-render on $p did not start"
+    cat "$results/services.log" >>"$log"
+    exit 1
+  }
 done
-"$bin/crackvis" health "localhost:$render_port" >>"$log" 2>&1 || {
-  say "crackvis-render did not start"
-  cat "$results/services.log" >>"$log"
-  exit 1
-}
 head -c 4000 "$results/services.log" >>"$log"
 
-# NAME ARGS...: one bench render, its JSON appended to results.jsonl.
+# NAME ARGS...: one bench render, its JSON appended to results.jsonl;
+# SERVER_PORT picks the render server (default: the GPU default's).
 bench() {
   local name=$1
   shift
   say "bench render $name: $*"
-  "$bin/crackvis" bench render --server "localhost:$render_port" "$@" --json \
+  "$bin/crackvis" bench render --server "localhost:${SERVER_PORT:-$render_port}" "$@" --json \
     >"$work/report.json" 2>>"$log"
   local rc=$?
   python3 - "$name" "$work/report.json" "$rc" >>"$results/results.jsonl" <<'EOF'
@@ -152,7 +164,21 @@ if [[ ${SKIP_1E6:-0} != 1 ]]; then
     --first-pictures 2 --jumps 10 --playback-steps 0
   bench "1e6-720p" --file fcc-1e6.h5 --size 1280x720 --seconds "$drag" --still-frames 10 \
     --first-pictures 0 --jumps 0 --playback-steps 0
+  # Occlusion culling on the CPU (llvmpipe's default) against the GPU
+  # default (off), alternating, twice each.
+  for round in 1 2; do
+    SERVER_PORT=$culling_port bench "1e6-1080p-culling-on-$round" --file fcc-1e6.h5 --size 1920x1080 \
+      --seconds 3 --still-frames 10 --first-pictures 0 --jumps 0 --playback-steps 0
+    bench "1e6-1080p-culling-off-$round" --file fcc-1e6.h5 --size 1920x1080 \
+      --seconds 3 --still-frames 10 --first-pictures 0 --jumps 0 --playback-steps 0
+  done
 fi
+for round in 1 2; do
+  SERVER_PORT=$culling_port bench "A-1080p-culling-on-$round" --file $a --size 1920x1080 \
+    --seconds 3 --still-frames 10 --first-pictures 0 --jumps 0 --playback-steps 0
+  bench "A-1080p-culling-off-$round" --file $a --size 1920x1080 \
+    --seconds 3 --still-frames 10 --first-pictures 0 --jumps 0 --playback-steps 0
+done
 for n in 1 4 8; do
   bench "A-720p-sessions-$n" --file $a --size 1280x720 --seconds "$drag" --sessions "$n" \
     --server-pid "$render_pid"

@@ -293,14 +293,16 @@ void vtkPointSpriteSphereMapper::SelectSpheres(vtkRenderer* ren, vtkActor* act,
   const bool culling = this->OcclusionCulling && !act->HasTranslucentPolygonalGeometry() &&
                        ren->GetSelector() == nullptr;
 
-  if (culling && static_cast<std::size_t>(n) >= this->OcclusionCellThreshold) {
+  if (static_cast<std::size_t>(n) >= this->OcclusionCellThreshold) {
     // Large sets: by cells kept between frames, no pass over every sphere.
+    // Without culling (a GPU), the cells in view are drawn whole.
     this->UpdateCells(positions, radii);
     const double largest =
         this->Occlusion.projectCells(view, this->Cells, transform, this->MaxPointSize);
     this->DrawPoints = !this->ForceGeometryShader && largest <= this->MaxPointSize;
     const std::vector<std::int32_t>& shown =
-        this->Occlusion.unoccludedInCells(this->DrawPoints ? guard : 0);
+        culling ? this->Occlusion.unoccludedInCells(this->DrawPoints ? guard : 0)
+                : this->Occlusion.inViewCells();
     this->Drawn.assign(shown.begin(), shown.end());
     return;
   }

@@ -578,6 +578,34 @@ const std::vector<std::int32_t>& SphereOcclusion::unoccludedInCells(int guard) {
   return m_visible;
 }
 
+const std::vector<std::int32_t>& SphereOcclusion::inViewCells() {
+  // A mark per sphere and one ascending pass: no sort of up to every index.
+  m_inView.assign(m_cellSet != nullptr ? m_cellSet->sphereCount() : 0, 0);
+  for (const CellInView& cell : m_cellsInView) {
+    if (cell.open) {  // projected already, clipped spheres left out
+      for (std::int32_t i = cell.first; i < cell.first + cell.count; ++i) {
+        m_inView[static_cast<std::size_t>(m_source[static_cast<std::size_t>(i)])] = 1;
+      }
+      continue;
+    }
+    const SphereCells::Cell& c = m_cellSet->cells()[static_cast<std::size_t>(cell.cell)];
+    for (std::int32_t m = c.first; m < c.first + c.count; ++m) {
+      const auto member = static_cast<std::size_t>(m);
+      if (cell.clip == Clip::kSome && clipCentre(m_planes, m_cellSet->centre(member)).clipped) {
+        continue;
+      }
+      m_inView[static_cast<std::size_t>(m_cellSet->index(member))] = 1;
+    }
+  }
+  m_visible.clear();
+  for (std::size_t i = 0; i < m_inView.size(); ++i) {
+    if (m_inView[i] != 0) {
+      m_visible.push_back(static_cast<std::int32_t>(i));
+    }
+  }
+  return m_visible;
+}
+
 std::vector<std::int32_t> unoccludedSpheres(const OcclusionView& view, const SphereSet& spheres) {
   SphereOcclusion occlusion;
   occlusion.project(view, spheres);

@@ -17,6 +17,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <crackvis/common/status.hpp>
@@ -108,6 +109,10 @@ class SceneRenderer {
     std::size_t occlusionCellThreshold = 16384;
   };
   void setImpostorOptions(const ImpostorOptions& options);
+  // Whether a renderer culls hidden spheres by default: on for a software
+  // rasteriser (llvmpipe), off for a GPU; `setting` is the value of
+  // CRACKVIS_OCCLUSION_CULLING (on, off, auto or null), which overrides it.
+  static Result<bool> occlusionCullingFor(std::string_view glRenderer, const char* setting);
   // The last frame's impostors: spheres drawn, of how many, and whether as
   // points (false: the geometry shader, also used for a sphere wider than
   // the largest point). All 0 without impostors.

@@ -152,6 +152,11 @@ class SphereOcclusion {
   // The indices (SphereCells' input order) of the spheres that may show,
   // ascending; clipped spheres are left out.
   const std::vector<std::int32_t>& unoccludedInCells(int guard);
+  // By cells, without the occlusion test: the spheres of every cell in view
+  // after projectCells, clipped spheres left out, ascending. For a GPU,
+  // which draws a hidden sphere faster than the CPU can find it hidden; a
+  // cell out of view still costs nothing.
+  const std::vector<std::int32_t>& inViewCells();
 
  private:
   struct Projected {
@@ -212,6 +217,7 @@ class SphereOcclusion {
   std::vector<std::uint8_t> m_mayHide;
   std::vector<std::int32_t> m_source;
   std::vector<std::int32_t> m_cellSpheres;
+  std::vector<std::uint8_t> m_inView;  // per sphere, inViewCells()
 };
 
 // One frame without keeping buffers: project, then unoccluded(0).
