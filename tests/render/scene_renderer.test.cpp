@@ -2,8 +2,10 @@
 // by colour, with the crack surface in a colour nothing else has.
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <numbers>
+#include <string>
 
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
@@ -747,11 +749,13 @@ TEST_CASE("hidden spheres are left out without changing the picture", "[render][
   CHECK(stats.drawn < stats.spheres * 2 / 3);
   CHECK(count(culled, notBlack) > kSize[0] * kSize[1] / 5);
   render::Image all;
-  (*renderer)->setImpostorOptions({.geometryShader = false, .occlusionCulling = false});
+  (*renderer)->setImpostorOptions({.geometryShader = false,
+                                   .occlusionCulling = false,
+                                   .occlusionCellThreshold = cells ? 0u : 1u << 30});
   REQUIRE((*renderer)->renderFrame(kSize[0], kSize[1], all).isOk());
   INFO("culled by cells: " << cells);
   // Sphere by sphere, only the spheres a clipping plane removes are left out;
-  // by cells, also the cells out of view (none from outside the block).
+  // by cells (inViewCells), also the cells out of view.
   const auto unculled = (*renderer)->impostorStats();
   if (!cells) {
     CHECK((unculled.drawn < unculled.spheres) == scene.description.particles.clip.has_value());
@@ -763,7 +767,9 @@ TEST_CASE("hidden spheres are left out without changing the picture", "[render][
   // VTK's own impostors (geometry shader): the same picture but for
   // silhouette pixels and small differences of shading, away from the edges
   // (where VTK's misses the spheres whose centres are outside the picture).
-  (*renderer)->setImpostorOptions({.geometryShader = true, .occlusionCulling = false});
+  (*renderer)->setImpostorOptions({.geometryShader = true,
+                                   .occlusionCulling = false,
+                                   .occlusionCellThreshold = cells ? 0u : 1u << 30});
   render::Image vtk;
   REQUIRE((*renderer)->renderFrame(kSize[0], kSize[1], vtk).isOk());
   CHECK(!(*renderer)->impostorStats().points);
@@ -877,6 +883,13 @@ TEST_CASE("without culling, cells out of view are left out and no sphere in view
   }
   CHECK(!expected.empty());
   CHECK(clipped == expected);
+  // Cells whose spheres may be wider than the largest point are projected
+  // sphere by sphere (open): they keep every sphere that shows too.
+  identity.planes = {};
+  byCells.projectCells(view, cells, identity, 1.0);
+  const std::vector<std::int32_t> open = byCells.inViewCells();
+  CHECK(std::is_sorted(open.begin(), open.end()));
+  CHECK(std::includes(open.begin(), open.end(), shows.begin(), shows.end()));
 }
 
 TEST_CASE("occlusion culling is on for a software rasteriser and off for a GPU", "[render]") {
@@ -887,6 +900,7 @@ TEST_CASE("occlusion culling is on for a software rasteriser and off for a GPU",
   CHECK(!*SceneRenderer::occlusionCullingFor("AMD Radeon Pro W7800 (radeonsi, navi31)", ""));
   // CRACKVIS_OCCLUSION_CULLING overrides the choice, and nothing else passes.
   CHECK(*SceneRenderer::occlusionCullingFor("NVIDIA H200/PCIe/SSE2", "on"));
+  CHECK(*SceneRenderer::occlusionCullingFor("NVIDIA H200/PCIe/SSE2", "On"));
   CHECK(!*SceneRenderer::occlusionCullingFor("llvmpipe (LLVM 15.0.6, 256 bits)", "off"));
   const auto wrong = SceneRenderer::occlusionCullingFor("llvmpipe", "yes");
   REQUIRE(!wrong.isOk());
@@ -895,6 +909,44 @@ TEST_CASE("occlusion culling is on for a software rasteriser and off for a GPU",
   auto renderer = SceneRenderer::create(64, 64);
   REQUIRE(renderer.isOk());
   CHECK_THAT((*renderer)->backend(), Catch::Contains("; occlusion culling o"));
+}
+
+TEST_CASE("a kept renderer culls as a new one: the choice for its OpenGL survives a cleared scene",
+          "[render][egl]") {
+  // The same block as above, seen from a corner: most spheres are hidden.
+  constexpr int kSize[2] = {320, 240};
+  Scene scene;
+  scene.description.view.width = kSize[0];
+  scene.description.view.height = kSize[1];
+  scene.description.particles.visible = true;
+  scene.description.view.scalarBar = false;
+  const dem::Vec3 centre = 0.5 * scene.crack.block.extent;
+  scene.description.view.camera =
+      pipeline::CameraDescription{centre + dem::Vec3{10, 7, 5}, centre, {0, 0, 1}, 30};
+  const char* before = std::getenv("CRACKVIS_OCCLUSION_CULLING");
+  const std::string saved = before != nullptr ? before : "";
+  const bool culling = GENERATE(false, true);
+  INFO("CRACKVIS_OCCLUSION_CULLING=" << (culling ? "on" : "off"));
+  ::setenv("CRACKVIS_OCCLUSION_CULLING", culling ? "on" : "off", 1);
+  auto renderer = render::SceneRenderer::create(kSize[0], kSize[1]);
+  if (before != nullptr) {
+    ::setenv("CRACKVIS_OCCLUSION_CULLING", saved.c_str(), 1);
+  } else {
+    ::unsetenv("CRACKVIS_OCCLUSION_CULLING");
+  }
+  REQUIRE(renderer.isOk());
+  // A session's scene, then the scene cleared as a session's end shelves the
+  // renderer, then the next session's.
+  for (int session = 0; session < 2; ++session) {
+    INFO("session " << session);
+    render::Image image;
+    REQUIRE((*renderer)->render(scene.description, scene.input(), image).isOk());
+    const auto stats = (*renderer)->impostorStats();
+    INFO(stats.drawn << " of " << stats.spheres << " spheres drawn");
+    CHECK(stats.spheres > 0);
+    CHECK((stats.drawn < stats.spheres * 2 / 3) == culling);
+    REQUIRE((*renderer)->clearScene().isOk());
+  }
 }
 
 TEST_CASE("a pick finds the particle or crack element under the point, as shown", "[render]") {

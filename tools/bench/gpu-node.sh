@@ -31,6 +31,7 @@ log=$results/gpu-node.log
 say() { echo "[$(date +%T)] $*" | tee -a "$log" >&2; }
 
 work=$(mktemp -d /tmp/crackvis-gpu.XXXXXX)
+trap 'rm -rf "$work"' EXIT
 tar -xJf "$pack" -C "$work" || { say "cannot unpack $pack"; exit 1; }
 cv=$work/crackvis
 data=$work/data
@@ -93,7 +94,7 @@ culling_port=$(port)
 CRACKVIS_OCCLUSION_CULLING=on "$bin/crackvis-render" --listen "127.0.0.1:$culling_port" \
   --data-server "localhost:$data_port" --access-log '' >>"$results/services.log" 2>&1 &
 culling_pid=$!
-trap 'kill $data_pid $render_pid $culling_pid 2>/dev/null; wait 2>/dev/null' EXIT
+trap 'kill $data_pid $render_pid $culling_pid 2>/dev/null; wait 2>/dev/null; rm -rf "$work"' EXIT
 for p in $render_port $culling_port; do
   for _ in $(seq 100); do
     "$bin/crackvis" health "localhost:$p" >/dev/null 2>&1 && break

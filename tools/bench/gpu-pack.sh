@@ -18,6 +18,9 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 root=$(cd "$here/../.." && pwd)
 build=${CRACKVIS_BUILD:-$root/build/release}
 pack=${1:?usage: gpu-pack.sh OUT.tar.xz}
+mkdir -p "$(dirname "$pack")"
+pack=$(cd "$(dirname "$pack")" && pwd)/$(basename "$pack")
+export LC_ALL=C  # sort and join on the same collation
 programs=(tools/crackvis dataservice/crackvis-data dataservice/crackvis-hdf5-worker
   server/app/crackvis-render)
 for program in "${programs[@]}"; do
@@ -50,6 +53,11 @@ stub() {  # LIBRARY_FILE
   source=$stage/stub.c
   echo '#include <stdlib.h>' >"$source"
   nm -D --defined-only "$library" | awk '{ print $2, $3 }' | sort -k2 >"$stage/defined"
+  # A versioned symbol would need its version node in the stub too.
+  if grep -q @ "$stage/defined"; then
+    echo "gpu-pack.sh: $(basename "$library") has versioned symbols: cannot stub it" >&2
+    exit 1
+  fi
   for other in "$stage"/crackvis/lib/* "$stage"/crackvis/bin/*; do
     [[ $other == "$library" ]] || nm -D --undefined-only "$other" 2>/dev/null | awk '{ print $2 }'
   done | sed 's/@.*//' | sort -u | join -1 2 -2 1 "$stage/defined" - |
@@ -62,8 +70,11 @@ stub() {  # LIBRARY_FILE
   cc -shared -fPIC -O1 -Wl,-soname,"$soname" -o "$library" "$source"
   echo "gpu-pack.sh: $(basename "$library") is a stub of $(($(wc -l <"$source") - 1)) symbols" >&2
 }
-stub "$stage"/crackvis/lib/libcodec2.so.*
-stub "$stage"/crackvis/lib/libicudata.so.*
+for name in libcodec2 libicudata; do
+  matches=("$stage"/crackvis/lib/"$name".so.*)
+  [[ -f ${matches[0]} ]] || { echo "gpu-pack.sh: no $name in the pack to stub" >&2; exit 1; }
+  stub "${matches[0]}"
+done
 
 for program in "$stage"/crackvis/bin/*; do
   # DT_RPATH, not RUNPATH: it applies to the libraries' own dependencies too.

@@ -294,8 +294,9 @@ void vtkPointSpriteSphereMapper::SelectSpheres(vtkRenderer* ren, vtkActor* act,
                        ren->GetSelector() == nullptr;
 
   if (static_cast<std::size_t>(n) >= this->OcclusionCellThreshold) {
-    // Large sets: by cells kept between frames, no pass over every sphere.
-    // Without culling (a GPU), the cells in view are drawn whole.
+    // Large sets: by cells kept between frames, no sphere projected unless
+    // its cell needs it. Without culling (a GPU), the cells in view are
+    // drawn whole.
     this->UpdateCells(positions, radii);
     const double largest =
         this->Occlusion.projectCells(view, this->Cells, transform, this->MaxPointSize);

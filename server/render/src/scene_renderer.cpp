@@ -2,6 +2,7 @@
 // frames and moving its camera.
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -65,6 +66,9 @@ struct SceneRenderer::Impl {
   bool cameraSet = false;
   vtkSmartPointer<vtkPointSpriteSphereMapper> impostors;  // null unless particles are impostors
   ImpostorOptions impostorOptions;
+  // What this renderer's OpenGL calls for (occlusionCullingFor): the options
+  // a cleared scene goes back to, so that a kept renderer draws as a new one.
+  ImpostorOptions defaultImpostorOptions;
   std::unique_ptr<Overlays> overlays;   // scalar bars and annotations
   vtkNew<vtkUnsignedCharArray> pixels;  // the last frame read back
   // The whole specimen at the step shown (every particle with its radius):
@@ -152,20 +156,23 @@ Result<std::unique_ptr<SceneRenderer>> SceneRenderer::create(int width, int heig
   if (!culling) {
     return culling.status();
   }
-  impl.impostorOptions.occlusionCulling = *culling;
+  impl.defaultImpostorOptions.occlusionCulling = *culling;
+  impl.impostorOptions = impl.defaultImpostorOptions;
   renderer->m_backend = fmt::format("{}; OpenGL renderer: {}; occlusion culling {}",
                                     impl.egl->description(), glRenderer, *culling ? "on" : "off");
   return renderer;
 }
 
 Result<bool> SceneRenderer::occlusionCullingFor(std::string_view glRenderer, const char* setting) {
-  const std::string_view chosen = setting != nullptr ? setting : "auto";
+  std::string chosen = setting != nullptr ? setting : "auto";
+  std::transform(chosen.begin(), chosen.end(), chosen.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (chosen == "on" || chosen == "off") {
     return chosen == "on";
   }
   if (chosen != "auto" && !chosen.empty()) {
     return invalidArgument(fmt::format(
-        "CRACKVIS_OCCLUSION_CULLING is '{}': give on, off or auto (the default)", chosen));
+        "CRACKVIS_OCCLUSION_CULLING is '{}': give on, off or auto (the default)", setting));
   }
   // A software rasteriser shades every fragment on the CPU: finding the
   // hidden spheres first pays (cuboid A's full frame 450 -> 250 ms on
@@ -300,7 +307,7 @@ Status SceneRenderer::clearScene() {
   const VtkErrorScope vtkErrors;
   impl.renderer->RemoveAllViewProps();
   impl.impostors = nullptr;
-  impl.impostorOptions = {};
+  impl.impostorOptions = impl.defaultImpostorOptions;
   pipeline::PipelineDescription empty;
   empty.view.width = impl.width;
   empty.view.height = impl.height;

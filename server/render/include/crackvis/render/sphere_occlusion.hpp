@@ -154,8 +154,9 @@ class SphereOcclusion {
   const std::vector<std::int32_t>& unoccludedInCells(int guard);
   // By cells, without the occlusion test: the spheres of every cell in view
   // after projectCells, clipped spheres left out, ascending. For a GPU,
-  // which draws a hidden sphere faster than the CPU can find it hidden; a
-  // cell out of view still costs nothing.
+  // which draws a hidden sphere faster than the CPU can find it hidden. A
+  // cell out of view is not drawn; the cost is a byte per sphere, marked and
+  // scanned.
   const std::vector<std::int32_t>& inViewCells();
 
  private:
