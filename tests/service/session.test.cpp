@@ -3,6 +3,7 @@
 // throws on data it should have refused; only that read or event fails.
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -486,6 +487,88 @@ TEST_CASE(
   CHECK_FALSE(failed);
   CHECK(shelf->size() == 1);
   drawsOnTheKeptRenderer("again");
+}
+
+TEST_CASE("a new session waits for the renderer of its size that a closing session clears",
+          "[session][render]") {
+  using std::chrono::milliseconds;
+  using Timer = std::chrono::steady_clock;
+  auto elapsed = [](Timer::time_point since) {
+    return std::chrono::duration_cast<milliseconds>(Timer::now() - since).count();
+  };
+  service::RendererShelf shelf;
+  auto made = render::SceneRenderer::create(64, 48);
+  REQUIRE(made);
+  (*made)->releaseContext();
+  std::unique_ptr<render::SceneRenderer> renderer = std::move(made).value();
+  render::SceneRenderer* const returning = renderer.get();
+
+  SECTION("it arrives: taken as soon as it is put") {
+    shelf.expect(64, 48);
+    std::thread closing([&] {
+      std::this_thread::sleep_for(milliseconds(80));
+      shelf.put(std::move(renderer));
+      shelf.arrived(64, 48);
+    });
+    const auto start = Timer::now();
+    auto taken = shelf.take(64, 48, milliseconds(5000));
+    const auto waited = elapsed(start);
+    closing.join();
+    CHECK(taken.get() == returning);
+    CHECK(waited >= 60);
+    CHECK(waited < 2000);
+    CHECK(shelf.expected(64, 48) == 0);
+  }
+  SECTION("it does not come: no wait beyond the news") {
+    shelf.expect(64, 48);
+    std::thread closing([&] {
+      std::this_thread::sleep_for(milliseconds(80));
+      shelf.arrived(64, 48);  // not sound: dropped, not shelved
+    });
+    const auto start = Timer::now();
+    CHECK(shelf.take(64, 48, milliseconds(5000)) == nullptr);
+    CHECK(elapsed(start) < 2000);
+    closing.join();
+  }
+  SECTION("another size is not waited for, and the wait is bounded") {
+    shelf.expect(64, 48);
+    auto start = Timer::now();
+    CHECK(shelf.take(80, 60, milliseconds(5000)) == nullptr);
+    CHECK(elapsed(start) < 1000);
+    start = Timer::now();
+    CHECK(shelf.take(64, 48, milliseconds(100)) == nullptr);
+    CHECK(elapsed(start) >= 90);
+    shelf.arrived(64, 48);
+  }
+}
+
+TEST_CASE("a closing session announces its renderer to the shelf until it is there",
+          "[session][render]") {
+  const Fixture fixture;
+  auto shelf = std::make_shared<service::RendererShelf>();
+  auto opened = Session::open("closing", smallView(0), fixture.opener(-1), {}, nullptr, shelf);
+  REQUIRE(opened);
+  std::shared_ptr<Session> session = std::move(opened).value();
+  REQUIRE((*session).snapshot(0, 0));
+  CHECK(shelf->expected(64, 48) == 0);
+  // A stream may still hold the session when CloseSession answers: the
+  // worker clears the renderer after that.
+  session->close();
+  CHECK(shelf->expected(64, 48) <= 1);
+  auto next = shelf->take(64, 48, std::chrono::milliseconds(5000));
+  CHECK(next != nullptr);
+  // Put, then settled: once the worker has ended, nothing is expected.
+  session.reset();
+  CHECK(shelf->size() == 0);
+  CHECK(shelf->expected(64, 48) == 0);
+  // A second close announces nothing more.
+  auto again = Session::open("again", smallView(0), fixture.opener(-1), {}, nullptr, shelf);
+  REQUIRE(again);
+  (*again)->close();
+  (*again)->close();
+  again->reset();
+  CHECK(shelf->expected(64, 48) == 0);
+  CHECK(shelf->size() == 1);
 }
 
 }  // namespace crackvis

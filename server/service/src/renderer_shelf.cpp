@@ -27,8 +27,22 @@ void RendererShelf::stock(int width, int height) {
   });
 }
 
-std::unique_ptr<render::SceneRenderer> RendererShelf::take(int width, int height) {
-  std::lock_guard lock(m_mutex);
+std::unique_ptr<render::SceneRenderer> RendererShelf::take(int width, int height,
+                                                           std::chrono::milliseconds wait) {
+  std::unique_lock lock(m_mutex);
+  const auto deadline = std::chrono::steady_clock::now() + wait;
+  for (;;) {
+    if (auto renderer = takeLocked(width, height)) {
+      return renderer;
+    }
+    if (!m_incoming.contains({width, height}) ||
+        m_changed.wait_until(lock, deadline) == std::cv_status::timeout) {
+      return takeLocked(width, height);
+    }
+  }
+}
+
+std::unique_ptr<render::SceneRenderer> RendererShelf::takeLocked(int width, int height) {
   for (auto it = m_kept.begin(); it != m_kept.end(); ++it) {
     if ((*it)->capacityWidth() == width && (*it)->capacityHeight() == height) {
       auto renderer = std::move(*it);
@@ -37,6 +51,28 @@ std::unique_ptr<render::SceneRenderer> RendererShelf::take(int width, int height
     }
   }
   return nullptr;
+}
+
+void RendererShelf::expect(int width, int height) {
+  std::lock_guard lock(m_mutex);
+  ++m_incoming[{width, height}];
+}
+
+void RendererShelf::arrived(int width, int height) {
+  {
+    std::lock_guard lock(m_mutex);
+    const auto it = m_incoming.find({width, height});
+    if (it != m_incoming.end() && --it->second <= 0) {
+      m_incoming.erase(it);
+    }
+  }
+  m_changed.notify_all();
+}
+
+int RendererShelf::expected(int width, int height) const {
+  std::lock_guard lock(m_mutex);
+  const auto it = m_incoming.find({width, height});
+  return it != m_incoming.end() ? it->second : 0;
 }
 
 void RendererShelf::put(std::unique_ptr<render::SceneRenderer> renderer) {
@@ -53,6 +89,7 @@ void RendererShelf::put(std::unique_ptr<render::SceneRenderer> renderer) {
       m_kept.push_back(std::move(renderer));
     }
   }
+  m_changed.notify_all();
   dropped.reset();  // outside the lock: it makes its context current to go
 }
 

@@ -63,6 +63,15 @@ Session::~Session() {
 
 void Session::run(std::promise<Status> started) {
   runWorker(started);
+  {
+    // The renderer a close announced is on the shelf now, or will not come.
+    std::lock_guard lock(m_mutex);
+    m_shelfSize.reset();
+    if (m_announced && m_renderers) {
+      m_renderers->arrived(m_announced->first, m_announced->second);
+    }
+    m_announced.reset();
+  }
   // The worker's scene, step cache, GL context and encoder are gone: hand the
   // freed pages back to the system. glibc keeps them in its arenas
   // otherwise, and crackvis-render grew by ~150 MB per closed cuboid-A
@@ -79,6 +88,11 @@ void Session::runWorker(std::promise<Status>& started) {
   started.set_value(Status::ok());
   if (Status status = guarded(m_id, "the session loop", [&] { return serve(worker); }); !status) {
     fail(status);
+  }
+  {
+    // From here on a close announces nothing: the renderer is on its way.
+    std::lock_guard lock(m_mutex);
+    m_shelfSize.reset();
   }
   worker.shelveRenderer();
   // Tasks that will not run break their promises: a waiting snapshot
@@ -400,6 +414,12 @@ Result<render::Image> Session::snapshot(int width, int height, int* step,
 void Session::close(std::string reason) {
   {
     std::lock_guard lock(m_mutex);
+    if (!m_closing && m_shelfSize && m_renderers) {
+      // Under the session's lock, so that run() settles only what was
+      // announced (the shelf's lock is taken inside it, never the reverse).
+      m_renderers->expect(m_shelfSize->first, m_shelfSize->second);
+      m_announced = m_shelfSize;
+    }
     m_closing = true;
     if (!reason.empty() && m_closeReason.empty()) {
       m_closeReason = std::move(reason);

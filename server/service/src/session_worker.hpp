@@ -80,6 +80,9 @@ struct Session::Worker {
   // Puts a sound renderer on the server's shelf for the next session, its
   // scene dropped (on this thread, whose the context is).
   void shelveRenderer();
+  // Tells the session the size of the renderer it would shelve (none: 0),
+  // so that a close announces it to the shelf (RendererShelf::expect).
+  void noteRenderer();
   // The renderer's frame, noting whether the renderer stays sound.
   Status drawFrame(int w, int h, render::Image& image, bool interactive);
   // Looks for a live file's new steps when due; shows the last while

@@ -13,10 +13,14 @@
 // kept at 1280x720, 147 MB without).
 #pragma once
 
+#include <chrono>
+#include <condition_variable>
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <crackvis/render/scene_renderer.hpp>
@@ -35,8 +39,18 @@ class RendererShelf {
   // fails (the first session then makes its own, and reports why).
   void stock(int width, int height);
   // A renderer of exactly width x height, its context released; null when
-  // none waits.
-  std::unique_ptr<render::SceneRenderer> take(int width, int height);
+  // none waits. While one of that size is on its way back (expect, not yet
+  // arrived), waits up to `wait` for it: a client that closes a session and
+  // opens the next at once (the browser page choosing another file) would
+  // otherwise make a renderer while its last one is being cleared.
+  std::unique_ptr<render::SceneRenderer> take(
+      int width, int height, std::chrono::milliseconds wait = std::chrono::milliseconds(0));
+  // A session that closes will put its renderer of width x height here
+  // (expect), and has put it or given up (arrived; exactly once for each
+  // expect).
+  void expect(int width, int height);
+  void arrived(int width, int height);
+  int expected(int width, int height) const;
   // `renderer`'s scene cleared and its context released by the caller. A
   // full shelf drops its oldest (on this thread): the newest is likelier to
   // fit the next session (the same user again, the same window).
@@ -44,9 +58,13 @@ class RendererShelf {
   std::size_t size() const;
 
  private:
+  std::unique_ptr<render::SceneRenderer> takeLocked(int width, int height);
+
   const std::size_t m_capacity;
   mutable std::mutex m_mutex;
+  std::condition_variable m_changed;  // a renderer put, or one not coming
   std::vector<std::unique_ptr<render::SceneRenderer>> m_kept;
+  std::map<std::pair<int, int>, int> m_incoming;  // size -> renderers on their way
   std::thread m_stocking;
 };
 

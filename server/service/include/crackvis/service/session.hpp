@@ -24,6 +24,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -206,6 +207,10 @@ class Session {
   std::optional<Clock::time_point> m_detachedSince;
   bool m_needFrame = false;  // a stream attached and wants a keyframe now
   bool m_closing = false;
+  // The capacity of the renderer the worker would shelve, and the one a
+  // close announced to the shelf (settled once the worker has ended).
+  std::optional<std::pair<int, int>> m_shelfSize;
+  std::optional<std::pair<int, int>> m_announced;
   std::string m_closeReason;
   Clock::time_point m_lastActive = Clock::now();
   std::uint64_t m_dropped = 0;
