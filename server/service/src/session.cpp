@@ -63,15 +63,7 @@ Session::~Session() {
 
 void Session::run(std::promise<Status> started) {
   runWorker(started);
-  {
-    // The renderer a close announced is on the shelf now, or will not come.
-    std::lock_guard lock(m_mutex);
-    m_shelfSize.reset();
-    if (m_announced && m_renderers) {
-      m_renderers->arrived(m_announced->first, m_announced->second);
-    }
-    m_announced.reset();
-  }
+  settleShelving();  // settled already, but for a throw out of the worker
   // The worker's scene, step cache, GL context and encoder are gone: hand the
   // freed pages back to the system. glibc keeps them in its arenas
   // otherwise, and crackvis-render grew by ~150 MB per closed cuboid-A
@@ -79,9 +71,21 @@ void Session::run(std::promise<Status> started) {
   malloc_trim(0);
 }
 
+void Session::settleShelving() {
+  // The renderer a close announced is on the shelf now, or will not come;
+  // and a close from here on announces nothing.
+  std::lock_guard lock(m_mutex);
+  m_shelfSize.reset();
+  if (m_announced && m_renderers) {
+    m_renderers->arrived(m_announced->first, m_announced->second);
+  }
+  m_announced.reset();
+}
+
 void Session::runWorker(std::promise<Status>& started) {
   Worker worker(*this);
   if (Status status = guarded(m_id, "open", [&] { return worker.start(); }); !status) {
+    settleShelving();  // before Session::open's close, which would announce
     started.set_value(status);
     return;
   }
@@ -95,6 +99,7 @@ void Session::runWorker(std::promise<Status>& started) {
     m_shelfSize.reset();
   }
   worker.shelveRenderer();
+  settleShelving();  // now, not after the worker's teardown: a taker waits
   // Tasks that will not run break their promises: a waiting snapshot
   // returns UNAVAILABLE.
   std::lock_guard lock(m_mutex);

@@ -55,7 +55,7 @@ Status Session::Worker::ensureRenderer(int w, int h) {
 
 void Session::Worker::noteRenderer() {
   std::lock_guard lock(session.m_mutex);
-  if (renderer) {
+  if (renderer && rendererSound) {
     session.m_shelfSize = std::pair{renderer->capacityWidth(), renderer->capacityHeight()};
   } else {
     session.m_shelfSize.reset();
@@ -189,6 +189,9 @@ Status Session::Worker::drawFrame(int w, int h, render::Image& image, bool inter
   rendererSound = false;
   const Status drawn = renderer->renderFrame(w, h, image, interactive);
   rendererSound = sound && drawn.isOk();
+  if (sound && !rendererSound) {
+    noteRenderer();  // it will not be shelved: a close announces nothing
+  }
   return drawn;
 }
 

@@ -178,6 +178,8 @@ class Session {
 
   void run(std::promise<Status> started);
   void runWorker(std::promise<Status>& started);
+  // Settles what a close announced to the shelf (RendererShelf::arrived).
+  void settleShelving();
   Status serve(Worker& worker);        // the event loop; an error ends the session
   Status renderEarly(Worker& worker);  // the first frame, before a stream attaches
   void fail(const Status& status);
