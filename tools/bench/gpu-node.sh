@@ -155,7 +155,7 @@ EOF
 
 a=cuboidA.h5
 bench "A-1080p-60Hz" --file $a --size 1920x1080 --seconds "$drag" --event-rate 60 --still-frames 20 \
-  --first-pictures 3 --jumps 30 --playback-steps 100
+  --first-pictures 5 --jumps 30 --playback-steps 100
 bench "A-1080p-120Hz" --file $a --size 1920x1080 --seconds "$drag" --event-rate 120 --still-frames 10 \
   --first-pictures 0 --jumps 0 --playback-steps 0
 bench "A-720p-60Hz" --file $a --size 1280x720 --seconds "$drag" --event-rate 60 --still-frames 20 \
