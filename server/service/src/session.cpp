@@ -63,7 +63,7 @@ Session::~Session() {
 
 void Session::run(std::promise<Status> started) {
   runWorker(started);
-  settleShelving();  // settled already, but for a throw out of the worker
+  settleShelving();  // settled in runWorker; again here should it have thrown
   // The worker's scene, step cache, GL context and encoder are gone: hand the
   // freed pages back to the system. glibc keeps them in its arenas
   // otherwise, and crackvis-render grew by ~150 MB per closed cuboid-A

@@ -80,8 +80,9 @@ struct Session::Worker {
   // Puts a sound renderer on the server's shelf for the next session, its
   // scene dropped (on this thread, whose the context is).
   void shelveRenderer();
-  // Tells the session the size of the renderer it would shelve (none: 0),
-  // so that a close announces it to the shelf (RendererShelf::expect).
+  // Tells the session the size of the renderer it would shelve (none while
+  // it has no sound renderer), so that a close announces it to the shelf
+  // (RendererShelf::expect).
   void noteRenderer();
   // The renderer's frame, noting whether the renderer stays sound.
   Status drawFrame(int w, int h, render::Image& image, bool interactive);
