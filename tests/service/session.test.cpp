@@ -584,4 +584,27 @@ TEST_CASE("a closing session announces its renderer to the shelf until it is the
   CHECK(shelf->expected(64, 48) == 0);
 }
 
+TEST_CASE("an ended session asks the server's trimmer, which trims once it is quiet",
+          "[session][render]") {
+  const Fixture fixture;
+  std::atomic<int> trimmed{0};
+  auto trimmer = std::make_shared<service::HeapTrimmer>(
+      service::HeapTrimmer::Timing{std::chrono::milliseconds(3000),
+                                   std::chrono::milliseconds(10000)},
+      [&] { ++trimmed; });
+  for (const char* id : {"first", "second"}) {
+    auto opened =
+        Session::open(id, smallView(0), fixture.opener(-1), {}, nullptr, nullptr, trimmer);
+    REQUIRE(opened);
+    REQUIRE((*opened)->snapshot(0, 0));
+    opened->reset();  // closed, its thread joined: the trim was asked for
+  }
+  const auto start = std::chrono::steady_clock::now();
+  while (trimmer->trims() == 0 &&
+         std::chrono::steady_clock::now() - start < std::chrono::seconds(20)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  CHECK(trimmed == 1);  // the two ends, well within 3 s of each other, trimmed for once
+}
+
 }  // namespace crackvis

@@ -337,7 +337,7 @@ Status RenderServiceImpl::openSession(const Caller& caller, const v1::OpenSessio
   Result<std::shared_ptr<Session>> session = internalError("the session did not open");
   try {
     session = Session::open(newSessionId(), *description, opener(caller), m_config.limits, m_turns,
-                            m_renderers);
+                            m_renderers, m_trimmer);
   } catch (...) {
     m_sessions.add(nullptr, caller.name);  // the reservation is given back, then rethrown
     throw;

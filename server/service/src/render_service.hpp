@@ -54,7 +54,8 @@ class RenderServiceImpl final : public v1::RenderService::Service {
         m_turns(std::make_shared<RenderTurns>(config.limits.rendersAtOnce)),
         m_renderers(config.keptRenderers > 0 ? std::make_shared<RendererShelf>(
                                                    static_cast<std::size_t>(config.keptRenderers))
-                                             : nullptr) {
+                                             : nullptr),
+        m_trimmer(std::make_shared<HeapTrimmer>()) {
     if (m_renderers) {
       // One renderer of the default view's size waits for the first session.
       const pipeline::ViewDescription view;
@@ -138,6 +139,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   FinishedSeries m_finishedSeries;
   std::shared_ptr<RenderTurns> m_turns;        // shared by every session's frames
   std::shared_ptr<RendererShelf> m_renderers;  // the renderers of ended sessions; may be null
+  std::shared_ptr<HeapTrimmer> m_trimmer;      // the heap, trimmed once sessions stop ending
 };
 
 }  // namespace crackvis::service

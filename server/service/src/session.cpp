@@ -24,23 +24,25 @@ const char* eventName(const SessionEvent& event) {
 
 Session::Session(std::string id, pipeline::PipelineDescription description, SourceOpener opener,
                  SessionLimits limits, std::shared_ptr<RenderTurns> turns,
-                 std::shared_ptr<RendererShelf> renderers)
+                 std::shared_ptr<RendererShelf> renderers, std::shared_ptr<HeapTrimmer> trimmer)
     : m_id(std::move(id)),
       m_limits(limits),
       m_initial(std::move(description)),
       m_opener(std::move(opener)),
       m_turns(std::move(turns)),
       m_renderers(std::move(renderers)),
+      m_trimmer(std::move(trimmer)),
       m_detachedSince(Clock::now()) {}
 
 Result<std::shared_ptr<Session>> Session::open(std::string id,
                                                pipeline::PipelineDescription description,
                                                SourceOpener opener, SessionLimits limits,
                                                std::shared_ptr<RenderTurns> turns,
-                                               std::shared_ptr<RendererShelf> renderers) {
+                                               std::shared_ptr<RendererShelf> renderers,
+                                               std::shared_ptr<HeapTrimmer> trimmer) {
   std::shared_ptr<Session> session(new Session(std::move(id), std::move(description),
                                                std::move(opener), limits, std::move(turns),
-                                               std::move(renderers)));
+                                               std::move(renderers), std::move(trimmer)));
   std::promise<Status> started;
   auto result = started.get_future();
   session->m_thread = std::thread(
@@ -67,8 +69,14 @@ void Session::run(std::promise<Status> started) {
   // The worker's scene, step cache, GL context and encoder are gone: hand the
   // freed pages back to the system. glibc keeps them in its arenas
   // otherwise, and crackvis-render grew by ~150 MB per closed cuboid-A
-  // session (117 MB idle, 461 MB after three; 186 MB once trimmed).
-  malloc_trim(0);
+  // session (117 MB idle, 461 MB after three; 186 MB once trimmed). The
+  // server's trimmer waits until no session has ended for a while, so that
+  // the next session reuses them (HeapTrimmer).
+  if (m_trimmer) {
+    m_trimmer->request();
+  } else {
+    malloc_trim(0);
+  }
 }
 
 void Session::settleShelving() {

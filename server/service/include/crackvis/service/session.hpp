@@ -33,6 +33,7 @@
 #include <crackvis/render/scene_renderer.hpp>
 #include <crackvis/scene/scene_pipeline.hpp>
 #include <crackvis/scene_model/scene_pick.hpp>
+#include <crackvis/service/heap_trimmer.hpp>
 #include <crackvis/service/render_turns.hpp>
 #include <crackvis/service/renderer_shelf.hpp>
 #include <crackvis/service/session_event.hpp>
@@ -117,11 +118,14 @@ class Session {
   // turns (none: this session renders whenever it has a frame to draw).
   // `renderers`: where the session takes its renderer from if one of its
   // view size waits there, and puts it when it ends (none: it makes its own).
+  // `trimmer`: asked to trim the heap once the session has ended (none: the
+  // session trims it itself as it ends).
   static Result<std::shared_ptr<Session>> open(std::string id,
                                                pipeline::PipelineDescription description,
                                                SourceOpener opener, SessionLimits limits,
                                                std::shared_ptr<RenderTurns> turns = nullptr,
-                                               std::shared_ptr<RendererShelf> renderers = nullptr);
+                                               std::shared_ptr<RendererShelf> renderers = nullptr,
+                                               std::shared_ptr<HeapTrimmer> trimmer = nullptr);
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
   ~Session();  // closes and joins the thread (the GL context goes with it)
@@ -173,7 +177,7 @@ class Session {
  private:
   Session(std::string id, pipeline::PipelineDescription description, SourceOpener opener,
           SessionLimits limits, std::shared_ptr<RenderTurns> turns,
-          std::shared_ptr<RendererShelf> renderers);
+          std::shared_ptr<RendererShelf> renderers, std::shared_ptr<HeapTrimmer> trimmer);
   struct Worker;  // the thread's state: scene pipeline, renderer, view
 
   void run(std::promise<Status> started);
@@ -193,6 +197,7 @@ class Session {
   SourceOpener m_opener;
   std::shared_ptr<RenderTurns> m_turns;
   std::shared_ptr<RendererShelf> m_renderers;
+  std::shared_ptr<HeapTrimmer> m_trimmer;
 
   mutable std::mutex m_mutex;
   std::condition_variable m_wake;      // the session thread
