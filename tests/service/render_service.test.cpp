@@ -1477,6 +1477,10 @@ TEST_CASE(
     CHECK(open.at("total_ms").get<double>() == Approx(open.at("open_session_ms").get<double>() +
                                                       open.at("first_frame_ms").get<double>()));
     CHECK(server.at("open_file_ms").get<double>() > 0.0);  // each session opens the file
+    // The file's Describe is part of the open (a Describe through
+    // crackvis-data takes a round trip, however warm its cache).
+    CHECK(server.at("describe_ms").get<double>() > 0.0);
+    CHECK(server.at("describe_ms").get<double>() <= server.at("open_file_ms").get<double>());
     CHECK(server.at("renderer_ms").get<double>() > 0.0);
     CHECK(server.at("extract_ms").get<double>() > 0.0);
     CHECK(server.at("render_ms").get<double>() > 0.0);

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -138,10 +139,13 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
     }
     bonds = std::make_unique<DataClient::PendingRead>(client.startRead(file, slabs));
   }
+  const auto describing = std::chrono::steady_clock::now();
   auto description = client.describe(file);
   if (!description) {
     return description.status();
   }
+  const std::chrono::duration<double, std::milli> described =
+      std::chrono::steady_clock::now() - describing;
   auto failed = [&](const Status& status) {
     return status.isOk() ? status
                          : Status(status.code(), fmt::format("{}: {}", file, status.message()));
@@ -153,6 +157,7 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   RemoteDemFile remote;
   remote.m_client = client;
   remote.m_file = file;
+  remote.m_describeMs = described.count();
   remote.m_dimension = *dimension;
   remote.m_appendable = isAppendable(*description);
   if (const GroupInfo* root = description->findGroup("/")) {

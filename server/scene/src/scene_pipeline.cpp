@@ -43,6 +43,7 @@ class GuardedSource final : public source::StepSource {
   bool timeInIterations() const override { return m_inner->timeInIterations(); }
   bool appendable() const override { return m_inner->appendable(); }
   bool beingWritten() const override { return m_inner->beingWritten(); }
+  double describeMs() const override { return m_inner->describeMs(); }
   Result<bool> refresh() override {
     return guardedCall([&] { return m_inner->refresh(); },
                        [&](std::string_view detail) {
@@ -288,6 +289,7 @@ Status ScenePipeline::apply(pipeline::PipelineDescription next) {
   if (reopen || target != shown) {
     CRACKVIS_RETURN_IF_ERROR(showStep(target));
     m_timings.openMs = openMs;
+    m_timings.describeMs = source().describeMs();
     return Status::ok();
   }
   if (newExtractor || newSelection) {

@@ -80,6 +80,7 @@ Status Session::Worker::needRenderer() const {
 void Session::Worker::noteStepTimings() {
   stepTimings = {};
   stepTimings.openMs = scene->timings().openMs;
+  stepTimings.describeMs = scene->timings().describeMs;
   stepTimings.loadMs = scene->timings().loadMs;
   stepTimings.extractMs = scene->timings().extractMs;
 }

@@ -48,6 +48,7 @@ Result<v1::Frame> StreamEncoder::encode(RenderedFrame& frame) {
   out.set_h264(encoded->data.data(), encoded->data.size());
   auto* timings = out.mutable_timings();
   timings->set_open_ms(frame.timings.openMs);
+  timings->set_describe_ms(frame.timings.describeMs);
   timings->set_renderer_ms(frame.timings.rendererMs);
   timings->set_load_ms(frame.timings.loadMs);
   timings->set_extract_ms(frame.timings.extractMs);

@@ -179,6 +179,7 @@ class RemoteSource final : public FileSource {
 
   const std::string& file() const override { return m_remote.file(); }
   int stepCount() const override { return m_remote.stepCount(); }
+  double describeMs() const override { return m_remote.describeMs(); }
   bool timeInIterations() const override { return m_remote.timeInIterations(); }
   bool appendable() const override { return m_remote.appendable(); }
   bool beingWritten() const override { return m_remote.beingWritten(); }

@@ -93,6 +93,9 @@ class RemoteDemFile {
   Result<bool> refresh();
   std::int64_t particleCount() const { return m_particles; }
   std::int64_t bondCount() const { return m_bonds; }
+  // How long open()'s Describe took, from the call to its answer (the time a
+  // first picture spends on the file's summary).
+  double describeMs() const { return m_describeMs; }
   int stepCount() const { return static_cast<int>(m_description->steps.size()); }
   const std::vector<StepEntry>& steps() const { return m_description->steps; }
 
@@ -157,6 +160,7 @@ class RemoteDemFile {
   bool m_timeInIterations = false;
   bool m_appendable = false;  // a live file: steps along an extendible axis
   bool m_beingWritten = false;
+  double m_describeMs = 0.0;
   std::int64_t m_particles = 0;
   std::int64_t m_bonds = 0;
   std::shared_ptr<std::vector<dem::Bond>> m_bondList;

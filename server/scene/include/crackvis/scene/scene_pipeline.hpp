@@ -48,7 +48,8 @@ std::string seriesKey(const pipeline::PipelineDescription& description);
 // What the last step change cost.
 struct StepTimings {
   double openMs = 0.0;  // opening the file (its summary, lattice, first step); 0 when it was open
-  double loadMs = 0.0;  // 0 for a cached step
+  double describeMs = 0.0;  // of openMs: the file's summary (crackvis-data's Describe)
+  double loadMs = 0.0;      // 0 for a cached step
   double extractMs = 0.0;
 };
 

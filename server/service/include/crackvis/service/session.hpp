@@ -43,6 +43,7 @@ namespace crackvis::service {
 
 struct FrameTimings {
   double openMs = 0.0;      // the file opened for this frame (summary, lattice, first step)
+  double describeMs = 0.0;  // of openMs: the summary (crackvis-data's Describe)
   double rendererMs = 0.0;  // the EGL context and renderer made for this frame
   double loadMs = 0.0;
   double extractMs = 0.0;

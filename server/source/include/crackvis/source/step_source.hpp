@@ -86,6 +86,9 @@ class StepSource {
   // steps, when asked for, are read again). FAILED_PRECONDITION when the
   // file was replaced by another. A file that cannot grow answers false.
   virtual Result<bool> refresh() { return false; }
+  // How long describing the file took as it was opened: crackvis-data's
+  // Describe for a remote file; 0 for a local one (its reader opens it).
+  virtual double describeMs() const { return 0.0; }
 };
 
 // `file` relative to the data service's root. A file declaring more
