@@ -548,6 +548,43 @@ TEST_CASE("a new session waits for the renderer of its size that a closing sessi
   }
 }
 
+TEST_CASE("a full shelf keeps the renderer a take was woken for, and drops the one put",
+          "[session][render]") {
+  using std::chrono::milliseconds;
+  service::RendererShelf shelf(1);
+  auto makeReleased = [](int w, int h) {
+    auto made = render::SceneRenderer::create(w, h);
+    REQUIRE(made);
+    (*made)->releaseContext();
+    return std::move(made).value();
+  };
+  for (int round = 0; round < 5; ++round) {
+    std::unique_ptr<render::SceneRenderer> awaited = makeReleased(64, 48);
+    std::unique_ptr<render::SceneRenderer> other = makeReleased(80, 60);
+    render::SceneRenderer* const expected = awaited.get();
+    shelf.expect(64, 48);
+    std::unique_ptr<render::SceneRenderer> got;
+    std::thread taking([&] { got = shelf.take(64, 48, milliseconds(10000)); });
+    const auto start = std::chrono::steady_clock::now();
+    while (shelf.waiting(64, 48) == 0 &&
+           std::chrono::steady_clock::now() - start < std::chrono::seconds(10)) {
+      std::this_thread::sleep_for(milliseconds(1));
+    }
+    REQUIRE(shelf.waiting(64, 48) == 1);
+    // Put, and at once another of another size: the second put finds the
+    // shelf full of the renderer the take was woken for, unless the take
+    // has had the lock already. Either way the take gets it.
+    shelf.put(std::move(awaited));
+    shelf.put(std::move(other));
+    shelf.arrived(64, 48);
+    taking.join();
+    CHECK(got.get() == expected);
+    CHECK(shelf.size() <= 1);
+    CHECK(shelf.waiting(64, 48) == 0);
+    (void)shelf.take(80, 60);  // empty for the next round
+  }
+}
+
 TEST_CASE("a closing session announces its renderer to the shelf until it is there",
           "[session][render]") {
   const Fixture fixture;

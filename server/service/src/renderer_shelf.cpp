@@ -1,3 +1,5 @@
+#include <algorithm>
+
 #include <crackvis/service/renderer_shelf.hpp>
 
 namespace crackvis::service {
@@ -31,15 +33,33 @@ std::unique_ptr<render::SceneRenderer> RendererShelf::take(int width, int height
                                                            std::chrono::milliseconds wait) {
   std::unique_lock lock(m_mutex);
   const auto deadline = std::chrono::steady_clock::now() + wait;
+  const std::pair size{width, height};
   for (;;) {
     if (auto renderer = takeLocked(width, height)) {
       return renderer;
     }
-    if (!m_incoming.contains({width, height}) ||
-        m_changed.wait_until(lock, deadline) == std::cv_status::timeout) {
+    if (!m_incoming.contains(size)) {
+      return nullptr;
+    }
+    ++m_waiting[size];
+    const std::cv_status woken = m_changed.wait_until(lock, deadline);
+    if (--m_waiting[size] <= 0) {
+      m_waiting.erase(size);
+    }
+    if (woken == std::cv_status::timeout) {
       return takeLocked(width, height);
     }
   }
+}
+
+bool RendererShelf::awaited(const render::SceneRenderer& renderer) const {
+  return m_waiting.contains({renderer.capacityWidth(), renderer.capacityHeight()});
+}
+
+int RendererShelf::waiting(int width, int height) const {
+  std::lock_guard lock(m_mutex);
+  const auto it = m_waiting.find({width, height});
+  return it != m_waiting.end() ? it->second : 0;
 }
 
 std::unique_ptr<render::SceneRenderer> RendererShelf::takeLocked(int width, int height) {
@@ -81,12 +101,22 @@ void RendererShelf::put(std::unique_ptr<render::SceneRenderer> renderer) {
     std::lock_guard lock(m_mutex);
     if (m_capacity == 0) {
       dropped = std::move(renderer);
-    } else {
-      if (m_kept.size() == m_capacity) {
-        dropped = std::move(m_kept.front());
-        m_kept.erase(m_kept.begin());
-      }
+    } else if (m_kept.size() < m_capacity) {
       m_kept.push_back(std::move(renderer));
+    } else {
+      // The oldest no take waits for; else the one put, unless it is awaited.
+      auto victim = std::find_if(m_kept.begin(), m_kept.end(),
+                                 [&](const auto& kept) { return !awaited(*kept); });
+      if (victim == m_kept.end() && !awaited(*renderer)) {
+        dropped = std::move(renderer);
+      } else {
+        if (victim == m_kept.end()) {
+          victim = m_kept.begin();
+        }
+        dropped = std::move(*victim);
+        m_kept.erase(victim);
+        m_kept.push_back(std::move(renderer));
+      }
     }
   }
   m_changed.notify_all();

@@ -53,18 +53,25 @@ class RendererShelf {
   int expected(int width, int height) const;
   // `renderer`'s scene cleared and its context released by the caller. A
   // full shelf drops its oldest (on this thread): the newest is likelier to
-  // fit the next session (the same user again, the same window).
+  // fit the next session (the same user again, the same window). A renderer
+  // of a size a take is waiting for is dropped last: the waiter was woken
+  // for it and has not yet had the lock (should every one kept be awaited,
+  // the one put goes, unless it is awaited too).
   void put(std::unique_ptr<render::SceneRenderer> renderer);
   std::size_t size() const;
+  // Takes waiting now for a renderer of width x height (for tests).
+  int waiting(int width, int height) const;
 
  private:
   std::unique_ptr<render::SceneRenderer> takeLocked(int width, int height);
+  bool awaited(const render::SceneRenderer& renderer) const;
 
   const std::size_t m_capacity;
   mutable std::mutex m_mutex;
   std::condition_variable m_changed;  // a renderer put, or one not coming
   std::vector<std::unique_ptr<render::SceneRenderer>> m_kept;
   std::map<std::pair<int, int>, int> m_incoming;  // size -> renderers on their way
+  std::map<std::pair<int, int>, int> m_waiting;   // size -> takes waiting for one
   std::thread m_stocking;
 };
 
