@@ -177,6 +177,57 @@ TEST_CASE("a scene pipeline extracts anew only when the extraction changes", "[s
   CHECK(scene.step() == 2);
 }
 
+// A local source that says its file took 12.5 ms to describe, as a remote
+// one measures crackvis-data's Describe.
+class DescribedSource final : public source::StepSource {
+ public:
+  explicit DescribedSource(std::unique_ptr<source::StepSource> inner) : m_inner(std::move(inner)) {}
+  const std::string& file() const override { return m_inner->file(); }
+  const dem::Lattice& lattice() const override { return m_inner->lattice(); }
+  int stepCount() const override { return m_inner->stepCount(); }
+  Status setExtraArrays(const source::ExtraArrays& extras) override {
+    return m_inner->setExtraArrays(extras);
+  }
+  const std::vector<std::int32_t>& breakSteps() const override { return m_inner->breakSteps(); }
+  Result<source::SourceStep> read(int step) override { return m_inner->read(step); }
+  double describeMs() const override { return 12.5; }
+
+ private:
+  std::unique_ptr<source::StepSource> m_inner;
+};
+
+TEST_CASE("a scene pipeline's timings are those of its last change alone", "[scene]") {
+  const Series series;
+  scene::SourceOpener opener =
+      [&series](const std::string& file) -> Result<std::unique_ptr<source::StepSource>> {
+    auto local = source::openLocalSource(series.dir.file(file));
+    if (!local) {
+      return local.status();
+    }
+    return std::unique_ptr<source::StepSource>(
+        std::make_unique<DescribedSource>(std::move(local).value()));
+  };
+  auto opened = scene::ScenePipeline::open(cellCut(1), opener);
+  REQUIRE(opened);
+  scene::ScenePipeline& scene = **opened;
+  // The open: the file, of which its Describe.
+  CHECK(scene.timings().openMs > 0.0);
+  CHECK(scene.timings().describeMs == 12.5);
+  // Another step of the open file: no open, no Describe.
+  REQUIRE(scene.replace(cellCut(2)));
+  CHECK(scene.timings().openMs == 0.0);
+  CHECK(scene.timings().describeMs == 0.0);
+  // Another colour only: nothing read or extracted, and nothing of the
+  // changes before reported again.
+  auto coloured = cellCut(2);
+  coloured.cracks.colour = {1, 2, 3};
+  REQUIRE(scene.replace(coloured));
+  CHECK(scene.timings().openMs == 0.0);
+  CHECK(scene.timings().describeMs == 0.0);
+  CHECK(scene.timings().loadMs == 0.0);
+  CHECK(scene.timings().extractMs == 0.0);
+}
+
 // A random packing with a planted through crack and scattered breaks.
 struct PlantedSeries {
   testing::TempDir dir;

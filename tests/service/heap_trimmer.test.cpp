@@ -47,14 +47,14 @@ TEST_CASE("ends close together are trimmed for once, after the quiet time", "[se
 
 TEST_CASE("a request within the quiet time puts the trim off", "[service][trim]") {
   std::atomic<int> trimmed{0};
-  HeapTrimmer trimmer({milliseconds(2000), milliseconds(60000)}, [&] { ++trimmed; });
+  HeapTrimmer trimmer({milliseconds(3000), milliseconds(60000)}, [&] { ++trimmed; });
   trimmer.request();
-  std::this_thread::sleep_for(milliseconds(1000));
+  std::this_thread::sleep_for(milliseconds(500));
   const auto second = Clock::now();
   trimmer.request();
   REQUIRE(waitFor([&] { return trimmer.trims() == 1; }, milliseconds(20000)));
-  // Two seconds after the second request, not after the first.
-  CHECK(Clock::now() - second >= milliseconds(2000));
+  // Three seconds after the second request, not after the first.
+  CHECK(Clock::now() - second >= milliseconds(3000));
   CHECK(trimmed == 1);
 }
 

@@ -256,6 +256,9 @@ void ScenePipeline::commit() {
 }
 
 Status ScenePipeline::apply(pipeline::PipelineDescription next) {
+  // What this change costs, and nothing of an earlier one: a change that
+  // reads and extracts nothing reports zeros.
+  m_timings = {};
   const bool empty = m_state.cache == nullptr;
   const bool newFile = empty || next.file != m_state.description.file;
   // Colouring by another array reads the file anew with it (rare: a menu
@@ -289,7 +292,7 @@ Status ScenePipeline::apply(pipeline::PipelineDescription next) {
   if (reopen || target != shown) {
     CRACKVIS_RETURN_IF_ERROR(showStep(target));
     m_timings.openMs = openMs;
-    m_timings.describeMs = source().describeMs();
+    m_timings.describeMs = reopen ? source().describeMs() : 0.0;
     return Status::ok();
   }
   if (newExtractor || newSelection) {
