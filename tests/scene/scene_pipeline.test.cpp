@@ -3,6 +3,7 @@
 // nothing, and the extraction options compared as a whole.
 #include <catch2/catch.hpp>
 
+#include "support/forwarding_source.hpp"
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/cracks/crack_components.hpp>
@@ -179,21 +180,10 @@ TEST_CASE("a scene pipeline extracts anew only when the extraction changes", "[s
 
 // A local source that says its file took 12.5 ms to describe, as a remote
 // one measures crackvis-data's Describe.
-class DescribedSource final : public source::StepSource {
+class DescribedSource final : public testing::ForwardingSource {
  public:
-  explicit DescribedSource(std::unique_ptr<source::StepSource> inner) : m_inner(std::move(inner)) {}
-  const std::string& file() const override { return m_inner->file(); }
-  const dem::Lattice& lattice() const override { return m_inner->lattice(); }
-  int stepCount() const override { return m_inner->stepCount(); }
-  Status setExtraArrays(const source::ExtraArrays& extras) override {
-    return m_inner->setExtraArrays(extras);
-  }
-  const std::vector<std::int32_t>& breakSteps() const override { return m_inner->breakSteps(); }
-  Result<source::SourceStep> read(int step) override { return m_inner->read(step); }
+  using ForwardingSource::ForwardingSource;
   double describeMs() const override { return 12.5; }
-
- private:
-  std::unique_ptr<source::StepSource> m_inner;
 };
 
 TEST_CASE("a scene pipeline's timings are those of its last change alone", "[scene]") {

@@ -11,6 +11,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "support/forwarding_source.hpp"
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/service/render_turns.hpp>
@@ -26,26 +27,18 @@ using service::SessionNotice;
 
 // A local file's source whose read of one step throws, as std::vector does
 // on a size it cannot hold.
-class ThrowingSource : public source::StepSource {
+class ThrowingSource : public testing::ForwardingSource {
  public:
   ThrowingSource(std::unique_ptr<source::StepSource> inner, int poisoned)
-      : m_inner(std::move(inner)), m_poisoned(poisoned) {}
-  const std::string& file() const override { return m_inner->file(); }
-  const dem::Lattice& lattice() const override { return m_inner->lattice(); }
-  int stepCount() const override { return m_inner->stepCount(); }
-  Status setExtraArrays(const source::ExtraArrays& extras) override {
-    return m_inner->setExtraArrays(extras);
-  }
-  const std::vector<std::int32_t>& breakSteps() const override { return m_inner->breakSteps(); }
+      : ForwardingSource(std::move(inner)), m_poisoned(poisoned) {}
   Result<source::SourceStep> read(int step) override {
     if (step == m_poisoned) {
       throw std::length_error("cannot create std::vector larger than max_size()");
     }
-    return m_inner->read(step);
+    return ForwardingSource::read(step);
   }
 
  private:
-  std::unique_ptr<source::StepSource> m_inner;
   int m_poisoned;
 };
 
