@@ -692,24 +692,43 @@ Result<std::vector<std::int32_t>> DemFileReader::readBreakSteps() const {
   return breakStep;
 }
 
-Result<StepState> DemFileReader::readStep(int step) const {
+namespace {
+
+// `recycled` ready to take a step of n particles and m bonds: its arrays
+// keep their memory (a vector resized to the size it has is left as it is;
+// the read overwrites its values). The optional arrays are sized, or
+// emptied, by the read.
+StepState reuse(StepState recycled, std::uint64_t n, std::uint64_t m) {
+  StepState state = std::move(recycled);
+  state.positions.resize(n);
+  state.bondState.resize(m);
+  state.scalars.clear();
+  state.extras.clear();
+  return state;
+}
+
+}  // namespace
+
+Result<StepState> DemFileReader::readStep(int step, StepState recycled) const {
   CRACKVIS_RETURN_IF_ERROR(checkStepInRange(m_path, step, stepCount()));
   CRACKVIS_RETURN_IF_ERROR(m_countsStored);
   const auto n = static_cast<std::uint64_t>(m_info.particleCount);
   const auto m = static_cast<std::uint64_t>(m_info.bondCount);
-  StepState state;
+  StepState state = reuse(std::move(recycled), n, m);
   state.time = m_info.steps[static_cast<size_t>(step)].time;
-  state.positions.resize(n);
-  state.bondState.resize(m);
   CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kPositions, step, state.positions.data()));
   CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondState, step, state.bondState.data()));
   if (h5::linkExists(m_file.get(), stepDatasetPath(DemDataset::kVelocities, step))) {
     state.velocities.resize(n);
     CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kVelocities, step, state.velocities.data()));
+  } else {
+    state.velocities.clear();
   }
   if (h5::linkExists(m_file.get(), stepDatasetPath(DemDataset::kBondForce, step))) {
     state.bondForce.resize(m);
     CRACKVIS_RETURN_IF_ERROR(readWhole(DemDataset::kBondForce, step, state.bondForce.data()));
+  } else {
+    state.bondForce.clear();
   }
   state.scalars = m_info.steps[static_cast<size_t>(step)].scalars;
   for (const ExtraInfo& extra : m_info.extras) {
@@ -1073,13 +1092,12 @@ Result<std::vector<std::int32_t>> DemFileReader::readBreakStepRows(
 }
 
 Result<StepState> DemFileReader::readStepRows(int step, std::span<const ParticleIndex> particles,
-                                              std::span<const BondIndex> bonds) const {
+                                              std::span<const BondIndex> bonds,
+                                              StepState recycled) const {
   CRACKVIS_RETURN_IF_ERROR(checkStepInRange(m_path, step, stepCount()));
   CRACKVIS_RETURN_IF_ERROR(m_countsStored);
-  StepState state;
+  StepState state = reuse(std::move(recycled), particles.size(), bonds.size());
   state.time = m_info.steps[static_cast<size_t>(step)].time;
-  state.positions.resize(particles.size());
-  state.bondState.resize(bonds.size());
   CRACKVIS_RETURN_IF_ERROR(
       readRows(DemDataset::kPositions, step, particles, state.positions.data()));
   CRACKVIS_RETURN_IF_ERROR(readRows(DemDataset::kBondState, step, bonds, state.bondState.data()));
@@ -1087,10 +1105,14 @@ Result<StepState> DemFileReader::readStepRows(int step, std::span<const Particle
     state.velocities.resize(particles.size());
     CRACKVIS_RETURN_IF_ERROR(
         readRows(DemDataset::kVelocities, step, particles, state.velocities.data()));
+  } else {
+    state.velocities.clear();
   }
   if (h5::linkExists(m_file.get(), stepDatasetPath(DemDataset::kBondForce, step))) {
     state.bondForce.resize(bonds.size());
     CRACKVIS_RETURN_IF_ERROR(readRows(DemDataset::kBondForce, step, bonds, state.bondForce.data()));
+  } else {
+    state.bondForce.clear();
   }
   state.scalars = m_info.steps[static_cast<size_t>(step)].scalars;
   for (const ExtraInfo& extra : m_info.extras) {

@@ -327,7 +327,7 @@ TEST_CASE("partial reads refuse rows out of range, out of order, and a corrupt i
   }
 }
 
-TEST_CASE("h5::readRowsAt reads far-apart rows and long runs in several spans, exactly",
+TEST_CASE("h5::readRowsAt reads far-apart rows, gapped rows and long runs in spans, exactly",
           "[dem][index]") {
   testing::TempDir dir;
   const std::string path = dir.file("values.h5");
@@ -347,7 +347,10 @@ TEST_CASE("h5::readRowsAt reads far-apart rows and long runs in several spans, e
   }
   std::vector<std::int32_t> rows;
   for (std::int32_t i = 0; i < 1'500'000; ++i) {
-    rows.push_back(i);  // one run of 6 MB: two spans
+    rows.push_back(i);  // one run of 6 MB: two spans, read into place
+  }
+  for (std::int32_t i = 1'520'000; i < 1'530'000; i += 7) {
+    rows.push_back(i);  // close gaps: one span, its rows copied out
   }
   for (std::int32_t i = 1'600'000; i < kCount; i += 40'000) {
     rows.push_back(i);  // 160 KB apart: a span each

@@ -18,12 +18,15 @@ readonly here root
 usage() {
   cat <<EOF
 usage: tools/bench/mpi-ranks.sh --file FILE [--ranks "1 2 4"] [--rounds R] [--first S]
-                                [--count C] [--size WxH] [--out DIR]
+                                [--count C] [--size WxH] [--ghost-width W] [--out DIR]
 
 pvbatch with the crackvis plugin on FILE at each rank count (default "1 2"), R rounds
 (default 2): the first update at step S (default: 5 steps before the last), its frame, then
 C more steps (default 4), each updated and rendered (default 1280x720, llvmpipe on a private
-Xvfb). --out keeps every run's JSON and /usr/bin/time output.
+Xvfb). --ghost-width sets the reader's GhostWidth (default: the reader's, 4 longest bonds).
+--out keeps every run's JSON, log and /usr/bin/time output. After the summary, each rank's
+update of a later step by stage (the reader's prepare, read and fill; the filter's lattice,
+piece, extract, opening, whole_set and output), timed in the process itself.
 EOF
 }
 
@@ -38,6 +41,7 @@ rounds=2
 first=-5
 count=4
 size=1280x720
+ghost=default
 out=
 while (($#)); do
   case $1 in
@@ -48,6 +52,7 @@ while (($#)); do
     --first) first=${2:?--first needs a value}; shift 2 ;;
     --count) count=${2:?--count needs a value}; shift 2 ;;
     --size) size=${2:?--size needs a value}; shift 2 ;;
+    --ghost-width) ghost=${2:?--ghost-width needs a value}; shift 2 ;;
     --out) out=${2:?--out needs a value}; shift 2 ;;
     *) die "unknown argument $1 (see --help)" ;;
   esac
@@ -59,6 +64,7 @@ for r in $rank_counts; do
   [[ $r =~ ^[1-9][0-9]*$ ]] || die "--ranks: $r is not a positive integer"
 done
 [[ $size =~ ^[0-9]+x[0-9]+$ ]] || die "--size $size: expected WIDTHxHEIGHT"
+[[ $ghost == default || $ghost =~ ^[0-9]+(\.[0-9]+)?$ ]] || die "--ghost-width $ghost: expected a number"
 [[ -x /usr/bin/time ]] || die "needs GNU time (/usr/bin/time, package time)"
 command -v Xvfb >/dev/null || die "needs Xvfb (Debian's ParaView renders through GLX)"
 
@@ -93,6 +99,8 @@ done
 DISPLAY=:$(head -1 "$work/display")
 export DISPLAY
 cat "$file" >/dev/null # into the page cache for every run
+# Each reader and filter update prints its stages (crack_filter_state.h, StageLog).
+export CRACKVIS_VTK_TIMINGS=1
 
 # run TAG RANKS FILE|baseline: one pvbatch run; /usr/bin/time appends each
 # rank's peak RSS (KiB) and wall seconds to $out/TAG.rss.
@@ -100,12 +108,13 @@ run() {
   local tag=$1 ranks=$2 input=$3
   local timed=(/usr/bin/time -a -o "$out/$tag.rss" -f "%M %e")
   rm -f "$out/$tag.rss"
-  local script=("$here/mpi_ranks.py" "$plugin" "$input" "first=$first" "$count" "$size" "$out/$tag.json")
+  local script=("$here/mpi_ranks.py" "$plugin" "$input" "first=$first" "$count" "$size" "$out/$tag.json"
+    "ghost=$ghost")
   if ((ranks == 1)); then
     "${timed[@]}" "$pvbatch" --no-mpi "${script[@]}" >"$out/$tag.log" 2>&1
   else
     mpiexec --allow-run-as-root --oversubscribe -np "$ranks" -x LD_LIBRARY_PATH -x PYTHONPATH \
-      -x DISPLAY ${crackvis_huge_pages_mpi[@]+"${crackvis_huge_pages_mpi[@]}"} "${timed[@]}" "$pvbatch" "${script[@]}" >"$out/$tag.log" 2>&1
+      -x DISPLAY -x CRACKVIS_VTK_TIMINGS ${crackvis_huge_pages_mpi[@]+"${crackvis_huge_pages_mpi[@]}"} "${timed[@]}" "$pvbatch" "${script[@]}" >"$out/$tag.log" 2>&1
   fi || die "$tag failed: $(grep -v '^HDF5-DIAG\|^  ' "$out/$tag.log" | tail -3)"
   cut -d' ' -f1 /proc/loadavg >"$out/$tag.load"
 }
@@ -174,4 +183,60 @@ for ranks in counts:
           f"{rs[0]['cells']} ({met})")
 print("times in ms, medians over the rounds (a step: the median of its steps); memory in MiB: "
       "peak RSS by /usr/bin/time; fixed: a rank that only loaded the plugin and rendered an empty view")
+
+def stage_lines(tag):
+    """Per process, by its MPI rank (or pid order without one), its timing lines after the
+    first update's, as (what, {stage: ms})."""
+    by_process = {}
+    for line in open(f"{out}/{tag}.log"):
+        if not line.startswith("crackvis-vtk-timings "):
+            continue
+        fields = dict(f.split("=", 1) for f in line.split()[1:] if "=" in f)
+        what = next(f for f in line.split()[1:] if "=" not in f)
+        stages = {k[:-3]: float(v) for k, v in fields.items() if k.endswith("_ms")}
+        rank = fields.get("rank", "-")
+        key = (int(rank) if rank.isdigit() else 0, int(fields["pid"]))
+        by_process.setdefault(key, []).append((fields.get("time"), what, stages))
+    # The first update of each process (the piece's preparation), at the first time it
+    # saw, is not a step.
+    return [[(what, stages) for time, what, stages in lines if time != lines[0][0]]
+            for _, lines in sorted(by_process.items())]
+
+print()
+print("a later step's update by stage, per rank (medians over the steps and rounds, ms):")
+for ranks in counts:
+    per_rank = {}
+    for r in range(1, rounds + 1):
+        for k, lines in enumerate(stage_lines(f"run-{ranks}-{r}")):
+            for what, stages in lines:
+                kind = "reader" if what.startswith("reader") else "filter"
+                for stage, ms in stages.items():
+                    per_rank.setdefault((kind, stage), {}).setdefault(k, []).append(ms)
+    if not per_rank:
+        print(f"  {ranks} rank(s): no timing lines (a plugin built before StageLog?)")
+        continue
+    print(f"  {ranks} rank(s): " + "  ".join(f"{'rank ' + str(k):>8}" for k in range(ranks)))
+    for (kind, stage), values in per_rank.items():
+        cells = "  ".join(f"{med(values[k]):>8.1f}" if k in values else f"{'-':>8}" for k in range(ranks))
+        print(f"    {kind + ' ' + stage:<18} {cells}")
+    # Rank 0's update clock against the plugin's work in it: from the first
+    # reader's start to the last filter's end over the ranks (one clock,
+    # CLOCK_MONOTONIC), and what lies outside that (ParaView's own work).
+    inside, outside = [], []
+    for r in range(1, rounds + 1):
+        spans = [(float(f["start"]), float(f["end"]))
+                 for line in open(f"{out}/run-{ranks}-{r}.log")
+                 if line.startswith("crackvis-vtk-timings ")
+                 for f in [dict(x.split("=", 1) for x in line.split()[1:] if "=" in x)]
+                 if "start" in f]
+        for step in json.load(open(f"{out}/run-{ranks}-{r}.json"))["steps"]:
+            lo, hi = step.get("update_span", (0.0, 0.0))
+            within = [sp for sp in spans if sp[0] >= lo - 1.0 and sp[1] <= hi + 1.0]
+            if within:
+                plugin = max(e for _, e in within) - min(b for b, _ in within)
+                inside.append(plugin)
+                outside.append(hi - lo - plugin)
+    if inside:
+        print(f"    rank 0's update clock: {med(inside):.1f} in the plugin (first reader start to "
+              f"last filter end), {med(outside):.1f} outside it (ParaView)")
 EOF

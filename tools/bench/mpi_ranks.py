@@ -8,7 +8,9 @@ frame, then each following step of COUNT: update (read + extract), frame
 plugin and renders an empty view: the fixed part of a rank's memory.
 Writes the timings (ms) as JSON to OUT.
 
-    pvbatch mpi_ranks.py PLUGIN FILE first=FIRST COUNT WIDTHxHEIGHT OUT
+    pvbatch mpi_ranks.py PLUGIN FILE first=FIRST COUNT WIDTHxHEIGHT OUT [ghost=W]
+
+ghost=W sets the reader's GhostWidth (ghost=default: the reader's own).
 
 FIRST comes as first=FIRST: pvbatch takes a bare negative number of two
 digits (-10) for one of its own options.
@@ -22,6 +24,7 @@ from paraview.simple import (CreateRenderView, GetActiveCamera, LoadPlugin, Rend
 from paraview import servermanager
 
 plugin, path, first, count, size, out = sys.argv[1:7]
+ghost = sys.argv[7].removeprefix("ghost=") if len(sys.argv) > 7 else "default"
 first, count = int(first.removeprefix("first=")), int(count)
 width, height = (int(v) for v in size.split("x"))
 LoadPlugin(plugin, ns=globals())
@@ -39,6 +42,9 @@ if path == "baseline":
     result["first_frame_ms"] = ms_since(start)
 else:
     reader = crackvisdemreader(FileName=path)  # noqa: F821 (the plugin defines it)
+    if ghost != "default":
+        reader.GhostWidth = float(ghost)
+        result["ghost_width"] = float(ghost)
     times = list(reader.TimestepValues) if len(reader.TimestepValues) > 1 else [reader.TimestepValues]
     first = first if first >= 0 else len(times) + first
     steps = list(range(first, min(first + 1 + count, len(times))))
@@ -64,9 +70,12 @@ else:
         start = time.perf_counter()
         crack.UpdatePipeline(times[step])
         update = ms_since(start)
+        # On the clock of the plugin's CRACKVIS_VTK_TIMINGS lines (CLOCK_MONOTONIC).
+        update_span = [1000.0 * start, 1000.0 * start + update]
         view.ViewTime = times[step]
         start = time.perf_counter()
         Render(view)
-        result["steps"].append({"step": step, "update_ms": update, "frame_ms": ms_since(start)})
+        result["steps"].append({"step": step, "update_ms": update, "frame_ms": ms_since(start),
+                                "update_span": update_span})
 with open(out, "w") as handle:
     json.dump(result, handle)

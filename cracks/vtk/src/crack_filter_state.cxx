@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include <fmt/format.h>
+#include <unistd.h>
 #include <vtkCellArray.h>
 #include <vtkCellArrayIterator.h>
 #include <vtkCellData.h>
@@ -15,6 +16,7 @@
 #include <vtkDoubleArray.h>
 #include <vtkFieldData.h>
 #include <vtkFloatArray.h>
+#include <vtkInformation.h>
 #include <vtkIntArray.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
@@ -24,6 +26,7 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkUnstructuredGrid.h>
 
+#include <crackvis/analysis/bond_normals.hpp>
 #include <crackvis/analysis/opening.hpp>
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/partition.hpp>
@@ -31,59 +34,85 @@
 namespace crackvis::cracks::vtkadapter {
 namespace {
 
-// Which triangulation each viewing array's memory belongs to. An entry
-// lives exactly as long as VTK uses that memory: VTK calls
-// releaseViewedMemory when the last array sharing the buffer lets it go (or
-// moves its values elsewhere), and the entry's reference keeps the
-// triangulation alive until then.
-struct ViewedTriangulations {
+// What each viewing array's memory belongs to. An entry lives exactly as
+// long as VTK uses that memory: VTK calls releaseViewedMemory when the last
+// array sharing the buffer lets it go (or moves its values elsewhere), and
+// the entry's reference keeps the owner alive until then.
+struct ViewedMemory {
   struct Views {
-    std::shared_ptr<const Triangulation> owner;
+    std::shared_ptr<const void> owner;
+    const std::type_info* ownerType = nullptr;  // what `owner` points to
     int buffers = 0;  // VTK buffers viewing the memory; each is released once
   };
   std::mutex mutex;
   std::unordered_map<const void*, Views> of;
 };
 
-ViewedTriangulations& viewed() {
-  static ViewedTriangulations* registry = new ViewedTriangulations;  // outlives every array
+ViewedMemory& viewed() {
+  static ViewedMemory* registry = new ViewedMemory;  // outlives every array
   return *registry;
 }
 
 // VTK's free function of a viewing array's buffer. VTK keeps it for a
 // buffer it later allocates itself (vtkBuffer::Allocate, after Initialize or
 // SetNumberOfTuples on the array): such memory is VTK's malloc's, and freed.
+// The owner is released outside the lock: releasing it may run its deleter.
 void releaseViewedMemory(void* memory) {
-  ViewedTriangulations& registry = viewed();
-  const std::scoped_lock lock(registry.mutex);
-  const auto found = registry.of.find(memory);
-  if (found == registry.of.end()) {
-    std::free(memory);
-  } else if (--found->second.buffers == 0) {
-    registry.of.erase(found);
+  std::shared_ptr<const void> owner;
+  {
+    ViewedMemory& registry = viewed();
+    const std::scoped_lock lock(registry.mutex);
+    const auto found = registry.of.find(memory);
+    if (found == registry.of.end()) {
+      std::free(memory);
+      return;
+    }
+    if (--found->second.buffers == 0) {
+      owner = std::move(found->second.owner);
+      registry.of.erase(found);
+    }
   }
 }
 
-// An int array of `tuples` x `components` viewing `memory`, which belongs to
-// `owner`. VTK's arrays are not const: these are read-only by contract (field
-// data is only read downstream; nothing may write into them).
-vtkSmartPointer<vtkIntArray> viewingArray(const char* name, const void* memory, vtkIdType tuples,
-                                          int components,
-                                          std::shared_ptr<const Triangulation> owner) {
-  static_assert(sizeof(int) == sizeof(dem::ParticleIndex));
-  auto array = vtkSmartPointer<vtkIntArray>::New();
+}  // namespace
+
+vtkSmartPointer<vtkDataArray> viewingArray(int type, const char* name, const void* memory,
+                                           vtkIdType tuples, int components,
+                                           std::shared_ptr<const void> owner,
+                                           const std::type_info& ownerType) {
+  vtkSmartPointer<vtkDataArray> array;
+  array.TakeReference(vtkDataArray::CreateDataArray(type));
   array->SetName(name);
   array->SetNumberOfComponents(components);
-  array->SetArray(static_cast<int*>(const_cast<void*>(memory)), tuples * components, 0);
+  if (memory == nullptr || tuples == 0) {
+    return array;  // nothing to view
+  }
+  ViewedMemory& registry = viewed();
+  const std::scoped_lock lock(registry.mutex);
+  auto [entry, added] = registry.of.try_emplace(memory);
+  ViewedMemory::Views& views = entry->second;
+  const bool sameOwner = !views.owner.owner_before(owner) && !owner.owner_before(views.owner) &&
+                         views.ownerType != nullptr && *views.ownerType == ownerType;
+  if (!added && !sameOwner) {
+    // Memory another owner's arrays still view: taking it over would
+    // release that owner while they do. A copy is safe.
+    array->SetNumberOfTuples(tuples);
+    std::memcpy(array->GetVoidPointer(0), memory,
+                static_cast<std::size_t>(tuples * components * array->GetDataTypeSize()));
+    return array;
+  }
+  array->SetVoidArray(const_cast<void*>(memory), tuples * components, 0);
   array->SetArrayFreeFunction(releaseViewedMemory);
   // Registered once the array is made: it releases the memory once.
-  ViewedTriangulations& registry = viewed();
-  const std::scoped_lock lock(registry.mutex);
-  ViewedTriangulations::Views& views = registry.of[memory];
-  views.owner = std::move(owner);
+  if (added) {
+    views.owner = std::move(owner);
+    views.ownerType = &ownerType;
+  }
   ++views.buffers;
   return array;
 }
+
+namespace {
 
 vtkDataArray* cellArray(vtkPolyData* input, const char* name) {
   return input->GetCellData() != nullptr ? input->GetCellData()->GetArray(name) : nullptr;
@@ -152,6 +181,42 @@ vtkSmartPointer<vtkPoints> toPoints(const std::vector<Vec3>& points) {
 }
 
 }  // namespace
+
+StageLog::StageLog()
+    : m_enabled(std::getenv("CRACKVIS_VTK_TIMINGS") != nullptr),
+      m_start(std::chrono::steady_clock::now()),
+      m_last(m_start) {}
+
+void StageLog::mark(const char* stage) {
+  const auto now = std::chrono::steady_clock::now();
+  if (m_enabled) {
+    m_stages += fmt::format(" {}_ms={:.1f}", stage,
+                            std::chrono::duration<double, std::milli>(now - m_last).count());
+  }
+  m_last = now;
+}
+
+void StageLog::report(const char* what, double time) const {
+  if (m_enabled) {
+    const auto sinceEpoch = [](std::chrono::steady_clock::time_point t) {
+      return std::chrono::duration<double, std::milli>(t.time_since_epoch()).count();
+    };
+    const double total = std::chrono::duration<double, std::milli>(m_last - m_start).count();
+    // start and end on the steady clock (CLOCK_MONOTONIC, as Python's
+    // time.perf_counter): the time between updates' stages shows too.
+    // The MPI rank as Open MPI or MPICH's launcher names it; "-" without one.
+    const char* rank = std::getenv("OMPI_COMM_WORLD_RANK");
+    rank = rank != nullptr ? rank : std::getenv("PMI_RANK");
+    fmt::print(stderr,
+               "crackvis-vtk-timings pid={} rank={} {} time={}{} total_ms={:.1f} start={:.1f} "
+               "end={:.1f}\n",
+               ::getpid(), rank != nullptr ? rank : "-", what, time, m_stages, total,
+               sinceEpoch(m_start), sinceEpoch(m_last));
+  }
+}
+
+CrackFilterState::CrackFilterState() = default;
+CrackFilterState::~CrackFilterState() = default;
 
 bool ArrayStamp::matches(vtkObject* object) const {
   return object != nullptr && object == m_object && object->GetMTime() == m_time;
@@ -302,6 +367,7 @@ bool CrackFilterState::readLattice(vtkPolyData* input, double radiusDefault, std
     m_bonds = std::move(bonds);
     m_dimension = check.dimension;
     m_extractor.reset();
+    m_normals.reset();
     m_graph = std::make_unique<BondGraph>(static_cast<std::size_t>(n), m_bonds);
   }
   m_linesStamp.set(lines);
@@ -317,6 +383,7 @@ void CrackFilterState::readReference(vtkPolyData* input, vtkIdType n) {
   }
   m_referenceStamp.set(nullptr);
   m_reference.clear();
+  m_normals.reset();  // found in the old reference
   if (reference == nullptr || reference->GetNumberOfComponents() != 3 ||
       reference->GetNumberOfTuples() != n) {
     return;
@@ -332,6 +399,7 @@ void CrackFilterState::readReference(vtkPolyData* input, vtkIdType n) {
 
 void addTriangulationArrays(std::shared_ptr<const Triangulation> triangulation,
                             vtkFieldData* field) {
+  static_assert(sizeof(int) == sizeof(dem::ParticleIndex));
   static_assert(sizeof(triangulation->cells[0]) == 4 * sizeof(int) &&
                 sizeof(triangulation->edges[0]) == 2 * sizeof(int));
   if (triangulation == nullptr || triangulation->cells.empty()) {
@@ -339,11 +407,11 @@ void addTriangulationArrays(std::shared_ptr<const Triangulation> triangulation,
   }
   const auto cells = static_cast<vtkIdType>(triangulation->cells.size());
   const auto edges = static_cast<vtkIdType>(triangulation->edges.size());
-  field->AddArray(
-      viewingArray(kTriangulationCellsArray, triangulation->cells.data(), cells, 4, triangulation));
+  field->AddArray(viewingArray(VTK_INT, kTriangulationCellsArray, triangulation->cells.data(),
+                               cells, 4, triangulation));
   if (edges > 0) {
-    field->AddArray(viewingArray(kTriangulationEdgesArray, triangulation->edges.data(), edges, 2,
-                                 triangulation));
+    field->AddArray(viewingArray(VTK_INT, kTriangulationEdgesArray, triangulation->edges.data(),
+                                 edges, 2, triangulation));
   } else {
     // Cells without edges cannot be; an empty array keeps the pair whole.
     auto none = vtkSmartPointer<vtkIntArray>::New();
@@ -362,13 +430,14 @@ std::shared_ptr<const Triangulation> viewedTriangulation(vtkDataArray* cells, vt
       cellInts->GetNumberOfComponents() != 4 || edgeInts->GetNumberOfComponents() != 2) {
     return nullptr;
   }
-  ViewedTriangulations& registry = viewed();
+  ViewedMemory& registry = viewed();
   const std::scoped_lock lock(registry.mutex);
   const auto found = registry.of.find(cellInts->GetPointer(0));
-  if (found == registry.of.end()) {
+  if (found == registry.of.end() || found->second.ownerType == nullptr ||
+      *found->second.ownerType != typeid(const Triangulation)) {
     return nullptr;
   }
-  const std::shared_ptr<const Triangulation>& triangulation = found->second.owner;
+  const auto triangulation = std::static_pointer_cast<const Triangulation>(found->second.owner);
   const bool same =
       static_cast<const void*>(cellInts->GetPointer(0)) == triangulation->cells.data() &&
       cellInts->GetNumberOfTuples() == static_cast<vtkIdType>(triangulation->cells.size()) &&
@@ -501,6 +570,7 @@ void CrackFilterState::toWholeSet(CrackMesh& mesh) const {
 
 bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptions& requested,
                            double radiusDefault, CrackMesh& mesh, std::string& error) {
+  m_stages = StageLog{};
   if (input == nullptr) {
     error = "no input";
     return false;
@@ -514,6 +584,7 @@ bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptio
   if (!readLattice(input, radiusDefault, error)) {
     return false;
   }
+  m_stages.mark("lattice");
   ExtractOptions options = requested;
   const bool piece = readPiece(input, options);
   if (m_extractor == nullptr || method != m_method || options != m_options) {
@@ -521,6 +592,7 @@ bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptio
     m_options = options;
     m_extractor = makeExtractor(method, *m_graph, m_dimension, options);
   }
+  m_stages.mark("piece");
   // The reference configuration comes as point data (the crackvis-dem
   // reader gives the first step's positions): with it, local Voronoi faces
   // are material surfaces and a triangulation is made in the reference, as
@@ -531,17 +603,35 @@ bool CrackFilterState::run(vtkPolyData* input, Method method, const ExtractOptio
     error = status.message();
     return false;
   }
-  // Opening and slip against the reference, as `crackvis report` measures
-  // them; a piece measures with its ghost layer, before it keeps its own.
+  m_stages.mark("extract");
+  // Opening and slip against the reference, as `crackvis report` and the
+  // render server measure them; a piece measures with its ghost layer,
+  // before it keeps its own. The normals are kept across steps, as the
+  // render server keeps them: a step finds those of its new breaks (found
+  // anew every step, they were most of a step's update at 10^6 particles).
+  // The opening arrays need no components.
   if (!m_reference.empty()) {
+    if (m_normals == nullptr) {
+      m_normals = std::make_unique<analysis::BondNormals>(m_dimension);
+    }
+    m_normals->update(m_bonds, m_state, m_reference);
     analysis::appendOpeningArrays(
-        mesh,
-        analysis::measureOpening(mesh, findComponents(mesh), m_bonds, m_reference, m_positions));
+        mesh, analysis::measureOpening(mesh, CrackComponents{}, m_bonds, m_reference, m_positions,
+                                       {}, m_normals.get()));
   }
+  m_stages.mark("opening");
   if (piece) {
     toWholeSet(mesh);
   }
+  m_stages.mark("whole_set");
   return true;
+}
+
+void CrackFilterState::reportStages(vtkPolyData* input, const char* what) {
+  m_stages.mark("output");
+  vtkInformation* info = input != nullptr ? input->GetInformation() : nullptr;
+  const bool timed = info != nullptr && info->Has(vtkDataObject::DATA_TIME_STEP()) != 0;
+  m_stages.report(what, timed ? info->Get(vtkDataObject::DATA_TIME_STEP()) : 0.0);
 }
 
 void toPolyData(const CrackMesh& mesh, vtkPolyData* output) {

@@ -4,8 +4,10 @@
 #ifndef crackvis_crack_filter_state_h
 #define crackvis_crack_filter_state_h
 
+#include <chrono>
 #include <memory>
 #include <string>
+#include <typeinfo>
 #include <utility>
 #include <vector>
 
@@ -15,6 +17,10 @@
 
 #include "crackvis_vtk_conversion.h"
 #include <crackvis/cracks/extractor.hpp>
+
+namespace crackvis::analysis {
+class BondNormals;
+}
 
 class vtkCellArray;
 class vtkFieldData;
@@ -38,6 +44,24 @@ class ArrayStamp {
   vtkMTimeType m_time = 0;
 };
 
+// A VTK array of `type` (VTK_DOUBLE, VTK_INT, ...) viewing `tuples` x
+// `components` values at `memory`, which `owner` keeps alive, instead of a
+// copy: VTK releases `owner` when the last array using the memory lets it go
+// (its deleter may then recycle the memory). Read-only by contract: nothing
+// downstream may write into the values. Empty (no memory viewed) for no
+// tuples.
+vtkSmartPointer<vtkDataArray> viewingArray(int type, const char* name, const void* memory,
+                                           vtkIdType tuples, int components,
+                                           std::shared_ptr<const void> owner,
+                                           const std::type_info& ownerType);
+template <typename Owner>
+vtkSmartPointer<vtkDataArray> viewingArray(int type, const char* name, const void* memory,
+                                           vtkIdType tuples, int components,
+                                           std::shared_ptr<Owner> owner) {
+  return viewingArray(type, name, memory, tuples, components,
+                      std::shared_ptr<const void>(std::move(owner)), typeid(Owner));
+}
+
 // A piece's triangulation as its two field arrays (kTriangulationCellsArray,
 // kTriangulationEdgesArray). The arrays view the triangulation's memory
 // rather than copy it, and keep it alive while they do; a filter in the same
@@ -53,12 +77,40 @@ void addTriangulationArrays(std::shared_ptr<const Triangulation> triangulation,
 // values must then be copied).
 std::shared_ptr<const Triangulation> viewedTriangulation(vtkDataArray* cells, vtkDataArray* edges);
 
+// Where one update's time went, stage by stage, for the plugin's benchmarks
+// under MPI (tools/bench/mpi-ranks.sh): rank 0's clock around an update says
+// nothing of the other ranks' parts. With CRACKVIS_VTK_TIMINGS set in the
+// environment, report() prints one line on standard error, tagged with the
+// process id; otherwise marks cost a clock read and nothing is printed.
+class StageLog {
+ public:
+  StageLog();
+  // The time since the last mark (or since construction) goes to `stage`.
+  void mark(const char* stage);
+  // `time`: the step's time value, as the pipeline asked for it.
+  void report(const char* what, double time) const;
+
+ private:
+  bool m_enabled = false;
+  std::chrono::steady_clock::time_point m_start;
+  std::chrono::steady_clock::time_point m_last;
+  std::string m_stages;
+};
+
 class CrackFilterState {
  public:
+  CrackFilterState();
+  ~CrackFilterState();  // where BondNormals is complete
+  CrackFilterState(const CrackFilterState&) = delete;
+  CrackFilterState& operator=(const CrackFilterState&) = delete;
+
   // Extracts one step from `input`. On bad input returns false and says why
   // in `error` (the filter reports it with vtkErrorMacro).
   bool run(vtkPolyData* input, Method method, const ExtractOptions& options, double radiusDefault,
            CrackMesh& mesh, std::string& error);
+  // Ends the last run's stages with the filter's output (made since run
+  // returned) and reports them (StageLog) as `what`, at the input's time.
+  void reportStages(vtkPolyData* input, const char* what);
 
  private:
   bool readLattice(vtkPolyData* input, double radiusDefault, std::string& error);
@@ -99,9 +151,13 @@ class CrackFilterState {
   std::vector<std::int32_t> m_intactComponents;
   std::unique_ptr<BondGraph> m_graph;
   std::unique_ptr<CrackExtractor> m_extractor;
+  // The broken bonds' normals for the opening arrays, kept across steps
+  // while the bonds and the reference stay the same.
+  std::unique_ptr<analysis::BondNormals> m_normals;
   Method m_method = Method::kCellCut;
   ExtractOptions m_options;
   int m_dimension = 3;
+  StageLog m_stages;
 };
 
 }  // namespace crackvis::cracks::vtkadapter

@@ -35,6 +35,7 @@ int vtkCellAttributeCrackFilter::RequestData(vtkInformation*, vtkInformationVect
     return 0;
   }
   crackvis::cracks::vtkadapter::toUnstructuredGrid(mesh, output);
+  this->State->reportStages(input, "cell-attribute");
   return 1;
 }
 

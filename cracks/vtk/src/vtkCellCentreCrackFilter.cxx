@@ -34,6 +34,7 @@ int vtkCellCentreCrackFilter::RequestData(vtkInformation*, vtkInformationVector*
     return 0;
   }
   crackvis::cracks::vtkadapter::toPolyData(mesh, output);
+  this->State->reportStages(input, "cell-centre");
   return 1;
 }
 

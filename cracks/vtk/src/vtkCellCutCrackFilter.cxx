@@ -33,6 +33,7 @@ int vtkCellCutCrackFilter::RequestData(vtkInformation*, vtkInformationVector** i
     return 0;
   }
   crackvis::cracks::vtkadapter::toPolyData(mesh, output);
+  this->State->reportStages(input, "cell-cut");
   return 1;
 }
 

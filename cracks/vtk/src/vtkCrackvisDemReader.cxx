@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <optional>
 
 #include <vtkAbstractArray.h>
@@ -43,6 +45,32 @@ struct StaticArrays {
   vtkSmartPointer<vtkCellArray> lines;                    // the bonds
   std::vector<vtkSmartPointer<vtkAbstractArray>> points;  // radius, ids, groups, extras
   std::vector<vtkSmartPointer<vtkAbstractArray>> cells;   // break steps, strength, flags, extras
+};
+
+// The arrays of a step whose output VTK has let go, kept for the next read
+// (DemFileReader::readStep's `recycled`): reading into fresh memory and
+// copying it into fresh VTK arrays made a third of a step's update at 10^7
+// particles the kernel's zeroing of new pages. One step's worth is kept, the
+// larger one: a piece cut from a whole read returns piece-sized arrays,
+// while the next whole read needs whole-sized ones.
+class StepSpares {
+ public:
+  void put(dem::StepState&& state) {
+    const std::scoped_lock lock(m_mutex);
+    if (!m_spare || state.positions.capacity() >= m_spare->positions.capacity()) {
+      m_spare = std::move(state);
+    }
+  }
+  dem::StepState take() {
+    const std::scoped_lock lock(m_mutex);
+    dem::StepState out = m_spare ? std::move(*m_spare) : dem::StepState{};
+    m_spare.reset();
+    return out;
+  }
+
+ private:
+  std::mutex m_mutex;
+  std::optional<dem::StepState> m_spare;
 };
 
 // The open file and its time-independent part, kept while the file name
@@ -95,6 +123,8 @@ struct DemReaderCache {
   // A live file's writer records the step of each bond it breaks as it
   // commits the step: the break steps read before new steps are stale.
   bool breakStepsStale = false;
+  // Shared with the step arrays VTK still holds, which return to it.
+  std::shared_ptr<StepSpares> spares = std::make_shared<StepSpares>();
 };
 
 namespace {
@@ -126,15 +156,6 @@ void addArray(vtkFieldData* data, const char* name, const std::vector<Value>& va
               int components = 1) {
   if (auto array = makeArray<VtkArray>(name, values, components)) {
     data->AddArray(array);
-  }
-}
-
-void addExtras(const std::vector<dem::ExtraArray>& extras, vtkPolyData* output) {
-  for (const dem::ExtraArray& extra : extras) {
-    vtkFieldData* data = extra.owner == dem::ExtraOwner::kParticles
-                             ? static_cast<vtkFieldData*>(output->GetPointData())
-                             : static_cast<vtkFieldData*>(output->GetCellData());
-    addArray<vtkDoubleArray>(data, extra.name.c_str(), extra.values, extra.components);
   }
 }
 
@@ -240,11 +261,38 @@ Status loadLattice(DemReaderCache& cache) {
   return Status::ok();
 }
 
-// One step's output: the step's own arrays, made now, and the lattice's,
-// added by reference.
-void fill(const StaticArrays& fixed, int step, const dem::StepState& state, vtkPolyData* output) {
+// The step's per-step extra arrays, viewing `state`'s memory.
+void viewExtras(const std::shared_ptr<dem::StepState>& state, vtkPolyData* output) {
+  for (const dem::ExtraArray& extra : state->extras) {
+    if (extra.values.empty() || extra.components <= 0) {
+      continue;
+    }
+    vtkFieldData* data = extra.owner == dem::ExtraOwner::kParticles
+                             ? static_cast<vtkFieldData*>(output->GetPointData())
+                             : static_cast<vtkFieldData*>(output->GetCellData());
+    data->AddArray(viewingArray(VTK_DOUBLE, extra.name.c_str(), extra.values.data(),
+                                static_cast<vtkIdType>(extra.rows()), extra.components, state));
+  }
+}
+
+// A step's output: the time-independent arrays by reference, the step's own
+// arrays (positions, velocities, bond states and forces, extras) viewing its
+// memory (no copy), which goes back to `spares` once VTK has let go of every
+// array viewing it.
+void fill(const StaticArrays& fixed, int step, dem::StepState&& read,
+          const std::shared_ptr<StepSpares>& spares, vtkPolyData* output) {
+  static_assert(sizeof(dem::Vec3) == 3 * sizeof(double));
+  const std::weak_ptr<StepSpares> back = spares;
+  const std::shared_ptr<dem::StepState> state(new dem::StepState(std::move(read)),
+                                              [back](dem::StepState* done) {
+                                                if (const auto keep = back.lock()) {
+                                                  keep->put(std::move(*done));
+                                                }
+                                                delete done;
+                                              });
   vtkNew<vtkPoints> points;
-  points->SetData(toArray(state.positions));
+  points->SetData(viewingArray(VTK_DOUBLE, "Points", state->positions.data(),
+                               static_cast<vtkIdType>(state->positions.size()), 3, state));
   output->SetPoints(points);
   output->SetLines(fixed.lines);
   vtkPointData* pointData = output->GetPointData();
@@ -252,20 +300,25 @@ void fill(const StaticArrays& fixed, int step, const dem::StepState& state, vtkP
   for (const auto& array : fixed.points) {
     pointData->AddArray(array);
   }
-  std::vector<float> velocities;
-  velocities.reserve(3 * state.velocities.size());
-  for (const auto& v : state.velocities) {
-    velocities.insert(velocities.end(), v.begin(), v.end());
+  static_assert(sizeof(state->velocities[0]) == 3 * sizeof(float));
+  if (!state->velocities.empty()) {
+    pointData->AddArray(viewingArray(VTK_FLOAT, "velocity", state->velocities.data(),
+                                     static_cast<vtkIdType>(state->velocities.size()), 3, state));
   }
-  addArray<vtkFloatArray>(pointData, "velocity", velocities, 3);
   vtkCellData* cells = output->GetCellData();
-  addArray<vtkUnsignedCharArray>(cells, "bond_state", state.bondState);
-  addArray<vtkFloatArray>(cells, "bond_force", state.bondForce);
+  if (!state->bondState.empty()) {
+    cells->AddArray(viewingArray(VTK_UNSIGNED_CHAR, "bond_state", state->bondState.data(),
+                                 static_cast<vtkIdType>(state->bondState.size()), 1, state));
+  }
+  if (!state->bondForce.empty()) {
+    cells->AddArray(viewingArray(VTK_FLOAT, "bond_force", state->bondForce.data(),
+                                 static_cast<vtkIdType>(state->bondForce.size()), 1, state));
+  }
   for (const auto& array : fixed.cells) {
     cells->AddArray(array);
   }
-  addExtras(state.extras, output);
-  addFieldData(step, state, output);
+  viewExtras(state, output);
+  addFieldData(step, *state, output);
 }
 
 // The rows of `values` (rows of `width` values) at `rows`; empty stays empty.
@@ -564,12 +617,15 @@ Status refreshBreakSteps(DemReaderCache& cache, bool pieceCurrent) {
   return Status::ok();
 }
 
-dem::StepState pieceState(dem::StepState state, const Piece& part) {
-  state.positions = pick(state.positions, part.particles);
-  state.velocities = pick(state.velocities, part.particles);
-  state.bondState = pick(state.bondState, part.bonds);
-  state.bondForce = pick(state.bondForce, part.bonds);
-  state.extras = pickExtras(state.extras, part);
+dem::StepState pieceState(const dem::StepState& whole, const Piece& part) {
+  dem::StepState state;
+  state.time = whole.time;
+  state.scalars = whole.scalars;
+  state.positions = pick(whole.positions, part.particles);
+  state.velocities = pick(whole.velocities, part.particles);
+  state.bondState = pick(whole.bondState, part.bonds);
+  state.bondForce = pick(whole.bondForce, part.bonds);
+  state.extras = pickExtras(whole.extras, part);
   return state;
 }
 
@@ -701,6 +757,7 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
     return 1;  // no such piece: empty
   }
   namespace adapter = crackvis::cracks::vtkadapter;
+  adapter::StageLog stages;
   const int step =
       out->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
           ? adapter::stepAt(cache.times,
@@ -729,28 +786,34 @@ int vtkCrackvisDemReader::RequestData(vtkInformation*, vtkInformationVector**,
       return 0;
     }
   }
+  stages.mark("prepare");
   // A piece read through the index reads only its rows of the step.
   auto state = pieces > 1 && cache.indexed
-                   ? cache.reader->readStepRows(step, cache.part.particles, cache.part.bonds)
-                   : cache.reader->readStep(step);
+                   ? cache.reader->readStepRows(step, cache.part.particles, cache.part.bonds,
+                                                cache.spares->take())
+                   : cache.reader->readStep(step, cache.spares->take());
   if (!state) {
     vtkErrorMacro(<< state.status().message());
     return 0;
   }
+  stages.mark("read");
   const double time = state->time;
   if (pieces == 1) {
-    adapter::fill(*cache.wholeArrays, step, *state, output);
+    adapter::fill(*cache.wholeArrays, step, std::move(*state), cache.spares, output);
   } else {
     if (cache.indexed) {
       adapter::addIndexedComponents(cache, step, output);
-      adapter::fill(*cache.pieceArrays, step, *state, output);
+      adapter::fill(*cache.pieceArrays, step, std::move(*state), cache.spares, output);
     } else {
       adapter::addComponents(cache, *state, output);
-      adapter::fill(*cache.pieceArrays, step, adapter::pieceState(std::move(*state), cache.part),
+      adapter::fill(*cache.pieceArrays, step, adapter::pieceState(*state, cache.part), cache.spares,
                     output);
+      cache.spares->put(std::move(*state));  // the whole read's arrays, for the next
     }
     adapter::sharePieceData(cache.pieceData, output);
   }
   output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), time);
+  stages.mark("fill");
+  stages.report(pieces > 1 ? "reader-piece" : "reader", time);
   return 1;
 }

@@ -36,6 +36,7 @@ int vtkLocalVoronoiCrackFilter::RequestData(vtkInformation*, vtkInformationVecto
     return 0;
   }
   crackvis::cracks::vtkadapter::toPolyData(mesh, output);
+  this->State->reportStages(input, "local-voronoi");
   return 1;
 }
 
