@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -31,6 +34,7 @@
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
+#include "crack_filter_state.h"
 #include "crack_fixtures.hpp"
 #include "support/paced_writer.hpp"
 #include "support/sample_files.hpp"
@@ -629,4 +633,44 @@ TEST_CASE("a crack filter stepping through a run measures the openings a fresh o
   const double middle = sample.steps[sample.steps.size() / 2].time;
   const std::vector<double> back = openingsAt(stepping.Get(), middle);
   CHECK(sameOpenings(back, freshAt(middle), 0.0));
+}
+
+// The stage log the plugin's benchmarks read per rank: silent unless
+// CRACKVIS_VTK_TIMINGS is set; then one line with each stage in order, the
+// total, and start <= end on the monotonic clock.
+TEST_CASE("a stage log prints its stages only when CRACKVIS_VTK_TIMINGS is set", "[cracks][vtk]") {
+  const auto printed = [](bool enabled) {
+    if (enabled) {
+      ::setenv("CRACKVIS_VTK_TIMINGS", "1", 1);
+    } else {
+      ::unsetenv("CRACKVIS_VTK_TIMINGS");
+    }
+    vtkadapter::StageLog log;
+    log.mark("read");
+    log.mark("fill");
+    std::FILE* out = std::tmpfile();
+    REQUIRE(out != nullptr);
+    log.report("reader", 1.5, out);
+    std::rewind(out);
+    std::string text;
+    for (int c = std::fgetc(out); c != EOF; c = std::fgetc(out)) {
+      text.push_back(static_cast<char>(c));
+    }
+    std::fclose(out);
+    ::unsetenv("CRACKVIS_VTK_TIMINGS");
+    return text;
+  };
+  CHECK(printed(false).empty());
+  const std::string line = printed(true);
+  CHECK(line.rfind("crackvis-vtk-timings pid=", 0) == 0);
+  CHECK_THAT(line, Catch::Contains(" reader time=1.5 read_ms="));
+  CHECK(line.find("read_ms=") < line.find("fill_ms="));
+  CHECK(line.find("fill_ms=") < line.find("total_ms="));
+  const auto number = [&](const char* key) {
+    return std::stod(line.substr(line.find(key) + std::strlen(key)));
+  };
+  CHECK(number(" start=") <= number(" end="));
+  CHECK(number(" rss_mib=") > 0.0);
+  CHECK(number(" peak_mib=") >= number(" rss_mib="));
+  CHECK(line.back() == '\n');
 }

@@ -239,4 +239,15 @@ for ranks in counts:
     if inside:
         print(f"    rank 0's update clock: {med(inside):.1f} in the plugin (first reader start to "
               f"last filter end), {med(outside):.1f} outside it (ParaView)")
+    # Where each rank's peak memory was reached: its peak after the first update's read,
+    # after its first extraction, and at its last line (round 1).
+    peaks = {}
+    for line in open(f"{out}/run-{ranks}-1.log"):
+        if line.startswith("crackvis-vtk-timings ") and "peak_mib=" in line:
+            f = dict(x.split("=", 1) for x in line.split()[1:] if "=" in x)
+            peaks.setdefault((f.get("rank", "-"), int(f["pid"])), []).append(float(f["peak_mib"]))
+    for (rank, _), values in sorted(peaks.items()):
+        if len(values) >= 2:
+            print(f"    rank {rank} peak (MiB, round 1): {values[0]:.0f} after the first read, "
+                  f"{values[1]:.0f} after the first extraction, {values[-1]:.0f} at the end")
 EOF

@@ -36,6 +36,15 @@ result = {"ranks": servermanager.ActiveConnection.GetNumberOfDataPartitions()}
 def ms_since(start):
     return 1000.0 * (time.perf_counter() - start)
 
+
+def resident_mib():
+    """This process's (rank 0's) resident memory, MiB: what each part of the run adds."""
+    with open("/proc/self/status") as status:
+        for line in status:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    return -1.0
+
 if path == "baseline":
     start = time.perf_counter()
     Render(view)
@@ -52,18 +61,22 @@ else:
     # The first update before Show: Show updates the pipeline at the view's
     # time when it has no data yet, which would do the piece's preparation
     # (open, find and read the piece, triangulate) outside the timer.
+    result["rss_mib"] = {"before": resident_mib()}
     start = time.perf_counter()
     crack.UpdatePipeline(times[steps[0]])
     result["first_update_ms"] = ms_since(start)
+    result["rss_mib"]["first_update"] = resident_mib()
     view.ViewTime = times[steps[0]]
     start = time.perf_counter()
     Show(crack, view)
     result["show_ms"] = ms_since(start)
+    result["rss_mib"]["show"] = resident_mib()
     ResetCamera(view)
     GetActiveCamera().Azimuth(30)
     start = time.perf_counter()
     Render(view)
     result["first_frame_ms"] = ms_since(start)
+    result["rss_mib"]["first_frame"] = resident_mib()
     result["cells"] = crack.GetDataInformation().GetNumberOfCells()
     result["steps"] = []
     for step in steps[1:]:
@@ -76,6 +89,6 @@ else:
         start = time.perf_counter()
         Render(view)
         result["steps"].append({"step": step, "update_ms": update, "frame_ms": ms_since(start),
-                                "update_span": update_span})
+                                "update_span": update_span, "rss_mib": resident_mib()})
 with open(out, "w") as handle:
     json.dump(result, handle)

@@ -196,8 +196,35 @@ void StageLog::mark(const char* stage) {
   m_last = now;
 }
 
-void StageLog::report(const char* what, double time) const {
+namespace {
+
+// The process's resident and peak resident memory in MiB (/proc/self/status
+// VmRSS, VmHWM); -1 where not known. Read for each stage line, so that the
+// benchmarks see which update sets a rank's peak.
+std::pair<double, double> residentMiB() {
+  std::pair<double, double> out{-1.0, -1.0};
+  std::FILE* status = std::fopen("/proc/self/status", "r");
+  if (status == nullptr) {
+    return out;
+  }
+  char line[256];
+  while (std::fgets(line, sizeof line, status) != nullptr) {
+    long kib = 0;
+    if (std::sscanf(line, "VmRSS: %ld kB", &kib) == 1) {
+      out.first = static_cast<double>(kib) / 1024.0;
+    } else if (std::sscanf(line, "VmHWM: %ld kB", &kib) == 1) {
+      out.second = static_cast<double>(kib) / 1024.0;
+    }
+  }
+  std::fclose(status);
+  return out;
+}
+
+}  // namespace
+
+void StageLog::report(const char* what, double time, std::FILE* out) const {
   if (m_enabled) {
+    const auto [rss, peak] = residentMiB();
     const auto sinceEpoch = [](std::chrono::steady_clock::time_point t) {
       return std::chrono::duration<double, std::milli>(t.time_since_epoch()).count();
     };
@@ -207,11 +234,11 @@ void StageLog::report(const char* what, double time) const {
     // The MPI rank as Open MPI or MPICH's launcher names it; "-" without one.
     const char* rank = std::getenv("OMPI_COMM_WORLD_RANK");
     rank = rank != nullptr ? rank : std::getenv("PMI_RANK");
-    fmt::print(stderr,
+    fmt::print(out,
                "crackvis-vtk-timings pid={} rank={} {} time={}{} total_ms={:.1f} start={:.1f} "
-               "end={:.1f}\n",
+               "end={:.1f} rss_mib={:.0f} peak_mib={:.0f}\n",
                ::getpid(), rank != nullptr ? rank : "-", what, time, m_stages, total,
-               sinceEpoch(m_start), sinceEpoch(m_last));
+               sinceEpoch(m_start), sinceEpoch(m_last), rss, peak);
   }
 }
 

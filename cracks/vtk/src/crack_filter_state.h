@@ -5,6 +5,7 @@
 #define crackvis_crack_filter_state_h
 
 #include <chrono>
+#include <cstdio>
 #include <memory>
 #include <string>
 #include <typeinfo>
@@ -81,14 +82,17 @@ std::shared_ptr<const Triangulation> viewedTriangulation(vtkDataArray* cells, vt
 // under MPI (tools/bench/mpi-ranks.sh): rank 0's clock around an update says
 // nothing of the other ranks' parts. With CRACKVIS_VTK_TIMINGS set in the
 // environment, report() prints one line on standard error, tagged with the
-// process id; otherwise marks cost a clock read and nothing is printed.
+// process id, its MPI rank, the stages' start and end on the monotonic
+// clock, and the process's resident and peak memory after them; otherwise
+// marks cost a clock read and nothing is printed.
 class StageLog {
  public:
   StageLog();
   // The time since the last mark (or since construction) goes to `stage`.
   void mark(const char* stage);
-  // `time`: the step's time value, as the pipeline asked for it.
-  void report(const char* what, double time) const;
+  // `time`: the step's time value, as the pipeline asked for it; `out`:
+  // where the line goes (standard error but in tests).
+  void report(const char* what, double time, std::FILE* out = stderr) const;
 
  private:
   bool m_enabled = false;
