@@ -49,8 +49,9 @@ struct StaticArrays {
 
 // The arrays of a step whose output VTK has let go, kept for the next read
 // (DemFileReader::readStep's `recycled`): reading into fresh memory and
-// copying it into fresh VTK arrays made a third of a step's update at 10^7
-// particles the kernel's zeroing of new pages. One step's worth is kept, the
+// copying it into fresh VTK arrays put a third of a 10^7 rank's samples
+// over its later steps in the kernel's zeroing of new pages (most in the
+// first step after the first update). One step's worth is kept, the
 // larger one: a piece cut from a whole read returns piece-sized arrays,
 // while the next whole read needs whole-sized ones.
 class StepSpares {

@@ -151,8 +151,9 @@ class DemFileReader {
   // One whole step with its scalars and extra arrays: a few contiguous reads,
   // validated against N and M. `recycled`, a step read before, lends its
   // arrays' memory (their values are overwritten): a reader stepping through
-  // a run then takes no fresh pages from the kernel at every step, whose
-  // zeroing was a third of a step's update at 10^7 particles.
+  // a run then takes no fresh pages from the kernel at every step (their
+  // zeroing took a third of a 10^7 ParaView rank's samples over its later
+  // steps).
   Result<StepState> readStep(int step, StepState recycled = {}) const;
   // Only the bond states of a step (for statistics over many steps).
   Result<std::vector<std::uint8_t>> readBondState(int step) const;
