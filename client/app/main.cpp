@@ -6,8 +6,10 @@
 #include <QTimer>
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include <crackvis/client_core/demo_script.hpp>
+#include <crackvis/client_ui/latency_run.hpp>
 #include <crackvis/client_ui/main_window.hpp>
 #include <crackvis/common/spelling.hpp>
 #include <crackvis/rpc/connection_advice.hpp>
@@ -68,6 +70,37 @@ QString misspelling(const QCommandLineParser& parser, const QList<QCommandLineOp
       .arg(given, nearest.empty()
                       ? QString()
                       : QStringLiteral(" (did you mean %1?)").arg(QString::fromStdString(nearest)));
+}
+
+// --measure-latency's numbers, or nothing and what is wrong with them.
+std::optional<crackvis::client::LatencyRunOptions> latencyRunOptions(const QString& size,
+                                                                     const QString& seconds,
+                                                                     const QString& stills,
+                                                                     QString& why) {
+  crackvis::client::LatencyRunOptions options;
+  const QStringList sides = size.split(QLatin1Char('x'));
+  bool wide = false;
+  bool high = false;
+  if (sides.size() == 2) {
+    options.view = QSize(sides[0].toInt(&wide), sides[1].toInt(&high));
+  }
+  if (!wide || !high || options.view.width() < 320 || options.view.height() < 240 ||
+      options.view.width() % 2 != 0 || options.view.height() % 2 != 0) {
+    why = QStringLiteral("--view-size %1: expected WxH, even, at least 320x240").arg(size);
+    return std::nullopt;
+  }
+  bool number = false;
+  options.seconds = seconds.toDouble(&number);
+  if (!number || !(options.seconds >= 0.5 && options.seconds <= 600.0)) {
+    why = QStringLiteral("--drag-seconds %1: expected 0.5 to 600 seconds").arg(seconds);
+    return std::nullopt;
+  }
+  options.stills = stills.toInt(&number);
+  if (!number || options.stills < 0 || options.stills > 1000) {
+    why = QStringLiteral("--still-moves %1: expected 0 to 1000").arg(stills);
+    return std::nullopt;
+  }
+  return options;
 }
 
 // The scripted session without a window (no display needed).
@@ -153,8 +186,27 @@ int main(int argc, char** argv) {
       QStringLiteral("no window: run the scripted demo session (rotate, step through the fracture, "
                      "the four methods) and write demo.mp4 and demo.png into this folder"),
       QStringLiteral("folder"));
-  const QList<QCommandLineOption> options{connect, ca,           cert,       key,       token,
-                                          file,    pipelineFile, screenshot, demoOption};
+  QCommandLineOption measureLatency(
+      QStringLiteral("measure-latency"),
+      QStringLiteral("time the window as a user drives it, then quit: the view sized to "
+                     "--view-size, a drag of rotate moves at 60 Hz for --drag-seconds, then "
+                     "--still-moves still camera moves; writes each event's latency from its send "
+                     "to the frame painted (p50, p95), frames per second, decode time and CPU per "
+                     "frame as JSON to this file (- for standard output), as the browser page's "
+                     "benchmark does (tools/bench/browser-vs-client.sh)"),
+      QStringLiteral("json"));
+  QCommandLineOption viewSize(QStringLiteral("view-size"),
+                              QStringLiteral("the view's size for --measure-latency"),
+                              QStringLiteral("WxH"), QStringLiteral("1280x720"));
+  QCommandLineOption dragSeconds(QStringLiteral("drag-seconds"),
+                                 QStringLiteral("the drag's length for --measure-latency"),
+                                 QStringLiteral("seconds"), QStringLiteral("5"));
+  QCommandLineOption stillMoves(QStringLiteral("still-moves"),
+                                QStringLiteral("still camera moves for --measure-latency"),
+                                QStringLiteral("count"), QStringLiteral("10"));
+  const QList<QCommandLineOption> options{
+      connect,        ca,       token,       file,       pipelineFile, screenshot, demoOption,
+      measureLatency, viewSize, dragSeconds, stillMoves, cert,         key};
   parser.addOptions(options);
   if (!parser.parse(QCoreApplication::arguments())) {
     return fail(misspelling(parser, options), kExitUsage);
@@ -186,15 +238,29 @@ int main(int argc, char** argv) {
     }
     return runHeadlessDemo(settings, parser.value(file), parser.value(demoOption), startView);
   }
-  // A screenshot run has no one to read the messages pane: what goes wrong
-  // is printed at once, and the program ends with status 1.
+  // A screenshot or latency run has no one to read the messages pane: what
+  // goes wrong is printed at once, and the program ends with status 1.
   const bool screenshotRun = parser.isSet(screenshot);
+  const bool latencyRun = parser.isSet(measureLatency);
+  crackvis::client::LatencyRunOptions latencyOptions;
+  if (latencyRun) {
+    QString why;
+    auto parsed = latencyRunOptions(parser.value(viewSize), parser.value(dragSeconds),
+                                    parser.value(stillMoves), why);
+    if (!parsed) {
+      return fail(why, kExitUsage);
+    }
+    latencyOptions = *parsed;
+    latencyOptions.jsonPath = parser.value(measureLatency);
+  }
   // --file, else the file a saved view (--pipeline) names.
   const QString fileToOpen =
       parser.isSet(file) ? parser.value(file) : QString::fromStdString(startView.file);
-  if (screenshotRun && (!parser.isSet(connect) || fileToOpen.isEmpty())) {
-    return fail(QStringLiteral("--window-screenshot needs --connect and --file (or a --pipeline "
-                               "view that names a file)"),
+  if ((screenshotRun || latencyRun) && (!parser.isSet(connect) || fileToOpen.isEmpty())) {
+    return fail(QStringLiteral("%1 needs --connect and --file (or a --pipeline view that names "
+                               "a file)")
+                    .arg(screenshotRun ? QStringLiteral("--window-screenshot")
+                                       : QStringLiteral("--measure-latency")),
                 kExitUsage);
   }
 
@@ -203,6 +269,23 @@ int main(int argc, char** argv) {
     window.pipelinePanel().setDescription(startView);
   }
   window.show();
+  crackvis::client::LatencyRun* timing = nullptr;
+  if (latencyRun) {
+    timing = new crackvis::client::LatencyRun(window, latencyOptions);
+    QObject::connect(timing, &crackvis::client::LatencyRun::finished, &window,
+                     [](int code, const QString& why) {
+                       if (code != 0) {
+                         fail(why, code);
+                       }
+                       QApplication::exit(code);
+                     });
+    QObject::connect(&window.client(), &crackvis::client::RenderClient::eventFailed, timing,
+                     [timing](quint64, const QString& message) { timing->fail(message); });
+    QObject::connect(
+        &window.client(), &crackvis::client::RenderClient::connectionLost, timing,
+        [timing](const QString& why) { timing->fail(QStringLiteral("connection lost: ") + why); });
+    timing->start();
+  }
   if (parser.isSet(connect)) {
     // A saved view (--pipeline) opens as it was saved: its step (a step the
     // file lacks is the server's error, in the messages pane) and camera;
@@ -216,7 +299,7 @@ int main(int argc, char** argv) {
         opened = window.openFile(fileToOpen, -1);
       }
     }
-    if (!opened && screenshotRun) {
+    if (!opened && (screenshotRun || latencyRun)) {
       return fail(window.lastMessage(), kExitFailure);
     }
   }

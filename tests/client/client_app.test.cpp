@@ -2,9 +2,13 @@
 // do): without a display, with a misspelt option, and --window-screenshot
 // runs that cannot succeed, which print the reason at once and exit 1
 // instead of waiting out their 60 s. The services run in this process.
+#include <QByteArray>
+#include <QJsonDocument>
+#include <QJsonObject>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
@@ -99,4 +103,49 @@ TEST_CASE(
                                    "and --file (or a --pipeline view that names a file)"});
   }
   CHECK_FALSE(std::filesystem::exists(png));
+}
+
+TEST_CASE(
+    "crackvis-client --measure-latency drags the window's view and times each event to its paint",
+    "[client][integration]") {
+  auto services = startServices();
+  TempDir out;
+  const std::string json = out.file("latency.json");
+  auto args = connection(services.render->address());
+  args.insert(args.end(), {"--file", "cuboidA.h5", "--measure-latency", json, "--view-size",
+                           "640x480", "--drag-seconds", "1", "--still-moves", "3"});
+  const TimedRun run = screenshotRun(args);
+  INFO(run.result.err);
+  REQUIRE(run.result.exitCode == 0);
+  CHECK(clientLines(run.result.err).empty());
+  std::ifstream in(json);
+  std::stringstream text;
+  text << in.rdbuf();
+  const QJsonObject figures =
+      QJsonDocument::fromJson(QByteArray::fromStdString(text.str())).object();
+  INFO(text.str());
+  CHECK(figures["size"].toString() == "640x480");
+  CHECK(figures["platform"].toString() == "offscreen");
+  CHECK(figures["first_frame_ms"].toDouble() > 0.0);
+  // The drag's 60 moves: every one reached the server as an event and was
+  // reflected by a painted frame, the release's still request too.
+  const QJsonObject drag = figures["drag_event_to_paint_ms"].toObject();
+  CHECK(drag["n"].toInt() == 61);
+  CHECK(drag["p50"].toDouble() > 0.0);
+  CHECK(drag["p95"].toDouble() >= drag["p50"].toDouble());
+  const int frames = figures["drag_frames"].toInt();
+  CHECK(frames > 0);
+  CHECK(figures["decode_ms"].toObject()["n"].toInt() == frames);
+  CHECK(figures["drag_fps"].toDouble() > 0.0);
+  CHECK(figures["client_cpu_ms_per_frame"].toDouble() > 0.0);
+  CHECK(figures["bitrate_mbps"].toDouble() > 0.0);
+  // Each still move is one event, answered by one painted frame.
+  const QJsonObject still = figures["still_event_to_paint_ms"].toObject();
+  CHECK(still["n"].toInt() == 3);
+  CHECK(still["p50"].toDouble() > 0.0);
+  // The server's part of a frame's latency is inside the whole.
+  const QJsonObject server = figures["server_event_to_send_ms"].toObject();
+  CHECK(server["n"].toInt() > 0);
+  CHECK(server["p50"].toDouble() > 0.0);
+  CHECK(server["p50"].toDouble() < drag["p95"].toDouble());
 }

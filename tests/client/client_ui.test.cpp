@@ -9,13 +9,17 @@
 #include <QDoubleSpinBox>
 #include <QLineEdit>
 #include <QSignalSpy>
+#include <QTest>
+#include <chrono>
 #include <cmath>
+#include <thread>
 
 #include <catch2/catch.hpp>
 
 #include "client/client_process.hpp"
 #include <crackvis/client_ui/pipeline_panel.hpp>
 #include <crackvis/client_ui/step_plot.hpp>
+#include <crackvis/client_ui/viewport.hpp>
 
 using namespace crackvis;
 using namespace crackvis::testing;
@@ -216,6 +220,70 @@ TEST_CASE("crackvis-client without a display says what to run instead", "[client
   const auto help = runClient(kNoDisplay, {"--help"});
   CHECK(help.exitCode == 0);
   CHECK_THAT(help.out, Catch::Contains("--window-screenshot"));
+}
+
+TEST_CASE("the viewport times each event from its send to the first painted frame reflecting it",
+          "[client][ui]") {
+  application();
+  client::RenderClient connection;
+  client::Viewport view(connection);
+  view.resize(320, 240);
+  view.show();
+  std::vector<std::vector<double>> paints;
+  QObject::connect(&view, &client::Viewport::painted,
+                   [&](const std::vector<double>& latencies, const client::FrameInfo&) {
+                     paints.push_back(latencies);
+                   });
+  QImage picture(320, 240, QImage::Format_RGB888);
+  picture.fill(Qt::darkGray);
+  const auto sent = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  // Two frames shown before one paint: the events of the first are
+  // reflected first by the frame painted, so they are timed with it.
+  client::FrameInfo first;
+  first.eventsSentAt = {sent, sent + std::chrono::milliseconds(10)};
+  client::FrameInfo second;
+  second.eventsSentAt = {sent + std::chrono::milliseconds(20)};
+  view.showFrame(picture, first);
+  view.showFrame(picture, second);
+  REQUIRE(QTest::qWaitFor([&] { return !paints.empty(); }, 5000));
+  const auto elapsed =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - sent).count();
+  REQUIRE(paints.back().size() == 3);
+  CHECK(paints.back()[0] >= 30.0);
+  CHECK(paints.back()[0] <= elapsed);
+  CHECK(paints.back()[0] - paints.back()[1] == Approx(10.0).margin(0.01));
+  CHECK(paints.back()[0] - paints.back()[2] == Approx(20.0).margin(0.01));
+  CHECK(view.paintLatencyMs() == Approx(paints.back()[1]));
+  // A frame reflecting no new event is painted with none, and a repaint of
+  // it is no new frame.
+  const std::size_t before = paints.size();
+  view.showFrame(picture, client::FrameInfo{});
+  REQUIRE(QTest::qWaitFor([&] { return paints.size() > before; }, 5000));
+  CHECK(paints.back().empty());
+  view.repaint();
+  CHECK(paints.size() == before + 1);
+}
+
+TEST_CASE("crackvis-client --measure-latency says what it needs", "[client]") {
+  const auto noFile =
+      runClient(kOffscreen, {"--connect", "localhost:50052", "--measure-latency", "-"});
+  CHECK(noFile.exitCode == 2);
+  CHECK(
+      clientLines(noFile.err) ==
+      std::vector<std::string>{"crackvis-client: --measure-latency needs --connect and --file (or "
+                               "a --pipeline view that names a file)"});
+  const auto badSize = runClient(kOffscreen, {"--connect", "localhost:50052", "--file", "a.h5",
+                                              "--measure-latency", "-", "--view-size", "641x480"});
+  CHECK(badSize.exitCode == 2);
+  CHECK(clientLines(badSize.err) ==
+        std::vector<std::string>{
+            "crackvis-client: --view-size 641x480: expected WxH, even, at least 320x240"});
+  const auto badSeconds = runClient(kOffscreen, {"--connect", "localhost:50052", "--file", "a.h5",
+                                                 "--measure-latency", "-", "--drag-seconds", "x"});
+  CHECK(badSeconds.exitCode == 2);
+  CHECK(clientLines(badSeconds.err) ==
+        std::vector<std::string>{"crackvis-client: --drag-seconds x: expected 0.5 to 600 seconds"});
 }
 
 TEST_CASE("crackvis-client names a misspelt option and the nearest one", "[client]") {

@@ -142,6 +142,7 @@ void RenderClient::Impl::handle(const v1::ServerMessage& message, std::uint64_t 
     unit.info.reduction = frame.reduction();
     unit.info.renderMs = frame.timings().render_ms();
     unit.info.encodeMs = frame.timings().encode_ms();
+    unit.info.serverEventToSendMs = frame.timings().event_to_send_ms();
     unit.generation = generation;
     unit.received = Clock::now();
     {
@@ -253,6 +254,7 @@ void RenderClient::Impl::decodeLoop() {
       decoderGeneration = unit.generation;
     }
     std::optional<QImage> image;
+    const auto decodeStart = Clock::now();
     if (frameDecoder) {
       auto decoded = frameDecoder->decode(unit.frame);
       if (decoded && decoded->has_value()) {
@@ -262,12 +264,14 @@ void RenderClient::Impl::decodeLoop() {
     lock.lock();
     if (image) {
       const auto now = Clock::now();
+      unit.info.decodeMs = ms(now - decodeStart);
       ++framesDecoded;
       frameTimes.push_back(now);
       for (auto it = sentAt.begin(); it != sentAt.end() && it->first <= unit.info.lastEventId;) {
         const double latency = ms(now - it->second);
         latencies.push_back(latency);
         unit.info.latencyMs = latency;
+        unit.info.eventsSentAt.push_back(it->second);
         it = sentAt.erase(it);
       }
       while (latencies.size() > 30) {
@@ -284,7 +288,15 @@ void RenderClient::Impl::deliver(QImage image, const FrameInfo& info) {
   bool post = false;
   {
     std::lock_guard lock(deliveryMutex);
+    // A frame the GUI thread has not taken yet is replaced, and the events
+    // it reflected first are reflected first by this one.
+    std::vector<Clock::time_point> sent;
+    if (latest) {
+      sent = std::move(latest->second.eventsSentAt);
+    }
     latest = std::make_pair(std::move(image), info);
+    auto& reflected = latest->second.eventsSentAt;
+    reflected.insert(reflected.begin(), sent.begin(), sent.end());
     post = !deliveryPending;
     deliveryPending = true;
   }
@@ -385,17 +397,18 @@ QString RenderClient::pipelineXml() const {
 }
 
 namespace {
-v1::ClientEvent cameraEvent(v1::CameraEvent::Kind kind, double dx, double dy) {
+v1::ClientEvent cameraEvent(v1::CameraEvent::Kind kind, double dx, double dy, bool still = false) {
   v1::ClientEvent event;
   event.mutable_camera()->set_kind(kind);
   event.mutable_camera()->set_dx(dx);
   event.mutable_camera()->set_dy(dy);
+  event.mutable_camera()->set_still(still);
   return event;
 }
 }  // namespace
 
-quint64 RenderClient::rotate(double dx, double dy) {
-  return m_impl->queue(cameraEvent(v1::CameraEvent::ROTATE, dx, dy));
+quint64 RenderClient::rotate(double dx, double dy, bool still) {
+  return m_impl->queue(cameraEvent(v1::CameraEvent::ROTATE, dx, dy, still));
 }
 quint64 RenderClient::pan(double dx, double dy) {
   return m_impl->queue(cameraEvent(v1::CameraEvent::PAN, dx, dy));

@@ -762,9 +762,12 @@ void MainWindow::togglePlay() {
 void MainWindow::updateStatus() {
   updateLive();
   const StreamStatistics stats = m_client.statistics();
+  // The latency the user sees: from an event's send to the frame painted
+  // (the decode and the paint included), as the browser page reports it.
+  const double painted = m_viewport->paintLatencyMs();
   m_stats->setText(tr("%1 fps   latency %2 ms   %3 Mbit/s%4")
                        .arg(stats.fps, 0, 'f', 0)
-                       .arg(stats.latencyMs, 0, 'f', 0)
+                       .arg(painted >= 0.0 ? painted : stats.latencyMs, 0, 'f', 0)
                        .arg(stats.bitrateBps / 1e6, 0, 'f', 2)
                        .arg(m_client.recording() ? tr("   REC") : QString()));
 }

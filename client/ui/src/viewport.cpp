@@ -2,6 +2,7 @@
 #include <QMouseEvent>
 #include <QPainter>
 #include <QWheelEvent>
+#include <algorithm>
 
 #include <crackvis/client_core/render_client.hpp>
 #include <crackvis/client_ui/viewport.hpp>
@@ -21,9 +22,15 @@ Viewport::Viewport(RenderClient& client, QWidget* parent) : QWidget(parent), m_c
   });
 }
 
-void Viewport::showFrame(const QImage& image) {
+void Viewport::showFrame(const QImage& image, const FrameInfo& info) {
   m_image = image;
   ++m_framesShown;
+  // update() paints once for the frames shown meanwhile: the events of
+  // those not painted are reflected first by the one that is.
+  std::vector<std::chrono::steady_clock::time_point> unpainted = std::move(m_info.eventsSentAt);
+  m_info = info;
+  m_info.eventsSentAt.insert(m_info.eventsSentAt.begin(), unpainted.begin(), unpainted.end());
+  m_framePending = true;
   update();
 }
 
@@ -36,6 +43,31 @@ void Viewport::paintEvent(QPaintEvent*) {
     return;
   }
   painter.drawImage(pictureRect(), m_image);
+  painter.end();
+  if (!m_framePending) {
+    return;  // a repaint (exposed, resized) of a frame painted before
+  }
+  m_framePending = false;
+  const auto now = std::chrono::steady_clock::now();
+  std::vector<double> latencies;
+  for (const auto sent : m_info.eventsSentAt) {
+    latencies.push_back(std::chrono::duration<double, std::milli>(now - sent).count());
+    m_paintLatencies.push_back(latencies.back());
+  }
+  m_info.eventsSentAt.clear();
+  while (m_paintLatencies.size() > 30) {
+    m_paintLatencies.pop_front();
+  }
+  emit painted(latencies, m_info);
+}
+
+double Viewport::paintLatencyMs() const {
+  if (m_paintLatencies.empty()) {
+    return -1.0;
+  }
+  std::vector<double> sorted(m_paintLatencies.begin(), m_paintLatencies.end());
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  return sorted[sorted.size() / 2];
 }
 
 // The stream has the window's size once a resize went through; until then

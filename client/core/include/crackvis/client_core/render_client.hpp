@@ -15,6 +15,7 @@
 #include <QSize>
 #include <QString>
 #include <QStringList>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -79,6 +80,14 @@ struct FrameInfo {
   double renderMs = 0.0;
   double encodeMs = 0.0;
   double latencyMs = -1.0;  // event to decoded frame, when it reflects a new event
+  double decodeMs = 0.0;    // this client's decode of the frame and its conversion to a QImage
+  // The server's part of the latency (FrameTimings.event_to_send_ms: the
+  // last event it reflects received to the frame sent); 0 when it reflects
+  // no new event.
+  double serverEventToSendMs = 0.0;
+  // When each event that this frame is the first to reflect was sent: the
+  // viewport times them to the frame's paint (Viewport::painted).
+  std::vector<std::chrono::steady_clock::time_point> eventsSentAt;
 };
 
 struct StreamStatistics {
@@ -125,7 +134,9 @@ class RenderClient : public QObject {
   QString pipelineXml() const;
 
   // Events: queued for the writer thread; each returns its event id.
-  quint64 rotate(double dx, double dy);
+  // `still`: a camera move that is not part of a drag (a scripted view),
+  // answered at once by a full-resolution frame (CameraEvent.still).
+  quint64 rotate(double dx, double dy, bool still = false);
   quint64 pan(double dx, double dy);
   quint64 zoom(double amount);
   quint64 resetCamera();

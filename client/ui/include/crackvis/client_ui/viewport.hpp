@@ -11,10 +11,13 @@
 #include <QRect>
 #include <QTimer>
 #include <QWidget>
+#include <chrono>
+#include <deque>
+#include <vector>
+
+#include <crackvis/client_core/render_client.hpp>
 
 namespace crackvis::client {
-
-class RenderClient;
 
 class Viewport : public QWidget {
   Q_OBJECT
@@ -27,13 +30,20 @@ class Viewport : public QWidget {
   QRect pictureRect() const;
   // Asks what is drawn at a widget point; false outside the picture.
   bool pickAt(QPoint point);
+  // The median of the last 30 events' latencies from their send to the
+  // first painted frame that reflects them (what the user sees wait); -1
+  // before the first.
+  double paintLatencyMs() const;
 
  public slots:
-  void showFrame(const QImage& image);
+  void showFrame(const QImage& image, const crackvis::client::FrameInfo& info = {});
 
  signals:
   void playToggled();
   void stepBy(int delta);
+  // A new frame was painted: the latencies (ms, from send to this paint) of the
+  // events it is the first painted frame to reflect, and the frame's info.
+  void painted(const std::vector<double>& eventToPaintMs, const crackvis::client::FrameInfo& info);
 
  protected:
   void paintEvent(QPaintEvent* event) override;
@@ -53,6 +63,12 @@ class Viewport : public QWidget {
   Drag m_drag = Drag::kNone;
   QTimer m_resizeTimer;  // a resize is sent once the window stops changing
   int m_framesShown = 0;
+  // The newest frame's info, with the send times of every event that no
+  // painted frame has reflected yet (frames shown between two paints
+  // collect theirs here).
+  FrameInfo m_info;
+  bool m_framePending = false;          // a frame shown and not painted yet
+  std::deque<double> m_paintLatencies;  // the last 30, for paintLatencyMs
 };
 
 }  // namespace crackvis::client
