@@ -340,6 +340,34 @@ Status fromGrpcStatus(const grpc::Status& status, const std::string& call, const
   return fromProbe(status, call, peer);
 }
 
+void awaitConnection(grpc::ChannelInterface& channel, const std::string& address,
+                     std::chrono::system_clock::time_point deadline) {
+  grpc_connectivity_state state = channel.GetState(/*try_to_connect=*/true);
+  if (state == GRPC_CHANNEL_READY) {
+    return;
+  }
+  // A first attempt, and the next one after gRPC's 1 s backoff (20 %
+  // jitter) with its handshake.
+  constexpr auto kFirstAttempt = std::chrono::seconds(5);
+  constexpr auto kNextAttempt = std::chrono::milliseconds(2500);
+  auto limit = std::min(deadline, std::chrono::system_clock::now() + kFirstAttempt);
+  bool failedOnce = false;
+  while (state != GRPC_CHANNEL_READY && state != GRPC_CHANNEL_SHUTDOWN) {
+    if (state == GRPC_CHANNEL_TRANSIENT_FAILURE) {
+      if (failedOnce ||
+          probeTransport(address, std::chrono::milliseconds(1000)).transport != Transport::kTls) {
+        return;  // the call's own failure says why
+      }
+      failedOnce = true;
+      limit = std::min(deadline, std::chrono::system_clock::now() + kNextAttempt);
+    }
+    if (!channel.WaitForStateChange(state, limit)) {
+      return;
+    }
+    state = channel.GetState(/*try_to_connect=*/true);
+  }
+}
+
 void quietGrpcLogs() {
   if (std::getenv("GRPC_VERBOSITY") == nullptr) {
     gpr_set_log_function([](gpr_log_func_args*) {});

@@ -136,6 +136,41 @@ TEST_CASE("Plaintext against TLS and TLS against plaintext are named",
   }
 }
 
+TEST_CASE("A call's channel is connected first, and given up at once where no TLS server trusts it",
+          "[dataservice][integration]") {
+  using std::chrono::steady_clock;
+  const auto within = [](std::chrono::seconds s) { return std::chrono::system_clock::now() + s; };
+  const auto secondsSince = [](steady_clock::time_point start) {
+    return std::chrono::duration<double>(steady_clock::now() - start).count();
+  };
+  SECTION("a server that takes the client: connected") {
+    auto server = startServer(baseConfig());
+    auto channel = rawChannel(*server);
+    rpc::awaitConnection(*channel, server->address(), within(std::chrono::seconds(30)));
+    CHECK(channel->GetState(false) == GRPC_CHANNEL_READY);
+  }
+  SECTION("nothing listening: after the first attempt, not the deadline") {
+    const std::string address = fmt::format("127.0.0.1:{}", closedPort());
+    auto channel = grpc::CreateChannel(address, grpc::InsecureChannelCredentials());
+    const auto start = steady_clock::now();
+    rpc::awaitConnection(*channel, address, within(std::chrono::seconds(30)));
+    CHECK(channel->GetState(false) != GRPC_CHANNEL_READY);
+    CHECK(secondsSince(start) < 10.0);
+  }
+  SECTION("a TLS server that refuses the certificate: after a second attempt") {
+    auto server = startServer(baseConfig());
+    const auto good = clientTls("client");
+    const auto other = clientTls("other-client", "other-ca");
+    auto options = clientOptions(*server);
+    options.tls = {good.ca, other.cert, other.key};
+    const auto start = steady_clock::now();
+    auto files = connect(options).listFiles();  // awaits the connection in its call
+    CHECK(secondsSince(start) < 10.0);
+    REQUIRE_FALSE(files.isOk());
+    CHECK_THAT(files.status().message(), Catch::Contains("did it refuse the client certificate?"));
+  }
+}
+
 TEST_CASE("A healthy data service is named as one", "[dataservice][integration]") {
   auto server = startServer(baseConfig());
   const auto result = runProcess(healthOf(server->address()));

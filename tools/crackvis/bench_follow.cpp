@@ -190,6 +190,10 @@ Result<nlohmann::json> run(const FollowBenchOptions& options) {
   if (!channel) {
     return channel.status();
   }
+  // Its first call meets a connection (gRPC 1.51 can fail an attempt in
+  // progress: rpc::awaitConnection).
+  rpc::awaitConnection(**channel, options.server,
+                       std::chrono::system_clock::now() + std::chrono::seconds(10));
   auto stub = v1::RenderService::NewStub(*channel);
   const LoadAverage loadBefore = loadAverage();
   std::vector<std::unique_ptr<Follower>> followers;

@@ -258,7 +258,14 @@ Result<std::shared_ptr<grpc::Channel>> makeChannel(const RenderBenchOptions& opt
   tls::ChannelOptions channel;
   channel.target = options.server;
   channel.material = material;
-  return tls::createChannel(channel);
+  auto created = tls::createChannel(channel);
+  if (created) {
+    // Its first call meets a connection (gRPC 1.51 can fail an attempt in
+    // progress: rpc::awaitConnection).
+    rpc::awaitConnection(**created, options.server,
+                         std::chrono::system_clock::now() + std::chrono::seconds(10));
+  }
+  return created;
 }
 
 void authorize(grpc::ClientContext& context, const RenderBenchOptions& options) {

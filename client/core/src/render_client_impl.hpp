@@ -26,6 +26,7 @@
 #include <crackvis/common/status.hpp>
 #include <crackvis/encode/frame_codec.hpp>
 #include <crackvis/record/stream_recorder.hpp>
+#include <crackvis/rpc/connection_advice.hpp>
 
 namespace crackvis::client {
 
@@ -99,19 +100,27 @@ struct RenderClient::Impl {
   // render_client.cpp: the connection.
   Status failure(const grpc::Status& status, const char* call) const;
 
-  // One unary call of the connection's file calls: authorized, its failure
-  // worded by connection_advice. `call(context, response)` makes the call.
+  // One unary call of the connection's file calls: on a connected channel
+  // (rpc::awaitConnection), authorized, its failure worded by
+  // connection_advice. `call(context, response)` makes the call.
   template <typename Response, typename Call>
   Status unary(const char* name, Response& response, Call&& call) {
     if (!stub) {
       return failedPrecondition("not connected");
     }
+    awaitConnection();
     grpc::ClientContext context;
     authorize(context);
     return failure(call(context, response), name);
   }
 
   void authorize(grpc::ClientContext& context) const;
+  // Gives a channel that is not connected yet its connection first: gRPC
+  // 1.51 can fail an attempt in progress (rpc::awaitConnection).
+  void awaitConnection() const {
+    rpc::awaitConnection(*channel, settings.address.toStdString(),
+                         std::chrono::system_clock::now() + std::chrono::seconds(10));
+  }
 
   // session_stream.cpp: the session and its stream.
   std::uint64_t queue(v1::ClientEvent event);

@@ -48,6 +48,7 @@ std::uint64_t RenderClient::Impl::queue(v1::ClientEvent event) {
 }
 
 Status RenderClient::Impl::openOnServer(const std::string& xml) {
+  awaitConnection();
   grpc::ClientContext context;
   authorize(context);
   v1::OpenSessionRequest request;

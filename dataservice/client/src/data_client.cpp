@@ -103,12 +103,16 @@ struct DataClient::Impl {
     return rpc::fromGrpcStatus(status, call, peer(kind), channel);
   }
 
-  // The options' timeout from now, or `deadline` when it comes first.
+  // The options' timeout from now, or `deadline` when it comes first; a
+  // channel not connected yet is given its connection first (gRPC 1.51 can
+  // fail an attempt in progress: rpc::awaitConnection).
   void prepare(grpc::ClientContext& context, Deadline deadline = Deadline::max()) const {
-    context.set_deadline(
+    const Deadline until =
         std::min(deadline, std::chrono::system_clock::now() +
                                std::chrono::duration_cast<std::chrono::system_clock::duration>(
-                                   std::chrono::duration<double>(options.timeoutSeconds))));
+                                   std::chrono::duration<double>(options.timeoutSeconds)));
+    rpc::awaitConnection(*channel, options.target, until);
+    context.set_deadline(until);
     if (!authorization.empty()) {
       context.AddMetadata("authorization", authorization);
     }

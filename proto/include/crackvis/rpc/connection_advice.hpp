@@ -85,6 +85,21 @@ ServerKind identifyServer(const std::shared_ptr<grpc::ChannelInterface>& channel
 Status fromGrpcStatus(const grpc::Status& status, const std::string& call, const Peer& peer,
                       const std::shared_ptr<grpc::ChannelInterface>& channel);
 
+// Before a call on `channel` to `address`: when the channel is not
+// connected, waits (until `deadline`, at most a few seconds) for it to
+// connect, allowing one failed attempt when a TLS server answers there.
+// gRPC 1.51 (Debian 12's) can fail a connection attempt that is merely in
+// progress: between connect(2) and its errno check it makes calls that may
+// overwrite errno (fixed upstream by grpc/grpc#35064), so EINPROGRESS reads
+// as "connect: No such file or directory". A call that is not
+// wait-for-ready then fails at once ("failed to connect to all addresses",
+// which fromGrpcStatus would blame on the certificates), although the
+// channel's next attempt, a second later, connects. Returns at once when
+// connected; when nothing listens there (or it is not TLS) after the first
+// failed attempt, so that the call fails fast with its advice.
+void awaitConnection(grpc::ChannelInterface& channel, const std::string& address,
+                     std::chrono::system_clock::time_point deadline);
+
 // gRPC's own log lines (a failed TLS handshake prints one to stderr) are
 // dropped unless GRPC_VERBOSITY is set: a command-line tool's failure is
 // the one line it prints itself.
