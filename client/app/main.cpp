@@ -231,6 +231,11 @@ int main(int argc, char** argv) {
   const crackvis::client::ConnectionSettings settings{parser.value(connect), parser.value(ca),
                                                       parser.value(cert), parser.value(key),
                                                       parser.value(token)};
+  if (parser.isSet(measureLatency) && (demo || parser.isSet(screenshot))) {
+    return fail(QStringLiteral("--measure-latency runs the window alone: leave out %1")
+                    .arg(demo ? QStringLiteral("--demo") : QStringLiteral("--window-screenshot")),
+                kExitUsage);
+  }
   if (demo) {
     if (!parser.isSet(connect) || !parser.isSet(file)) {
       qCritical("crackvis-client: --demo needs --connect and --file");
@@ -291,6 +296,9 @@ int main(int argc, char** argv) {
     // file lacks is the server's error, in the messages pane) and camera;
     // a file alone at its last step, the camera fitted to it.
     bool opened = window.connectTo(settings);
+    if (opened && timing != nullptr) {
+      timing->start();  // the first frame timed from the file's open
+    }
     if (opened && !fileToOpen.isEmpty()) {
       if (parser.isSet(pipelineFile)) {
         startView.file = fileToOpen.toStdString();

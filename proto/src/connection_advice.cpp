@@ -340,16 +340,16 @@ Status fromGrpcStatus(const grpc::Status& status, const std::string& call, const
   return fromProbe(status, call, peer);
 }
 
-void awaitConnection(grpc::ChannelInterface& channel, const std::string& address,
+void awaitConnection(grpc::Channel& channel, const std::string& address,
                      std::chrono::system_clock::time_point deadline) {
   grpc_connectivity_state state = channel.GetState(/*try_to_connect=*/true);
   if (state == GRPC_CHANNEL_READY) {
     return;
   }
-  // A first attempt, and the next one after gRPC's 1 s backoff (20 %
-  // jitter) with its handshake.
+  // The first attempt (a TCP connection and the TLS handshake), and the
+  // next one, made at once: a handshake on loopback takes milliseconds.
   constexpr auto kFirstAttempt = std::chrono::seconds(5);
-  constexpr auto kNextAttempt = std::chrono::milliseconds(2500);
+  constexpr auto kNextAttempt = std::chrono::seconds(1);
   auto limit = std::min(deadline, std::chrono::system_clock::now() + kFirstAttempt);
   bool failedOnce = false;
   while (state != GRPC_CHANNEL_READY && state != GRPC_CHANNEL_SHUTDOWN) {
@@ -359,6 +359,9 @@ void awaitConnection(grpc::ChannelInterface& channel, const std::string& address
         return;  // the call's own failure says why
       }
       failedOnce = true;
+      // pick_first stays in TRANSIENT_FAILURE until it connects: the wait
+      // below ends with a connection or at its limit.
+      grpc::experimental::ChannelResetConnectionBackoff(&channel);
       limit = std::min(deadline, std::chrono::system_clock::now() + kNextAttempt);
     }
     if (!channel.WaitForStateChange(state, limit)) {

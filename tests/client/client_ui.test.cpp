@@ -284,6 +284,13 @@ TEST_CASE("crackvis-client --measure-latency says what it needs", "[client]") {
   CHECK(badSeconds.exitCode == 2);
   CHECK(clientLines(badSeconds.err) ==
         std::vector<std::string>{"crackvis-client: --drag-seconds x: expected 0.5 to 600 seconds"});
+  const auto both =
+      runClient(kOffscreen, {"--connect", "localhost:50052", "--file", "a.h5", "--measure-latency",
+                             "-", "--window-screenshot", "a.png"});
+  CHECK(both.exitCode == 2);
+  CHECK(clientLines(both.err) ==
+        std::vector<std::string>{"crackvis-client: --measure-latency runs the window alone: "
+                                 "leave out --window-screenshot"});
 }
 
 TEST_CASE("crackvis-client names a misspelt option and the nearest one", "[client]") {

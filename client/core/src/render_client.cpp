@@ -82,9 +82,13 @@ Status RenderClient::connectTo(const ConnectionSettings& settings) {
   }
   auto channel = std::move(created).value();
   auto stub = v1::RenderService::NewStub(channel);
-  // One round trip that needs the server and our certificate: ListFiles.
+  // One round trip that needs the server and our certificate: ListFiles,
+  // on the channel's connection (gRPC 1.51 can fail an attempt in progress:
+  // rpc::awaitConnection).
+  const auto deadline = std::chrono::system_clock::now() + std::chrono::seconds(10);
+  rpc::awaitConnection(*channel, options.target, deadline);
   grpc::ClientContext context;
-  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(10));
+  context.set_deadline(deadline);
   if (!settings.token.isEmpty()) {
     context.AddMetadata("authorization", "Bearer " + settings.token.toStdString());
   }

@@ -15,8 +15,13 @@
 namespace crackvis::client {
 namespace {
 
-// Overall bound: a run that has not ended by then reports why.
-constexpr int kRunTimeoutMs = 180'000;
+// Overall bound, beyond the drag and the still moves: a run that has not
+// ended by then reports why.
+constexpr int kRunSlackMs = 60'000;
+constexpr int kPerStillMs = 3'000;
+// The drag's frames are counted until the frame answering its release is
+// painted (at least kAfterDragMs, at most this).
+constexpr int kMostAfterDragMs = 10'000;
 // As browser_latency.mjs: a second's rest before the drag, half a second
 // after it (its last frames), half a second before the still moves, and
 // 200 ms after each still move's frame.
@@ -54,10 +59,13 @@ void sendMouse(QWidget& target, QEvent::Type type, QPointF at, Qt::MouseButton b
 
 LatencyRun::LatencyRun(MainWindow& window, LatencyRunOptions options)
     : QObject(&window), m_window(window), m_options(std::move(options)) {
+  const int bound =
+      kRunSlackMs + static_cast<int>(1000.0 * m_options.seconds) + kPerStillMs * m_options.stills;
   m_timeout.setSingleShot(true);
-  m_timeout.setInterval(kRunTimeoutMs);
-  connect(&m_timeout, &QTimer::timeout, this,
-          [this] { fail(QStringLiteral("the latency run did not end within 180 s")); });
+  m_timeout.setInterval(bound);
+  connect(&m_timeout, &QTimer::timeout, this, [this, bound] {
+    fail(QStringLiteral("the latency run did not end within %1 s").arg(bound / 1000));
+  });
   connect(&m_window.viewport(), &Viewport::painted, this, &LatencyRun::framePainted);
 }
 
@@ -82,7 +90,12 @@ void LatencyRun::framePainted(const std::vector<double>& latencies, const FrameI
       if (m_firstFrameMs < 0.0) {
         m_firstFrameMs = static_cast<double>(m_clock.nsecsElapsed()) / 1e6;
       }
-      sizeView();
+      // Not from inside the viewport's paint: after it.
+      QTimer::singleShot(0, this, [this] {
+        if (m_phase == Phase::kFirstFrame) {
+          sizeView();
+        }
+      });
       const Viewport& view = m_window.viewport();
       if (info.fullResolution && view.size() == m_options.view &&
           view.image().size() == m_options.view) {
@@ -96,17 +109,23 @@ void LatencyRun::framePainted(const std::vector<double>& latencies, const FrameI
       ++m_dragFrames;
       m_dragLatencies.insert(m_dragLatencies.end(), latencies.begin(), latencies.end());
       m_decodeMs.push_back(info.decodeMs);
-      if (info.serverEventToSendMs > 0.0) {
+      // The server's part while dragging, as the page counts it.
+      if (m_phase == Phase::kDrag && info.serverEventToSendMs > 0.0) {
         m_serverMs.push_back(info.serverEventToSendMs);
       }
       const QString reduction = QString::number(info.reduction);
       m_reductions[reduction] = m_reductions.value(reduction).toInt() + 1;
+      if (m_phase == Phase::kAfterDrag && info.lastEventId >= m_releaseEvent) {
+        m_releasePainted = true;
+        closeDrag();
+      }
       break;
     }
     case Phase::kStills:
-      if (!m_stillAnswered && !latencies.empty()) {
-        m_stillAnswered = true;
-        m_stillLatencies.insert(m_stillLatencies.end(), latencies.begin(), latencies.end());
+      // The still move's own frame: the newest event it reflects is the move.
+      if (m_stillEvent != 0 && info.lastEventId >= m_stillEvent && !latencies.empty()) {
+        m_stillEvent = 0;
+        m_stillLatencies.push_back(latencies.back());
         QTimer::singleShot(kBetweenStillsMs, this, &LatencyRun::nextStill);
       }
       break;
@@ -117,6 +136,9 @@ void LatencyRun::framePainted(const std::vector<double>& latencies, const FrameI
 }
 
 void LatencyRun::startDrag() {
+  if (m_phase == Phase::kDone) {
+    return;
+  }
   Viewport& view = m_window.viewport();
   m_phase = Phase::kDrag;
   m_dragCpuStartMs = cpuMs();
@@ -130,6 +152,9 @@ void LatencyRun::startDrag() {
 // Move i at i / rate seconds into the drag, on the browser benchmark's path:
 // a figure eight about the view's centre.
 void LatencyRun::moveMouse() {
+  if (m_phase != Phase::kDrag) {
+    return;  // the run failed meanwhile
+  }
   const int moves = static_cast<int>(std::lround(m_options.seconds * m_options.rate));
   if (m_move >= moves) {
     endDrag();
@@ -149,28 +174,47 @@ void LatencyRun::moveMouse() {
 void LatencyRun::endDrag() {
   Viewport& view = m_window.viewport();
   sendMouse(view, QEvent::MouseButtonRelease, m_at, Qt::LeftButton, Qt::NoButton);
+  m_releaseEvent = view.lastEventSent();
   m_bitrateBps = m_window.client().statistics().bitrateBps;  // over the drag's last second
   m_phase = Phase::kAfterDrag;
   QTimer::singleShot(kAfterDragMs, this, [this] {
-    const double dragMs = static_cast<double>(m_clock.elapsed() - m_dragStartMs);
-    m_dragFps = 1000.0 * m_dragFrames / dragMs;
-    m_cpuPerFrameMs = m_dragFrames > 0 ? (cpuMs() - m_dragCpuStartMs) / m_dragFrames : 0.0;
-    m_phase = Phase::kSettle;
-    QTimer::singleShot(kBeforeStillsMs, this, [this] {
+    m_afterDragWaited = true;
+    closeDrag();
+  });
+  QTimer::singleShot(kMostAfterDragMs, this, [this] {
+    m_releasePainted = true;  // no frame answered the release: the drag ends anyway
+    closeDrag();
+  });
+}
+
+// The drag's figures, once its release has been answered and the rest after
+// it is over.
+void LatencyRun::closeDrag() {
+  if (m_phase != Phase::kAfterDrag || !m_releasePainted || !m_afterDragWaited) {
+    return;
+  }
+  const double dragMs = static_cast<double>(m_clock.elapsed() - m_dragStartMs);
+  m_dragFps = 1000.0 * m_dragFrames / dragMs;
+  m_cpuPerFrameMs = m_dragFrames > 0 ? (cpuMs() - m_dragCpuStartMs) / m_dragFrames : 0.0;
+  m_phase = Phase::kSettle;
+  QTimer::singleShot(kBeforeStillsMs, this, [this] {
+    if (m_phase == Phase::kSettle) {
       m_phase = Phase::kStills;
       nextStill();
-    });
+    }
   });
 }
 
 void LatencyRun::nextStill() {
+  if (m_phase != Phase::kStills) {
+    return;  // the run failed meanwhile
+  }
   if (m_still == m_options.stills) {
     finish();
     return;
   }
   ++m_still;
-  m_stillAnswered = false;
-  m_window.client().rotate(kStillRotate, 0.0, /*still=*/true);
+  m_stillEvent = m_window.client().rotate(kStillRotate, 0.0, /*still=*/true);
 }
 
 void LatencyRun::finish() {

@@ -30,6 +30,13 @@ void Viewport::showFrame(const QImage& image, const FrameInfo& info) {
   std::vector<std::chrono::steady_clock::time_point> unpainted = std::move(m_info.eventsSentAt);
   m_info = info;
   m_info.eventsSentAt.insert(m_info.eventsSentAt.begin(), unpainted.begin(), unpainted.end());
+  // A window that is not painted (minimised, hidden) keeps only the newest
+  // events' times: they are what its next paint will time.
+  constexpr std::size_t kMostUnpainted = 256;
+  if (m_info.eventsSentAt.size() > kMostUnpainted) {
+    m_info.eventsSentAt.erase(m_info.eventsSentAt.begin(),
+                              m_info.eventsSentAt.end() - kMostUnpainted);
+  }
   m_framePending = true;
   update();
 }
@@ -85,8 +92,8 @@ bool Viewport::pickAt(QPoint point) {
   if (!m_client.hasSession() || !picture.contains(point) || picture.isEmpty()) {
     return false;
   }
-  m_client.pick((point.x() - picture.left() + 0.5) / picture.width(),
-                (point.y() - picture.top() + 0.5) / picture.height());
+  m_lastEventSent = m_client.pick((point.x() - picture.left() + 0.5) / picture.width(),
+                                  (point.y() - picture.top() + 0.5) / picture.height());
   return true;
 }
 
@@ -114,13 +121,13 @@ void Viewport::mouseMoveEvent(QMouseEvent* event) {
   m_last = now;
   switch (m_drag) {
     case Drag::kRotate:
-      m_client.rotate(dx, dy);
+      m_lastEventSent = m_client.rotate(dx, dy);
       break;
     case Drag::kPan:
-      m_client.pan(dx, dy);
+      m_lastEventSent = m_client.pan(dx, dy);
       break;
     case Drag::kZoom:
-      m_client.zoom(-2.0 * dy);  // drag up to zoom in
+      m_lastEventSent = m_client.zoom(-2.0 * dy);  // drag up to zoom in
       break;
     case Drag::kNone:
       break;
@@ -129,19 +136,19 @@ void Viewport::mouseMoveEvent(QMouseEvent* event) {
 
 void Viewport::mouseReleaseEvent(QMouseEvent*) {
   if (m_drag != Drag::kNone) {
-    m_client.requestStill();  // the full-resolution picture at once
+    m_lastEventSent = m_client.requestStill();  // the full-resolution picture at once
   }
   m_drag = Drag::kNone;
 }
 
 void Viewport::wheelEvent(QWheelEvent* event) {
-  m_client.zoom(event->angleDelta().y() / 1200.0);
+  m_lastEventSent = m_client.zoom(event->angleDelta().y() / 1200.0);
 }
 
 void Viewport::keyPressEvent(QKeyEvent* event) {
   switch (event->key()) {
     case Qt::Key_R:
-      m_client.resetCamera();
+      m_lastEventSent = m_client.resetCamera();
       break;
     case Qt::Key_Space:
       emit playToggled();

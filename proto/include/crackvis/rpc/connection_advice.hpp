@@ -94,10 +94,11 @@ Status fromGrpcStatus(const grpc::Status& status, const std::string& call, const
 // as "connect: No such file or directory". A call that is not
 // wait-for-ready then fails at once ("failed to connect to all addresses",
 // which fromGrpcStatus would blame on the certificates), although the
-// channel's next attempt, a second later, connects. Returns at once when
-// connected; when nothing listens there (or it is not TLS) after the first
-// failed attempt, so that the call fails fast with its advice.
-void awaitConnection(grpc::ChannelInterface& channel, const std::string& address,
+// channel's next attempt connects. That attempt is made at once (the
+// channel's backoff reset) and waited for at most a second. Returns at once
+// when connected, and after the first failed attempt when nothing listens
+// there or it is not TLS, so that the call fails fast with its advice.
+void awaitConnection(grpc::Channel& channel, const std::string& address,
                      std::chrono::system_clock::time_point deadline);
 
 // gRPC's own log lines (a failed TLS handshake prints one to stderr) are

@@ -38,7 +38,8 @@ class LatencyRun : public QObject {
 
  public:
   LatencyRun(MainWindow& window, LatencyRunOptions options);
-  // Right before the file is opened: the first frame is timed from here.
+  // Once connected, right before the file is opened: the first frame is
+  // timed from here.
   void start();
   // Ends the run with `why` (a lost connection, a refused event).
   void fail(const QString& why);
@@ -55,6 +56,7 @@ class LatencyRun : public QObject {
   void startDrag();
   void moveMouse();
   void endDrag();
+  void closeDrag();
   void nextStill();
   void finish();
   double cpuMs() const;
@@ -78,9 +80,12 @@ class LatencyRun : public QObject {
   double m_bitrateBps = 0.0;
   double m_dragFps = 0.0;
   double m_cpuPerFrameMs = 0.0;
+  quint64 m_releaseEvent = 0;      // the drag's last event: its release
+  bool m_releasePainted = false;   // a frame reflecting it was painted
+  bool m_afterDragWaited = false;  // the rest after the drag is over
   // The still moves.
   int m_still = 0;
-  bool m_stillAnswered = false;
+  quint64 m_stillEvent = 0;  // the newest still move's event, until answered
   std::vector<double> m_stillLatencies;
 };
 

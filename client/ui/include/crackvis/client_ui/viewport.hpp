@@ -34,6 +34,8 @@ class Viewport : public QWidget {
   // first painted frame that reflects them (what the user sees wait); -1
   // before the first.
   double paintLatencyMs() const;
+  // The id of the newest event the mouse, wheel or keys sent (0: none yet).
+  quint64 lastEventSent() const { return m_lastEventSent; }
 
  public slots:
   void showFrame(const QImage& image, const crackvis::client::FrameInfo& info = {});
@@ -67,7 +69,8 @@ class Viewport : public QWidget {
   // painted frame has reflected yet (frames shown between two paints
   // collect theirs here).
   FrameInfo m_info;
-  bool m_framePending = false;          // a frame shown and not painted yet
+  bool m_framePending = false;  // a frame shown and not painted yet
+  quint64 m_lastEventSent = 0;
   std::deque<double> m_paintLatencies;  // the last 30, for paintLatencyMs
 };
 
