@@ -7,12 +7,14 @@
 #pragma once
 
 #include <algorithm>
+#include <thread>
 
 #include <grpcpp/grpcpp.h>
 
 #include "crack_history.hpp"
 #include "crackvis/v1/render.grpc.pb.h"
 #include "session_registry.hpp"
+#include "stream_encoder.hpp"
 #include <crackvis/dataservice_client/data_client.hpp>
 #include <crackvis/rpc_server/access_log.hpp>
 #include <crackvis/rpc_server/call.hpp>
@@ -56,11 +58,13 @@ class RenderServiceImpl final : public v1::RenderService::Service {
                                                    static_cast<std::size_t>(config.keptRenderers))
                                              : nullptr),
         m_trimmer(std::make_shared<HeapTrimmer>()) {
+    const pipeline::ViewDescription view;
     if (m_renderers) {
       // One renderer of the default view's size waits for the first session.
-      const pipeline::ViewDescription view;
       m_renderers->stock(view.width, view.height);
     }
+    m_encoderWarmUp = std::jthread(
+        [width = view.width, height = view.height] { StreamEncoder::warmUp(width, height); });
   }
 
   SessionRegistry& sessions() { return m_sessions; }
@@ -140,6 +144,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   std::shared_ptr<RenderTurns> m_turns;        // shared by every session's frames
   std::shared_ptr<RendererShelf> m_renderers;  // the renderers of ended sessions; may be null
   std::shared_ptr<HeapTrimmer> m_trimmer;      // the heap, trimmed once sessions stop ending
+  std::jthread m_encoderWarmUp;                // libx264's start, joined before the rest goes
 };
 
 }  // namespace crackvis::service

@@ -66,6 +66,18 @@ Result<v1::Frame> StreamEncoder::encode(RenderedFrame& frame) {
   return out;
 }
 
+void StreamEncoder::warmUp(int width, int height) {
+  auto created = encode::FrameEncoder::create({width, height, 30, 4'000'000});
+  if (!created) {
+    return;  // the first stream reports why
+  }
+  constexpr std::uint8_t kGrey = 128;
+  encode::RgbFrame grey{
+      width, height,
+      std::vector<std::uint8_t>(static_cast<std::size_t>(width) * height * 3, kGrey)};
+  (void)(*created)->encode(grey, true);
+}
+
 std::optional<v1::StreamStats> StreamEncoder::stats(std::uint64_t dropped) {
   const double seconds = secondsSince(m_windowStart);
   if (seconds < 1.0) {

@@ -20,6 +20,12 @@ class StreamEncoder {
  public:
   Result<v1::Frame> encode(RenderedFrame& frame);
 
+  // Makes an encoder of `width` x `height` and encodes one frame with it,
+  // then drops it: libx264's first encoder in a process takes about 20 ms
+  // more than later ones (its tables and set-up), which a server pays at
+  // its start instead of in the first user's first picture.
+  static void warmUp(int width, int height);
+
   // A stats message once a second.
   std::optional<v1::StreamStats> stats(std::uint64_t dropped);
 
