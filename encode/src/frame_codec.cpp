@@ -311,6 +311,15 @@ constexpr std::size_t kScalerPadding = 256;
 }  // namespace
 
 Result<std::optional<RgbFrame>> FrameDecoder::decode(const EncodedFrame& frame) {
+  RgbFrame picture;
+  auto decoded = decodeInto(frame, picture);
+  if (!decoded) {
+    return decoded.status();
+  }
+  return *decoded ? std::optional<RgbFrame>(std::move(picture)) : std::optional<RgbFrame>{};
+}
+
+Result<bool> FrameDecoder::decodeInto(const EncodedFrame& frame, RgbFrame& picture) {
   Impl& impl = *m_impl;
   impl.packet->data = const_cast<std::uint8_t*>(frame.data.data());
   impl.packet->size = static_cast<int>(frame.data.size());
@@ -320,7 +329,7 @@ Result<std::optional<RgbFrame>> FrameDecoder::decode(const EncodedFrame& frame) 
   CRACKVIS_RETURN_IF_ERROR(check(sent, "avcodec_send_packet"));
   const int received = avcodec_receive_frame(impl.context.get(), impl.yuv.get());
   if (received == AVERROR(EAGAIN)) {
-    return std::optional<RgbFrame>{};
+    return false;
   }
   CRACKVIS_RETURN_IF_ERROR(check(received, "avcodec_receive_frame"));
   const int width = impl.yuv->width;
@@ -339,19 +348,22 @@ Result<std::optional<RgbFrame>> FrameDecoder::decode(const EncodedFrame& frame) 
   // of each row and past the buffer (the heap corruption a 1046-pixel-wide
   // client window caused). The context above takes the generic path
   // (accurate rounding, full chroma interpolation), which handles any width;
-  // the padding stays as a guard. Shrinking a vector keeps its storage.
+  // the padding stays as a guard. Shrinking a vector keeps its storage, so
+  // a picture decoded into again only zeroes its padding.
   const std::size_t bytes = static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3;
-  RgbFrame rgb{width, height, std::vector<std::uint8_t>(bytes + kScalerPadding)};
-  std::uint8_t* target[1] = {rgb.rgb.data()};
+  picture.width = width;
+  picture.height = height;
+  picture.rgb.resize(bytes + kScalerPadding);
+  std::uint8_t* target[1] = {picture.rgb.data()};
   const int stride[1] = {width * 3};
   const int rows =
       sws_scale(impl.toRgb.get(), impl.yuv->data, impl.yuv->linesize, 0, height, target, stride);
   av_frame_unref(impl.yuv.get());
+  picture.rgb.resize(bytes);
   if (rows != height) {
     return internalError("sws_scale: YUV to RGB24 converted fewer rows than the frame has");
   }
-  rgb.rgb.resize(bytes);
-  return std::optional<RgbFrame>(std::move(rgb));
+  return true;
 }
 
 double psnr(const RgbFrame& a, const RgbFrame& b) {

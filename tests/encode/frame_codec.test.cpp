@@ -87,3 +87,43 @@ TEST_CASE("frames of any even width survive the round trip, and the stream may c
     }
   }
 }
+
+TEST_CASE("decoding into one picture gives decode's pixels, reusing its memory across frames",
+          "[encode]") {
+  // Clients decode every frame of a stream into one picture (crackvis-client,
+  // bench render); across a size change it follows the stream.
+  auto fresh = encode::FrameDecoder::create();
+  auto reusing = encode::FrameDecoder::create();
+  REQUIRE(fresh.isOk());
+  REQUIRE(reusing.isOk());
+  encode::RgbFrame picture;
+  for (auto [width, height] : {std::pair{640, 360}, std::pair{1046, 700}, std::pair{322, 242}}) {
+    auto encoder = encode::FrameEncoder::create({width, height, 30, 4'000'000});
+    REQUIRE(encoder.isOk());
+    const std::uint8_t* storage = nullptr;
+    for (int frame = 0; frame < 4; ++frame) {
+      encode::RgbFrame rgb{width, height,
+                           std::vector<std::uint8_t>(static_cast<std::size_t>(width) * height * 3)};
+      for (std::size_t k = 0; k < rgb.rgb.size(); ++k) {
+        rgb.rgb[k] = static_cast<std::uint8_t>(
+            (k / 3 % static_cast<std::size_t>(width) + 7 * frame + k % 3 * 60) & 0xff);
+      }
+      auto encoded = (*encoder)->encode(rgb, frame == 0);
+      REQUIRE(encoded.isOk());
+      auto expected = (*fresh)->decode(*encoded);
+      auto decoded = (*reusing)->decodeInto(*encoded, picture);
+      REQUIRE(expected.isOk());
+      REQUIRE(expected->has_value());
+      REQUIRE(decoded.isOk());
+      REQUIRE(*decoded);
+      INFO(width << "x" << height << " frame " << frame);
+      CHECK(picture.width == width);
+      CHECK(picture.height == height);
+      CHECK(picture.rgb == (*expected)->rgb);
+      if (frame > 0) {
+        CHECK(picture.rgb.data() == storage);  // no new buffer for a frame of the same size
+      }
+      storage = picture.rgb.data();
+    }
+  }
+}

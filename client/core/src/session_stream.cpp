@@ -240,6 +240,7 @@ void RenderClient::Impl::supervise() {
 void RenderClient::Impl::decodeLoop() {
   std::unique_ptr<encode::FrameDecoder> frameDecoder;
   std::uint64_t decoderGeneration = 0;
+  encode::RgbFrame picture;  // decoded into again: its memory stays faulted in
   std::unique_lock lock(mutex);
   while (true) {
     unitsChanged.wait(lock, [&] { return stopping || !units.empty(); });
@@ -257,9 +258,9 @@ void RenderClient::Impl::decodeLoop() {
     std::optional<QImage> image;
     const auto decodeStart = Clock::now();
     if (frameDecoder) {
-      auto decoded = frameDecoder->decode(unit.frame);
-      if (decoded && decoded->has_value()) {
-        image = toImage(**decoded);
+      auto decoded = frameDecoder->decodeInto(unit.frame, picture);
+      if (decoded && *decoded) {
+        image = toImage(picture);
       }
     }
     lock.lock();

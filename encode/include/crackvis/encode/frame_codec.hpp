@@ -71,6 +71,11 @@ class FrameDecoder {
 
   // Decodes one access unit; an RGB frame when the decoder has one.
   Result<std::optional<RgbFrame>> decode(const EncodedFrame& frame);
+  // The same into `picture`, reusing its storage; false while the decoder
+  // has no picture. A client that made a fresh frame per access unit zeroed
+  // and faulted in its memory every time (2.7 MB at 1280x720, at 50 frames
+  // per second).
+  Result<bool> decodeInto(const EncodedFrame& frame, RgbFrame& picture);
 
  private:
   FrameDecoder() = default;
