@@ -3,7 +3,8 @@
 # of ~8,000 bonded spheres in a regular hexagonal packing and in a random dense one, pulled apart
 # with JCFpm (tension_bar.py), imported with `crackvis import yade`, and the main crack's coverage
 # printed per method at the last step. Not committed (4 MB each): regenerated here in ~5 minutes
-# (one core per run; both run at once).
+# (one core per run; both run at once). hull_cells.py then measures the triangulation's hull
+# cells on the random run (docs/methods.md, "The triangulation's hull cells").
 #     bash tests/data/generators/yade/tension_runs.sh [OUTDIR] [CRACKVIS]
 set -euo pipefail
 HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
