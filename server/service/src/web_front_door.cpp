@@ -56,6 +56,12 @@ namespace {
 // Limits of the front door (docs/security.md's limits table).
 constexpr std::size_t kMaxRequestBody = pipeline::kMaxPipelineBytes + 8192;
 constexpr std::size_t kMaxStreamMessage = pipeline::kMaxPipelineBytes + 8192;
+// A stream message over kMaxStreamMessage is read to its end and dropped, so
+// that the client, still sending it, reads the close frame (1009) instead of
+// a reset: a socket closed with the message's rest unread resets the
+// connection. Beyond this the connection is failed at once (Beast's limit).
+constexpr std::size_t kMaxDrainedMessage = std::size_t{64} << 20;
+constexpr std::size_t kStreamReadChunk = 64 * 1024;
 constexpr std::uint32_t kMaxHeaderBytes = 16 * 1024;
 constexpr int kMaxConnections = 1024;
 constexpr int kMaxConnectionsPerAddress = 64;
@@ -417,7 +423,7 @@ class StreamConnection : public std::enable_shared_from_this<StreamConnection<St
     m_ws.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
     m_ws.set_option(websocket::stream_base::decorator(
         [](websocket::response_type& response) { response.set(http::field::server, kProgram); }));
-    m_ws.read_message_max(kMaxStreamMessage);
+    m_ws.read_message_max(kMaxDrainedMessage);
     m_ws.binary(true);
     m_ws.async_accept(request, [self = this->shared_from_this()](beast::error_code error) {
       if (error) {
@@ -469,30 +475,54 @@ class StreamConnection : public std::enable_shared_from_this<StreamConnection<St
     });
   }
 
+  // A message in pieces: one over kMaxStreamMessage is not kept, only read
+  // to its end (kMaxDrainedMessage), then refused with 1009.
   void read() {
-    m_ws.async_read(m_buffer,
-                    [self = this->shared_from_this()](beast::error_code error, std::size_t) {
-                      self->onMessage(error);
-                    });
+    m_ws.async_read_some(
+        m_buffer.prepare(kStreamReadChunk),
+        [self = this->shared_from_this()](beast::error_code error, std::size_t bytes) {
+          self->onRead(error, bytes);
+        });
   }
 
-  void onMessage(beast::error_code error) {
+  void onRead(beast::error_code error, std::size_t bytes) {
     if (error) {
-      // The client left, or broke a limit (Beast has sent 1009 for an
-      // oversized message): the writer loop sees the sink closed.
-      markClosed();
-      m_attachTimer.cancel();
-      if (error == websocket::error::message_too_big) {
-        m_readEnd =
-            resourceExhausted(fmt::format("a stream message is over {} bytes", kMaxStreamMessage));
-      }
-      if (!m_session) {
-        logOnce(m_readEnd ? unavailable(fmt::format("the stream ended before attaching: {}",
-                                                    error.message()))
-                          : m_readEnd);
-      }
-      return;
+      return onReadError(error);
     }
+    m_buffer.commit(bytes);
+    if (m_buffer.size() > kMaxStreamMessage) {
+      m_overLimit = true;
+      m_buffer.consume(m_buffer.size());
+    }
+    if (!m_ws.is_message_done()) {
+      return read();
+    }
+    if (m_overLimit) {
+      return closeWith(tooBig());
+    }
+    onMessage();
+  }
+
+  static Status tooBig() {
+    return resourceExhausted(fmt::format("a stream message is over {} bytes", kMaxStreamMessage));
+  }
+
+  void onReadError(beast::error_code error) {
+    // The client left, or sent more than can be drained (Beast has sent
+    // 1009): the writer loop sees the sink closed.
+    markClosed();
+    m_attachTimer.cancel();
+    if (error == websocket::error::message_too_big) {
+      m_readEnd = tooBig();
+    }
+    if (!m_session) {
+      logOnce(m_readEnd ? unavailable(
+                              fmt::format("the stream ended before attaching: {}", error.message()))
+                        : m_readEnd);
+    }
+  }
+
+  void onMessage() {
     v1::ClientEvent event;
     const bool parsed =
         event.ParseFromArray(m_buffer.data().data(), static_cast<int>(m_buffer.size()));
@@ -561,9 +591,11 @@ class StreamConnection : public std::enable_shared_from_this<StreamConnection<St
     if (!m_ws.is_open()) {
       return;
     }
+    // An oversized message gets WebSocket's own code, as Beast's limit gives it.
     const websocket::close_reason reason =
-        status.isOk()
-            ? websocket::close_reason(websocket::close_code::normal)
+        status.isOk() ? websocket::close_reason(websocket::close_code::normal)
+        : m_overLimit
+            ? websocket::close_reason(websocket::close_code::too_big, closeReason(status.message()))
             : websocket::close_reason(
                   static_cast<websocket::close_code>(
                       kCloseStatusBase + static_cast<int>(rpc::toGrpcStatus(status).error_code())),
@@ -589,6 +621,7 @@ class StreamConnection : public std::enable_shared_from_this<StreamConnection<St
   beast::flat_buffer m_buffer;
   std::shared_ptr<Session> m_session;  // set on the strand before the writer loop starts
   Status m_readEnd = Status::ok();     // a limit the client's messages broke
+  bool m_overLimit = false;            // the message being read is dropped
   bool m_closing = false;
   bool m_logged = false;
   mutable std::mutex m_mutex;
