@@ -350,19 +350,24 @@ Result<bool> FrameDecoder::decodeInto(const EncodedFrame& frame, RgbFrame& pictu
   // (accurate rounding, full chroma interpolation), which handles any width;
   // the padding stays as a guard. Shrinking a vector keeps its storage, so
   // a picture decoded into again only zeroes its padding.
+  // After a failure the picture holds no frame (a caller keeping the last
+  // good one would otherwise show a half-converted one).
   const std::size_t bytes = static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3;
-  picture.width = width;
-  picture.height = height;
   picture.rgb.resize(bytes + kScalerPadding);
   std::uint8_t* target[1] = {picture.rgb.data()};
   const int stride[1] = {width * 3};
   const int rows =
       sws_scale(impl.toRgb.get(), impl.yuv->data, impl.yuv->linesize, 0, height, target, stride);
   av_frame_unref(impl.yuv.get());
-  picture.rgb.resize(bytes);
   if (rows != height) {
+    picture.width = 0;
+    picture.height = 0;
+    picture.rgb.clear();
     return internalError("sws_scale: YUV to RGB24 converted fewer rows than the frame has");
   }
+  picture.width = width;
+  picture.height = height;
+  picture.rgb.resize(bytes);
   return true;
 }
 

@@ -5,6 +5,7 @@
 // it, each filter must give each surface element the opening and slip that
 // `crackvis report` measures (its loop: DemSeries, the method's extractor and
 // analysis::CrackAnalysis fed every step in order).
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -60,7 +61,7 @@ bool sameValue(double a, double b, double scale) {
 
 struct Compared {
   std::size_t elements = 0;   // with a bond, over the steps
-  std::size_t differing = 0;  // opening or slip not as the report's
+  std::size_t differing = 0;  // cells whose opening or slip is not the report's
   double largestOpening = 0.0;
 };
 
@@ -88,6 +89,13 @@ Compared compareWithReport(const std::string& path, cracks::Method method) {
     const double time = (*series)->info().steps[static_cast<std::size_t>(step)].time;
     analysis.analyse(step, time, *input, input->referencePositions, mesh);
     const analysis::ElementOpenings& expected = analysis.openings();
+    // The report's values as the filters' cell arrays: every cell in VTK
+    // order, NaN where a cell is no surface element.
+    analysis::appendOpeningArrays(mesh, expected);
+    const cracks::AttributeArray* reportOpening = mesh.findCellData("opening");
+    const cracks::AttributeArray* reportSlip = mesh.findCellData("slip");
+    REQUIRE(reportOpening != nullptr);
+    REQUIRE(reportSlip != nullptr);
 
     filter->UpdateTimeStep(time);
     vtkPolyData* out = vtkPolyData::SafeDownCast(filter->GetOutputDataObject(0));
@@ -97,21 +105,21 @@ Compared compareWithReport(const std::string& path, cracks::Method method) {
     INFO("step " << step);
     REQUIRE(opening != nullptr);
     REQUIRE(slip != nullptr);
+    const auto cells = static_cast<vtkIdType>(reportOpening->values.size());
+    REQUIRE(out->GetNumberOfCells() == cells);
+    REQUIRE(opening->GetNumberOfTuples() == cells);
+    REQUIRE(slip->GetNumberOfTuples() == cells);
     for (std::size_t e = 0; e < expected.size(); ++e) {
       if (!std::isnan(expected.opening[e])) {
         compared.largestOpening = std::max(compared.largestOpening, expected.opening[e]);
+        ++compared.elements;
       }
     }
-    for (std::size_t e = 0; e < expected.size(); ++e) {
-      const auto cell = static_cast<vtkIdType>(expected.cell[e]);
-      REQUIRE(cell < out->GetNumberOfCells());
-      if (std::isnan(expected.opening[e])) {
-        continue;
-      }
-      ++compared.elements;
-      const double scale = std::max(compared.largestOpening, 1e-12);
-      if (!sameValue(opening->GetTuple1(cell), expected.opening[e], scale) ||
-          !sameValue(slip->GetTuple1(cell), expected.slip[e], scale)) {
+    const double scale = std::max(compared.largestOpening, 1e-12);
+    for (vtkIdType c = 0; c < cells; ++c) {
+      const auto at = static_cast<std::size_t>(c);
+      if (!sameValue(opening->GetTuple1(c), reportOpening->values[at], scale) ||
+          !sameValue(slip->GetTuple1(c), reportSlip->values[at], scale)) {
         ++compared.differing;
       }
     }

@@ -15,6 +15,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
 #include <vector>
@@ -498,7 +499,8 @@ class StreamConnection : public std::enable_shared_from_this<StreamConnection<St
       return read();
     }
     if (m_overLimit) {
-      return closeWith(tooBig());
+      // WebSocket's own code for it, as Beast's limit gives it.
+      return closeWith(tooBig(), websocket::close_code::too_big);
     }
     onMessage();
   }
@@ -579,8 +581,9 @@ class StreamConnection : public std::enable_shared_from_this<StreamConnection<St
     m_changed.notify_all();
   }
 
-  // On the strand: a close frame carrying the status, once.
-  void closeWith(const Status& status) {
+  // On the strand: a close frame carrying the status, once; its code 4000 +
+  // the status's gRPC code unless `code` says otherwise.
+  void closeWith(const Status& status, std::optional<websocket::close_code> code = std::nullopt) {
     if (m_closing) {
       return;
     }
@@ -591,14 +594,12 @@ class StreamConnection : public std::enable_shared_from_this<StreamConnection<St
     if (!m_ws.is_open()) {
       return;
     }
-    // An oversized message gets WebSocket's own code, as Beast's limit gives it.
     const websocket::close_reason reason =
-        status.isOk() ? websocket::close_reason(websocket::close_code::normal)
-        : m_overLimit
-            ? websocket::close_reason(websocket::close_code::too_big, closeReason(status.message()))
+        status.isOk()
+            ? websocket::close_reason(websocket::close_code::normal)
             : websocket::close_reason(
-                  static_cast<websocket::close_code>(
-                      kCloseStatusBase + static_cast<int>(rpc::toGrpcStatus(status).error_code())),
+                  code.value_or(static_cast<websocket::close_code>(
+                      kCloseStatusBase + static_cast<int>(rpc::toGrpcStatus(status).error_code()))),
                   closeReason(status.message()));
     m_ws.async_close(reason, [self = this->shared_from_this()](beast::error_code) {});
   }

@@ -74,7 +74,7 @@ class FrameDecoder {
   // The same into `picture`, reusing its storage; false while the decoder
   // has no picture. A client that made a fresh frame per access unit zeroed
   // and faulted in its memory every time (2.7 MB at 1280x720, at 50 frames
-  // per second).
+  // per second). After an error the picture is empty.
   Result<bool> decodeInto(const EncodedFrame& frame, RgbFrame& picture);
 
  private:

@@ -9,7 +9,7 @@ The bar is 80 x 30 x 30 mm, centred on the origin, pulled along x
 (tension_bar.py); "near the sides" is a face or cell centre within 2 mm of
 y = +-15 mm or z = +-15 mm, which holds the outer layer of centres. A cell's
 quality is 6 sqrt(2) V / l_rms^3 (1 for a regular tetrahedron; a sliver, flat,
-is under 0.1).
+is under 0.1), of its nodes at the first step; the faces are the last step's.
 """
 import os
 import subprocess
@@ -35,8 +35,12 @@ def near_sides(centres):
     return (np.abs(centres[:, 1]) > HALF_SIDE - BAND) | (np.abs(centres[:, 2]) > HALF_SIDE - BAND)
 
 
-def cell_qualities(grid):
-    points = vtk_to_numpy(grid.GetPoints().GetData())
+def cell_qualities(grid, reference):
+    """Each cracked cell's quality and centre in the reference configuration
+    (the first step, which the triangulation was made of): the last step's
+    cells are stretched by the crack's opening."""
+    ids = vtk_to_numpy(grid.GetPointData().GetArray("particle_id"))
+    points = np.array([reference[int(i)] for i in ids])
     quality, centre = [], []
     for c in range(grid.GetNumberOfCells()):
         ids = grid.GetCell(c).GetPointIds()
@@ -48,6 +52,17 @@ def cell_qualities(grid):
         quality.append(6 * np.sqrt(2) * volume / np.sqrt(np.mean(np.square(edges))) ** 3)
         centre.append(x.mean(axis=0))
     return np.array(quality), np.array(centre)
+
+
+def reference_positions(crackvis, run, out):
+    """Particle id -> centre at the first step (`crackvis export`)."""
+    path = os.path.join(out, "reference.pvd")
+    subprocess.run([crackvis, "export", run, "--particles", "-s", "0", "-q", "-o", path], check=True,
+                   stdout=subprocess.DEVNULL)
+    particles = read(os.path.join(out, "reference", "reference_particles_000000.vtp"))
+    ids = vtk_to_numpy(particles.GetPointData().GetArray("id"))
+    centres = vtk_to_numpy(particles.GetPoints().GetData())
+    return {int(i): centres[k] for k, i in enumerate(ids)}
 
 
 def faces(poly):
@@ -81,7 +96,8 @@ def main():
                            check=True, stdout=subprocess.DEVNULL)
             return read(path)
 
-        quality, centre = cell_qualities(extract("cell-attribute", "cells.vtu"))
+        reference = reference_positions(crackvis, run, out)
+        quality, centre = cell_qualities(extract("cell-attribute", "cells.vtu"), reference)
         side = near_sides(centre)
         for name, mask in (("near the sides", side), ("inside", ~side)):
             q = quality[mask]
