@@ -9,6 +9,25 @@
 
 using namespace crackvis;
 
+namespace {
+
+// Smooth ramps that move a little per frame, over a constant blue.
+encode::RgbFrame rampFrame(int width, int height, int frame, int blue) {
+  encode::RgbFrame rgb{width, height,
+                       std::vector<std::uint8_t>(static_cast<std::size_t>(width) * height * 3)};
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      auto* p = &rgb.rgb[(static_cast<std::size_t>(y) * width + x) * 3];
+      p[0] = static_cast<std::uint8_t>((x + 4 * frame) * 200 / (width + 20));
+      p[1] = static_cast<std::uint8_t>(y * 200 / height);
+      p[2] = static_cast<std::uint8_t>(blue);
+    }
+  }
+  return rgb;
+}
+
+}  // namespace
+
 TEST_CASE("the encoder refuses bad settings, frames larger than its own and short pixel arrays",
           "[encode]") {
   struct Bad {
@@ -64,17 +83,7 @@ TEST_CASE("frames of any even width survive the round trip, and the stream may c
     auto encoder = encode::FrameEncoder::create({width, height, 30, 4'000'000});
     REQUIRE(encoder.isOk());
     for (int frame = 0; frame < 5; ++frame) {
-      encode::RgbFrame rgb{width, height,
-                           std::vector<std::uint8_t>(static_cast<std::size_t>(width) * height * 3)};
-      for (int y = 0; y < height; ++y) {
-        for (int x = 0; x < width; ++x) {
-          auto* p = &rgb.rgb[(static_cast<std::size_t>(y) * width + x) * 3];
-          // Smooth ramps that move a little per frame.
-          p[0] = static_cast<std::uint8_t>((x + 4 * frame) * 200 / (width + 20));
-          p[1] = static_cast<std::uint8_t>(y * 200 / height);
-          p[2] = 128;
-        }
-      }
+      const encode::RgbFrame rgb = rampFrame(width, height, frame, 128);
       auto encoded = (*encoder)->encode(rgb, frame == 0);
       REQUIRE(encoded.isOk());
       auto back = (*decoder)->decode(*encoded);
@@ -102,16 +111,8 @@ TEST_CASE("decoding into one picture gives decode's pixels, reusing its memory a
     REQUIRE(encoder.isOk());
     const std::uint8_t* storage = nullptr;
     for (int frame = 0; frame < 4; ++frame) {
-      encode::RgbFrame rgb{width, height,
-                           std::vector<std::uint8_t>(static_cast<std::size_t>(width) * height * 3)};
-      for (int y = 0; y < height; ++y) {
-        for (int x = 0; x < width; ++x) {
-          auto* p = &rgb.rgb[(static_cast<std::size_t>(y) * width + x) * 3];
-          p[0] = static_cast<std::uint8_t>((x + 4 * frame) * 200 / (width + 20));
-          p[1] = static_cast<std::uint8_t>(y * 200 / height);
-          p[2] = static_cast<std::uint8_t>(60 + 20 * frame);  // each frame its own
-        }
-      }
+      // Blue differs per frame: nothing of the last picture may be left.
+      const encode::RgbFrame rgb = rampFrame(width, height, frame, 60 + 20 * frame);
       auto encoded = (*encoder)->encode(rgb, frame == 0);
       REQUIRE(encoded.isOk());
       auto expected = (*fresh)->decode(*encoded);
