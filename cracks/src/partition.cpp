@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <numeric>
 #include <utility>
@@ -385,8 +386,10 @@ Result<std::optional<std::vector<std::array<dem::ParticleIndex, 4>>>> zoneCells(
   if (!positions || !rows) {
     return !positions ? positions.status() : rows.status();
   }
-  auto local =
-      triangulate(positions->positions, rows->radius, reader.info().dimension, wide.weighted);
+  // The slab's hull is not the set's: its cells are not peeled here, the
+  // set's peeled cells are taken out below.
+  auto local = triangulate(positions->positions, rows->radius, reader.info().dimension,
+                           {.weighted = wide.weighted, .peelHull = false});
   if (!local) {
     return std::optional<Cells>{};
   }
@@ -430,7 +433,13 @@ Result<std::optional<std::vector<std::array<dem::ParticleIndex, 4>>>> zoneCells(
   std::sort(cells.begin() + localCount, cells.end());
   std::inplace_merge(cells.begin(), cells.begin() + localCount, cells.end());
   cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-  return std::optional<Cells>{std::move(cells)};
+  // The hull's slivers the whole set's triangulation peels (the slab's
+  // triangulation, with a hull of its own, was not peeled).
+  Cells kept;
+  kept.reserve(cells.size());
+  std::set_difference(cells.begin(), cells.end(), wide.peeled.begin(), wide.peeled.end(),
+                      std::back_inserter(kept));
+  return std::optional<Cells>{std::move(kept)};
 }
 
 // Union-find over every particle without path compression, by size, so
@@ -682,7 +691,7 @@ Result<std::optional<IndexedPiece>> readIndexedPiece(const dem::DemFileReader& r
   const bool lattice = *index && (*index)->decomposition == dem::CellDecomposition::kLattice;
   const bool triangulated = *index &&
                             (*index)->decomposition == dem::CellDecomposition::kTriangulation &&
-                            (*index)->hasWideCells;
+                            (*index)->hasWideCells && (*index)->hasPeeledCells;
   if (!*index || !(*index)->hasBondStart || (!lattice && !triangulated)) {
     return std::optional<IndexedPiece>{};
   }
@@ -765,6 +774,7 @@ Result<dem::WideCells> wideCellsOf(std::span<const Vec3> first, const dem::Latti
       wide.cells.push_back(triangulation->cells[c]);
     }
   }
+  wide.peeled = std::move(triangulation->peeled);
   return wide;
 }
 

@@ -1,7 +1,10 @@
 // CGAL is used here alone, so its heavy headers are compiled once.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <iterator>
 #include <limits>
+#include <vector>
 
 #include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Delaunay_triangulation_3.h>
@@ -10,6 +13,8 @@
 #include <CGAL/Regular_triangulation_3.h>
 #include <CGAL/Regular_triangulation_vertex_base_2.h>
 #include <CGAL/Regular_triangulation_vertex_base_3.h>
+#include <CGAL/Triangulation_cell_base_with_info_3.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_3.h>
 #include <fmt/format.h>
@@ -22,24 +27,29 @@ namespace {
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Index = dem::ParticleIndex;
 
-using Delaunay3 =
-    CGAL::Delaunay_triangulation_3<Kernel,
-                                   CGAL::Triangulation_data_structure_3<
-                                       CGAL::Triangulation_vertex_base_with_info_3<Index, Kernel>>>;
+// Each cell and face carries one byte: whether it is peeled (peelHull).
+using Mark = std::uint8_t;
+using Delaunay3 = CGAL::Delaunay_triangulation_3<
+    Kernel, CGAL::Triangulation_data_structure_3<
+                CGAL::Triangulation_vertex_base_with_info_3<Index, Kernel>,
+                CGAL::Triangulation_cell_base_with_info_3<
+                    Mark, Kernel, CGAL::Delaunay_triangulation_cell_base_3<Kernel>>>>;
 using Regular3 = CGAL::Regular_triangulation_3<
     Kernel, CGAL::Triangulation_data_structure_3<
                 CGAL::Triangulation_vertex_base_with_info_3<
                     Index, Kernel, CGAL::Regular_triangulation_vertex_base_3<Kernel>>,
-                CGAL::Regular_triangulation_cell_base_3<Kernel>>>;
-using Delaunay2 =
-    CGAL::Delaunay_triangulation_2<Kernel,
-                                   CGAL::Triangulation_data_structure_2<
-                                       CGAL::Triangulation_vertex_base_with_info_2<Index, Kernel>>>;
+                CGAL::Triangulation_cell_base_with_info_3<
+                    Mark, Kernel, CGAL::Regular_triangulation_cell_base_3<Kernel>>>>;
+using Delaunay2 = CGAL::Delaunay_triangulation_2<
+    Kernel,
+    CGAL::Triangulation_data_structure_2<CGAL::Triangulation_vertex_base_with_info_2<Index, Kernel>,
+                                         CGAL::Triangulation_face_base_with_info_2<Mark, Kernel>>>;
 using Regular2 = CGAL::Regular_triangulation_2<
     Kernel, CGAL::Triangulation_data_structure_2<
                 CGAL::Triangulation_vertex_base_with_info_2<
                     Index, Kernel, CGAL::Regular_triangulation_vertex_base_2<Kernel>>,
-                CGAL::Regular_triangulation_face_base_2<Kernel>>>;
+                CGAL::Triangulation_face_base_with_info_2<
+                    Mark, Kernel, CGAL::Regular_triangulation_face_base_2<Kernel>>>>;
 
 // The squared radius of the ball that holds every particle able to unmake
 // the cell with these (point, weight) nodes: circumradius^2, or the power
@@ -99,35 +109,167 @@ void addEdge(Index a, Index b, std::vector<dem::Bond>& edges) {
   edges.push_back({std::min(a, b), std::max(a, b)});
 }
 
-template <typename T>
-void collect3(const T& t, Triangulation& out) {
-  for (auto cell = t.finite_cells_begin(); cell != t.finite_cells_end(); ++cell) {
-    std::array<Index, 4> nodes{};
-    for (int k = 0; k < 4; ++k) {
-      nodes[static_cast<std::size_t>(k)] = cell->vertex(k)->info();
+const Kernel::Point_3& bare(const Kernel::Point_3& p) {
+  return p;
+}
+const Kernel::Point_3& bare(const Kernel::Weighted_point_3& p) {
+  return p.point();
+}
+const Kernel::Point_2& bare(const Kernel::Point_2& p) {
+  return p;
+}
+const Kernel::Point_2& bare(const Kernel::Weighted_point_2& p) {
+  return p.point();
+}
+
+template <typename CellHandle>
+double quality3(CellHandle cell) {
+  std::array<Kernel::Point_3, 4> p;
+  for (int k = 0; k < 4; ++k) {
+    p[static_cast<std::size_t>(k)] = bare(cell->vertex(k)->point());
+  }
+  std::array<double, 4> x{}, y{}, z{};
+  for (std::size_t k = 0; k < 4; ++k) {
+    x[k] = p[k].x();
+    y[k] = p[k].y();
+    z[k] = p[k].z();
+  }
+  return tetrahedronQuality(x, y, z);
+}
+
+template <typename FaceHandle>
+double quality2(FaceHandle face) {
+  std::array<double, 3> x{}, y{};
+  for (int k = 0; k < 3; ++k) {
+    const Kernel::Point_2& p = bare(face->vertex(k)->point());
+    x[static_cast<std::size_t>(k)] = p.x();
+    y[static_cast<std::size_t>(k)] = p.y();
+  }
+  return triangleQuality(x, y);
+}
+
+// Marks (info 1) the slivers reached from outside the hull through slivers,
+// breadth first, and unmarks them all again when they are more than half
+// the cells (a layer one particle thick is all slivers, and all it has).
+// Works on cells (3D) and faces (2D) alike: `neighbours` is 4 or 3.
+template <typename Handle, typename Quality, typename Finite>
+std::vector<Handle> peel(std::vector<Handle> outer, int neighbours, std::size_t cellCount,
+                         Quality quality, Finite finite) {
+  std::vector<Handle> peeled;
+  auto consider = [&](Handle cell) {
+    if (finite(cell) && cell->info() == 0 && quality(cell) < kSliverQuality) {
+      cell->info() = 1;
+      peeled.push_back(cell);
     }
-    std::sort(nodes.begin(), nodes.end());
-    out.cells.push_back(nodes);
+  };
+  for (Handle cell : outer) {
+    consider(cell);
+  }
+  for (std::size_t next = 0; next < peeled.size(); ++next) {
+    const Handle cell = peeled[next];
+    for (int k = 0; k < neighbours; ++k) {
+      consider(cell->neighbor(k));
+    }
+  }
+  if (2 * peeled.size() > cellCount) {
+    for (Handle cell : peeled) {
+      cell->info() = 0;
+    }
+    peeled.clear();
+  }
+  return peeled;
+}
+
+template <typename Handle, typename Vertex>
+std::array<Index, 4> sortedNodes(Handle cell, int count, Vertex vertex) {
+  std::array<Index, 4> nodes{-1, -1, -1, -1};
+  for (int k = 0; k < count; ++k) {
+    nodes[static_cast<std::size_t>(k)] = vertex(cell, k);
+  }
+  std::sort(nodes.begin(), nodes.begin() + count);
+  return nodes;
+}
+
+template <typename T>
+void collect3(T& t, bool peelHull, Triangulation& out, std::vector<dem::Bond>& dropped) {
+  using Cell = typename T::Cell_handle;
+  for (auto cell = t.all_cells_begin(); cell != t.all_cells_end(); ++cell) {
+    cell->info() = 0;
+  }
+  std::vector<Cell> peeled;
+  if (peelHull && t.dimension() == 3) {
+    std::vector<Cell> outside;
+    t.incident_cells(t.infinite_vertex(), std::back_inserter(outside));
+    std::vector<Cell> outer;
+    outer.reserve(outside.size());
+    for (Cell cell : outside) {
+      outer.push_back(cell->neighbor(cell->index(t.infinite_vertex())));
+    }
+    peeled = peel(
+        std::move(outer), 4, t.number_of_finite_cells(), [](Cell c) { return quality3(c); },
+        [&](Cell c) { return !t.is_infinite(c); });
+  }
+  auto node = [](Cell cell, int k) { return cell->vertex(k)->info(); };
+  for (auto cell = t.finite_cells_begin(); cell != t.finite_cells_end(); ++cell) {
+    (cell->info() == 0 ? out.cells : out.peeled).push_back(sortedNodes(Cell(cell), 4, node));
   }
   for (auto edge = t.finite_edges_begin(); edge != t.finite_edges_end(); ++edge) {
     addEdge(edge->first->vertex(edge->second)->info(), edge->first->vertex(edge->third)->info(),
             out.edges);
   }
+  // An edge of peeled cells alone is no edge of the decomposition.
+  for (Cell cell : peeled) {
+    for (int i = 0; i < 4; ++i) {
+      for (int j = i + 1; j < 4; ++j) {
+        auto around = t.incident_cells(cell, i, j);
+        const auto start = around;
+        bool kept = false;
+        do {
+          kept = kept || (!t.is_infinite(around) && around->info() == 0);
+        } while (++around != start);
+        if (!kept) {
+          addEdge(node(cell, i), node(cell, j), dropped);
+        }
+      }
+    }
+  }
   out.hiddenParticles = out.hiddenParticles - t.number_of_vertices();
 }
 
 template <typename T>
-void collect2(const T& t, Triangulation& out) {
+void collect2(T& t, bool peelHull, Triangulation& out, std::vector<dem::Bond>& dropped) {
+  using Face = typename T::Face_handle;
+  for (auto face = t.all_faces_begin(); face != t.all_faces_end(); ++face) {
+    face->info() = 0;
+  }
+  std::vector<Face> peeled;
+  if (peelHull && t.dimension() == 2) {
+    std::vector<Face> outer;
+    auto around = t.incident_faces(t.infinite_vertex());
+    const auto start = around;
+    do {
+      outer.push_back(around->neighbor(around->index(t.infinite_vertex())));
+    } while (++around != start);
+    peeled = peel(
+        std::move(outer), 3, t.number_of_faces(), [](Face f) { return quality2(f); },
+        [&](Face f) { return !t.is_infinite(f); });
+  }
+  auto node = [](Face face, int k) { return face->vertex(k)->info(); };
   for (auto face = t.finite_faces_begin(); face != t.finite_faces_end(); ++face) {
-    std::array<Index, 4> nodes{face->vertex(0)->info(), face->vertex(1)->info(),
-                               face->vertex(2)->info(), -1};
-    std::sort(nodes.begin(), nodes.begin() + 3);
-    out.cells.push_back(nodes);
+    (face->info() == 0 ? out.cells : out.peeled).push_back(sortedNodes(Face(face), 3, node));
   }
   for (auto edge = t.finite_edges_begin(); edge != t.finite_edges_end(); ++edge) {
     const auto& face = edge->first;
     const int i = edge->second;
     addEdge(face->vertex(T::cw(i))->info(), face->vertex(T::ccw(i))->info(), out.edges);
+  }
+  for (Face face : peeled) {
+    for (int i = 0; i < 3; ++i) {
+      const Face other = face->neighbor(i);
+      if (t.is_infinite(other) || other->info() != 0) {
+        addEdge(node(face, T::cw(i)), node(face, T::ccw(i)), dropped);
+      }
+    }
   }
   out.hiddenParticles = out.hiddenParticles - t.number_of_vertices();
 }
@@ -167,34 +309,61 @@ std::vector<double> cellReach(const Triangulation& triangulation,
   return reach;
 }
 
+double tetrahedronQuality(const std::array<double, 4>& x, const std::array<double, 4>& y,
+                          const std::array<double, 4>& z) {
+  const Kernel::Point_3 a(x[0], y[0], z[0]);
+  const Kernel::Point_3 b(x[1], y[1], z[1]);
+  const Kernel::Point_3 c(x[2], y[2], z[2]);
+  const Kernel::Point_3 d(x[3], y[3], z[3]);
+  const double squares = CGAL::squared_distance(a, b) + CGAL::squared_distance(a, c) +
+                         CGAL::squared_distance(a, d) + CGAL::squared_distance(b, c) +
+                         CGAL::squared_distance(b, d) + CGAL::squared_distance(c, d);
+  const double rms = std::sqrt(squares / 6.0);
+  return rms > 0.0 ? 6.0 * std::sqrt(2.0) * std::abs(CGAL::volume(a, b, c, d)) / (rms * rms * rms)
+                   : 0.0;
+}
+
+double triangleQuality(const std::array<double, 3>& x, const std::array<double, 3>& y) {
+  const double twiceArea = std::abs((x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]));
+  double squares = 0.0;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const std::size_t next = (k + 1) % 3;
+    squares += (x[next] - x[k]) * (x[next] - x[k]) + (y[next] - y[k]) * (y[next] - y[k]);
+  }
+  return squares > 0.0 ? 2.0 * std::sqrt(3.0) * twiceArea / squares : 0.0;
+}
+
 Result<Triangulation> triangulate(std::span<const dem::Vec3> positions,
                                   std::span<const double> radius, int dimension,
-                                  std::optional<bool> weighted) {
+                                  const TriangulateOptions& options) {
   Triangulation out;
   out.dimension = dimension;
-  out.weighted = weighted.value_or(needsRegularTriangulation(radius));
+  out.weighted = options.weighted.value_or(needsRegularTriangulation(radius));
   out.hiddenParticles = positions.size();
+  std::vector<dem::Bond> dropped;  // edges of peeled cells alone
   if (dimension == 3) {
     if (out.weighted) {
-      collect3(build<Regular3, Kernel::Weighted_point_3>(positions, radius, true), out);
+      auto t = build<Regular3, Kernel::Weighted_point_3>(positions, radius, true);
+      collect3(t, options.peelHull, out, dropped);
     } else {
       auto t = build<Delaunay3, Kernel::Point_3>(positions, radius, false);
       if (t.dimension() < 3) {
         return failedPrecondition(fmt::format(
             "cannot triangulate {} particle centres: they are all in one plane", positions.size()));
       }
-      collect3(t, out);
+      collect3(t, options.peelHull, out, dropped);
     }
   } else {
     if (out.weighted) {
-      collect2(build<Regular2, Kernel::Weighted_point_2>(positions, radius, true), out);
+      auto t = build<Regular2, Kernel::Weighted_point_2>(positions, radius, true);
+      collect2(t, options.peelHull, out, dropped);
     } else {
       auto t = build<Delaunay2, Kernel::Point_2>(positions, radius, false);
       if (t.dimension() < 2) {
         return failedPrecondition(fmt::format(
             "cannot triangulate {} particle centres: they are all on one line", positions.size()));
       }
-      collect2(t, out);
+      collect2(t, options.peelHull, out, dropped);
     }
   }
   if (out.cells.empty()) {
@@ -202,10 +371,20 @@ Result<Triangulation> triangulate(std::span<const dem::Vec3> positions,
         "cannot triangulate {} particle centres: no cell (too few particles, or all in one {})",
         positions.size(), dimension == 3 ? "plane" : "line"));
   }
-  std::sort(out.cells.begin(), out.cells.end());
-  std::sort(out.edges.begin(), out.edges.end(), [](dem::Bond a, dem::Bond b) {
+  auto byEnds = [](dem::Bond a, dem::Bond b) {
     return a.first != b.first ? a.first < b.first : a.second < b.second;
-  });
+  };
+  std::sort(out.cells.begin(), out.cells.end());
+  std::sort(out.peeled.begin(), out.peeled.end());
+  std::sort(out.edges.begin(), out.edges.end(), byEnds);
+  if (!dropped.empty()) {
+    std::sort(dropped.begin(), dropped.end(), byEnds);
+    std::vector<dem::Bond> kept;
+    kept.reserve(out.edges.size());
+    std::set_difference(out.edges.begin(), out.edges.end(), dropped.begin(), dropped.end(),
+                        std::back_inserter(kept), byEnds);
+    out.edges = std::move(kept);
+  }
   return out;
 }
 

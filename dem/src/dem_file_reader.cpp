@@ -842,16 +842,7 @@ Result<std::optional<SpatialIndexInfo>> DemFileReader::readSpatialIndexInfo() co
 
 // /index/wide_cells' shape and the attributes that go with it.
 Status DemFileReader::readWideCellsInfo(hid_t group, SpatialIndexInfo& info) const {
-  auto opened = openInFile(kIndexWideCellsPath);
-  if (!opened) {
-    return opened.status();
-  }
-  const h5::DatasetShape& shape = opened->shape;
-  if (shape.type != ElementType::kInt32 || shape.dims.size() != 2 || shape.dims[1] != 4) {
-    return fail(failedPrecondition(fmt::format("dataset {} is {} {}, expected int32 [K, 4]",
-                                               kIndexWideCellsPath, shape.typeName,
-                                               h5::formatDims(shape.dims))));
-  }
+  CRACKVIS_RETURN_IF_ERROR(checkCellListShape(kIndexWideCellsPath));
   auto reach = h5::readDoubleAttribute(group, "wide_cell_reach");
   auto weighted = h5::readIntAttribute(group, "weighted_triangulation");
   if (!reach || !std::isfinite(*reach) || *reach < 0.0 || !weighted ||
@@ -864,6 +855,23 @@ Status DemFileReader::readWideCellsInfo(hid_t group, SpatialIndexInfo& info) con
   info.hasWideCells = true;
   info.wideCellReach = *reach;
   info.weightedTriangulation = *weighted == 1;
+  if (h5::linkExists(m_file.get(), kIndexPeeledCellsPath)) {
+    CRACKVIS_RETURN_IF_ERROR(checkCellListShape(kIndexPeeledCellsPath));
+    info.hasPeeledCells = true;
+  }
+  return Status::ok();
+}
+
+Status DemFileReader::checkCellListShape(const char* path) const {
+  auto opened = openInFile(path);
+  if (!opened) {
+    return opened.status();
+  }
+  const h5::DatasetShape& shape = opened->shape;
+  if (shape.type != ElementType::kInt32 || shape.dims.size() != 2 || shape.dims[1] != 4) {
+    return fail(failedPrecondition(fmt::format("dataset {} is {} {}, expected int32 [K, 4]", path,
+                                               shape.typeName, h5::formatDims(shape.dims))));
+  }
   return Status::ok();
 }
 
@@ -882,22 +890,46 @@ Result<std::optional<WideCells>> DemFileReader::readWideCells(const SpatialIndex
   if (!index.hasWideCells) {
     return std::optional<WideCells>{};
   }
-  auto opened = openInFile(kIndexWideCellsPath);
-  if (!opened) {
-    return opened.status();
-  }
   WideCells wide;
   wide.reach = index.wideCellReach;
   wide.weighted = index.weightedTriangulation;
-  wide.cells.resize(static_cast<std::size_t>(opened->shape.dims[0]));
-  if (Status read = h5::readDataset(opened->dataset.get(), ElementType::kInt32, wide.cells.data());
-      !read) {
-    return fail(read);
+  auto cells = readCellList(kIndexWideCellsPath);
+  if (!cells) {
+    return cells.status();
+  }
+  wide.cells = std::move(*cells);
+  if (index.hasPeeledCells) {
+    auto peeled = readCellList(kIndexPeeledCellsPath);
+    if (!peeled) {
+      return peeled.status();
+    }
+    // Sorted as the writer stores them, whatever a file says: a rank takes
+    // them out of its cells by a sorted difference.
+    std::sort(peeled->begin(), peeled->end());
+    wide.peeled = std::move(*peeled);
+  }
+  return std::optional<WideCells>{std::move(wide)};
+}
+
+// A [K, 4] list of cells under /index, checked: nodes ascending particle
+// indices, in 2D the fourth -1.
+Result<std::vector<std::array<ParticleIndex, 4>>> DemFileReader::readCellList(
+    const char* path) const {
+  auto opened = openInFile(path);
+  if (!opened) {
+    return opened.status();
+  }
+  std::vector<std::array<ParticleIndex, 4>> cells(static_cast<std::size_t>(opened->shape.dims[0]));
+  if (!cells.empty()) {
+    if (Status read = h5::readDataset(opened->dataset.get(), ElementType::kInt32, cells.data());
+        !read) {
+      return fail(read);
+    }
   }
   const auto last = static_cast<ParticleIndex>(m_info.particleCount - 1);
   const int nodes = m_info.dimension == 3 ? 4 : 3;
-  for (std::size_t c = 0; c < wide.cells.size(); ++c) {
-    const auto& cell = wide.cells[c];
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    const auto& cell = cells[c];
     bool good = nodes == 4 || cell[3] == -1;
     for (int k = 0; k < nodes && good; ++k) {
       const ParticleIndex node = cell[static_cast<std::size_t>(k)];
@@ -905,12 +937,11 @@ Result<std::optional<WideCells>> DemFileReader::readWideCells(const SpatialIndex
     }
     if (!good) {
       return fail(failedPrecondition(fmt::format(
-          "{} row {} is [{}, {}, {}, {}]: expected {} ascending particle indices in 0..{}{}",
-          kIndexWideCellsPath, c, cell[0], cell[1], cell[2], cell[3], nodes, last,
-          nodes == 3 ? ", then -1" : "")));
+          "{} row {} is [{}, {}, {}, {}]: expected {} ascending particle indices in 0..{}{}", path,
+          c, cell[0], cell[1], cell[2], cell[3], nodes, last, nodes == 3 ? ", then -1" : "")));
     }
   }
-  return std::optional<WideCells>{std::move(wide)};
+  return cells;
 }
 
 Result<std::vector<ParticleIndex>> DemFileReader::readIndexOrder(std::int64_t first,

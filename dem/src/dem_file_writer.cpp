@@ -293,7 +293,8 @@ Status DemFileWriter::writeSpatialIndex(const StepState& first) {
   return Status::ok();
 }
 
-// A triangulated packing's wide cells (/index/wide_cells), found on the
+// A triangulated packing's wide cells (/index/wide_cells) and the hull's
+// slivers its triangulation peels (/index/peeled_cells), found on the
 // first step as written. A packing that cannot be triangulated gets none:
 // its ranks then read the whole set, and report what extraction reports.
 Status DemFileWriter::writeWideCells(hid_t group, const StepState& first) {
@@ -304,8 +305,13 @@ Status DemFileWriter::writeWideCells(hid_t group, const StepState& first) {
   CRACKVIS_RETURN_IF_ERROR(h5::writeDoubleAttribute(group, "wide_cell_reach", wide->reach));
   CRACKVIS_RETURN_IF_ERROR(
       h5::writeIntAttribute(group, "weighted_triangulation", wide->weighted ? 1 : 0));
-  return h5::writeDataset(m_file.get(), kIndexWideCellsPath, ElementType::kInt32,
-                          {static_cast<std::uint64_t>(wide->cells.size()), 4}, wide->cells.data());
+  CRACKVIS_RETURN_IF_ERROR(h5::writeDataset(m_file.get(), kIndexWideCellsPath, ElementType::kInt32,
+                                            {static_cast<std::uint64_t>(wide->cells.size()), 4},
+                                            wide->cells.data()));
+  // Stored even when empty: its presence says the set was peeled.
+  return h5::writeDataset(m_file.get(), kIndexPeeledCellsPath, ElementType::kInt32,
+                          {static_cast<std::uint64_t>(wide->peeled.size()), 4},
+                          wide->peeled.data());
 }
 
 Status DemFileWriter::writeStepData(const StepState& step, bool breaksChanged) {

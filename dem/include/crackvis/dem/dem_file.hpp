@@ -167,8 +167,9 @@ class DemFileReader {
   Result<double> readIndexCoordinate(std::int64_t k) const;
   // /index/bond_start at `rows` (ascending particle indices, N included).
   Result<std::vector<std::int64_t>> readBondStarts(std::span<const std::int32_t> rows) const;
-  // /index/wide_cells with its attributes, checked (nodes in range and
-  // ascending); nullopt when the file has none.
+  // /index/wide_cells with its attributes, and /index/peeled_cells where
+  // stored, checked (nodes in range and ascending); nullopt when the file
+  // has no wide cells.
   Result<std::optional<WideCells>> readWideCells() const;
   // The same with the index's information already read (readSpatialIndexInfo).
   Result<std::optional<WideCells>> readWideCells(const SpatialIndexInfo& index) const;
@@ -228,6 +229,8 @@ class DemFileReader {
   Status readProvenance();
   Status checkIndexable() const;
   Status readWideCellsInfo(hid_t group, SpatialIndexInfo& info) const;
+  Status checkCellListShape(const char* path) const;
+  Result<std::vector<std::array<ParticleIndex, 4>>> readCellList(const char* path) const;
   Status checkStored(DemDataset id, std::int64_t rows) const;
   Status listExtras();
   Result<OpenedDataset> openExtra(const ExtraInfo& extra, int step) const;

@@ -38,6 +38,7 @@ inline constexpr const char* kIndexCoordinatePath = "/index/coordinate";
 inline constexpr const char* kIndexBondStartPath = "/index/bond_start";
 inline constexpr const char* kIndexBoxPath = "/index/box";
 inline constexpr const char* kIndexWideCellsPath = "/index/wide_cells";
+inline constexpr const char* kIndexPeeledCellsPath = "/index/peeled_cells";
 
 // "lattice", "triangulation" (the attribute /index@decomposition); "" unknown.
 const char* decompositionName(CellDecomposition decomposition);
@@ -57,6 +58,10 @@ struct SpatialIndexInfo {
   bool hasWideCells = false;
   double wideCellReach = 0.0;
   bool weightedTriangulation = false;
+  // Whether /index/peeled_cells is stored with them (files since
+  // 2026-11-30): without it a rank cannot peel the hull as the whole set's
+  // triangulation does, and reads the whole set.
+  bool hasPeeledCells = false;
 };
 
 // A triangulated packing's part of the index (/index/wide_cells): what a
@@ -72,6 +77,11 @@ struct WideCells {
   bool weighted = false;  // a regular (power) triangulation: the radii differ
   // Nodes ascending; in 2D the fourth is -1. Sorted.
   std::vector<std::array<ParticleIndex, 4>> cells;
+  // The hull's slivers that the whole set's triangulation peels
+  // (cracks::TriangulateOptions::peelHull), which a rank's triangulation of
+  // its slab, with a hull of its own, cannot tell: it takes them out of its
+  // cells. The same form; none in `cells`.
+  std::vector<std::array<ParticleIndex, 4>> peeled;
 };
 
 // Makes a triangulated packing's WideCells from its first step (the writer
