@@ -82,19 +82,22 @@ PrimitiveList keptOf(const PrimitiveList& list, const std::vector<char>& keep, s
 
 namespace {
 
-// Adds the nodes of every cell touching `held`, then those nodes' bonded
-// neighbours (partitionPiece).
+// Adds the nodes of every cell touching `held` (peeled cells too), then
+// those nodes' bonded neighbours (partitionPiece).
 void holdCellNeighbourhood(const Triangulation& triangulation, std::span<const dem::Bond> bonds,
                            std::vector<std::uint8_t>& held) {
   const std::vector<std::uint8_t> zone = held;
   auto inZone = [&](dem::ParticleIndex i) {
     return i >= 0 && zone[static_cast<std::size_t>(i)] != 0;
   };
-  for (const auto& cell : triangulation.cells) {
-    if (std::any_of(cell.begin(), cell.end(), inZone)) {
-      for (dem::ParticleIndex i : cell) {
-        if (i >= 0) {
-          held[static_cast<std::size_t>(i)] = 1;
+  // The peeled cells too: their edges are the triangulation's.
+  for (const auto* cells : {&triangulation.cells, &triangulation.peeled}) {
+    for (const auto& cell : *cells) {
+      if (std::any_of(cell.begin(), cell.end(), inZone)) {
+        for (dem::ParticleIndex i : cell) {
+          if (i >= 0) {
+            held[static_cast<std::size_t>(i)] = 1;
+          }
         }
       }
     }
@@ -358,15 +361,23 @@ Result<std::vector<dem::ParticleIndex>> sortedOrder(const dem::DemFileReader& re
   return std::move(*order);
 }
 
+using CellList = std::vector<std::array<dem::ParticleIndex, 4>>;
+
 // The whole set's cells that touch the zone (sorted, whole-set indices):
 // the cells of the triangulation of every particle within `margin` of the
-// zone whose reach stays inside it, and the stored wide cells. Nullopt when
-// those particles cannot be triangulated alone.
-Result<std::optional<std::vector<std::array<dem::ParticleIndex, 4>>>> zoneCells(
-    const dem::DemFileReader& reader, const dem::SpatialIndexInfo& index,
-    const dem::WideCells& wide, const SlabRange& slab,
-    const std::vector<dem::ParticleIndex>& zone) {
-  using Cells = std::vector<std::array<dem::ParticleIndex, 4>>;
+// zone whose reach stays inside it, and the stored wide cells; less the
+// hull's slivers the whole set peels, which come apart, for their edges.
+struct ZoneCells {
+  CellList kept;
+  CellList peeled;
+};
+
+// Nullopt when the zone's particles cannot be triangulated alone.
+Result<std::optional<ZoneCells>> zoneCells(const dem::DemFileReader& reader,
+                                           const dem::SpatialIndexInfo& index,
+                                           const dem::WideCells& wide, const SlabRange& slab,
+                                           const std::vector<dem::ParticleIndex>& zone) {
+  using Cells = CellList;
   const auto n = static_cast<std::int64_t>(reader.info().particleCount);
   // A cell of reach r touching the zone lies, with every particle that
   // could unmake it, within 2 r of the zone; half as much again for the
@@ -391,7 +402,7 @@ Result<std::optional<std::vector<std::array<dem::ParticleIndex, 4>>>> zoneCells(
   auto local = triangulate(positions->positions, rows->radius, reader.info().dimension,
                            {.weighted = wide.weighted, .peelHull = false});
   if (!local) {
-    return std::optional<Cells>{};
+    return std::optional<ZoneCells>{};
   }
   const std::vector<double> reach =
       cellReach(*local, positions->positions, rows->radius, index.largestRadius);
@@ -435,11 +446,17 @@ Result<std::optional<std::vector<std::array<dem::ParticleIndex, 4>>>> zoneCells(
   cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
   // The hull's slivers the whole set's triangulation peels (the slab's
   // triangulation, with a hull of its own, was not peeled).
-  Cells kept;
-  kept.reserve(cells.size());
+  ZoneCells out;
+  out.kept.reserve(cells.size());
   std::set_difference(cells.begin(), cells.end(), wide.peeled.begin(), wide.peeled.end(),
-                      std::back_inserter(kept));
-  return std::optional<Cells>{std::move(kept)};
+                      std::back_inserter(out.kept));
+  std::copy_if(wide.peeled.begin(), wide.peeled.end(), std::back_inserter(out.peeled),
+               [&](const std::array<dem::ParticleIndex, 4>& cell) {
+                 return std::any_of(cell.begin(), cell.end(), [&](dem::ParticleIndex i) {
+                   return i >= 0 && contains(zone, i);
+                 });
+               });
+  return std::optional<ZoneCells>{std::move(out)};
 }
 
 // Union-find over every particle without path compression, by size, so
@@ -558,9 +575,9 @@ BreakForest keepPaths(const ForestBuilder& whole, const std::vector<dem::Particl
   return forest;
 }
 
-// The cells in piece indices, and their edges (sorted, each once: gathered
-// per first end, since a particle has few).
-Triangulation pieceTriangulation(const std::vector<std::array<dem::ParticleIndex, 4>>& cells,
+// The cells in piece indices, and the edges of them and of the peeled cells
+// (sorted, each once: gathered per first end, since a particle has few).
+Triangulation pieceTriangulation(const ZoneCells& cells,
                                  const std::vector<dem::ParticleIndex>& held,
                                  std::size_t particleCount, int dimension, bool weighted) {
   Triangulation out;
@@ -571,26 +588,35 @@ Triangulation pieceTriangulation(const std::vector<std::array<dem::ParticleIndex
     localOf[static_cast<std::size_t>(held[k])] = static_cast<dem::ParticleIndex>(k);
   }
   const auto nodes = static_cast<std::size_t>(dimension == 3 ? 4 : 3);
-  out.cells.reserve(cells.size());
-  // Six edges a tetrahedron: counted in 64 bits, past 2^31 at 5e7 particles.
-  std::vector<std::int64_t> start(held.size() + 1, 0);
-  for (const auto& cell : cells) {
+  auto toLocal = [&](const std::array<dem::ParticleIndex, 4>& cell) {
     std::array<dem::ParticleIndex, 4> mapped{};
     std::transform(cell.begin(), cell.end(), mapped.begin(), [&](dem::ParticleIndex i) {
       return i < 0 ? -1 : localOf[static_cast<std::size_t>(i)];
     });
-    out.cells.push_back(mapped);  // ascending still: the mapping keeps order
-    for (std::size_t a = 0; a + 1 < nodes; ++a) {
-      start[static_cast<std::size_t>(mapped[a]) + 1] += static_cast<std::int64_t>(nodes - 1 - a);
+    return mapped;  // ascending still: the mapping keeps order
+  };
+  out.cells.reserve(cells.kept.size());
+  std::transform(cells.kept.begin(), cells.kept.end(), std::back_inserter(out.cells), toLocal);
+  CellList peeled;
+  std::transform(cells.peeled.begin(), cells.peeled.end(), std::back_inserter(peeled), toLocal);
+  // Six edges a tetrahedron: counted in 64 bits, past 2^31 at 5e7 particles.
+  std::vector<std::int64_t> start(held.size() + 1, 0);
+  for (const CellList* list : {&out.cells, &peeled}) {
+    for (const auto& cell : *list) {
+      for (std::size_t a = 0; a + 1 < nodes; ++a) {
+        start[static_cast<std::size_t>(cell[a]) + 1] += static_cast<std::int64_t>(nodes - 1 - a);
+      }
     }
   }
   std::partial_sum(start.begin(), start.end(), start.begin());
   std::vector<dem::ParticleIndex> other(static_cast<std::size_t>(start.back()));
   std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
-  for (const auto& cell : out.cells) {
-    for (std::size_t a = 0; a + 1 < nodes; ++a) {
-      for (std::size_t b = a + 1; b < nodes; ++b) {
-        other[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell[a])]++)] = cell[b];
+  for (const CellList* list : {&out.cells, &peeled}) {
+    for (const auto& cell : *list) {
+      for (std::size_t a = 0; a + 1 < nodes; ++a) {
+        for (std::size_t b = a + 1; b < nodes; ++b) {
+          other[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell[a])]++)] = cell[b];
+        }
       }
     }
   }
@@ -617,9 +643,9 @@ Triangulation pieceTriangulation(const std::vector<std::array<dem::ParticleIndex
 }
 
 // A triangulated packing's held particles (partitionPiece's: the zone, the
-// nodes of the cells touching it, and those nodes' bonded neighbours), with
-// the cells and the forest. False when the slab cannot be triangulated
-// alone.
+// nodes of the cells touching it, peeled or not, and those nodes' bonded
+// neighbours), with the cells and the forest. False when the slab cannot be
+// triangulated alone.
 Result<bool> holdTriangulatedPiece(const dem::DemFileReader& reader, const SlabRange& slab,
                                    IndexedPiece& result) {
   auto wide = reader.readWideCells(result.index);  // the index info is read already
@@ -646,11 +672,13 @@ Result<bool> holdTriangulatedPiece(const dem::DemFileReader& reader, const SlabR
     mark[static_cast<std::size_t>(i)] = 1;
   }
   std::vector<dem::ParticleIndex> held = zone;
-  for (const auto& cell : **cells) {
-    for (dem::ParticleIndex i : cell) {
-      if (i >= 0 && mark[static_cast<std::size_t>(i)] == 0) {
-        mark[static_cast<std::size_t>(i)] = 2;
-        held.push_back(i);
+  for (const CellList* list : {&(*cells)->kept, &(*cells)->peeled}) {
+    for (const auto& cell : *list) {
+      for (dem::ParticleIndex i : cell) {
+        if (i >= 0 && mark[static_cast<std::size_t>(i)] == 0) {
+          mark[static_cast<std::size_t>(i)] = 2;
+          held.push_back(i);
+        }
       }
     }
   }
@@ -768,13 +796,27 @@ Result<dem::WideCells> wideCellsOf(std::span<const Vec3> first, const dem::Latti
   if (!(wide.reach > 0.0)) {
     wide.reach = 4.0 * largest;  // no bonds: the particles' size sets the scale
   }
+  // The wide cells of the unpeeled triangulation, the peeled ones too: a
+  // reader that knows no peeled cells (before 2026-11-30) then cuts its
+  // pieces as it cuts its whole set, and one that does takes them out.
   const std::vector<double> reach = cellReach(*triangulation, first, lattice.radius, largest);
   for (std::size_t c = 0; c < reach.size(); ++c) {
     if (!(reach[c] <= wide.reach)) {
       wide.cells.push_back(triangulation->cells[c]);
     }
   }
-  wide.peeled = std::move(triangulation->peeled);
+  Triangulation peeled;
+  peeled.dimension = triangulation->dimension;
+  peeled.weighted = triangulation->weighted;
+  peeled.cells = std::move(triangulation->peeled);
+  const std::vector<double> peeledReach = cellReach(peeled, first, lattice.radius, largest);
+  for (std::size_t c = 0; c < peeledReach.size(); ++c) {
+    if (!(peeledReach[c] <= wide.reach)) {
+      wide.cells.push_back(peeled.cells[c]);
+    }
+  }
+  std::sort(wide.cells.begin(), wide.cells.end());
+  wide.peeled = std::move(peeled.cells);
   return wide;
 }
 

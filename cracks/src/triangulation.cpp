@@ -153,8 +153,8 @@ double quality2(FaceHandle face) {
 // the cells (a layer one particle thick is all slivers, and all it has).
 // Works on cells (3D) and faces (2D) alike: `neighbours` is 4 or 3.
 template <typename Handle, typename Quality, typename Finite>
-std::vector<Handle> peel(std::vector<Handle> outer, int neighbours, std::size_t cellCount,
-                         Quality quality, Finite finite) {
+void peel(const std::vector<Handle>& outer, int neighbours, std::size_t cellCount, Quality quality,
+          Finite finite) {
   std::vector<Handle> peeled;
   auto consider = [&](Handle cell) {
     if (finite(cell) && cell->info() == 0 && quality(cell) < kSliverQuality) {
@@ -175,9 +175,7 @@ std::vector<Handle> peel(std::vector<Handle> outer, int neighbours, std::size_t 
     for (Handle cell : peeled) {
       cell->info() = 0;
     }
-    peeled.clear();
   }
-  return peeled;
 }
 
 template <typename Handle, typename Vertex>
@@ -191,12 +189,11 @@ std::array<Index, 4> sortedNodes(Handle cell, int count, Vertex vertex) {
 }
 
 template <typename T>
-void collect3(T& t, bool peelHull, Triangulation& out, std::vector<dem::Bond>& dropped) {
+void collect3(T& t, bool peelHull, Triangulation& out) {
   using Cell = typename T::Cell_handle;
   for (auto cell = t.all_cells_begin(); cell != t.all_cells_end(); ++cell) {
     cell->info() = 0;
   }
-  std::vector<Cell> peeled;
   if (peelHull && t.dimension() == 3) {
     std::vector<Cell> outside;
     t.incident_cells(t.infinite_vertex(), std::back_inserter(outside));
@@ -205,8 +202,8 @@ void collect3(T& t, bool peelHull, Triangulation& out, std::vector<dem::Bond>& d
     for (Cell cell : outside) {
       outer.push_back(cell->neighbor(cell->index(t.infinite_vertex())));
     }
-    peeled = peel(
-        std::move(outer), 4, t.number_of_finite_cells(), [](Cell c) { return quality3(c); },
+    peel(
+        outer, 4, t.number_of_finite_cells(), [](Cell c) { return quality3(c); },
         [&](Cell c) { return !t.is_infinite(c); });
   }
   auto node = [](Cell cell, int k) { return cell->vertex(k)->info(); };
@@ -217,32 +214,15 @@ void collect3(T& t, bool peelHull, Triangulation& out, std::vector<dem::Bond>& d
     addEdge(edge->first->vertex(edge->second)->info(), edge->first->vertex(edge->third)->info(),
             out.edges);
   }
-  // An edge of peeled cells alone is no edge of the decomposition.
-  for (Cell cell : peeled) {
-    for (int i = 0; i < 4; ++i) {
-      for (int j = i + 1; j < 4; ++j) {
-        auto around = t.incident_cells(cell, i, j);
-        const auto start = around;
-        bool kept = false;
-        do {
-          kept = kept || (!t.is_infinite(around) && around->info() == 0);
-        } while (++around != start);
-        if (!kept) {
-          addEdge(node(cell, i), node(cell, j), dropped);
-        }
-      }
-    }
-  }
   out.hiddenParticles = out.hiddenParticles - t.number_of_vertices();
 }
 
 template <typename T>
-void collect2(T& t, bool peelHull, Triangulation& out, std::vector<dem::Bond>& dropped) {
+void collect2(T& t, bool peelHull, Triangulation& out) {
   using Face = typename T::Face_handle;
   for (auto face = t.all_faces_begin(); face != t.all_faces_end(); ++face) {
     face->info() = 0;
   }
-  std::vector<Face> peeled;
   if (peelHull && t.dimension() == 2) {
     std::vector<Face> outer;
     auto around = t.incident_faces(t.infinite_vertex());
@@ -250,8 +230,8 @@ void collect2(T& t, bool peelHull, Triangulation& out, std::vector<dem::Bond>& d
     do {
       outer.push_back(around->neighbor(around->index(t.infinite_vertex())));
     } while (++around != start);
-    peeled = peel(
-        std::move(outer), 3, t.number_of_faces(), [](Face f) { return quality2(f); },
+    peel(
+        outer, 3, t.number_of_faces(), [](Face f) { return quality2(f); },
         [&](Face f) { return !t.is_infinite(f); });
   }
   auto node = [](Face face, int k) { return face->vertex(k)->info(); };
@@ -262,14 +242,6 @@ void collect2(T& t, bool peelHull, Triangulation& out, std::vector<dem::Bond>& d
     const auto& face = edge->first;
     const int i = edge->second;
     addEdge(face->vertex(T::cw(i))->info(), face->vertex(T::ccw(i))->info(), out.edges);
-  }
-  for (Face face : peeled) {
-    for (int i = 0; i < 3; ++i) {
-      const Face other = face->neighbor(i);
-      if (t.is_infinite(other) || other->info() != 0) {
-        addEdge(node(face, T::cw(i)), node(face, T::ccw(i)), dropped);
-      }
-    }
   }
   out.hiddenParticles = out.hiddenParticles - t.number_of_vertices();
 }
@@ -340,30 +312,29 @@ Result<Triangulation> triangulate(std::span<const dem::Vec3> positions,
   out.dimension = dimension;
   out.weighted = options.weighted.value_or(needsRegularTriangulation(radius));
   out.hiddenParticles = positions.size();
-  std::vector<dem::Bond> dropped;  // edges of peeled cells alone
   if (dimension == 3) {
     if (out.weighted) {
       auto t = build<Regular3, Kernel::Weighted_point_3>(positions, radius, true);
-      collect3(t, options.peelHull, out, dropped);
+      collect3(t, options.peelHull, out);
     } else {
       auto t = build<Delaunay3, Kernel::Point_3>(positions, radius, false);
       if (t.dimension() < 3) {
         return failedPrecondition(fmt::format(
             "cannot triangulate {} particle centres: they are all in one plane", positions.size()));
       }
-      collect3(t, options.peelHull, out, dropped);
+      collect3(t, options.peelHull, out);
     }
   } else {
     if (out.weighted) {
       auto t = build<Regular2, Kernel::Weighted_point_2>(positions, radius, true);
-      collect2(t, options.peelHull, out, dropped);
+      collect2(t, options.peelHull, out);
     } else {
       auto t = build<Delaunay2, Kernel::Point_2>(positions, radius, false);
       if (t.dimension() < 2) {
         return failedPrecondition(fmt::format(
             "cannot triangulate {} particle centres: they are all on one line", positions.size()));
       }
-      collect2(t, options.peelHull, out, dropped);
+      collect2(t, options.peelHull, out);
     }
   }
   if (out.cells.empty()) {
@@ -371,20 +342,11 @@ Result<Triangulation> triangulate(std::span<const dem::Vec3> positions,
         "cannot triangulate {} particle centres: no cell (too few particles, or all in one {})",
         positions.size(), dimension == 3 ? "plane" : "line"));
   }
-  auto byEnds = [](dem::Bond a, dem::Bond b) {
-    return a.first != b.first ? a.first < b.first : a.second < b.second;
-  };
   std::sort(out.cells.begin(), out.cells.end());
   std::sort(out.peeled.begin(), out.peeled.end());
-  std::sort(out.edges.begin(), out.edges.end(), byEnds);
-  if (!dropped.empty()) {
-    std::sort(dropped.begin(), dropped.end(), byEnds);
-    std::vector<dem::Bond> kept;
-    kept.reserve(out.edges.size());
-    std::set_difference(out.edges.begin(), out.edges.end(), dropped.begin(), dropped.end(),
-                        std::back_inserter(kept), byEnds);
-    out.edges = std::move(kept);
-  }
+  std::sort(out.edges.begin(), out.edges.end(), [](dem::Bond a, dem::Bond b) {
+    return a.first != b.first ? a.first < b.first : a.second < b.second;
+  });
   return out;
 }
 

@@ -872,6 +872,17 @@ Status DemFileReader::checkCellListShape(const char* path) const {
     return fail(failedPrecondition(fmt::format("dataset {} is {} {}, expected int32 [K, 4]", path,
                                                shape.typeName, h5::formatDims(shape.dims))));
   }
+  // Rows the file does not store are refused before they are allocated,
+  // as checkStored refuses them for the lattice's arrays.
+  constexpr std::uint64_t kMaxExpansion = 1100;
+  const std::uint64_t declared = shape.dims[0] * 16;
+  const std::uint64_t stored = h5::storedBytes(opened->dataset.get());
+  if (declared > 0 && (stored == 0 || declared / kMaxExpansion > stored)) {
+    return fail(failedPrecondition(fmt::format(
+        "dataset {} declares {} rows ({} bytes) but the file stores only {} bytes of it "
+        "(unwritten or corrupt)",
+        path, shape.dims[0], declared, stored)));
+  }
   return Status::ok();
 }
 

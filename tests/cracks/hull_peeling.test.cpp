@@ -199,10 +199,11 @@ TEST_CASE("the triangulation peels the slivers reached from its hull, and nothin
   for (const Cell& cell : peeled->peeled) {
     CHECK(std::any_of(cell.begin(), cell.begin() + dimension + 1, outer));
   }
-  // The edges are those of the kept cells: an edge of peeled cells alone
-  // goes with them.
-  CHECK(sameEdges(peeled->edges, edgesOf(peeled->cells, dimension)));
-  CHECK(peeled->edges.size() < whole->edges.size());
+  // The edges stay, the peeled cells' too: they are the pairs of particles
+  // whose Voronoi cells meet, for local Voronoi, peeled or not.
+  CHECK(sameEdges(peeled->edges, whole->edges));
+  CHECK(sameEdges(whole->edges, edgesOf(whole->cells, dimension)));
+  CHECK_FALSE(sameEdges(peeled->edges, edgesOf(peeled->cells, dimension)));
 }
 
 TEST_CASE("a layer one particle thick keeps its slivers: they are all it has",

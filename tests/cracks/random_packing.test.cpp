@@ -130,6 +130,7 @@ TEST_CASE("every method covers a through crack in a random packing", "[cracks][p
         // crack.
         if (method == Method::kCellAttribute) {
           const auto parts = findComponents(mesh).components;
+          REQUIRE_FALSE(parts.empty());
           double crumbs = 0.0;
           for (std::size_t k = 1; k < parts.size(); ++k) {
             CHECK(parts[k].primitives <= 2);

@@ -740,18 +740,28 @@ TEST_CASE("damaged wide or peeled cells fail a triangulated piece with a clear e
     REQUIRE(file.isOk());
     n = static_cast<std::int32_t>(file->info().particleCount);
   }
-  // A node beyond N, then nodes out of order.
-  const auto [values, what] =
-      GENERATE_COPY(std::pair{std::vector<std::int32_t>{n + 3}, std::string("outside")},
-                    std::pair{std::vector<std::int32_t>{n - 1, 0}, std::string("descending")});
-  INFO(what);
-  testing::setInt32Elements(path, cells, values, 0);
+  // A node beyond N, nodes out of order, or 2^40 rows (16 TiB) declared
+  // and none written, refused before they are allocated.
+  const std::string damage = GENERATE(as<std::string>{}, "outside", "descending", "unstored");
+  INFO(damage);
+  if (damage == "unstored") {
+    testing::replaceWithSparseDataset(path, cells, dem::h5::ElementType::kInt32,
+                                      {std::uint64_t{1} << 40, 4});
+  } else {
+    testing::setInt32Elements(path, cells,
+                              damage == "outside" ? std::vector<std::int32_t>{n + 3}
+                                                  : std::vector<std::int32_t>{n - 1, 0},
+                              0);
+  }
   auto file = dem::DemFileReader::open(path);
   REQUIRE(file.isOk());
   auto read = cracks::readIndexedPiece(*file, 0, 2, 4.0);
   REQUIRE_FALSE(read.isOk());
   CHECK(read.status().code() == StatusCode::kFailedPrecondition);
   CHECK_THAT(read.status().message(), Catch::Contains(cells));
+  if (damage == "unstored") {
+    CHECK_THAT(read.status().message(), Catch::Contains("stores only"));
+  }
   vtkObject::GlobalWarningDisplayOff();
   vtkNew<vtkCrackvisDemReader> reader;
   reader->SetFileName(path.c_str());

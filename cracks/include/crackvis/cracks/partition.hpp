@@ -42,7 +42,8 @@ using dem::longestBond;
 // dem::sliceAxis(reference) with equal particle counts; ghostWidth in metres.
 // With the whole set's triangulation (a packing that is no lattice), the
 // ghost layer also holds every node of a cell that touches the slab and
-// ghost layer, and those nodes' bonded neighbours: at the specimen's surface
+// ghost layer (a peeled one too: its edges are the triangulation's), and
+// those nodes' bonded neighbours: at the specimen's surface
 // flat cells reach particles far along it, and a cell's never-bonded edges
 // are held by paths through its nodes' neighbours.
 Piece partitionPiece(std::span<const Vec3> reference, std::span<const dem::Bond> bonds, int piece,
@@ -100,14 +101,15 @@ struct IndexedPiece {
 };
 // nullopt when the file cannot be read so: it has no index, no bond_start
 // (bonds not sorted by first end), no recorded decomposition, or a
-// triangulated packing without /index/wide_cells and /index/peeled_cells
+// triangulated packing without /index/wide_cells or /index/peeled_cells
 // (files before 2026-11-30 lack the second), or whose slab and margin
 // cannot be triangulated alone (too few particles, or all in one plane).
 //
 // A triangulated piece holds the particles and bonds partitionPiece holds
 // with the whole set's triangulation, and of that triangulation the cells
-// with a node in the slab and ghost layer, with their edges (not the other
-// cells among its particles, which make no primitive it owns). The rank
+// with a node in the slab and ghost layer, with their edges and those of
+// the peeled cells there (not the other cells among its particles, which
+// make no primitive it owns). The rank
 // triangulates its slab, its ghost layer and a margin of 2.5 wide-cell
 // reaches (dem::WideCells::reach) around them, and keeps the cells that
 // touch the slab and ghost layer and whose reach (cellReach) is at most
@@ -115,8 +117,8 @@ struct IndexedPiece {
 // zone, they are the whole set's. The cells of larger reach (the flat
 // cells at the specimen's surface) come from /index/wide_cells, and the
 // hull's slivers the whole set's triangulation peels (/index/peeled_cells)
-// are taken out. The forest
-// comes from readBreakForest's pass; its memory is freed before return.
+// are taken out. The forest comes from readBreakForest's pass; its memory
+// is freed before return.
 Result<std::optional<IndexedPiece>> readIndexedPiece(const dem::DemFileReader& reader, int piece,
                                                      int pieces, double ghostBonds);
 

@@ -25,7 +25,9 @@ struct Triangulation {
   // The hull's slivers peeled from `cells` (TriangulateOptions::peelHull),
   // nodes ascending, sorted.
   std::vector<std::array<dem::ParticleIndex, 4>> peeled;
-  // Unique edges (first < second) of `cells`, sorted.
+  // Unique edges (first < second), sorted: every edge of the triangulation,
+  // the peeled cells' too, since local Voronoi takes them for the pairs of
+  // particles whose cells meet (the Delaunay graph).
   std::vector<dem::Bond> edges;
   // Particles that are no vertex of the triangulation (a regular
   // triangulation hides a sphere lying inside others' power cells).
@@ -37,7 +39,7 @@ struct TriangulateOptions {
   // regular, unless this says (a piece of a set triangulates as the whole
   // set does).
   std::optional<bool> weighted;
-  // Whether to peel the hull's slivers. The triangulation fills the convex
+  // Whether to peel the hull's slivers (their edges stay). The triangulation fills the convex
   // hull of the centres, and on a specimen's sides its outermost cells are
   // slivers spanning the outer layer of centres: crack faces built from
   // them lean into the side (docs/methods.md, "The triangulation's hull
