@@ -8,6 +8,7 @@
 #include <exception>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <string>
 
@@ -89,14 +90,29 @@ int snapshot(const Flags& flags, const RenderServerConfig& config) {
     if (!root) {
       return fail(root.status().message());
     }
-    opener = [root = std::move(root).value(), sizes = config.limits.fileSizes](
-                 const std::string& file) -> Result<std::unique_ptr<source::StepSource>> {
-      auto resolved = root.resolveFile(file);
-      if (!resolved) {
-        return resolved.status();
+    auto resolved = root->resolveFile(description->file);
+    if (!resolved) {
+      return fail(resolved.status().message());
+    }
+    // Opened here, before the session starts its threads: the guarded open
+    // forks, and a child forked beside running threads may wait forever on
+    // a lock one of them held (ASan's allocator's did, in the test suite).
+    auto opened = source::openLocalSource(resolved->absolute, config.limits.fileSizes,
+                                          source::LocalOpen::kStructureInChild);
+    if (!opened) {
+      return fail(opened.status().message());
+    }
+    auto first = std::make_shared<std::unique_ptr<source::StepSource>>(std::move(opened).value());
+    opener = [first, file = description->file](
+                 const std::string& asked) -> Result<std::unique_ptr<source::StepSource>> {
+      if (asked != file) {
+        return crackvis::failedPrecondition(
+            fmt::format("a snapshot reads {} alone, not {}", file, asked));
       }
-      return source::openLocalSource(resolved->absolute, sizes,
-                                     source::LocalOpen::kStructureInChild);
+      if (!*first) {
+        return crackvis::failedPrecondition(fmt::format("a snapshot opens {} once", file));
+      }
+      return std::move(*first);
     };
   } else {
     auto connected = dataservice::DataClient::connect(config.data);
