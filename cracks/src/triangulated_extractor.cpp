@@ -20,7 +20,8 @@
 // never opens, and a through crack leaves no hole. A bonded pair
 // that is no triangulation neighbour keeps its bond, but no cell holds it,
 // so it makes no face of its own (cell methods) or none that exists (local
-// Voronoi reports it inconsistent).
+// Voronoi reports it inconsistent); a bonded edge of peeled hull slivers
+// alone is held by no cell either.
 #include <algorithm>
 #include <map>
 #include <numeric>

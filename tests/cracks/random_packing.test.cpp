@@ -123,7 +123,7 @@ TEST_CASE("every method covers a through crack in a random packing", "[cracks][p
         // surfaces reach the hull of the centres the plane cuts, cell cut's
         // to the midpoints of the outermost cut bonds, a little inside it.
         CHECK(covered >= 0.95);
-        // One surface. Cell attribute's cells are joined by shared nodes,
+        // One surface. Cell attribute's cells are joined by shared faces,
         // and one at the specimen's side may stand alone where the hull's
         // slivers that joined it to the rest are peeled (one cell of 1,777,
         // 1.9 % of the area, with the unequal radii): a crumb, not a second

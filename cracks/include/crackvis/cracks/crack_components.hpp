@@ -23,8 +23,9 @@
 // of a quarter of the smallest radius, so a folded or doubled surface counts
 // once. The section is the convex hull of the centres of the particles the
 // plane cuts (|distance| <= radius), projected onto it: the material the
-// plane meets, out to the centres, where every method is defined (the cells
-// of a decomposition end at the centres' hull). It is taken of the reference
+// plane meets, out to the centres, where local Voronoi is defined (the cells
+// of a decomposition end at the centres' hull, a triangulation's at the hull
+// less the slivers it peels). It is taken of the reference
 // configuration where the step has one: the plane of an opened crack runs
 // through the gap, where it cuts no particle of the current step.
 #pragma once

@@ -76,8 +76,9 @@ Result<BreakForest> readBreakForest(const dem::DemFileReader& reader,
                                     const std::vector<dem::ParticleIndex>& particles);
 
 // The part of the whole set's triangulation a triangulated piece holds, in
-// piece indices: every cell with a node in the slab and ghost layer, and
-// those cells' edges; and the forest that answers which particles the
+// piece indices: every cell with a node in the slab and ghost layer (not
+// peeled: its `peeled` stays empty), those cells' edges and those of the
+// peeled cells there; and the forest that answers which particles the
 // intact bonds still join.
 struct PieceTriangulation {
   Triangulation triangulation;
@@ -123,7 +124,8 @@ Result<std::optional<IndexedPiece>> readIndexedPiece(const dem::DemFileReader& r
                                                      int pieces, double ghostBonds);
 
 // A triangulated packing's wide cells (dem::WideCells) from its first
-// step: the cells whose reach exceeds kWideCellReach longest bonds.
+// step: the unpeeled triangulation's cells whose reach exceeds
+// kWideCellReach longest bonds, and the hull's slivers it peels.
 Result<dem::WideCells> wideCellsOf(std::span<const Vec3> first, const dem::Lattice& lattice);
 inline constexpr double kWideCellReach = 1.5;
 

@@ -19,11 +19,12 @@ namespace crackvis::cracks {
 struct Triangulation {
   int dimension = 3;
   bool weighted = false;  // regular (power) triangulation
-  // Finite cells with their nodes ascending: tetrahedra, or triangles in 2D
-  // (the fourth node -1). Sorted, so the order does not depend on CGAL's.
+  // The finite cells not peeled, with their nodes ascending: tetrahedra, or
+  // triangles in 2D (the fourth node -1). Sorted, so the order does not
+  // depend on CGAL's.
   std::vector<std::array<dem::ParticleIndex, 4>> cells;
   // The hull's slivers peeled from `cells` (TriangulateOptions::peelHull),
-  // nodes ascending, sorted.
+  // nodes ascending, sorted; empty in a piece's (cracks::PieceTriangulation).
   std::vector<std::array<dem::ParticleIndex, 4>> peeled;
   // Unique edges (first < second), sorted: every edge of the triangulation,
   // the peeled cells' too, since local Voronoi takes them for the pairs of

@@ -56,8 +56,9 @@ struct DemMetadata {
   // (cracks::decompositionOf), lets a reader of one slab skip that decision.
   bool spatialIndex = true;
   CellDecomposition decomposition = CellDecomposition::kUnknown;
-  // For a triangulated packing, what makes /index/wide_cells (unset: not
-  // written, and each rank then reads the whole set).
+  // For a triangulated packing, what makes /index/wide_cells and
+  // /index/peeled_cells (unset: not written, and each rank then reads the
+  // whole set).
   WideCellsMaker wideCells;
 };
 

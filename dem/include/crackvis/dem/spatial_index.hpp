@@ -80,7 +80,8 @@ struct WideCells {
   // The hull's slivers that the whole set's triangulation peels
   // (cracks::TriangulateOptions::peelHull), which a rank's triangulation of
   // its slab, with a hull of its own, cannot tell: it takes them out of its
-  // cells. The same form; none in `cells`.
+  // cells. The same form; those of reach over `reach` are in `cells` too
+  // (the unpeeled triangulation's wide cells).
   std::vector<std::array<ParticleIndex, 4>> peeled;
 };
 
