@@ -799,22 +799,20 @@ Result<dem::WideCells> wideCellsOf(std::span<const Vec3> first, const dem::Latti
   // The wide cells of the unpeeled triangulation, the peeled ones too: a
   // reader that knows no peeled cells (before 2026-11-30) then cuts its
   // pieces as it cuts its whole set, and one that does takes them out.
-  const std::vector<double> reach = cellReach(*triangulation, first, lattice.radius, largest);
-  for (std::size_t c = 0; c < reach.size(); ++c) {
-    if (!(reach[c] <= wide.reach)) {
-      wide.cells.push_back(triangulation->cells[c]);
+  auto addWide = [&](const Triangulation& cells) {
+    const std::vector<double> reach = cellReach(cells, first, lattice.radius, largest);
+    for (std::size_t c = 0; c < reach.size(); ++c) {
+      if (!(reach[c] <= wide.reach)) {
+        wide.cells.push_back(cells.cells[c]);
+      }
     }
-  }
+  };
+  addWide(*triangulation);
   Triangulation peeled;
   peeled.dimension = triangulation->dimension;
   peeled.weighted = triangulation->weighted;
   peeled.cells = std::move(triangulation->peeled);
-  const std::vector<double> peeledReach = cellReach(peeled, first, lattice.radius, largest);
-  for (std::size_t c = 0; c < peeledReach.size(); ++c) {
-    if (!(peeledReach[c] <= wide.reach)) {
-      wide.cells.push_back(peeled.cells[c]);
-    }
-  }
+  addWide(peeled);
   std::sort(wide.cells.begin(), wide.cells.end());
   wide.peeled = std::move(peeled.cells);
   return wide;

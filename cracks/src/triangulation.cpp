@@ -195,12 +195,11 @@ void collect3(T& t, bool peelHull, Triangulation& out) {
     cell->info() = 0;
   }
   if (peelHull && t.dimension() == 3) {
-    std::vector<Cell> outside;
-    t.incident_cells(t.infinite_vertex(), std::back_inserter(outside));
+    // The cells outside the hull, then each one's finite neighbour.
     std::vector<Cell> outer;
-    outer.reserve(outside.size());
-    for (Cell cell : outside) {
-      outer.push_back(cell->neighbor(cell->index(t.infinite_vertex())));
+    t.incident_cells(t.infinite_vertex(), std::back_inserter(outer));
+    for (Cell& cell : outer) {
+      cell = cell->neighbor(cell->index(t.infinite_vertex()));
     }
     peel(
         outer, 4, t.number_of_finite_cells(), [](Cell c) { return quality3(c); },

@@ -221,19 +221,25 @@ Status DemFileReader::checkIndexable() const {
 // so a dataset claiming more than kMaxExpansion times its stored bytes is
 // corrupt or unwritten, never a real packing.
 Status DemFileReader::checkStored(DemDataset id, std::int64_t rows) const {
-  constexpr std::uint64_t kMaxExpansion = 1100;
   constexpr std::uint64_t kRowBytes = 8;  // one float64 radius, or two int32 particle indices
   auto dataset = openChecked(id);
   if (!dataset) {
     return dataset.status();
   }
-  const auto declared = static_cast<std::uint64_t>(rows) * kRowBytes;
-  const std::uint64_t stored = h5::storedBytes(dataset->get());
+  return checkStoredBytes(dataset->get(), datasetPath(id), static_cast<std::uint64_t>(rows),
+                          kRowBytes);
+}
+
+Status DemFileReader::checkStoredBytes(hid_t dataset, const std::string& path, std::uint64_t rows,
+                                       std::uint64_t rowBytes) const {
+  constexpr std::uint64_t kMaxExpansion = 1100;
+  const std::uint64_t declared = rows * rowBytes;
+  const std::uint64_t stored = h5::storedBytes(dataset);
   if (declared > 0 && (stored == 0 || declared / kMaxExpansion > stored)) {
     return fail(failedPrecondition(fmt::format(
         "dataset {} declares {} rows ({} bytes) but the file stores only {} bytes of it "
         "(unwritten or corrupt; deflate compresses at most about 1000:1)",
-        datasetPath(id), rows, declared, stored)));
+        path, rows, declared, stored)));
   }
   return Status::ok();
 }
@@ -873,17 +879,8 @@ Status DemFileReader::checkCellListShape(const char* path) const {
                                                shape.typeName, h5::formatDims(shape.dims))));
   }
   // Rows the file does not store are refused before they are allocated,
-  // as checkStored refuses them for the lattice's arrays.
-  constexpr std::uint64_t kMaxExpansion = 1100;
-  const std::uint64_t declared = shape.dims[0] * 16;
-  const std::uint64_t stored = h5::storedBytes(opened->dataset.get());
-  if (declared > 0 && (stored == 0 || declared / kMaxExpansion > stored)) {
-    return fail(failedPrecondition(fmt::format(
-        "dataset {} declares {} rows ({} bytes) but the file stores only {} bytes of it "
-        "(unwritten or corrupt)",
-        path, shape.dims[0], declared, stored)));
-  }
-  return Status::ok();
+  // as they are for the lattice's arrays.
+  return checkStoredBytes(opened->dataset.get(), path, shape.dims[0], 16);
 }
 
 Result<std::optional<WideCells>> DemFileReader::readWideCells() const {

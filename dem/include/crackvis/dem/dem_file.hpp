@@ -233,6 +233,8 @@ class DemFileReader {
   Status checkCellListShape(const char* path) const;
   Result<std::vector<std::array<ParticleIndex, 4>>> readCellList(const char* path) const;
   Status checkStored(DemDataset id, std::int64_t rows) const;
+  Status checkStoredBytes(hid_t dataset, const std::string& path, std::uint64_t rows,
+                          std::uint64_t rowBytes) const;
   Status listExtras();
   Result<OpenedDataset> openExtra(const ExtraInfo& extra, int step) const;
   Result<ExtraArray> readExtra(const ExtraInfo& extra, int step) const;
