@@ -10,6 +10,7 @@ namespace crackvis::analysis {
 CrackAnalysis::CrackAnalysis(const dem::Lattice& lattice, AnalysisOptions options)
     : m_lattice(lattice),
       m_options(options),
+      m_components(cracks::ComponentDetail::kAreas),
       m_normals(lattice.dimension, options.opening.smoothingRadius) {}
 
 StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInput& input,
@@ -30,7 +31,9 @@ StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInp
     out.hasMain = true;
     out.mainArea = main.area;
     out.mainBox = main.box;
-    out.mainNormal = main.normal;
+    if (m_options.mainPlaneEachStep) {
+      out.mainNormal = mainPlane(mesh).normal;
+    }
   }
   m_normals.update(m_lattice.bonds, diff, input.bondState, reference);
   m_openings = measureOpening(mesh, components, m_lattice.bonds, reference, input.positions,
@@ -46,6 +49,10 @@ StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInp
   out.tension = m_modes.count(BreakMode::kTension);
   out.shear = m_modes.count(BreakMode::kShear);
   return out;
+}
+
+cracks::ComponentPlane CrackAnalysis::mainPlane(const CrackMesh& mesh) const {
+  return cracks::componentPlane(mesh, components(), 0);
 }
 
 namespace {
@@ -69,11 +76,19 @@ CrackFront crackFront(std::span<const StepAnalysis> steps, int dimension) {
     front.speed.assign(steps.size(), 0.0);
     return front;
   }
+  // The normal of the last main crack that has one; else (no caller asked
+  // for a plane) the axis its box is thinnest along.
+  const auto planed = std::find_if(steps.rbegin(), steps.rend(), [](auto& s) {
+    return s.hasMain && dem::dot(s.mainNormal, s.mainNormal) > 0.0;
+  });
   int normalAxis = 0;
   for (int axis = 1; axis < dimension; ++axis) {
-    if (std::abs(along(last->mainNormal, axis)) > std::abs(along(last->mainNormal, normalAxis))) {
-      normalAxis = axis;
-    }
+    const bool closer = planed != steps.rend()
+                            ? std::abs(along(planed->mainNormal, axis)) >
+                                  std::abs(along(planed->mainNormal, normalAxis))
+                            : along(last->mainBox.hi - last->mainBox.lo, axis) <
+                                  along(last->mainBox.hi - last->mainBox.lo, normalAxis);
+    normalAxis = closer ? axis : normalAxis;
   }
   double bestGrowth = -1.0;
   for (int axis = 0; axis < dimension; ++axis) {

@@ -3,6 +3,9 @@
 #include <cmath>
 #include <limits>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <crackvis/analysis/bond_normals.hpp>
 #include <crackvis/analysis/opening.hpp>
 #include <crackvis/analysis/tensor.hpp>
@@ -59,6 +62,55 @@ Vec3 centroidOf(const CrackMesh& mesh, const cracks::Primitive& primitive) {
   return (1.0 / static_cast<double>(std::max<std::size_t>(primitive.count, 1))) * sum;
 }
 
+// Element e of `out`: its area, centroid, cell and component, and the
+// opening and slip of the bonds it stands for.
+void measureElement(const CrackMesh& mesh, const cracks::Primitive& primitive,
+                    const CrackComponents& components, std::span<const dem::Bond> bonds,
+                    std::span<const Vec3> reference, std::span<const Vec3> current,
+                    const BondNormals& normals, const cracks::AttributeArray* cellIds,
+                    const cracks::AttributeArray* pointIds, std::size_t base, ElementOpenings& out,
+                    std::size_t e) {
+  out.area[e] = cracks::measure(mesh, primitive);
+  out.centroid[e] = centroidOf(mesh, primitive);
+  out.cell[e] = base + primitive.index;
+  if (primitive.index < components.ofPrimitive.size()) {
+    out.component[e] = components.ofPrimitive[primitive.index];
+  }
+  // The bonds of one cell cut element may cross the crack either way
+  // round: each counts along the first one's normal (the normals of
+  // neighbouring bonds are nearly parallel; their axes need not be).
+  Vec3 jump{};
+  Vec3 firstNormal{};
+  Vec3 normal{};
+  int carried = 0;
+  forEachBond(mesh, primitive, bonds.size(), cellIds, pointIds, [&](std::size_t b) {
+    const auto i = static_cast<std::size_t>(bonds[b].first);
+    const auto j = static_cast<std::size_t>(bonds[b].second);
+    if (i >= reference.size() || j >= reference.size()) {
+      return;
+    }
+    const Vec3 bondNormal = normals.normal(b);
+    if (carried == 0) {
+      firstNormal = bondNormal;
+    }
+    const double side = dem::dot(bondNormal, firstNormal) < 0.0 ? -1.0 : 1.0;
+    jump = jump + side * (current[j] - current[i] - (reference[j] - reference[i]));
+    normal = normal + side * bondNormal;
+    ++carried;
+  });
+  const double length = dem::norm(normal);
+  if (carried == 0 || length == 0.0) {
+    // No bond: the face's own normal (orientation counts it still).
+    out.normal[e] = elementNormal(mesh, primitive);
+    return;
+  }
+  out.normal[e] = (1.0 / length) * normal;
+  const Vec3 meanJump = (1.0 / carried) * jump;
+  const double normalPart = dem::dot(meanJump, out.normal[e]);
+  out.opening[e] = normalPart;
+  out.slip[e] = dem::norm(meanJump - normalPart * out.normal[e]);
+}
+
 }  // namespace
 
 ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& components,
@@ -90,48 +142,14 @@ ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& com
   out.cell.resize(count);
   out.opening.assign(count, kNaN);
   out.slip.assign(count, kNaN);
-  for (std::size_t e = 0; e < count; ++e) {
-    const cracks::Primitive& primitive = primitives[e];
-    out.area[e] = cracks::measure(mesh, primitive);
-    out.centroid[e] = centroidOf(mesh, primitive);
-    out.cell[e] = surfaceBase(mesh) + primitive.index;
-    if (primitive.index < components.ofPrimitive.size()) {
-      out.component[e] = components.ofPrimitive[primitive.index];
+  const std::size_t base = surfaceBase(mesh);
+  // Each element on its own: blocks on all cores, the same figures on any.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const auto& range) {
+    for (std::size_t e = range.begin(); e < range.end(); ++e) {
+      measureElement(mesh, primitives[e], components, bonds, reference.first(n), current.first(n),
+                     *normals, cellIds, pointIds, base, out, e);
     }
-    // The bonds of one cell cut element may cross the crack either way
-    // round: each counts along the first one's normal (the normals of
-    // neighbouring bonds are nearly parallel; their axes need not be).
-    Vec3 jump{};
-    Vec3 firstNormal{};
-    Vec3 normal{};
-    int carried = 0;
-    forEachBond(mesh, primitive, bonds.size(), cellIds, pointIds, [&](std::size_t b) {
-      const auto i = static_cast<std::size_t>(bonds[b].first);
-      const auto j = static_cast<std::size_t>(bonds[b].second);
-      if (i >= n || j >= n) {
-        return;
-      }
-      const Vec3 d0 = reference[j] - reference[i];
-      if (carried == 0) {
-        firstNormal = normals->normal(b);
-      }
-      const double side = dem::dot(normals->normal(b), firstNormal) < 0.0 ? -1.0 : 1.0;
-      jump = jump + side * (current[j] - current[i] - d0);
-      normal = normal + side * normals->normal(b);
-      ++carried;
-    });
-    const double length = dem::norm(normal);
-    if (carried == 0 || length == 0.0) {
-      // No bond: the face's own normal (orientation counts it still).
-      out.normal[e] = elementNormal(mesh, primitive);
-      continue;
-    }
-    out.normal[e] = (1.0 / length) * normal;
-    const Vec3 meanJump = (1.0 / carried) * jump;
-    const double normalPart = dem::dot(meanJump, out.normal[e]);
-    out.opening[e] = normalPart;
-    out.slip[e] = dem::norm(meanJump - normalPart * out.normal[e]);
-  }
+  });
   return out;
 }
 

@@ -473,10 +473,15 @@ Vec3 singleNormal(const Moments& moments, const Primitive& primitive, const Crac
 
 // The components of a surface whose primitives are already grouped: each
 // primitive's group (< groupCount) names its component. Components are
-// numbered in order of first appearance, then summed up.
+// numbered in order of first appearance, then summed up: every one's
+// primitives, area and box, and with ComponentDetail::kEvery its centroid
+// and plane.
 CrackComponents summariseSurface(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
-                                 const std::vector<std::int32_t>& groupOf, std::size_t groupCount) {
+                                 const std::vector<std::int32_t>& groupOf, std::size_t groupCount,
+                                 ComponentDetail detail) {
+  const bool planes = detail == ComponentDetail::kEvery;
   CrackComponents set;
+  set.planes = planes;
   set.ofPrimitive.assign(componentList(mesh).size(), -1);
   std::vector<std::int32_t> label(groupCount, -1);
   std::vector<Moments> moments;
@@ -488,26 +493,42 @@ CrackComponents summariseSurface(const CrackMesh& mesh, const std::vector<Primit
     if (label[group] < 0) {
       label[group] = static_cast<std::int32_t>(found.size());
       found.emplace_back();
-      moments.emplace_back();
-      singles.push_back(primitive);
+      if (planes) {
+        moments.emplace_back();
+        singles.push_back(primitive);
+      }
     }
     const auto c = static_cast<std::size_t>(label[group]);
     set.ofPrimitive[primitive.index] = label[group];
     auto point = [&](std::size_t v) {
       return mesh.points[static_cast<std::size_t>(primitive.ids[v])];
     };
-    ++found[c].primitives;
-    for (std::size_t v = 0; v < primitive.count; ++v) {
-      grow(found[c].box, point(v), found[c].primitives == 1 && v == 0);
+    CrackComponent& component = found[c];
+    ++component.primitives;
+    // The primitive's own box first: one merge per primitive, not per point.
+    dem::Bounds own{point(0), point(0)};
+    for (std::size_t v = 1; v < primitive.count; ++v) {
+      grow(own, point(v), false);
+    }
+    if (component.primitives == 1) {
+      component.box = own;
+    } else {
+      grow(component.box, own.lo, false);
+      grow(component.box, own.hi, false);
     }
     if (primitive.count == 2) {
-      found[c].area += measure(mesh, primitive);
-      moments[c].addSegment(point(0), point(1));
+      component.area += measure(mesh, primitive);
+      if (planes) {
+        moments[c].addSegment(point(0), point(1));
+      }
+    } else if (planes) {
+      component.area += moments[c].addPolygon(mesh.points, primitive.ids, primitive.count);
     } else {
-      found[c].area += moments[c].addPolygon(mesh.points, primitive.ids, primitive.count);
+      // polygonArea sums the cross products addPolygon sums, in its order.
+      component.area += polygonArea(mesh.points, primitive.ids, primitive.count);
     }
   }
-  for (std::size_t c = 0; c < found.size(); ++c) {
+  for (std::size_t c = 0; planes && c < found.size(); ++c) {
     found[c].centroid = moments[c].centroid();
     found[c].normal = found[c].primitives == 1 ? singleNormal(moments[c], singles[c], mesh)
                                                : bestFitNormal(moments[c], mesh.dimension);
@@ -544,7 +565,7 @@ CrackComponents surfaceComponents(const CrackMesh& mesh) {
   for (std::size_t k = 0; k < primitives.size(); ++k) {
     groupOf[k] = findRoot(parent, welded[static_cast<std::size_t>(primitives[k].ids[0])]);
   }
-  return summariseSurface(mesh, primitives, groupOf, parent.size());
+  return summariseSurface(mesh, primitives, groupOf, parent.size(), ComponentDetail::kEvery);
 }
 
 // Cells sharing a face (3D: a triangle or quad; 2D: an edge) are one
@@ -899,7 +920,7 @@ bool ComponentTracker::updateCarried(const CrackMesh& mesh) {
   for (std::int32_t& group : groupOf) {
     group = findRoot(m_parent, group);
   }
-  m_components = summariseSurface(mesh, primitives, groupOf, m_parent.size());
+  m_components = summariseSurface(mesh, primitives, groupOf, m_parent.size(), m_detail);
   return true;
 }
 
@@ -956,6 +977,37 @@ double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::s
   const bool reference = step.referencePositions.size() == step.positions.size();
   return sectionCoverage(mesh, set, c, reference ? step.referencePositions : step.positions,
                          step.radius);
+}
+
+ComponentPlane componentPlane(const CrackMesh& mesh, const CrackComponents& set, std::size_t c) {
+  if (c >= set.components.size()) {
+    return {};
+  }
+  if (set.planes || mesh.holdsCells()) {
+    return {set.components[c].centroid, set.components[c].normal};
+  }
+  // The moments summariseSurface sums, over the same primitives in its order.
+  Moments moments;
+  std::size_t count = 0;
+  Primitive single{};
+  for (const Primitive& primitive : surfacePrimitives(mesh)) {
+    if (primitive.index >= set.ofPrimitive.size() ||
+        set.ofPrimitive[primitive.index] != static_cast<std::int32_t>(c)) {
+      continue;
+    }
+    single = count++ == 0 ? primitive : single;
+    if (primitive.count == 2) {
+      moments.addSegment(mesh.points[static_cast<std::size_t>(primitive.ids[0])],
+                         mesh.points[static_cast<std::size_t>(primitive.ids[1])]);
+    } else {
+      moments.addPolygon(mesh.points, primitive.ids, primitive.count);
+    }
+  }
+  if (count == 0) {
+    return {};
+  }
+  return {moments.centroid(), count == 1 ? singleNormal(moments, single, mesh)
+                                         : bestFitNormal(moments, mesh.dimension)};
 }
 
 void keepComponents(CrackMesh& mesh, const CrackComponents& set, const ComponentFilter& filter) {

@@ -60,6 +60,24 @@ void requireSameComponents(const cracks::CrackComponents& kept,
   }
 }
 
+// A tracker that sums areas only: the same components, areas and boxes, and
+// componentPlane gives each one's centroid and plane to the last bit.
+void requireSameAreasAndPlanes(const cracks::CrackMesh& mesh, const cracks::CrackComponents& kept,
+                               const cracks::CrackComponents& anew) {
+  REQUIRE(kept.components.size() == anew.components.size());
+  CHECK(kept.ofPrimitive == anew.ofPrimitive);
+  for (std::size_t c = 0; c < anew.components.size(); ++c) {
+    CHECK(kept.components[c].primitives == anew.components[c].primitives);
+    CHECK(kept.components[c].area == anew.components[c].area);
+    CHECK(dem::norm(kept.components[c].box.lo - anew.components[c].box.lo) == 0.0);
+    CHECK(dem::norm(kept.components[c].box.hi - anew.components[c].box.hi) == 0.0);
+    const cracks::ComponentPlane plane = cracks::componentPlane(mesh, kept, c);
+    CHECK(dem::norm(plane.centroid - anew.components[c].centroid) == 0.0);
+    CHECK(dem::norm(plane.normal - anew.components[c].normal) == 0.0);
+  }
+  CHECK(dem::norm(cracks::componentPlane(mesh, kept, anew.components.size()).normal) == 0.0);
+}
+
 }  // namespace
 
 TEST_CASE("components kept across steps equal the components found anew at each step",
@@ -79,13 +97,18 @@ TEST_CASE("components kept across steps equal the components found anew at each 
       CAPTURE(what);
       auto extractor = cracks::makeExtractor(method, graph, dem::dimensionOf(c.kind));
       cracks::ComponentTracker tracker;
+      cracks::ComponentTracker areas(cracks::ComponentDetail::kAreas);
       cracks::CrackMesh mesh;
       std::size_t largest = 0;
       for (const dem::StepState& state : run.steps) {
         REQUIRE(extractor->extract(inputOf(run, state), mesh));
-        requireSameComponents(tracker.update(mesh, true), cracks::findComponents(mesh));
+        const cracks::CrackComponents anew = cracks::findComponents(mesh);
+        requireSameComponents(tracker.update(mesh, true), anew);
+        requireSameAreasAndPlanes(mesh, areas.update(mesh, true), anew);
         largest = std::max(largest, tracker.current().components.size());
       }
+      // Kept surfaces hold no planes; those found anew (cells too) do.
+      CHECK(areas.current().planes == (tracker.recomputations() > 0));
       // Local Voronoi and cell centre carry a bond per face: only the new
       // faces are welded, and there are many pieces to join or keep apart.
       // The others are found anew at every step.

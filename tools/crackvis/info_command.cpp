@@ -224,6 +224,10 @@ Status analyseCracks(const InfoOptions& options, FileSummary& summary) {
         analyses.analyse(step, time, *input, input->referencePositions, mesh,
                          analysis::recordedBreakModes((*series)->state().extras)));
   }
+  // The front's axes follow the last main crack's plane.
+  if (!summary.cracks.empty() && summary.cracks.back().hasMain) {
+    summary.cracks.back().mainNormal = analyses.mainPlane(mesh).normal;
+  }
   summary.front = analysis::crackFront(summary.cracks, lattice.dimension);
   return Status::ok();
 }

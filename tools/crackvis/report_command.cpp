@@ -119,6 +119,11 @@ int runReport(const ReportCommandOptions& options) {
     ReportRow row{analysis.analyse(step, time, *input, input->referencePositions, mesh,
                                    analysis::recordedBreakModes((*series)->state().extras)),
                   {}};
+    // The main crack's plane where the report reads it: the profile's step
+    // and the front's last step.
+    if (row.step.hasMain && (step == at || k + 1 == steps->size())) {
+      row.step.mainNormal = analysis.mainPlane(mesh).normal;
+    }
     collectScalars((*series)->state(), data.scalarNames, row.scalars);
     data.rows.push_back(std::move(row));
     if (step == at) {

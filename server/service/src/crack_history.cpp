@@ -7,6 +7,18 @@
 
 namespace crackvis::service {
 
+namespace {
+
+// Every step's main plane: a history may be shown up to any step, and its
+// front's axes follow the last shown main crack's plane.
+analysis::AnalysisOptions everyStepsPlane() {
+  analysis::AnalysisOptions options;
+  options.mainPlaneEachStep = true;
+  return options;
+}
+
+}  // namespace
+
 Result<std::unique_ptr<CrackHistoryRun>> CrackHistoryRun::start(
     std::unique_ptr<source::StepSource> source, cracks::Method method, bool recordedModes) {
   // The modes need each bond's force and break step where the file has them.
@@ -28,7 +40,7 @@ CrackHistoryRun::CrackHistoryRun(std::unique_ptr<source::StepSource> source, cra
       m_recordedModes(recordedModes),
       m_graph(m_source->lattice().particleCount(), m_source->lattice().bonds),
       m_extractor(cracks::makeExtractor(method, m_graph, m_source->lattice().dimension)),
-      m_analyses(m_source->lattice(), {}) {}
+      m_analyses(m_source->lattice(), everyStepsPlane()) {}
 
 bool CrackHistoryRun::continues(const std::string& file, cracks::Method method,
                                 bool recordedModes) const {

@@ -29,6 +29,10 @@ namespace crackvis::analysis {
 struct AnalysisOptions {
   OpeningOptions opening;
   std::size_t minFragment = 1;  // particles; smaller fragments are dust
+  // Fill StepAnalysis::mainNormal at every step. Off, only mainPlane() gives
+  // it, for the steps that need it: the second moments of the main crack's
+  // every face were half the analyses' work of a step.
+  bool mainPlaneEachStep = false;
 };
 
 struct StepAnalysis {
@@ -40,7 +44,7 @@ struct StepAnalysis {
   bool hasMain = false;
   double mainArea = 0.0;
   dem::Bounds mainBox;
-  Vec3 mainNormal;
+  Vec3 mainNormal;  // zero unless AnalysisOptions::mainPlaneEachStep, or set from mainPlane()
   OpeningSummary mainOpening;
   OpeningSummary allOpening;
   std::size_t fragments = 0;  // of at least minFragment particles
@@ -60,7 +64,13 @@ class CrackAnalysis {
                        std::span<const Vec3> reference, const CrackMesh& mesh,
                        std::span<const double> recordedModes = {});
 
+  // Every component's primitives, area and box; the centroid and plane of
+  // the main one (components[0]) only (cracks::ComponentDetail::kLargest).
+  // Every component's primitives, area and box (cracks::ComponentDetail::kAreas).
   const CrackComponents& components() const { return m_components.current(); }
+  // The main crack's centroid and best-fit plane at the step analysed last;
+  // `mesh`: the one given to analyse.
+  cracks::ComponentPlane mainPlane(const CrackMesh& mesh) const;
   const ElementOpenings& openings() const { return m_openings; }
   const Fragments& fragments() const { return m_fragments.current(); }
   const FragmentTracker& fragmentTracker() const { return m_fragments; }
@@ -85,7 +95,9 @@ struct CrackFront {
 };
 
 // The in-plane axes are the world axes other than the one the last main
-// crack's normal is closest to (2D: and z); of those, the one along which
+// crack's normal is closest to (2D: and z); the last main crack with a
+// normal (mainNormal set), or without any, the axis the last main crack's
+// box is thinnest along. Of those, the one along which
 // the main crack's extent grew most from its first step to its last.
 CrackFront crackFront(std::span<const StepAnalysis> steps, int dimension);
 

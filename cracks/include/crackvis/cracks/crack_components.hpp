@@ -61,6 +61,9 @@ struct CrackComponents {
   // volume cell (3D) or triangle (2D) of a cell mesh, in mesh order, as an
   // index into `components`; -1 for inconsistency marks.
   std::vector<std::int32_t> ofPrimitive;
+  // False where only each component's primitives, area and box were summed
+  // (ComponentDetail::kAreas): componentPlane finds a centroid and plane.
+  bool planes = true;
 };
 
 CrackComponents findComponents(const CrackMesh& mesh);
@@ -73,12 +76,20 @@ CrackComponents findComponents(const CrackMesh& mesh);
 // that shared a point keep sharing it, and faces only come as bonds break.
 // So only the faces of bonds new since the last step are welded: against
 // each other, and against the old faces' points that fall near them. The
-// components' areas, boxes and planes are summed anew each step (the faces
-// move). Anything else (cells, cell cut's point bond ids, no reference
+// components' areas, boxes and (ComponentDetail::kEvery) planes are summed
+// anew each step (the faces move). Anything else (cells, cell cut's point bond ids, no reference
 // configuration, a bond that left the mesh or holds two cells) is found
 // anew by findComponents, and the tracker starts over.
+
+// What the tracker sums of each component each step: everything (kEvery),
+// or its primitives, area and box (kAreas: the analyses ask for one
+// component's plane now and then, and the second moments of every face were
+// most of a step's work).
+enum class ComponentDetail { kEvery, kAreas };
+
 class ComponentTracker {
  public:
+  explicit ComponentTracker(ComponentDetail detail = ComponentDetail::kEvery) : m_detail(detail) {}
   const CrackComponents& update(const CrackMesh& mesh, bool carried);
   const CrackComponents& current() const { return m_components; }
   // How often update() found the components of the whole mesh anew.
@@ -97,6 +108,7 @@ class ComponentTracker {
   std::vector<std::int64_t> m_cellOfSlot;  // the slot's cell this step
   std::vector<std::uint32_t> m_seenAt;     // the step stamp a slot was last seen at
   std::uint32_t m_stamp = 0;
+  ComponentDetail m_detail;
   CrackComponents m_components;
   std::size_t m_recomputations = 0;
 };
@@ -113,6 +125,15 @@ double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::s
 // The same for a step: of its reference configuration, if it has one.
 double sectionCoverage(const CrackMesh& mesh, const CrackComponents& set, std::size_t c,
                        const StepInput& step);
+
+// Component c's centroid and best-fit plane as findComponents gives them
+// (to the last bit: the same moments in the same order), also where `set`
+// holds areas only; zero for a c it does not have.
+struct ComponentPlane {
+  Vec3 centroid;
+  Vec3 normal;
+};
+ComponentPlane componentPlane(const CrackMesh& mesh, const CrackComponents& set, std::size_t c);
 
 // Which components to keep: those of at least `minArea`, and of those the
 // `largest` biggest (0: all).
