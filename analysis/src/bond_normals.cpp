@@ -29,6 +29,9 @@ void BondNormals::reset(std::size_t bondCount) {
   m_normal.clear();
   m_window.clear();
   m_stale.clear();
+  m_sumsOf.clear();
+  m_sums.clear();
+  m_freeSums.clear();
   m_slots.assign(1024, Slot{});
   m_lists.clear();
 }
@@ -111,31 +114,15 @@ void BondNormals::forNear(dem::Vec3 p, Visit&& visit) const {
   }
 }
 
-dem::Vec3 BondNormals::findNormal(std::size_t k, std::uint32_t& window) const {
-  // One pass over the grid collects the window; the sums run over it.
-  thread_local std::vector<std::pair<std::size_t, double>> near;
-  near.clear();
-  forNear(m_mid[k], [&](std::size_t b, double w) { near.emplace_back(b, w); });
-  window = static_cast<std::uint32_t>(near.size());
-  return normalOf(k, near);
-}
-
-dem::Vec3 BondNormals::normalOf(std::size_t k,
-                                std::span<const std::pair<std::size_t, double>> near) const {
-  double weight = 0.0;
-  dem::Vec3 mean{};
-  for (const auto& [b, w] : near) {
-    weight += w;
-    mean = mean + w * m_mid[b];
-  }
+dem::Vec3 BondNormals::normalOf(std::size_t k, const WindowSums& sums) const {
   dem::Vec3 axis;
   bool planar = false;
-  if (near.size() >= (m_flat ? 2u : 3u) && weight > 0.0) {
-    mean = (1.0 / weight) * mean;
-    AxialTensor spread;
-    for (const auto& [b, w] : near) {
-      spread.add(m_mid[b] - mean, w);
-    }
+  if (sums.count >= (m_flat ? 2u : 3u) && sums.weight > 0.0) {
+    // The spread about the weighted mean: sum w d d^T - W mean mean^T, of
+    // offsets from the bond's own midpoint (at most R long: no cancellation).
+    const dem::Vec3 mean = (1.0 / sums.weight) * sums.offset;
+    AxialTensor spread = sums.spread;
+    spread.add(mean, -sums.weight);
     const double total = spread.trace();
     if (m_flat) {
       spread.addZ(total + 1.0);  // z is never the normal of a 2D crack
@@ -146,11 +133,7 @@ dem::Vec3 BondNormals::normalOf(std::size_t k,
     planar = across < 0.1 * inPlane;  // far less spread across than along
   }
   if (!planar) {
-    AxialTensor directions;
-    for (const auto& [b, w] : near) {
-      directions.add(m_axis[b], w);
-    }
-    axis = directions.principalAxis();
+    axis = sums.directions.principalAxis();
   }
   return dem::dot(axis, m_axis[k]) < 0.0 ? -1.0 * axis : axis;
 }
@@ -188,33 +171,50 @@ void BondNormals::add(std::span<const dem::Bond> bonds, std::span<const std::int
     m_axis.push_back(length > 0.0 ? (1.0 / length) * d0 : dem::Vec3{});
     m_normal.emplace_back();
     m_window.push_back(0);
-    m_stale.push_back(1);
+    m_stale.push_back(0);
+    if (m_freeSums.empty()) {
+      m_sumsOf.push_back(static_cast<std::int32_t>(m_sums.size()));
+      m_sums.emplace_back();
+    } else {
+      m_sumsOf.push_back(m_freeSums.back());
+      m_freeSums.pop_back();
+      m_sums[static_cast<std::size_t>(m_sumsOf.back())] = WindowSums{};
+    }
     cell(cellKey(mid)).push_back({mid, k});
   }
   // The new bonds, and the broken bonds whose window they entered while that
   // window was still sparse: once a window holds kSettledWindow midpoints,
   // one more moves its plane little, and finding it again for every break
-  // nearby was most of a step's cost on a large crack. A new bond's window
-  // is the list of bonds it entered: one search gives both.
+  // nearby was most of a step's cost on a large crack. One search per new
+  // bond sums its own window and adds it to the sparse windows it entered.
   std::vector<std::size_t> again;
-  std::vector<std::pair<std::size_t, double>> near;
   for (std::size_t k = first; k < m_mid.size(); ++k) {
-    near.clear();
+    WindowSums& own = sumsOf(k);
     forNear(m_mid[k], [&](std::size_t b, double w) {
-      near.emplace_back(b, w);
-      if (m_stale[b] == 0 && m_window[b] < kSettledWindow) {
-        m_stale[b] = 1;
-        again.push_back(b);
+      own.add(m_mid[b] - m_mid[k], w, m_axis[b]);
+      if (b < first && m_sumsOf[b] >= 0) {
+        sumsOf(b).add(m_mid[k] - m_mid[b], w, m_axis[k]);
+        if (m_stale[b] == 0) {
+          m_stale[b] = 1;
+          again.push_back(b);
+        }
       }
     });
-    m_normal[k] = normalOf(k, near);
-    m_window[k] = static_cast<std::uint32_t>(near.size());
+  }
+  auto find = [&](std::size_t k) {
+    const WindowSums& sums = sumsOf(k);
+    m_normal[k] = normalOf(k, sums);
+    m_window[k] = sums.count;
+    if (sums.count >= kSettledWindow) {
+      m_freeSums.push_back(m_sumsOf[k]);
+      m_sumsOf[k] = -1;
+    }
+  };
+  for (std::size_t k = first; k < m_mid.size(); ++k) {
+    find(k);
   }
   for (std::size_t k : again) {
-    m_normal[k] = findNormal(k, m_window[k]);
-  }
-  std::fill(m_stale.begin() + static_cast<std::ptrdiff_t>(first), m_stale.end(), 0);
-  for (std::size_t k : again) {
+    find(k);
     m_stale[k] = 0;
   }
   m_computed += m_mid.size() - first + again.size();

@@ -54,12 +54,25 @@ Vec3 elementNormal(const CrackMesh& mesh, const cracks::Primitive& primitive) {
   return cracks::polygonNormal(mesh.points, primitive.ids, primitive.count);
 }
 
-Vec3 centroidOf(const CrackMesh& mesh, const cracks::Primitive& primitive) {
-  Vec3 sum{};
-  for (std::size_t k = 0; k < primitive.count; ++k) {
-    sum = sum + mesh.points[static_cast<std::size_t>(primitive.ids[k])];
+// An element's area (2D: length), as cracks::measure gives it, and its
+// centroid, reading its points once.
+void measureShape(const CrackMesh& mesh, const cracks::Primitive& primitive, double& area,
+                  Vec3& centroid) {
+  const Vec3 origin = mesh.points[static_cast<std::size_t>(primitive.ids[0])];
+  Vec3 sum = origin;
+  Vec3 newell{};
+  Vec3 previous{};  // the last point less the origin
+  for (std::size_t k = 1; k < primitive.count; ++k) {
+    const Vec3 p = mesh.points[static_cast<std::size_t>(primitive.ids[k])];
+    sum = sum + p;
+    const Vec3 offset = p - origin;
+    if (k >= 2) {
+      newell = newell + cracks::cross(previous, offset);
+    }
+    previous = offset;
   }
-  return (1.0 / static_cast<double>(std::max<std::size_t>(primitive.count, 1))) * sum;
+  centroid = (1.0 / static_cast<double>(std::max<std::size_t>(primitive.count, 1))) * sum;
+  area = primitive.count == 2 ? dem::norm(previous) : 0.5 * dem::norm(newell);
 }
 
 // Element e of `out`: its area, centroid, cell and component, and the
@@ -70,8 +83,7 @@ void measureElement(const CrackMesh& mesh, const cracks::Primitive& primitive,
                     const BondNormals& normals, const cracks::AttributeArray* cellIds,
                     const cracks::AttributeArray* pointIds, std::size_t base, ElementOpenings& out,
                     std::size_t e) {
-  out.area[e] = cracks::measure(mesh, primitive);
-  out.centroid[e] = centroidOf(mesh, primitive);
+  measureShape(mesh, primitive, out.area[e], out.centroid[e]);
   out.cell[e] = base + primitive.index;
   if (primitive.index < components.ofPrimitive.size()) {
     out.component[e] = components.ofPrimitive[primitive.index];

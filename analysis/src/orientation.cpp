@@ -38,7 +38,9 @@ std::array<double, 2> equalAreaPoint(Vec3 n) {
   if (n.z > 0.0) {
     n = -1.0 * n;
   }
-  const double horizontal = std::hypot(n.x, n.y);
+  // Unit normals: no overflow to guard against (std::hypot's care was a
+  // third of a step's stereonet).
+  const double horizontal = std::sqrt(n.x * n.x + n.y * n.y);
   if (horizontal == 0.0) {
     return {0.0, 0.0};
   }

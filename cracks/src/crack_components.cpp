@@ -855,10 +855,18 @@ void ComponentTracker::weldNewFaces(const CrackMesh& mesh, const std::vector<Pri
       marks.mark(mesh.points[static_cast<std::size_t>(primitives[k].ids[v])], margin);
     }
   }
+  // Beyond the new faces' box by more than a key's cell, no point welds to
+  // theirs: most old points are turned away by six comparisons.
+  const Vec3 reachLo = box.lo - Vec3{margin, margin, margin};
+  const Vec3 reachHi = box.hi + Vec3{margin, margin, margin};
+  auto within = [&](Vec3 p) {
+    return p.x >= reachLo.x && p.x <= reachHi.x && p.y >= reachLo.y && p.y <= reachHi.y &&
+           p.z >= reachLo.z && p.z <= reachHi.z;
+  };
   for (std::size_t k = 0; k < primitives.size(); ++k) {
     for (std::size_t v = 0; slots[k] < oldSlots && v < primitives[k].count; ++v) {
       const Vec3 p = mesh.points[static_cast<std::size_t>(primitives[k].ids[v])];
-      if (!marks.marked(p)) {
+      if (!within(p) || !marks.marked(p)) {
         continue;
       }
       const auto at = newKeys.find(weldKey(p, tolerance));

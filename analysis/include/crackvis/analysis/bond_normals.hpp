@@ -16,8 +16,8 @@
 //
 // Incremental: a step's new breaks get their normals, and the broken bonds
 // within R of a new one are found again while their window is sparse (fewer
-// than kSettledWindow midpoints); a bond that heals (a viewer stepping back)
-// starts the set over.
+// than kSettledWindow midpoints), from sums each new break adds itself to;
+// a bond that heals (a viewer stepping back) starts the set over.
 #pragma once
 
 #include <cstdint>
@@ -26,6 +26,7 @@
 #include <vector>
 
 #include <crackvis/analysis/bond_diff.hpp>
+#include <crackvis/analysis/tensor.hpp>
 #include <crackvis/dem/model.hpp>
 
 namespace crackvis::analysis {
@@ -56,18 +57,42 @@ class BondNormals {
   double radius() const { return m_radius; }
   // How many normals were found (again) in all: the incremental work.
   std::size_t computed() const { return m_computed; }
+  // The midpoints in a broken bond's window when its normal was last found
+  // (0 for one not in the set); from kSettledWindow on it is found no more.
+  std::uint32_t window(std::size_t bond) const {
+    return bond < m_index.size() && m_index[bond] >= 0
+               ? m_window[static_cast<std::size_t>(m_index[bond])]
+               : 0;
+  }
+  static constexpr std::uint32_t kSettledWindow = 24;
 
  private:
   void reset(std::size_t bondCount);
   std::uint64_t cellKey(dem::Vec3 p) const;
   template <typename Visit>
   void forNear(dem::Vec3 p, Visit&& visit) const;
-  // The normal of broken bond k (its index among the broken ones); also
-  // stores how many midpoints its window held.
-  dem::Vec3 findNormal(std::size_t k, std::uint32_t& window) const;
-  // The normal from broken bond k's window: (index, weight) pairs.
-  dem::Vec3 normalOf(std::size_t k, std::span<const std::pair<std::size_t, double>> near) const;
-  static constexpr std::uint32_t kSettledWindow = 24;
+  // What a window's plane is found from, summed while the window is sparse:
+  // the midpoints' weights and offsets from the bond's own midpoint, their
+  // second moments, and those of the reference directions. A new break adds
+  // itself to the sparse windows it enters, so none is searched again.
+  struct WindowSums {
+    std::uint32_t count = 0;
+    double weight = 0.0;
+    dem::Vec3 offset{};
+    AxialTensor spread;
+    AxialTensor directions;
+    void add(dem::Vec3 d, double w, dem::Vec3 axis) {
+      ++count;
+      weight += w;
+      offset = offset + w * d;
+      spread.add(d, w);
+      directions.add(axis, w);
+    }
+  };
+  // The normal of broken bond k (its index among the broken ones) from its
+  // window's sums.
+  dem::Vec3 normalOf(std::size_t k, const WindowSums& sums) const;
+  WindowSums& sumsOf(std::size_t k) { return m_sums[static_cast<std::size_t>(m_sumsOf[k])]; }
 
   bool m_flat;
   double m_radius;
@@ -79,6 +104,9 @@ class BondNormals {
   std::vector<dem::Vec3> m_normal;
   std::vector<std::uint32_t> m_window;  // midpoints in the window when last found
   std::vector<std::uint8_t> m_stale;    // scratch of add(), all 0 between calls
+  std::vector<std::int32_t> m_sumsOf;   // [K] into m_sums; -1 once the window settled
+  std::vector<WindowSums> m_sums;       // of the sparse windows, slots reused
+  std::vector<std::int32_t> m_freeSums;
   // The broken bonds' midpoints by grid cell (of size R), kept beside their
   // ids so a window's search reads each cell's entries in a row.
   struct Entry {
