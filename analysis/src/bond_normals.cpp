@@ -1,8 +1,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numeric>
 #include <utility>
 #include <vector>
+
+#include <tbb/parallel_for.h>
 
 #include <crackvis/analysis/bond_normals.hpp>
 #include <crackvis/analysis/tensor.hpp>
@@ -187,37 +190,54 @@ void BondNormals::add(std::span<const dem::Bond> bonds, std::span<const std::int
   // one more moves its plane little, and finding it again for every break
   // nearby was most of a step's cost on a large crack. One search per new
   // bond sums its own window and adds it to the sparse windows it entered.
-  std::vector<std::size_t> again;
-  for (std::size_t k = first; k < m_mid.size(); ++k) {
-    WindowSums& own = sumsOf(k);
-    forNear(m_mid[k], [&](std::size_t b, double w) {
-      own.add(m_mid[b] - m_mid[k], w, m_axis[b]);
-      if (b < first && m_sumsOf[b] >= 0) {
-        sumsOf(b).add(m_mid[k] - m_mid[b], w, m_axis[k]);
-        if (m_stale[b] == 0) {
-          m_stale[b] = 1;
-          again.push_back(b);
+  // The searches run on all cores in blocks; what they add to the old
+  // windows is added after, block by block, so every sum is taken in the
+  // same order on any number of cores.
+  struct Entered {
+    std::size_t window;  // the old bond whose window a new one entered
+    std::size_t by;      // the new bond
+    double weight;
+  };
+  constexpr std::size_t kBlock = 256;
+  const std::size_t blocks = (m_mid.size() - first + kBlock - 1) / kBlock;
+  std::vector<std::vector<Entered>> entered(blocks);
+  tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t block) {
+    const std::size_t end = std::min(m_mid.size(), first + (block + 1) * kBlock);
+    for (std::size_t k = first + block * kBlock; k < end; ++k) {
+      WindowSums& own = sumsOf(k);
+      forNear(m_mid[k], [&](std::size_t b, double w) {
+        own.add(m_mid[b] - m_mid[k], w, m_axis[b]);
+        if (b < first && m_sumsOf[b] >= 0) {
+          entered[block].push_back({b, k, w});
         }
+      });
+    }
+  });
+  std::vector<std::size_t> found(m_mid.size() - first);
+  std::iota(found.begin(), found.end(), first);
+  for (const std::vector<Entered>& list : entered) {
+    for (const Entered& e : list) {
+      sumsOf(e.window).add(m_mid[e.by] - m_mid[e.window], e.weight, m_axis[e.by]);
+      if (m_stale[e.window] == 0) {
+        m_stale[e.window] = 1;
+        found.push_back(e.window);
       }
-    });
+    }
   }
-  auto find = [&](std::size_t k) {
-    const WindowSums& sums = sumsOf(k);
-    m_normal[k] = normalOf(k, sums);
-    m_window[k] = sums.count;
-    if (sums.count >= kSettledWindow) {
+  // The planes on all cores; then the settled windows give their sums back.
+  tbb::parallel_for(std::size_t{0}, found.size(), [&](std::size_t n) {
+    const std::size_t k = found[n];
+    m_normal[k] = normalOf(k, sumsOf(k));
+    m_window[k] = sumsOf(k).count;
+  });
+  for (std::size_t k : found) {
+    m_stale[k] = 0;
+    if (m_window[k] >= kSettledWindow) {
       m_freeSums.push_back(m_sumsOf[k]);
       m_sumsOf[k] = -1;
     }
-  };
-  for (std::size_t k = first; k < m_mid.size(); ++k) {
-    find(k);
   }
-  for (std::size_t k : again) {
-    find(k);
-    m_stale[k] = 0;
-  }
-  m_computed += m_mid.size() - first + again.size();
+  m_computed += found.size();
 }
 
 void BondNormals::update(std::span<const dem::Bond> bonds, std::span<const std::uint8_t> bondState,

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/global_control.h>
+
 #include "analysis_fixtures.hpp"
 #include <crackvis/analysis/bond_diff.hpp>
 #include <crackvis/cracks/crack_components.hpp>
@@ -292,6 +294,33 @@ TEST_CASE("a sparse window's normal, from sums its new breaks added, is the wind
   // Scattered breaks give sparse windows; the crack's plane, settled ones.
   CHECK(sparse > 50);
   CHECK(settled > 50);
+}
+
+TEST_CASE("normals found on one core and on all are the same to the last bit",
+          "[analysis][incremental]") {
+  const Run run = plantedRun(dem::LatticeKind::kFcc, dem::fccUnitCells(5, 4, 4), 0.05);
+  const auto& lattice = run.block.lattice;
+  auto normalsOn = [&](std::size_t cores) {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, cores);
+    BondNormals normals(3, 1.5);
+    for (const dem::StepState& state : run.steps) {
+      normals.update(lattice.bonds, state.bondState, run.block.positions);
+    }
+    std::vector<dem::Vec3> out;
+    for (std::size_t b = 0; b < lattice.bonds.size(); ++b) {
+      out.push_back(normals.normal(b));
+    }
+    return std::pair{out, normals.computed()};
+  };
+  const auto one = normalsOn(1);
+  const auto all = normalsOn(4);
+  CHECK(one.second == all.second);
+  REQUIRE(one.first.size() == all.first.size());
+  std::size_t differ = 0;
+  for (std::size_t b = 0; b < one.first.size(); ++b) {
+    differ += dem::norm(one.first[b] - all.first[b]) == 0.0 ? 0 : 1;
+  }
+  CHECK(differ == 0);
 }
 
 TEST_CASE("normals and break modes read from the new breaks equal those from all bond states",
