@@ -122,7 +122,7 @@ dem::Vec3 BondNormals::normalOf(std::size_t k, const WindowSums& sums) const {
   bool planar = false;
   if (sums.count >= (m_flat ? 2u : 3u) && sums.weight > 0.0) {
     // The spread about the weighted mean: sum w d d^T - W mean mean^T, of
-    // offsets from the bond's own midpoint (at most R long: no cancellation).
+    // offsets from the bond's own midpoint (at most R long: little cancellation).
     const dem::Vec3 mean = (1.0 / sums.weight) * sums.offset;
     AxialTensor spread = sums.spread;
     spread.add(mean, -sums.weight);
@@ -198,7 +198,7 @@ void BondNormals::add(std::span<const dem::Bond> bonds, std::span<const std::int
     std::size_t by;      // the new bond
     double weight;
   };
-  constexpr std::size_t kBlock = 256;
+  constexpr std::size_t kBlock = kSearchBlock;
   const std::size_t blocks = (m_mid.size() - first + kBlock - 1) / kBlock;
   std::vector<std::vector<Entered>> entered(blocks);
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t block) {

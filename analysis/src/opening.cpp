@@ -58,8 +58,13 @@ Vec3 elementNormal(const CrackMesh& mesh, const cracks::Primitive& primitive) {
 // centroid, reading its points once.
 void measureShape(const CrackMesh& mesh, const cracks::Primitive& primitive, double& area,
                   Vec3& centroid) {
+  if (primitive.count == 0) {
+    area = 0.0;
+    centroid = Vec3{};
+    return;
+  }
   const Vec3 origin = mesh.points[static_cast<std::size_t>(primitive.ids[0])];
-  Vec3 sum = origin;
+  Vec3 sum = Vec3{} + origin;
   Vec3 newell{};
   Vec3 previous{};  // the last point less the origin
   for (std::size_t k = 1; k < primitive.count; ++k) {

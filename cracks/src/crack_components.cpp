@@ -505,6 +505,9 @@ CrackComponents summariseSurface(const CrackMesh& mesh, const std::vector<Primit
     };
     CrackComponent& component = found[c];
     ++component.primitives;
+    if (primitive.count == 0) {
+      continue;  // an empty polygon: no point, no area
+    }
     // The primitive's own box first: one merge per primitive, not per point.
     dem::Bounds own{point(0), point(0)};
     for (std::size_t v = 1; v < primitive.count; ++v) {

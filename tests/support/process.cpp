@@ -86,6 +86,21 @@ std::vector<std::string> lines(const std::string& text) {
   return result;
 }
 
+std::vector<std::string> programLines(const std::string& text) {
+  std::vector<std::string> result;
+  for (std::string& line : lines(text)) {
+    // "==PID==WARNING: AddressSanitizer failed to allocate ...": the
+    // sanitizer's own note when a library asks for more than exists.
+    const bool sanitizerNote =
+        line.rfind("==", 0) == 0 &&
+        line.find("==WARNING: AddressSanitizer failed to allocate") != std::string::npos;
+    if (!sanitizerNote) {
+      result.push_back(std::move(line));
+    }
+  }
+  return result;
+}
+
 std::uint64_t residentBytes() {
   std::ifstream statm("/proc/self/statm");
   std::uint64_t size = 0;

@@ -40,5 +40,8 @@ std::string fileText(const std::string& path);
 
 // Non-empty lines of a text.
 std::vector<std::string> lines(const std::string& text);
+// The same without the notes a sanitizer build's runtime adds of its own
+// (an allocation of 2^64 bytes that libhdf5 asks for and is refused).
+std::vector<std::string> programLines(const std::string& text);
 
 }  // namespace crackvis::testing

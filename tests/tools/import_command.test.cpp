@@ -201,7 +201,7 @@ TEST_CASE("Every local reader refuses every file the fuzzers kept, with one line
       auto run = runProcess(command);
       INFO(command[1] << " " << command[2] << " on " << path << "\n" << run.err);
       CHECK(run.exitCode == 1);
-      CHECK(crackvis::testing::lines(run.err).size() == 1);
+      CHECK(crackvis::testing::programLines(run.err).size() == 1);
       CHECK_THAT(run.err, Catch::Contains(name));
       CHECK_THAT(run.err, !Catch::Contains("internal error"));
     }

@@ -65,6 +65,8 @@ class BondNormals {
                : 0;
   }
   static constexpr std::uint32_t kSettledWindow = 24;
+  // New breaks per block of add()'s searches on all cores.
+  static constexpr std::size_t kSearchBlock = 256;
 
  private:
   void reset(std::size_t bondCount);

@@ -64,9 +64,9 @@ class CrackAnalysis {
                        std::span<const Vec3> reference, const CrackMesh& mesh,
                        std::span<const double> recordedModes = {});
 
-  // Every component's primitives, area and box; the centroid and plane of
-  // the main one (components[0]) only (cracks::ComponentDetail::kLargest).
-  // Every component's primitives, area and box (cracks::ComponentDetail::kAreas).
+  // Every component's primitives, area and box (cracks::ComponentDetail::kAreas):
+  // centroids and planes are zero unless `planes` (where the tracker found the
+  // components anew); mainPlane() or cracks::componentPlane give them.
   const CrackComponents& components() const { return m_components.current(); }
   // The main crack's centroid and best-fit plane at the step analysed last;
   // `mesh`: the one given to analyse.
@@ -95,9 +95,11 @@ struct CrackFront {
 };
 
 // The in-plane axes are the world axes other than the one the last main
-// crack's normal is closest to (2D: and z); the last main crack with a
-// normal (mainNormal set), or without any, the axis the last main crack's
-// box is thinnest along. Of those, the one along which
+// crack's normal is closest to (2D: and z): of the last step with a main
+// crack and a normal (mainNormal set; `crackvis report` and `info` set the
+// last step's, so where bonds healed and the last step has no main crack,
+// an earlier step's), or without any, the axis the last main crack's box is
+// thinnest along. Of those, the one along which
 // the main crack's extent grew most from its first step to its last.
 CrackFront crackFront(std::span<const StepAnalysis> steps, int dimension);
 

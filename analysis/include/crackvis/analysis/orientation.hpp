@@ -50,7 +50,7 @@ struct Stereonet {
   std::vector<double> weight;  // [row y][column x], size * size
   double cellCentre(int k) const { return -1.0 + (k + 0.5) * 2.0 / size; }
 };
-// The projected point of an axial direction (lower hemisphere).
+// The projected point of an axial unit direction (lower hemisphere).
 std::array<double, 2> equalAreaPoint(Vec3 n);
 Stereonet stereonet(const ElementOpenings& elements, int component, int size);
 

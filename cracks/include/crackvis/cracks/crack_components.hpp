@@ -51,6 +51,7 @@ struct CrackComponent {
   std::size_t primitives = 0;
   double area = 0.0;  // m^2 (2D: length, m)
   dem::Bounds box;
+  // Zero where only areas were summed (CrackComponents::planes false).
   Vec3 centroid;
   Vec3 normal;  // unit normal of the best-fit plane (2D: of the best-fit line, z = 0)
 };
