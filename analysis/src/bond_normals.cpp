@@ -198,12 +198,11 @@ void BondNormals::add(std::span<const dem::Bond> bonds, std::span<const std::int
     std::size_t by;      // the new bond
     double weight;
   };
-  constexpr std::size_t kBlock = kSearchBlock;
-  const std::size_t blocks = (m_mid.size() - first + kBlock - 1) / kBlock;
+  const std::size_t blocks = (m_mid.size() - first + kSearchBlock - 1) / kSearchBlock;
   std::vector<std::vector<Entered>> entered(blocks);
   tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t block) {
-    const std::size_t end = std::min(m_mid.size(), first + (block + 1) * kBlock);
-    for (std::size_t k = first + block * kBlock; k < end; ++k) {
+    const std::size_t end = std::min(m_mid.size(), first + (block + 1) * kSearchBlock);
+    for (std::size_t k = first + block * kSearchBlock; k < end; ++k) {
       WindowSums& own = sumsOf(k);
       forNear(m_mid[k], [&](std::size_t b, double w) {
         own.add(m_mid[b] - m_mid[k], w, m_axis[b]);

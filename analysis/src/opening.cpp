@@ -76,7 +76,7 @@ void measureShape(const CrackMesh& mesh, const cracks::Primitive& primitive, dou
     }
     previous = offset;
   }
-  centroid = (1.0 / static_cast<double>(std::max<std::size_t>(primitive.count, 1))) * sum;
+  centroid = (1.0 / static_cast<double>(primitive.count)) * sum;
   area = primitive.count == 2 ? dem::norm(previous) : 0.5 * dem::norm(newell);
 }
 

@@ -471,6 +471,25 @@ Vec3 singleNormal(const Moments& moments, const Primitive& primitive, const Crac
   return bestFitNormal(moments, mesh.dimension);
 }
 
+// Adds a surface primitive to a component's moments; returns its area (a
+// segment's length, a polygon's Newell area).
+double addPrimitive(Moments& moments, const CrackMesh& mesh, const Primitive& primitive) {
+  if (primitive.count == 2) {
+    moments.addSegment(mesh.points[static_cast<std::size_t>(primitive.ids[0])],
+                       mesh.points[static_cast<std::size_t>(primitive.ids[1])]);
+    return measure(mesh, primitive);
+  }
+  return moments.addPolygon(mesh.points, primitive.ids, primitive.count);
+}
+
+// A component's plane from its summed moments: of one primitive its own,
+// else the best fit.
+Vec3 planeOf(const Moments& moments, std::size_t primitives, const Primitive& first,
+             const CrackMesh& mesh) {
+  return primitives == 1 ? singleNormal(moments, first, mesh)
+                         : bestFitNormal(moments, mesh.dimension);
+}
+
 // The components of a surface whose primitives are already grouped: each
 // primitive's group (< groupCount) names its component. Components are
 // numbered in order of first appearance, then summed up: every one's
@@ -519,22 +538,16 @@ CrackComponents summariseSurface(const CrackMesh& mesh, const std::vector<Primit
       grow(component.box, own.lo, false);
       grow(component.box, own.hi, false);
     }
-    if (primitive.count == 2) {
-      component.area += measure(mesh, primitive);
-      if (planes) {
-        moments[c].addSegment(point(0), point(1));
-      }
-    } else if (planes) {
-      component.area += moments[c].addPolygon(mesh.points, primitive.ids, primitive.count);
+    if (planes) {
+      component.area += addPrimitive(moments[c], mesh, primitive);
     } else {
-      // polygonArea sums the cross products addPolygon sums, in its order.
-      component.area += polygonArea(mesh.points, primitive.ids, primitive.count);
+      // measure sums the cross products addPolygon sums, in its order.
+      component.area += measure(mesh, primitive);
     }
   }
   for (std::size_t c = 0; planes && c < found.size(); ++c) {
     found[c].centroid = moments[c].centroid();
-    found[c].normal = found[c].primitives == 1 ? singleNormal(moments[c], singles[c], mesh)
-                                               : bestFitNormal(moments[c], mesh.dimension);
+    found[c].normal = planeOf(moments[c], found[c].primitives, singles[c], mesh);
   }
   sortLargestFirst(found, set);
   return set;
@@ -1007,18 +1020,12 @@ ComponentPlane componentPlane(const CrackMesh& mesh, const CrackComponents& set,
       continue;
     }
     single = count++ == 0 ? primitive : single;
-    if (primitive.count == 2) {
-      moments.addSegment(mesh.points[static_cast<std::size_t>(primitive.ids[0])],
-                         mesh.points[static_cast<std::size_t>(primitive.ids[1])]);
-    } else {
-      moments.addPolygon(mesh.points, primitive.ids, primitive.count);
-    }
+    addPrimitive(moments, mesh, primitive);
   }
   if (count == 0) {
     return {};
   }
-  return {moments.centroid(), count == 1 ? singleNormal(moments, single, mesh)
-                                         : bestFitNormal(moments, mesh.dimension)};
+  return {moments.centroid(), planeOf(moments, count, single, mesh)};
 }
 
 void keepComponents(CrackMesh& mesh, const CrackComponents& set, const ComponentFilter& filter) {

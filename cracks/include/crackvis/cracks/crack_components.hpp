@@ -78,9 +78,9 @@ CrackComponents findComponents(const CrackMesh& mesh);
 // So only the faces of bonds new since the last step are welded: against
 // each other, and against the old faces' points that fall near them. The
 // components' areas, boxes and (ComponentDetail::kEvery) planes are summed
-// anew each step (the faces move). Anything else (cells, cell cut's point bond ids, no reference
-// configuration, a bond that left the mesh or holds two cells) is found
-// anew by findComponents, and the tracker starts over.
+// anew each step (the faces move). Anything else (cells, cell cut's point
+// bond ids, no reference configuration, a bond that left the mesh or holds
+// two cells) is found anew by findComponents, and the tracker starts over.
 
 // What the tracker sums of each component each step: everything (kEvery),
 // or its primitives, area and box (kAreas: the analyses ask for one
