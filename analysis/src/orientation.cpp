@@ -76,14 +76,8 @@ MeanOrientation meanOrientation(const ElementOpenings& elements, int component) 
   MeanOrientation mean;
   mean.normal = tensor.principalAxis();
   if (total > 0.0) {
-    double along = 0.0;
-    for (std::size_t e = 0; e < elements.size(); ++e) {
-      if (counts(elements, e, component)) {
-        const double c = dem::dot(elements.normal[e], mean.normal);
-        along += elements.area[e] * c * c;
-      }
-    }
-    mean.strength = along / total;
+    // sum(a (n . m)^2) is m^T T m: no second pass over the elements.
+    mean.strength = tensor.along(mean.normal) / total;
   }
   const bool flip = mean.normal.z > 0.0 || (mean.normal.z == 0.0 && mean.normal.y < 0.0);
   if (flip) {

@@ -9,6 +9,11 @@
 #include <unordered_map>
 #include <utility>
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 #include <crackvis/cracks/crack_components.hpp>
 #include <crackvis/cracks/surface_primitives.hpp>
 
@@ -490,18 +495,61 @@ Vec3 planeOf(const Moments& moments, std::size_t primitives, const Primitive& fi
                          : bestFitNormal(moments, mesh.dimension);
 }
 
+// Primitives per block of the passes that run on all cores: each block a
+// few tens of microseconds, so that a step's few thousand faces still split.
+constexpr std::size_t kPrimitiveBlock = 1024;
+
+// A primitive's own box, and its area where `area`; an empty polygon has
+// none.
+PrimitiveExtent extentOf(const CrackMesh& mesh, const Primitive& primitive, bool area = true) {
+  PrimitiveExtent extent;
+  if (primitive.count == 0) {
+    return extent;
+  }
+  auto point = [&](std::size_t v) {
+    return mesh.points[static_cast<std::size_t>(primitive.ids[v])];
+  };
+  extent.box = {point(0), point(0)};
+  for (std::size_t v = 1; v < primitive.count; ++v) {
+    grow(extent.box, point(v), false);
+  }
+  // measure sums the cross products addPolygon sums, in its order.
+  extent.area = area ? measure(mesh, primitive) : 0.0;
+  return extent;
+}
+
+// Every primitive's extent into `extents`, on all cores.
+void measureExtents(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
+                    std::vector<PrimitiveExtent>& extents, bool area = true) {
+  extents.resize(primitives.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, primitives.size(), kPrimitiveBlock),
+                    [&](const auto& range) {
+                      for (std::size_t k = range.begin(); k < range.end(); ++k) {
+                        extents[k] = extentOf(mesh, primitives[k], area);
+                      }
+                    });
+}
+
 // The components of a surface whose primitives are already grouped: each
 // primitive's group (< groupCount) names its component. Components are
 // numbered in order of first appearance, then summed up: every one's
 // primitives, area and box, and with ComponentDetail::kEvery its centroid
-// and plane.
+// and plane. Without planes, each primitive's box and area (`extents`, in
+// primitive order, else found here on all cores) are summed in primitive
+// order: the same sums as one pass.
 CrackComponents summariseSurface(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
                                  const std::vector<std::int32_t>& groupOf, std::size_t groupCount,
-                                 ComponentDetail detail) {
+                                 ComponentDetail detail,
+                                 const std::vector<PrimitiveExtent>* extents = nullptr) {
   const bool planes = detail == ComponentDetail::kEvery;
   CrackComponents set;
   set.planes = planes;
   set.ofPrimitive.assign(componentList(mesh).size(), -1);
+  std::vector<PrimitiveExtent> ownExtents;
+  if (!planes && extents == nullptr) {
+    measureExtents(mesh, primitives, ownExtents);
+  }
+  const std::vector<PrimitiveExtent>& measured = extents != nullptr ? *extents : ownExtents;
   std::vector<std::int32_t> label(groupCount, -1);
   std::vector<Moments> moments;
   std::vector<CrackComponent> found;
@@ -519,30 +567,29 @@ CrackComponents summariseSurface(const CrackMesh& mesh, const std::vector<Primit
     }
     const auto c = static_cast<std::size_t>(label[group]);
     set.ofPrimitive[primitive.index] = label[group];
-    auto point = [&](std::size_t v) {
-      return mesh.points[static_cast<std::size_t>(primitive.ids[v])];
-    };
     CrackComponent& component = found[c];
     ++component.primitives;
     if (primitive.count == 0) {
       continue;  // an empty polygon: no point, no area
     }
     // The primitive's own box first: one merge per primitive, not per point.
-    dem::Bounds own{point(0), point(0)};
-    for (std::size_t v = 1; v < primitive.count; ++v) {
-      grow(own, point(v), false);
+    dem::Bounds own;
+    if (planes) {
+      own = {mesh.points[static_cast<std::size_t>(primitive.ids[0])],
+             mesh.points[static_cast<std::size_t>(primitive.ids[0])]};
+      for (std::size_t v = 1; v < primitive.count; ++v) {
+        grow(own, mesh.points[static_cast<std::size_t>(primitive.ids[v])], false);
+      }
+      component.area += addPrimitive(moments[c], mesh, primitive);
+    } else {
+      own = measured[k].box;
+      component.area += measured[k].area;
     }
     if (component.primitives == 1) {
       component.box = own;
     } else {
       grow(component.box, own.lo, false);
       grow(component.box, own.hi, false);
-    }
-    if (planes) {
-      component.area += addPrimitive(moments[c], mesh, primitive);
-    } else {
-      // measure sums the cross products addPolygon sums, in its order.
-      component.area += measure(mesh, primitive);
     }
   }
   for (std::size_t c = 0; planes && c < found.size(); ++c) {
@@ -553,8 +600,31 @@ CrackComponents summariseSurface(const CrackMesh& mesh, const std::vector<Primit
   return set;
 }
 
+// dem::boundingBox of the points on all cores (minima and maxima: the same
+// in any order).
+dem::Bounds pointsBox(const std::vector<Vec3>& points) {
+  if (points.empty()) {
+    return dem::boundingBox(points);
+  }
+  constexpr std::size_t kPointBlock = 16384;
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, points.size(), kPointBlock),
+      dem::Bounds{points.front(), points.front()},
+      [&](const auto& range, dem::Bounds box) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+          grow(box, points[i], false);
+        }
+        return box;
+      },
+      [](dem::Bounds a, const dem::Bounds& b) {
+        grow(a, b.lo, false);
+        grow(a, b.hi, false);
+        return a;
+      });
+}
+
 double weldTolerance(const CrackMesh& mesh) {
-  const auto [lo, hi] = dem::boundingBox(mesh.points);
+  const auto [lo, hi] = pointsBox(mesh.points);
   return 1e-9 * std::max(dem::norm(hi - lo), 1e-300);
 }
 
@@ -837,12 +907,27 @@ void ComponentTracker::unite(std::int32_t a, std::int32_t b) {
   m_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
 }
 
-// The faces of the slots from `oldSlots` on are new this step: they weld to
-// each other through a hash of their points' weld keys, and to an old face
-// where one of its points has a key of theirs (the coarse marks spare most
-// old points the key and the lookup).
-void ComponentTracker::weldNewFaces(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
-                                    const std::vector<std::int32_t>& slots, std::int32_t oldSlots) {
+// Every face's extent (m_extents), and the faces of the slots from
+// `oldSlots` on, new this step, welded: to each other through a hash of
+// their points' weld keys, and to an old face where one of its points has a
+// key of theirs. The old faces are read once, on all cores, for both: a face
+// whose box lies beyond the new faces' by more than a key's cell is turned
+// away by six comparisons, and the coarse marks spare most points of the
+// rest the key and the lookup. Each block keeps the pairs it finds; they are
+// united after, and the components a set of unions makes do not depend on
+// their order.
+void ComponentTracker::measureAndWeld(const CrackMesh& mesh,
+                                      const std::vector<Primitive>& primitives,
+                                      const std::vector<std::int32_t>& slots,
+                                      std::int32_t oldSlots) {
+  // Areas only where summariseSurface reads them; kEvery sums its moments.
+  const bool areas = m_detail == ComponentDetail::kAreas;
+  if (static_cast<std::int32_t>(m_parent.size()) == oldSlots) {
+    if (areas) {
+      measureExtents(mesh, primitives, m_extents);
+    }
+    return;
+  }
   const double tolerance = weldTolerance(mesh);
   std::unordered_map<WeldKey, std::int32_t, WeldKeyHash> newKeys;
   dem::Bounds box;
@@ -862,6 +947,9 @@ void ComponentTracker::weldNewFaces(const CrackMesh& mesh, const std::vector<Pri
     }
   }
   if (oldSlots == 0) {
+    if (areas) {
+      measureExtents(mesh, primitives, m_extents);
+    }
     return;
   }
   const double margin = 2.0 * tolerance;
@@ -871,24 +959,40 @@ void ComponentTracker::weldNewFaces(const CrackMesh& mesh, const std::vector<Pri
       marks.mark(mesh.points[static_cast<std::size_t>(primitives[k].ids[v])], margin);
     }
   }
-  // Beyond the new faces' box by more than a key's cell, no point welds to
-  // theirs: most old points are turned away by six comparisons.
   const Vec3 reachLo = box.lo - Vec3{margin, margin, margin};
   const Vec3 reachHi = box.hi + Vec3{margin, margin, margin};
-  auto within = [&](Vec3 p) {
-    return p.x >= reachLo.x && p.x <= reachHi.x && p.y >= reachLo.y && p.y <= reachHi.y &&
-           p.z >= reachLo.z && p.z <= reachHi.z;
+  auto reaches = [&](const dem::Bounds& b) {
+    return b.hi.x >= reachLo.x && b.lo.x <= reachHi.x && b.hi.y >= reachLo.y &&
+           b.lo.y <= reachHi.y && b.hi.z >= reachLo.z && b.lo.z <= reachHi.z;
   };
-  for (std::size_t k = 0; k < primitives.size(); ++k) {
-    for (std::size_t v = 0; slots[k] < oldSlots && v < primitives[k].count; ++v) {
-      const Vec3 p = mesh.points[static_cast<std::size_t>(primitives[k].ids[v])];
-      if (!within(p) || !marks.marked(p)) {
-        continue;
-      }
-      const auto at = newKeys.find(weldKey(p, tolerance));
-      if (at != newKeys.end()) {
-        unite(at->second, slots[k]);
-      }
+  m_extents.resize(primitives.size());
+  using Weld = std::pair<std::int32_t, std::int32_t>;
+  tbb::enumerable_thread_specific<std::vector<Weld>> found;
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, primitives.size(), kPrimitiveBlock),
+      [&](const auto& range) {
+        std::vector<Weld>& welds = found.local();
+        for (std::size_t k = range.begin(); k < range.end(); ++k) {
+          const Primitive& primitive = primitives[k];
+          m_extents[k] = extentOf(mesh, primitive, areas);
+          if (slots[k] >= oldSlots || primitive.count == 0 || !reaches(m_extents[k].box)) {
+            continue;
+          }
+          for (std::size_t v = 0; v < primitive.count; ++v) {
+            const Vec3 p = mesh.points[static_cast<std::size_t>(primitive.ids[v])];
+            if (!marks.marked(p)) {
+              continue;
+            }
+            const auto at = newKeys.find(weldKey(p, tolerance));
+            if (at != newKeys.end()) {
+              welds.emplace_back(at->second, slots[k]);
+            }
+          }
+        }
+      });
+  for (const std::vector<Weld>& welds : found) {
+    for (const auto& [a, b] : welds) {
+      unite(a, b);
     }
   }
 }
@@ -938,13 +1042,11 @@ bool ComponentTracker::updateCarried(const CrackMesh& mesh) {
   if (oldSeen != static_cast<std::size_t>(oldSlots)) {
     return false;  // a face left: a bond healed, or the viewer went back
   }
-  if (static_cast<std::int32_t>(m_parent.size()) > oldSlots) {
-    weldNewFaces(mesh, primitives, groupOf, oldSlots);
-  }
+  measureAndWeld(mesh, primitives, groupOf, oldSlots);
   for (std::int32_t& group : groupOf) {
     group = findRoot(m_parent, group);
   }
-  m_components = summariseSurface(mesh, primitives, groupOf, m_parent.size(), m_detail);
+  m_components = summariseSurface(mesh, primitives, groupOf, m_parent.size(), m_detail, &m_extents);
   return true;
 }
 

@@ -382,6 +382,85 @@ TEST_CASE("normals found on one core and on all are the same to the last bit",
   CHECK(differ == 0);
 }
 
+namespace {
+
+// Every figure of a step's analysis, as numbers in a fixed order.
+std::vector<double> figuresOf(const StepAnalysis& s) {
+  const auto summary = [](const OpeningSummary& o) {
+    return std::vector<double>{static_cast<double>(o.elements),
+                               o.area,
+                               o.meanOpening,
+                               o.maxOpening,
+                               o.meanSlip,
+                               o.maxSlip};
+  };
+  std::vector<double> out{s.totalArea,
+                          static_cast<double>(s.components),
+                          s.mainArea,
+                          s.mainBox.lo.x,
+                          s.mainBox.lo.y,
+                          s.mainBox.lo.z,
+                          s.mainBox.hi.x,
+                          s.mainBox.hi.y,
+                          s.mainBox.hi.z,
+                          static_cast<double>(s.fragments),
+                          s.largestFragmentShare,
+                          static_cast<double>(s.tension),
+                          static_cast<double>(s.shear)};
+  for (const OpeningSummary& o : {s.mainOpening, s.allOpening}) {
+    const std::vector<double> part = summary(o);
+    out.insert(out.end(), part.begin(), part.end());
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("a run's analyses on one core and on four are the same to the last bit",
+          "[analysis][incremental]") {
+  // Enough scattered damage that the components' passes over the faces
+  // (welding, areas and boxes) and the openings run in several blocks.
+  const Run run = plantedRun(dem::LatticeKind::kFcc, dem::fccUnitCells(11, 10, 10), 0.12);
+  const auto& lattice = run.block.lattice;
+  const cracks::BondGraph graph(lattice.particleCount(), lattice.bonds);
+  auto analyseOn = [&](std::size_t cores) {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, cores);
+    auto extractor = cracks::makeExtractor(cracks::Method::kLocalVoronoi, graph, 3);
+    CrackAnalysis analysis(lattice, {});
+    cracks::CrackMesh mesh;
+    std::vector<double> figures;
+    for (std::size_t k = 0; k < run.steps.size(); ++k) {
+      const cracks::StepInput input = inputOf(run, run.steps[k]);
+      REQUIRE(extractor->extract(input, mesh));
+      const StepAnalysis step =
+          analysis.analyse(static_cast<int>(k), 0.0, input, run.block.positions, mesh);
+      const std::vector<double> own = figuresOf(step);
+      figures.insert(figures.end(), own.begin(), own.end());
+    }
+    const ElementOpenings& last = analysis.openings();
+    for (std::size_t e = 0; e < last.size(); ++e) {
+      figures.insert(figures.end(), {last.area[e], last.opening[e], last.slip[e],
+                                     static_cast<double>(last.component[e])});
+    }
+    const MeanOrientation mean = meanOrientation(last, -1);
+    figures.insert(figures.end(), {mean.normal.x, mean.normal.y, mean.normal.z, mean.strength});
+    const Stereonet net = stereonet(last, -1, 20);
+    figures.insert(figures.end(), net.weight.begin(), net.weight.end());
+    return std::pair{figures, last.size()};
+  };
+  const auto [one, elements] = analyseOn(1);
+  const auto [all, allElements] = analyseOn(4);
+  CHECK(elements > 3000);  // three blocks of the passes over the faces
+  REQUIRE(elements == allElements);
+  REQUIRE(one.size() == all.size());
+  std::size_t differ = 0;
+  for (std::size_t k = 0; k < one.size(); ++k) {
+    // NaN (an element without a bond) equals itself here.
+    differ += one[k] == all[k] || (std::isnan(one[k]) && std::isnan(all[k])) ? 0 : 1;
+  }
+  CHECK(differ == 0);
+}
+
 TEST_CASE("normals and break modes read from the new breaks equal those from all bond states",
           "[analysis][incremental]") {
   const Run run = plantedRun(dem::LatticeKind::kFcc, dem::fccUnitCells(5, 4, 4), 0.03);

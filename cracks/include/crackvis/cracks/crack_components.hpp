@@ -88,6 +88,12 @@ CrackComponents findComponents(const CrackMesh& mesh);
 // most of a step's work).
 enum class ComponentDetail { kEvery, kAreas };
 
+// A surface primitive's own box and area (a segment's length).
+struct PrimitiveExtent {
+  dem::Bounds box;
+  double area = 0.0;
+};
+
 class ComponentTracker {
  public:
   explicit ComponentTracker(ComponentDetail detail = ComponentDetail::kEvery) : m_detail(detail) {}
@@ -98,8 +104,8 @@ class ComponentTracker {
 
  private:
   bool updateCarried(const CrackMesh& mesh);
-  void weldNewFaces(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
-                    const std::vector<std::int32_t>& slots, std::int32_t oldSlots);
+  void measureAndWeld(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
+                      const std::vector<std::int32_t>& slots, std::int32_t oldSlots);
   void unite(std::int32_t a, std::int32_t b);
   std::int32_t slotOf(std::size_t bond);
   void reset();
@@ -110,6 +116,9 @@ class ComponentTracker {
   std::vector<std::uint32_t> m_seenAt;     // the step stamp a slot was last seen at
   std::uint32_t m_stamp = 0;
   ComponentDetail m_detail;
+  // Each face's box and area this step (areas with kAreas only), kept
+  // from step to step for their pages.
+  std::vector<PrimitiveExtent> m_extents;
   CrackComponents m_components;
   std::size_t m_recomputations = 0;
 };
