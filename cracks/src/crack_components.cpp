@@ -443,15 +443,22 @@ std::size_t countMarked(const std::vector<char>& cells) {
 // Numbers components largest first (ties by first appearance, so the order
 // is deterministic) and relabels the primitives.
 void sortLargestFirst(std::vector<CrackComponent>& found, CrackComponents& set) {
-  std::vector<std::int32_t> order(found.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
-    return found[static_cast<std::size_t>(a)].area > found[static_cast<std::size_t>(b)].area;
+  // Largest area first, equal areas in their order of appearance. The keys
+  // sit beside their indices: a scattered crack has thousands of
+  // components, and sorting indices through `found` took a fifth of the
+  // tracker's step on cuboid A (0.15 of 0.8 ms, by a probe).
+  std::vector<std::pair<double, std::int32_t>> order(found.size());
+  for (std::size_t c = 0; c < found.size(); ++c) {
+    order[c] = {found[c].area, static_cast<std::int32_t>(c)};
+  }
+  std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) {
+    return a.first > b.first || (a.first == b.first && a.second < b.second);
   });
   std::vector<std::int32_t> rank(found.size());
+  set.components.reserve(found.size());
   for (std::size_t r = 0; r < order.size(); ++r) {
-    rank[static_cast<std::size_t>(order[r])] = static_cast<std::int32_t>(r);
-    set.components.push_back(found[static_cast<std::size_t>(order[r])]);
+    rank[static_cast<std::size_t>(order[r].second)] = static_cast<std::int32_t>(r);
+    set.components.push_back(found[static_cast<std::size_t>(order[r].second)]);
   }
   for (std::int32_t& c : set.ofPrimitive) {
     c = c < 0 ? c : rank[static_cast<std::size_t>(c)];
