@@ -55,7 +55,7 @@ StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInp
     }
   }
   m_openings = measureOpening(mesh, components, m_lattice.bonds, reference, input.positions,
-                              m_options.opening, &m_normals);
+                              m_options.opening, &m_normals, m_components.extents());
   out.mainOpening = summariseOpening(m_openings, 0);
   out.allOpening = summariseOpening(m_openings, -1);
   out.fragments = fragmentsNow->countAtLeast(m_options.minFragment);

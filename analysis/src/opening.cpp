@@ -86,9 +86,15 @@ void measureElement(const CrackMesh& mesh, const cracks::Primitive& primitive,
                     const CrackComponents& components, std::span<const dem::Bond> bonds,
                     std::span<const Vec3> reference, std::span<const Vec3> current,
                     const BondNormals& normals, const cracks::AttributeArray* cellIds,
-                    const cracks::AttributeArray* pointIds, std::size_t base, ElementOpenings& out,
+                    const cracks::AttributeArray* pointIds, std::size_t base,
+                    std::span<const cracks::PrimitiveExtent> shapes, ElementOpenings& out,
                     std::size_t e) {
-  measureShape(mesh, primitive, out.area[e], out.centroid[e]);
+  if (shapes.empty()) {
+    measureShape(mesh, primitive, out.area[e], out.centroid[e]);
+  } else {
+    out.area[e] = shapes[e].area;
+    out.centroid[e] = shapes[e].centroid;
+  }
   out.cell[e] = base + primitive.index;
   if (primitive.index < components.ofPrimitive.size()) {
     out.component[e] = components.ofPrimitive[primitive.index];
@@ -133,8 +139,12 @@ void measureElement(const CrackMesh& mesh, const cracks::Primitive& primitive,
 ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& components,
                                std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
                                std::span<const Vec3> current, const OpeningOptions& options,
-                               const BondNormals* normals) {
+                               const BondNormals* normals,
+                               std::span<const cracks::PrimitiveExtent> shapes) {
   const std::vector<cracks::Primitive> primitives = cracks::surfacePrimitives(mesh);
+  if (shapes.size() != primitives.size()) {
+    shapes = {};
+  }
   const cracks::AttributeArray* cellIds = mesh.findCellData("bond_id");
   const cracks::AttributeArray* pointIds = cellIds ? nullptr : mesh.findPointData("bond_id");
   const std::size_t n = std::min(reference.size(), current.size());
@@ -164,7 +174,7 @@ ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& com
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const auto& range) {
     for (std::size_t e = range.begin(); e < range.end(); ++e) {
       measureElement(mesh, primitives[e], components, bonds, reference.first(n), current.first(n),
-                     *normals, cellIds, pointIds, base, out, e);
+                     *normals, cellIds, pointIds, base, shapes, out, e);
     }
   });
   return out;

@@ -506,33 +506,48 @@ Vec3 planeOf(const Moments& moments, std::size_t primitives, const Primitive& fi
 // few tens of microseconds, so that a step's few thousand faces still split.
 constexpr std::size_t kPrimitiveBlock = 1024;
 
-// A primitive's own box, and its area where `area`; an empty polygon has
-// none.
-PrimitiveExtent extentOf(const CrackMesh& mesh, const Primitive& primitive, bool area = true) {
+// A primitive's own box, and its area and centroid where `shape`, reading
+// its points once; an empty polygon has none. The area is measure()'s: the
+// same Newell sum about the first point, in the same order.
+PrimitiveExtent extentOf(const CrackMesh& mesh, const Primitive& primitive, bool shape = true) {
   PrimitiveExtent extent;
   if (primitive.count == 0) {
     return extent;
   }
-  auto point = [&](std::size_t v) {
-    return mesh.points[static_cast<std::size_t>(primitive.ids[v])];
-  };
-  extent.box = {point(0), point(0)};
-  for (std::size_t v = 1; v < primitive.count; ++v) {
-    grow(extent.box, point(v), false);
+  const Vec3 origin = mesh.points[static_cast<std::size_t>(primitive.ids[0])];
+  extent.box = {origin, origin};
+  if (!shape) {
+    for (std::size_t v = 1; v < primitive.count; ++v) {
+      grow(extent.box, mesh.points[static_cast<std::size_t>(primitive.ids[v])], false);
+    }
+    return extent;
   }
-  // measure sums the cross products addPolygon sums, in its order.
-  extent.area = area ? measure(mesh, primitive) : 0.0;
+  Vec3 sum = Vec3{} + origin;
+  Vec3 newell{};
+  Vec3 previous{};  // the last point less the origin
+  for (std::size_t v = 1; v < primitive.count; ++v) {
+    const Vec3 p = mesh.points[static_cast<std::size_t>(primitive.ids[v])];
+    grow(extent.box, p, false);
+    sum = sum + p;
+    const Vec3 offset = p - origin;
+    if (v >= 2) {
+      newell = newell + cross(previous, offset);
+    }
+    previous = offset;
+  }
+  extent.centroid = (1.0 / static_cast<double>(primitive.count)) * sum;
+  extent.area = primitive.count == 2 ? dem::norm(previous) : 0.5 * dem::norm(newell);
   return extent;
 }
 
 // Every primitive's extent into `extents`, on all cores.
 void measureExtents(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
-                    std::vector<PrimitiveExtent>& extents, bool area = true) {
+                    std::vector<PrimitiveExtent>& extents, bool shape = true) {
   extents.resize(primitives.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, primitives.size(), kPrimitiveBlock),
                     [&](const auto& range) {
                       for (std::size_t k = range.begin(); k < range.end(); ++k) {
-                        extents[k] = extentOf(mesh, primitives[k], area);
+                        extents[k] = extentOf(mesh, primitives[k], shape);
                       }
                     });
 }
@@ -1009,6 +1024,7 @@ const CrackComponents& ComponentTracker::update(const CrackMesh& mesh, bool carr
     return m_components;
   }
   reset();
+  m_extentsCurrent = false;
   m_components = findComponents(mesh);
   ++m_recomputations;
   return m_components;
@@ -1050,6 +1066,7 @@ bool ComponentTracker::updateCarried(const CrackMesh& mesh) {
     return false;  // a face left: a bond healed, or the viewer went back
   }
   measureAndWeld(mesh, primitives, groupOf, oldSlots);
+  m_extentsCurrent = m_detail == ComponentDetail::kAreas;
   for (std::int32_t& group : groupOf) {
     group = findRoot(m_parent, group);
   }

@@ -56,11 +56,14 @@ struct ElementOpenings {
 // `reference` and `current` are the particle centres [N]; `bonds` the
 // lattice's pairs [M]; `normals`, kept across steps by the caller, has every
 // bond the mesh carries (else the normals of those bonds are found here,
-// with options.smoothingRadius).
+// with options.smoothingRadius). `shapes`: each surface primitive's area and
+// centroid as a cracks::ComponentTracker measured them on this mesh
+// (ComponentTracker::extents()); empty, or of another length: measured here.
 ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& components,
                                std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
                                std::span<const Vec3> current, const OpeningOptions& options = {},
-                               const BondNormals* normals = nullptr);
+                               const BondNormals* normals = nullptr,
+                               std::span<const cracks::PrimitiveExtent> shapes = {});
 
 // Cell data "opening" and "slip" over all the mesh's primitives in VTK order
 // (NaN for those that are no surface element), appended to mesh.cellData.

@@ -88,10 +88,12 @@ CrackComponents findComponents(const CrackMesh& mesh);
 // most of a step's work).
 enum class ComponentDetail { kEvery, kAreas };
 
-// A surface primitive's own box and area (a segment's length).
+// A surface primitive's own box, area (a segment's length, as measure()
+// gives it) and centroid (the mean of its points).
 struct PrimitiveExtent {
   dem::Bounds box;
   double area = 0.0;
+  Vec3 centroid;
 };
 
 class ComponentTracker {
@@ -101,6 +103,14 @@ class ComponentTracker {
   const CrackComponents& current() const { return m_components; }
   // How often update() found the components of the whole mesh anew.
   std::size_t recomputations() const { return m_recomputations; }
+  // Each surface primitive's extent at the last update, in surfacePrimitives
+  // order, where that update summed areas (ComponentDetail::kAreas) of a
+  // carried surface; else empty. The openings read the areas and centroids
+  // from here instead of the faces' points again.
+  std::span<const PrimitiveExtent> extents() const {
+    return m_extentsCurrent ? std::span<const PrimitiveExtent>(m_extents)
+                            : std::span<const PrimitiveExtent>();
+  }
 
  private:
   bool updateCarried(const CrackMesh& mesh);
@@ -119,6 +129,7 @@ class ComponentTracker {
   // Each face's box and area this step (areas with kAreas only), kept
   // from step to step for their pages.
   std::vector<PrimitiveExtent> m_extents;
+  bool m_extentsCurrent = false;
   CrackComponents m_components;
   std::size_t m_recomputations = 0;
 };
