@@ -557,21 +557,16 @@ void measureExtents(const CrackMesh& mesh, const std::vector<Primitive>& primiti
 // numbered in order of first appearance, then summed up: every one's
 // primitives, area and box, and with ComponentDetail::kEvery its centroid
 // and plane. Without planes, each primitive's box and area (`extents`, in
-// primitive order, else found here on all cores) are summed in primitive
-// order: the same sums as one pass.
+// primitive order: ComponentTracker::measureAndWeld's) are summed in
+// primitive order: the same sums as one pass.
 CrackComponents summariseSurface(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
                                  const std::vector<std::int32_t>& groupOf, std::size_t groupCount,
                                  ComponentDetail detail,
-                                 const std::vector<PrimitiveExtent>* extents = nullptr) {
+                                 const std::vector<PrimitiveExtent>& extents) {
   const bool planes = detail == ComponentDetail::kEvery;
   CrackComponents set;
   set.planes = planes;
   set.ofPrimitive.assign(componentList(mesh).size(), -1);
-  std::vector<PrimitiveExtent> ownExtents;
-  if (!planes && extents == nullptr) {
-    measureExtents(mesh, primitives, ownExtents);
-  }
-  const std::vector<PrimitiveExtent>& measured = extents != nullptr ? *extents : ownExtents;
   std::vector<std::int32_t> label(groupCount, -1);
   std::vector<Moments> moments;
   std::vector<CrackComponent> found;
@@ -604,8 +599,8 @@ CrackComponents summariseSurface(const CrackMesh& mesh, const std::vector<Primit
       }
       component.area += addPrimitive(moments[c], mesh, primitive);
     } else {
-      own = measured[k].box;
-      component.area += measured[k].area;
+      own = extents[k].box;
+      component.area += extents[k].area;
     }
     if (component.primitives == 1) {
       component.box = own;
@@ -673,7 +668,7 @@ CrackComponents surfaceComponents(const CrackMesh& mesh) {
   for (std::size_t k = 0; k < primitives.size(); ++k) {
     groupOf[k] = findRoot(parent, welded[static_cast<std::size_t>(primitives[k].ids[0])]);
   }
-  return summariseSurface(mesh, primitives, groupOf, parent.size(), ComponentDetail::kEvery);
+  return summariseSurface(mesh, primitives, groupOf, parent.size(), ComponentDetail::kEvery, {});
 }
 
 // Cells sharing a face (3D: a triangle or quad; 2D: an edge) are one
@@ -888,7 +883,13 @@ class CoarseMarks {
   static constexpr int kCells = 64;
   std::array<int, 3> cellOf(Vec3 p) const {
     // A product, not a quotient: every point of the crack passes here.
-    auto at = [&](double v) { return std::clamp(static_cast<int>(v * m_perCell), 0, kCells - 1); };
+    // Clamped before the conversion: a point far outside the grid (an old
+    // face's, tested because its box reaches the new faces') or NaN would
+    // overflow an int.
+    auto at = [&](double v) {
+      const double c = v * m_perCell;
+      return c >= 0.0 ? (c < kCells - 1 ? static_cast<int>(c) : kCells - 1) : 0;
+    };
     return {at(p.x - m_lo.x), at(p.y - m_lo.y), at(p.z - m_lo.z)};
   }
   static std::size_t index(std::array<int, 3> c) {
@@ -929,15 +930,15 @@ void ComponentTracker::unite(std::int32_t a, std::int32_t b) {
   m_parent[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
 }
 
-// Every face's extent (m_extents), and the faces of the slots from
-// `oldSlots` on, new this step, welded: to each other through a hash of
-// their points' weld keys, and to an old face where one of its points has a
-// key of theirs. The old faces are read once, on all cores, for both: a face
-// whose box lies beyond the new faces' by more than a key's cell is turned
-// away by six comparisons, and the coarse marks spare most points of the
-// rest the key and the lookup. Each block keeps the pairs it finds; they are
-// united after, and the components a set of unions makes do not depend on
-// their order.
+// Every face's extent (m_extents: box, area and centroid with kAreas; with
+// kEvery only the boxes the search below needs, on steps that have it),
+// and the faces of the slots from `oldSlots` on, new this step, welded: to
+// each other through a hash of their points' weld keys, and to an old face
+// where one of its points has a key of theirs. The old faces are read once,
+// on all cores, for both: a face whose box lies beyond the new faces' by
+// more than a key's cell is turned away by six comparisons, and the coarse
+// marks spare most points of the rest the key and the lookup. Each block keeps the pairs it finds;
+// they are united after, and the components a set of unions makes do not depend on their order.
 void ComponentTracker::measureAndWeld(const CrackMesh& mesh,
                                       const std::vector<Primitive>& primitives,
                                       const std::vector<std::int32_t>& slots,
@@ -1070,7 +1071,7 @@ bool ComponentTracker::updateCarried(const CrackMesh& mesh) {
   for (std::int32_t& group : groupOf) {
     group = findRoot(m_parent, group);
   }
-  m_components = summariseSurface(mesh, primitives, groupOf, m_parent.size(), m_detail, &m_extents);
+  m_components = summariseSurface(mesh, primitives, groupOf, m_parent.size(), m_detail, m_extents);
   return true;
 }
 

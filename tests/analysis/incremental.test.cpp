@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include <tbb/global_control.h>
+#include <tbb/info.h>
 
 #include "analysis_fixtures.hpp"
 #include <crackvis/analysis/bond_diff.hpp>
@@ -166,6 +167,9 @@ TEST_CASE("the openings' areas and centroids from the components' pass equal the
         REQUIRE(extractor->extract(inputOf(run, state), mesh));
         analysis.analyse(static_cast<int>(k), 0.0, inputOf(run, state), run.block.positions, mesh);
         areas.update(mesh, true);
+        // The analysis kept its components (and so measured the faces) where
+        // they are carried.
+        CHECK(analysis.components().planes == !carried);
         const std::size_t primitives = cracks::surfacePrimitives(mesh).size();
         CHECK(areas.extents().size() == (carried ? primitives : 0u));
         const ElementOpenings direct = measureOpening(mesh, analysis.components(), lattice.bonds,
@@ -481,6 +485,16 @@ TEST_CASE("a run's analyses on one core and on four are the same to the last bit
       REQUIRE(extractor->extract(input, mesh));
       const StepAnalysis step =
           analysis.analyse(static_cast<int>(k), 0.0, input, run.block.positions, mesh);
+      // In several blocks, against the same figures found without the
+      // tracker: the components, and each element's area and centroid.
+      requireSameAreasAndPlanes(mesh, analysis.components(), cracks::findComponents(mesh));
+      const ElementOpenings direct = measureOpening(mesh, analysis.components(), lattice.bonds,
+                                                    run.block.positions, run.steps[k].positions);
+      REQUIRE(direct.size() == analysis.openings().size());
+      for (std::size_t e = 0; e < direct.size(); ++e) {
+        REQUIRE(direct.area[e] == analysis.openings().area[e]);
+        REQUIRE(dem::norm(direct.centroid[e] - analysis.openings().centroid[e]) == 0.0);
+      }
       const std::vector<double> own = figuresOf(step);
       figures.insert(figures.end(), own.begin(), own.end());
     }
@@ -495,6 +509,9 @@ TEST_CASE("a run's analyses on one core and on four are the same to the last bit
     figures.insert(figures.end(), net.weight.begin(), net.weight.end());
     return std::pair{figures, last.size()};
   };
+  if (tbb::info::default_concurrency() < 2) {
+    WARN("one core here: both runs below run on one thread");
+  }
   const auto [one, elements] = analyseOn(1);
   const auto [all, allElements] = analyseOn(4);
   CHECK(elements > 3000);  // three blocks of the passes over the faces

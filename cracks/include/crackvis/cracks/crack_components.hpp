@@ -106,7 +106,8 @@ class ComponentTracker {
   // Each surface primitive's extent at the last update, in surfacePrimitives
   // order, where that update summed areas (ComponentDetail::kAreas) of a
   // carried surface; else empty. The openings read the areas and centroids
-  // from here instead of the faces' points again.
+  // from here instead of the faces' points again. Valid for the mesh given
+  // to that update only, until the next one.
   std::span<const PrimitiveExtent> extents() const {
     return m_extentsCurrent ? std::span<const PrimitiveExtent>(m_extents)
                             : std::span<const PrimitiveExtent>();
@@ -126,8 +127,9 @@ class ComponentTracker {
   std::vector<std::uint32_t> m_seenAt;     // the step stamp a slot was last seen at
   std::uint32_t m_stamp = 0;
   ComponentDetail m_detail;
-  // Each face's box and area this step (areas with kAreas only), kept
-  // from step to step for their pages.
+  // Each face's box, area and centroid at the last update (kAreas; with
+  // kEvery boxes only, and not every step), kept from step to step for
+  // their pages.
   std::vector<PrimitiveExtent> m_extents;
   bool m_extentsCurrent = false;
   CrackComponents m_components;
