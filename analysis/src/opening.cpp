@@ -54,32 +54,6 @@ Vec3 elementNormal(const CrackMesh& mesh, const cracks::Primitive& primitive) {
   return cracks::polygonNormal(mesh.points, primitive.ids, primitive.count);
 }
 
-// An element's area (2D: length), as cracks::measure gives it, and its
-// centroid, reading its points once.
-void measureShape(const CrackMesh& mesh, const cracks::Primitive& primitive, double& area,
-                  Vec3& centroid) {
-  if (primitive.count == 0) {
-    area = 0.0;
-    centroid = Vec3{};
-    return;
-  }
-  const Vec3 origin = mesh.points[static_cast<std::size_t>(primitive.ids[0])];
-  Vec3 sum = Vec3{} + origin;
-  Vec3 newell{};
-  Vec3 previous{};  // the last point less the origin
-  for (std::size_t k = 1; k < primitive.count; ++k) {
-    const Vec3 p = mesh.points[static_cast<std::size_t>(primitive.ids[k])];
-    sum = sum + p;
-    const Vec3 offset = p - origin;
-    if (k >= 2) {
-      newell = newell + cracks::cross(previous, offset);
-    }
-    previous = offset;
-  }
-  centroid = (1.0 / static_cast<double>(primitive.count)) * sum;
-  area = primitive.count == 2 ? dem::norm(previous) : 0.5 * dem::norm(newell);
-}
-
 // Element e of `out`: its area, centroid, cell and component, and the
 // opening and slip of the bonds it stands for.
 void measureElement(const CrackMesh& mesh, const cracks::Primitive& primitive,
@@ -89,12 +63,10 @@ void measureElement(const CrackMesh& mesh, const cracks::Primitive& primitive,
                     const cracks::AttributeArray* pointIds, std::size_t base,
                     std::span<const cracks::PrimitiveExtent> shapes, ElementOpenings& out,
                     std::size_t e) {
-  if (shapes.empty()) {
-    measureShape(mesh, primitive, out.area[e], out.centroid[e]);
-  } else {
-    out.area[e] = shapes[e].area;
-    out.centroid[e] = shapes[e].centroid;
-  }
+  const cracks::PrimitiveExtent shape =
+      shapes.empty() ? cracks::measureExtent(mesh, primitive) : shapes[e];
+  out.area[e] = shape.area;
+  out.centroid[e] = shape.centroid;
   out.cell[e] = base + primitive.index;
   if (primitive.index < components.ofPrimitive.size()) {
     out.component[e] = components.ofPrimitive[primitive.index];

@@ -540,6 +540,14 @@ PrimitiveExtent extentOf(const CrackMesh& mesh, const Primitive& primitive, bool
   return extent;
 }
 
+}  // namespace
+
+PrimitiveExtent measureExtent(const CrackMesh& mesh, const Primitive& primitive) {
+  return extentOf(mesh, primitive);
+}
+
+namespace {
+
 // Every primitive's extent into `extents`, on all cores.
 void measureExtents(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
                     std::vector<PrimitiveExtent>& extents, bool shape = true) {
@@ -590,18 +598,8 @@ CrackComponents summariseSurface(const CrackMesh& mesh, const std::vector<Primit
       continue;  // an empty polygon: no point, no area
     }
     // The primitive's own box first: one merge per primitive, not per point.
-    dem::Bounds own;
-    if (planes) {
-      own = {mesh.points[static_cast<std::size_t>(primitive.ids[0])],
-             mesh.points[static_cast<std::size_t>(primitive.ids[0])]};
-      for (std::size_t v = 1; v < primitive.count; ++v) {
-        grow(own, mesh.points[static_cast<std::size_t>(primitive.ids[v])], false);
-      }
-      component.area += addPrimitive(moments[c], mesh, primitive);
-    } else {
-      own = extents[k].box;
-      component.area += extents[k].area;
-    }
+    const dem::Bounds own = planes ? extentOf(mesh, primitive, false).box : extents[k].box;
+    component.area += planes ? addPrimitive(moments[c], mesh, primitive) : extents[k].area;
     if (component.primitives == 1) {
       component.box = own;
     } else {
@@ -937,8 +935,9 @@ void ComponentTracker::unite(std::int32_t a, std::int32_t b) {
 // where one of its points has a key of theirs. The old faces are read once,
 // on all cores, for both: a face whose box lies beyond the new faces' by
 // more than a key's cell is turned away by six comparisons, and the coarse
-// marks spare most points of the rest the key and the lookup. Each block keeps the pairs it finds;
-// they are united after, and the components a set of unions makes do not depend on their order.
+// marks spare most points of the rest the key and the lookup. Each block
+// keeps the pairs it finds; they are united after, and the components a set
+// of unions makes do not depend on their order.
 void ComponentTracker::measureAndWeld(const CrackMesh& mesh,
                                       const std::vector<Primitive>& primitives,
                                       const std::vector<std::int32_t>& slots,
@@ -1025,7 +1024,6 @@ const CrackComponents& ComponentTracker::update(const CrackMesh& mesh, bool carr
     return m_components;
   }
   reset();
-  m_extentsCurrent = false;
   m_components = findComponents(mesh);
   ++m_recomputations;
   return m_components;
@@ -1067,7 +1065,6 @@ bool ComponentTracker::updateCarried(const CrackMesh& mesh) {
     return false;  // a face left: a bond healed, or the viewer went back
   }
   measureAndWeld(mesh, primitives, groupOf, oldSlots);
-  m_extentsCurrent = m_detail == ComponentDetail::kAreas;
   for (std::int32_t& group : groupOf) {
     group = findRoot(m_parent, group);
   }

@@ -95,6 +95,8 @@ struct PrimitiveExtent {
   double area = 0.0;
   Vec3 centroid;
 };
+// One primitive's extent, reading its points once (none for an empty one).
+PrimitiveExtent measureExtent(const CrackMesh& mesh, const Primitive& primitive);
 
 class ComponentTracker {
  public:
@@ -109,8 +111,9 @@ class ComponentTracker {
   // from here instead of the faces' points again. Valid for the mesh given
   // to that update only, until the next one.
   std::span<const PrimitiveExtent> extents() const {
-    return m_extentsCurrent ? std::span<const PrimitiveExtent>(m_extents)
-                            : std::span<const PrimitiveExtent>();
+    // Areas only were summed exactly where the tracker kept the surface.
+    return m_components.planes ? std::span<const PrimitiveExtent>()
+                               : std::span<const PrimitiveExtent>(m_extents);
   }
 
  private:
@@ -131,7 +134,6 @@ class ComponentTracker {
   // kEvery boxes only, and not every step), kept from step to step for
   // their pages.
   std::vector<PrimitiveExtent> m_extents;
-  bool m_extentsCurrent = false;
   CrackComponents m_components;
   std::size_t m_recomputations = 0;
 };
