@@ -54,8 +54,8 @@ StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInp
       out.mainNormal = mainPlane(mesh).normal;
     }
   }
-  m_openings = measureOpening(mesh, components, m_lattice.bonds, reference, input.positions,
-                              m_options.opening, &m_normals, m_components.extents());
+  measureOpening(mesh, components, m_lattice.bonds, reference, input.positions, m_options.opening,
+                 &m_normals, m_components.measured(), m_openings);
   out.mainOpening = summariseOpening(m_openings, 0);
   out.allOpening = summariseOpening(m_openings, -1);
   out.fragments = fragmentsNow->countAtLeast(m_options.minFragment);

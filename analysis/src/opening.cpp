@@ -54,8 +54,9 @@ Vec3 elementNormal(const CrackMesh& mesh, const cracks::Primitive& primitive) {
   return cracks::polygonNormal(mesh.points, primitive.ids, primitive.count);
 }
 
-// Element e of `out`: its area, centroid, cell and component, and the
-// opening and slip of the bonds it stands for.
+// Element e of `out`, every field of it: its area, centroid, cell and
+// component, and the opening and slip of the bonds it stands for (NaN
+// without one).
 void measureElement(const CrackMesh& mesh, const cracks::Primitive& primitive,
                     const CrackComponents& components, std::span<const dem::Bond> bonds,
                     std::span<const Vec3> reference, std::span<const Vec3> current,
@@ -68,9 +69,11 @@ void measureElement(const CrackMesh& mesh, const cracks::Primitive& primitive,
   out.area[e] = shape.area;
   out.centroid[e] = shape.centroid;
   out.cell[e] = base + primitive.index;
-  if (primitive.index < components.ofPrimitive.size()) {
-    out.component[e] = components.ofPrimitive[primitive.index];
-  }
+  out.component[e] = primitive.index < components.ofPrimitive.size()
+                         ? components.ofPrimitive[primitive.index]
+                         : -1;
+  out.opening[e] = kNaN;
+  out.slip[e] = kNaN;
   // The bonds of one cell cut element may cross the crack either way
   // round: each counts along the first one's normal (the normals of
   // neighbouring bonds are nearly parallel; their axes need not be).
@@ -106,41 +109,76 @@ void measureElement(const CrackMesh& mesh, const cracks::Primitive& primitive,
   out.slip[e] = dem::norm(meanJump - normalPart * out.normal[e]);
 }
 
+// Whether `measured` holds the surface primitives of `mesh` (and an extent
+// for each): they point into its connectivity, as many as it has.
+bool measuredOn(const CrackMesh& mesh, const cracks::MeasuredSurface& measured) {
+  const auto& primitives = measured.primitives;
+  if (primitives.empty() || measured.extents.size() != primitives.size()) {
+    return false;
+  }
+  if (mesh.dimension != 2) {
+    return primitives.size() == mesh.polygons.size() &&
+           primitives.front().ids == mesh.polygons.connectivity.data();
+  }
+  const std::int32_t* lo = mesh.lines.connectivity.data();
+  const std::int32_t* hi = lo + mesh.lines.connectivity.size();
+  return primitives.front().ids >= lo && primitives.back().ids + 2 <= hi;
+}
+
+// Each element's arrays sized to `count`, keeping their memory.
+void sizeElements(ElementOpenings& out, std::size_t count) {
+  out.area.resize(count);
+  out.centroid.resize(count);
+  out.normal.resize(count);
+  out.component.resize(count);
+  out.cell.resize(count);
+  out.opening.resize(count);
+  out.slip.resize(count);
+}
+
 }  // namespace
 
 ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& components,
                                std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
                                std::span<const Vec3> current, const OpeningOptions& options,
                                const BondNormals* normals,
-                               std::span<const cracks::PrimitiveExtent> shapes) {
-  const std::vector<cracks::Primitive> primitives = cracks::surfacePrimitives(mesh);
-  if (shapes.size() != primitives.size()) {
-    shapes = {};
+                               const cracks::MeasuredSurface& measured) {
+  ElementOpenings out;
+  measureOpening(mesh, components, bonds, reference, current, options, normals, measured, out);
+  return out;
+}
+
+void measureOpening(const CrackMesh& mesh, const CrackComponents& components,
+                    std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
+                    std::span<const Vec3> current, const OpeningOptions& options,
+                    const BondNormals* normals, const cracks::MeasuredSurface& measured,
+                    ElementOpenings& out) {
+  const bool kept = measuredOn(mesh, measured);
+  std::vector<cracks::Primitive> own;
+  if (!kept) {
+    own = cracks::surfacePrimitives(mesh);
   }
+  const std::span<const cracks::Primitive> primitives =
+      kept ? measured.primitives : std::span<const cracks::Primitive>(own);
+  const std::span<const cracks::PrimitiveExtent> shapes =
+      kept ? measured.extents : std::span<const cracks::PrimitiveExtent>();
   const cracks::AttributeArray* cellIds = mesh.findCellData("bond_id");
   const cracks::AttributeArray* pointIds = cellIds ? nullptr : mesh.findPointData("bond_id");
   const std::size_t n = std::min(reference.size(), current.size());
   // Without a caller's normals, those of the bonds this mesh carries.
-  BondNormals own(mesh.dimension, options.smoothingRadius);
+  BondNormals ownNormals(mesh.dimension, options.smoothingRadius);
   if (normals == nullptr) {
     std::vector<std::int32_t> carried;
     for (const cracks::Primitive& primitive : primitives) {
       forEachBond(mesh, primitive, bonds.size(), cellIds, pointIds,
                   [&](std::size_t b) { carried.push_back(static_cast<std::int32_t>(b)); });
     }
-    own.add(bonds, carried, reference.first(n));
-    normals = &own;
+    ownNormals.add(bonds, carried, reference.first(n));
+    normals = &ownNormals;
   }
-  ElementOpenings out;
   const std::size_t count = primitives.size();
   out.smoothingRadius = normals->radius();
-  out.area.resize(count);
-  out.centroid.resize(count);
-  out.normal.resize(count);
-  out.component.assign(count, -1);
-  out.cell.resize(count);
-  out.opening.assign(count, kNaN);
-  out.slip.assign(count, kNaN);
+  sizeElements(out, count);
   const std::size_t base = surfaceBase(mesh);
   // Each element on its own: blocks on all cores, the same figures on any.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const auto& range) {
@@ -149,7 +187,6 @@ ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& com
                      *normals, cellIds, pointIds, base, shapes, out, e);
     }
   });
-  return out;
 }
 
 void appendOpeningArrays(CrackMesh& mesh, const ElementOpenings& openings) {

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -440,25 +441,62 @@ std::size_t countMarked(const std::vector<char>& cells) {
   return static_cast<std::size_t>(std::count(cells.begin(), cells.end(), char{1}));
 }
 
+// A sort key of an area, largest first: non-negative doubles order as their
+// bit patterns, so the key runs down from that of infinity (an area is never
+// negative; NaN last).
+std::uint64_t largestFirstKey(double area) {
+  constexpr std::uint64_t kInfinity = 0x7FF0000000000000ull;
+  if (std::isnan(area)) {
+    return kInfinity + 1;
+  }
+  return kInfinity - std::bit_cast<std::uint64_t>(area > 0.0 ? area : 0.0);
+}
+
+// The indices of `found`, largest area first, equal areas in their order of
+// appearance: a stable radix sort of the keys, a byte at a time, skipping the
+// bytes all keys share. A scattered crack has thousands of components, and a
+// comparison sort of them was a fifth of the tracker's summing on cuboid A.
+std::vector<std::int32_t> largestFirst(const std::vector<CrackComponent>& found) {
+  const std::size_t n = found.size();
+  std::vector<std::uint64_t> key(n);
+  std::vector<std::int32_t> order(n);
+  for (std::size_t c = 0; c < n; ++c) {
+    key[c] = largestFirstKey(found[c].area);
+    order[c] = static_cast<std::int32_t>(c);
+  }
+  std::vector<std::uint64_t> keyOut(n);
+  std::vector<std::int32_t> orderOut(n);
+  for (int shift = 0; shift < 64; shift += 8) {
+    std::array<std::size_t, 257> start{};
+    for (const std::uint64_t k : key) {
+      ++start[((k >> shift) & 0xFF) + 1];
+    }
+    if (std::find(start.begin() + 1, start.end(), n) != start.end()) {
+      continue;  // every key has the same byte here: the order stands
+    }
+    for (std::size_t b = 1; b < start.size(); ++b) {
+      start[b] += start[b - 1];
+    }
+    for (std::size_t c = 0; c < n; ++c) {
+      const std::size_t at = start[(key[c] >> shift) & 0xFF]++;
+      keyOut[at] = key[c];
+      orderOut[at] = order[c];
+    }
+    key.swap(keyOut);
+    order.swap(orderOut);
+  }
+  return order;
+}
+
 // Numbers components largest first (ties by first appearance, so the order
 // is deterministic) and relabels the primitives.
 void sortLargestFirst(std::vector<CrackComponent>& found, CrackComponents& set) {
-  // Largest area first, equal areas in their order of appearance. The keys
-  // sit beside their indices: a scattered crack has thousands of
-  // components, and sorting indices through `found` took a fifth of the
-  // tracker's step on cuboid A (0.15 of 0.8 ms, by a probe).
-  std::vector<std::pair<double, std::int32_t>> order(found.size());
-  for (std::size_t c = 0; c < found.size(); ++c) {
-    order[c] = {found[c].area, static_cast<std::int32_t>(c)};
-  }
-  std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) {
-    return a.first > b.first || (a.first == b.first && a.second < b.second);
-  });
+  const std::vector<std::int32_t> order = largestFirst(found);
   std::vector<std::int32_t> rank(found.size());
   set.components.reserve(found.size());
   for (std::size_t r = 0; r < order.size(); ++r) {
-    rank[static_cast<std::size_t>(order[r].second)] = static_cast<std::int32_t>(r);
-    set.components.push_back(found[static_cast<std::size_t>(order[r].second)]);
+    rank[static_cast<std::size_t>(order[r])] = static_cast<std::int32_t>(r);
+    set.components.push_back(found[static_cast<std::size_t>(order[r])]);
   }
   for (std::int32_t& c : set.ofPrimitive) {
     c = c < 0 ? c : rank[static_cast<std::size_t>(c)];
@@ -548,16 +586,39 @@ PrimitiveExtent measureExtent(const CrackMesh& mesh, const Primitive& primitive)
 
 namespace {
 
-// Every primitive's extent into `extents`, on all cores.
-void measureExtents(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
-                    std::vector<PrimitiveExtent>& extents, bool shape = true) {
+// Every primitive's extent into `extents`, on all cores, and the box of
+// all their points (none without a point): minima and maxima, the same in
+// any order.
+std::optional<dem::Bounds> measureExtents(const CrackMesh& mesh,
+                                          const std::vector<Primitive>& primitives,
+                                          std::vector<PrimitiveExtent>& extents,
+                                          bool shape = true) {
   extents.resize(primitives.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, primitives.size(), kPrimitiveBlock),
-                    [&](const auto& range) {
-                      for (std::size_t k = range.begin(); k < range.end(); ++k) {
-                        extents[k] = extentOf(mesh, primitives[k], shape);
-                      }
-                    });
+  using Box = std::optional<dem::Bounds>;
+  const auto merge = [](Box a, const Box& b) {
+    if (!a || !b) {
+      return a ? a : b;
+    }
+    grow(*a, b->lo, false);
+    grow(*a, b->hi, false);
+    return a;
+  };
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, primitives.size(), kPrimitiveBlock), Box{},
+      [&](const auto& range, Box box) {
+        dem::Bounds own;
+        bool any = false;
+        for (std::size_t k = range.begin(); k < range.end(); ++k) {
+          extents[k] = extentOf(mesh, primitives[k], shape);
+          if (primitives[k].count > 0) {
+            grow(own, extents[k].box.lo, !any);
+            grow(own, extents[k].box.hi, false);
+            any = true;
+          }
+        }
+        return any ? merge(box, own) : box;
+      },
+      merge);
 }
 
 // The components of a surface whose primitives are already grouped: each
@@ -929,28 +990,32 @@ void ComponentTracker::unite(std::int32_t a, std::int32_t b) {
 }
 
 // Every face's extent (m_extents: box, area and centroid with kAreas; with
-// kEvery only the boxes the search below needs, on steps that have it),
-// and the faces of the slots from `oldSlots` on, new this step, welded: to
-// each other through a hash of their points' weld keys, and to an old face
-// where one of its points has a key of theirs. The old faces are read once,
-// on all cores, for both: a face whose box lies beyond the new faces' by
-// more than a key's cell is turned away by six comparisons, and the coarse
-// marks spare most points of the rest the key and the lookup. Each block
-// keeps the pairs it finds; they are united after, and the components a set
-// of unions makes do not depend on their order.
+// kEvery only the boxes the search below needs), and the faces of the slots
+// from `oldSlots` on, new this step, welded: to each other through a hash of
+// their points' weld keys, and to an old face where one of its points has a
+// key of theirs. The weld tolerance is 1e-9 of the faces' box, which the
+// extents' pass gives: reading every point of the mesh again for it was a
+// tenth of the tracker's step on cuboid A. The old faces are then searched
+// on all cores: a face whose box lies beyond the new faces' by more than a
+// key's cell is turned away by six comparisons, and the coarse marks spare
+// most points of the rest the key and the lookup. Each block keeps the pairs
+// it finds; they are united after, and the components a set of unions makes
+// do not depend on their order.
 void ComponentTracker::measureAndWeld(const CrackMesh& mesh,
                                       const std::vector<Primitive>& primitives,
                                       const std::vector<std::int32_t>& slots,
                                       std::int32_t oldSlots) {
   // Areas only where summariseSurface reads them; kEvery sums its moments.
   const bool areas = m_detail == ComponentDetail::kAreas;
-  if (static_cast<std::int32_t>(m_parent.size()) == oldSlots) {
-    if (areas) {
-      measureExtents(mesh, primitives, m_extents);
-    }
+  const bool welding = static_cast<std::int32_t>(m_parent.size()) != oldSlots;
+  if (!welding && !areas) {
     return;
   }
-  const double tolerance = weldTolerance(mesh);
+  const std::optional<dem::Bounds> faces = measureExtents(mesh, primitives, m_extents, areas);
+  if (!welding || !faces) {
+    return;
+  }
+  const double tolerance = 1e-9 * std::max(dem::norm(faces->hi - faces->lo), 1e-300);
   std::unordered_map<WeldKey, std::int32_t, WeldKeyHash> newKeys;
   dem::Bounds box;
   bool first = true;
@@ -968,11 +1033,8 @@ void ComponentTracker::measureAndWeld(const CrackMesh& mesh,
       }
     }
   }
-  if (oldSlots == 0) {
-    if (areas) {
-      measureExtents(mesh, primitives, m_extents);
-    }
-    return;
+  if (oldSlots == 0 || first) {
+    return;  // no old face, or the new ones have no point
   }
   const double margin = 2.0 * tolerance;
   CoarseMarks marks(box, margin);
@@ -987,7 +1049,6 @@ void ComponentTracker::measureAndWeld(const CrackMesh& mesh,
     return b.hi.x >= reachLo.x && b.lo.x <= reachHi.x && b.hi.y >= reachLo.y &&
            b.lo.y <= reachHi.y && b.hi.z >= reachLo.z && b.lo.z <= reachHi.z;
   };
-  m_extents.resize(primitives.size());
   using Weld = std::pair<std::int32_t, std::int32_t>;
   tbb::enumerable_thread_specific<std::vector<Weld>> found;
   tbb::parallel_for(
@@ -996,7 +1057,6 @@ void ComponentTracker::measureAndWeld(const CrackMesh& mesh,
         std::vector<Weld>& welds = found.local();
         for (std::size_t k = range.begin(); k < range.end(); ++k) {
           const Primitive& primitive = primitives[k];
-          m_extents[k] = extentOf(mesh, primitive, areas);
           if (slots[k] >= oldSlots || primitive.count == 0 || !reaches(m_extents[k].box)) {
             continue;
           }
@@ -1036,7 +1096,8 @@ bool ComponentTracker::updateCarried(const CrackMesh& mesh) {
   if (bondIds == nullptr) {
     return false;
   }
-  const std::vector<Primitive> primitives = surfacePrimitives(mesh);
+  m_primitives = surfacePrimitives(mesh);
+  const std::vector<Primitive>& primitives = m_primitives;
   const std::size_t base = componentPrimitiveBase(mesh);
   const auto oldSlots = static_cast<std::int32_t>(m_parent.size());
   ++m_stamp;

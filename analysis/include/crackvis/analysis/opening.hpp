@@ -56,14 +56,21 @@ struct ElementOpenings {
 // `reference` and `current` are the particle centres [N]; `bonds` the
 // lattice's pairs [M]; `normals`, kept across steps by the caller, has every
 // bond the mesh carries (else the normals of those bonds are found here,
-// with options.smoothingRadius). `shapes`: each surface primitive's area and
-// centroid as a cracks::ComponentTracker measured them on this mesh
-// (ComponentTracker::extents()); empty, or of another length: measured here.
+// with options.smoothingRadius). `measured`: the surface primitives with
+// their areas and centroids as a cracks::ComponentTracker read them on this
+// mesh (ComponentTracker::measured()); empty, or not of this mesh: read here.
 ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& components,
                                std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
                                std::span<const Vec3> current, const OpeningOptions& options = {},
                                const BondNormals* normals = nullptr,
-                               std::span<const cracks::PrimitiveExtent> shapes = {});
+                               const cracks::MeasuredSurface& measured = {});
+// The same into `out`, whose arrays keep their memory: an analysis of every
+// step writes the same few megabytes again, not into fresh pages.
+void measureOpening(const CrackMesh& mesh, const CrackComponents& components,
+                    std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
+                    std::span<const Vec3> current, const OpeningOptions& options,
+                    const BondNormals* normals, const cracks::MeasuredSurface& measured,
+                    ElementOpenings& out);
 
 // Cell data "opening" and "slip" over all the mesh's primitives in VTK order
 // (NaN for those that are no surface element), appended to mesh.cellData.

@@ -76,7 +76,9 @@ CrackComponents findComponents(const CrackMesh& mesh);
 // particles (`carried`: the step has a reference configuration), two faces
 // that shared a point keep sharing it, and faces only come as bonds break.
 // So only the faces of bonds new since the last step are welded: against
-// each other, and against the old faces' points that fall near them. The
+// each other, and against the old faces' points that fall near them (within
+// 1e-9 of the size of the faces' box: the mesh's, unless a point of the mesh
+// is on no face, such as an inconsistency line's end beyond them). The
 // components' areas, boxes and (ComponentDetail::kEvery) planes are summed
 // anew each step (the faces move). Anything else (cells, cell cut's point
 // bond ids, no reference configuration, a bond that left the mesh or holds
@@ -98,6 +100,13 @@ struct PrimitiveExtent {
 // One primitive's extent, reading its points once (none for an empty one).
 PrimitiveExtent measureExtent(const CrackMesh& mesh, const Primitive& primitive);
 
+// A surface's primitives (surfacePrimitives) and their extents, as read once
+// by one pass over a mesh; both empty where none was kept.
+struct MeasuredSurface {
+  std::span<const Primitive> primitives;
+  std::span<const PrimitiveExtent> extents;
+};
+
 class ComponentTracker {
  public:
   explicit ComponentTracker(ComponentDetail detail = ComponentDetail::kEvery) : m_detail(detail) {}
@@ -105,15 +114,18 @@ class ComponentTracker {
   const CrackComponents& current() const { return m_components; }
   // How often update() found the components of the whole mesh anew.
   std::size_t recomputations() const { return m_recomputations; }
-  // Each surface primitive's extent at the last update, in surfacePrimitives
-  // order, where that update summed areas (ComponentDetail::kAreas) of a
-  // carried surface; else empty. The openings read the areas and centroids
-  // from here instead of the faces' points again. Valid for the mesh given
-  // to that update only, until the next one.
-  std::span<const PrimitiveExtent> extents() const {
+  // The surface primitives and each one's extent at the last update, in
+  // surfacePrimitives order, where that update summed areas
+  // (ComponentDetail::kAreas) of a carried surface; else empty. The openings
+  // read the primitives, areas and centroids from here instead of the
+  // faces' points again. Valid for the mesh given to that update only,
+  // until the next one.
+  MeasuredSurface measured() const {
     // Areas only were summed exactly where the tracker kept the surface.
-    return m_components.planes ? std::span<const PrimitiveExtent>()
-                               : std::span<const PrimitiveExtent>(m_extents);
+    if (m_components.planes) {
+      return {};
+    }
+    return {m_primitives, m_extents};
   }
 
  private:
@@ -134,6 +146,7 @@ class ComponentTracker {
   // kEvery boxes only, and not every step), kept from step to step for
   // their pages.
   std::vector<PrimitiveExtent> m_extents;
+  std::vector<Primitive> m_primitives;  // of the last update (kAreas, carried)
   CrackComponents m_components;
   std::size_t m_recomputations = 0;
 };
