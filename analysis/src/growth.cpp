@@ -25,13 +25,23 @@ StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInp
   out.broken = diff.broken;
   // Four trackers that share nothing but their (read-only) inputs, side by
   // side: on cuboid A each is a fraction of a millisecond, so one after
-  // another they left the second core idle for most of a step. Each one's
-  // result is the same whichever thread runs it.
+  // another they left the second core idle for most of a step. The
+  // openings' bond part (each element's normal, opening and slip) needs the
+  // normals, not the components, so it follows them beside the components;
+  // where the elements lie (area, centroid, component) is placed after.
+  // Each one's result is the same whichever thread runs it.
+  m_primitives = cracks::surfacePrimitives(mesh);
   const CrackComponents* tracked = nullptr;
   const Fragments* fragmentsNow = nullptr;
   tbb::parallel_invoke(
-      [&] { tracked = &m_components.update(mesh, !input.referencePositions.empty()); },
-      [&] { m_normals.update(m_lattice.bonds, diff, input.bondState, reference); },
+      [&] {
+        tracked = &m_components.update(mesh, !input.referencePositions.empty(), m_primitives);
+      },
+      [&] {
+        m_normals.update(m_lattice.bonds, diff, input.bondState, reference);
+        measureBondOpenings(mesh, m_primitives, m_lattice.bonds, reference, input.positions,
+                            m_normals, m_openings);
+      },
       [&] {
         fragmentsNow = &m_fragments.update(m_lattice.bonds, input.bondState, m_lattice.radius,
                                            mesh.dimension, &diff);
@@ -54,8 +64,11 @@ StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInp
       out.mainNormal = mainPlane(mesh).normal;
     }
   }
-  measureOpening(mesh, components, m_lattice.bonds, reference, input.positions, m_options.opening,
-                 &m_normals, m_components.measured(), m_openings);
+  const cracks::MeasuredSurface measured = m_components.measured();
+  placeOpenings(
+      mesh, m_primitives, components,
+      measuredOn(mesh, measured) ? measured.extents : std::span<const cracks::PrimitiveExtent>(),
+      m_openings);
   out.mainOpening = summariseOpening(m_openings, 0);
   out.allOpening = summariseOpening(m_openings, -1);
   out.fragments = fragmentsNow->countAtLeast(m_options.minFragment);

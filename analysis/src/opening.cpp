@@ -54,24 +54,15 @@ Vec3 elementNormal(const CrackMesh& mesh, const cracks::Primitive& primitive) {
   return cracks::polygonNormal(mesh.points, primitive.ids, primitive.count);
 }
 
-// Element e of `out`, every field of it: its area, centroid, cell and
-// component, and the opening and slip of the bonds it stands for (NaN
-// without one).
-void measureElement(const CrackMesh& mesh, const cracks::Primitive& primitive,
-                    const CrackComponents& components, std::span<const dem::Bond> bonds,
-                    std::span<const Vec3> reference, std::span<const Vec3> current,
-                    const BondNormals& normals, const cracks::AttributeArray* cellIds,
-                    const cracks::AttributeArray* pointIds, std::size_t base,
-                    std::span<const cracks::PrimitiveExtent> shapes, ElementOpenings& out,
-                    std::size_t e) {
-  const cracks::PrimitiveExtent shape =
-      shapes.empty() ? cracks::measureExtent(mesh, primitive) : shapes[e];
-  out.area[e] = shape.area;
-  out.centroid[e] = shape.centroid;
+// The bonds' part of element e of `out`: its cell, and the opening and slip
+// of the bonds it stands for (NaN without one) along their normal (without
+// one, the face's own).
+void measureJump(const CrackMesh& mesh, const cracks::Primitive& primitive,
+                 std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
+                 std::span<const Vec3> current, const BondNormals& normals,
+                 const cracks::AttributeArray* cellIds, const cracks::AttributeArray* pointIds,
+                 std::size_t base, ElementOpenings& out, std::size_t e) {
   out.cell[e] = base + primitive.index;
-  out.component[e] = primitive.index < components.ofPrimitive.size()
-                         ? components.ofPrimitive[primitive.index]
-                         : -1;
   out.opening[e] = kNaN;
   out.slip[e] = kNaN;
   // The bonds of one cell cut element may cross the crack either way
@@ -109,9 +100,25 @@ void measureElement(const CrackMesh& mesh, const cracks::Primitive& primitive,
   out.slip[e] = dem::norm(meanJump - normalPart * out.normal[e]);
 }
 
-// Whether `measured` holds the surface primitives of `mesh` (and an extent
-// for each): they point into its connectivity, as many as it has.
+// Each element's arrays sized to `count`, keeping their memory.
+void sizeElements(ElementOpenings& out, std::size_t count) {
+  out.area.resize(count);
+  out.centroid.resize(count);
+  out.normal.resize(count);
+  out.component.resize(count);
+  out.cell.resize(count);
+  out.opening.resize(count);
+  out.slip.resize(count);
+}
+
+// Elements per block of the passes on all cores (each element on its own:
+// the same figures on any number of cores).
+constexpr std::size_t kElementBlock = 1024;
+
+}  // namespace
+
 bool measuredOn(const CrackMesh& mesh, const cracks::MeasuredSurface& measured) {
+  // They point into the mesh's connectivity, as many as it has.
   const auto& primitives = measured.primitives;
   if (primitives.empty() || measured.extents.size() != primitives.size()) {
     return false;
@@ -125,18 +132,45 @@ bool measuredOn(const CrackMesh& mesh, const cracks::MeasuredSurface& measured) 
   return primitives.front().ids >= lo && primitives.back().ids + 2 <= hi;
 }
 
-// Each element's arrays sized to `count`, keeping their memory.
-void sizeElements(ElementOpenings& out, std::size_t count) {
-  out.area.resize(count);
-  out.centroid.resize(count);
-  out.normal.resize(count);
-  out.component.resize(count);
-  out.cell.resize(count);
-  out.opening.resize(count);
-  out.slip.resize(count);
+void measureBondOpenings(const CrackMesh& mesh, std::span<const cracks::Primitive> primitives,
+                         std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
+                         std::span<const Vec3> current, const BondNormals& normals,
+                         ElementOpenings& out) {
+  const cracks::AttributeArray* cellIds = mesh.findCellData("bond_id");
+  const cracks::AttributeArray* pointIds = cellIds ? nullptr : mesh.findPointData("bond_id");
+  const std::size_t n = std::min(reference.size(), current.size());
+  out.smoothingRadius = normals.radius();
+  sizeElements(out, primitives.size());
+  const std::size_t base = surfaceBase(mesh);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, primitives.size(), kElementBlock),
+                    [&](const auto& range) {
+                      for (std::size_t e = range.begin(); e < range.end(); ++e) {
+                        measureJump(mesh, primitives[e], bonds, reference.first(n),
+                                    current.first(n), normals, cellIds, pointIds, base, out, e);
+                      }
+                    });
 }
 
-}  // namespace
+void placeOpenings(const CrackMesh& mesh, std::span<const cracks::Primitive> primitives,
+                   const CrackComponents& components,
+                   std::span<const cracks::PrimitiveExtent> extents, ElementOpenings& out) {
+  if (extents.size() != primitives.size()) {
+    extents = {};
+  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, primitives.size(), kElementBlock),
+                    [&](const auto& range) {
+                      for (std::size_t e = range.begin(); e < range.end(); ++e) {
+                        const cracks::Primitive& primitive = primitives[e];
+                        const cracks::PrimitiveExtent shape =
+                            extents.empty() ? cracks::measureExtent(mesh, primitive) : extents[e];
+                        out.area[e] = shape.area;
+                        out.centroid[e] = shape.centroid;
+                        out.component[e] = primitive.index < components.ofPrimitive.size()
+                                               ? components.ofPrimitive[primitive.index]
+                                               : -1;
+                      }
+                    });
+}
 
 ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& components,
                                std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
@@ -160,33 +194,22 @@ void measureOpening(const CrackMesh& mesh, const CrackComponents& components,
   }
   const std::span<const cracks::Primitive> primitives =
       kept ? measured.primitives : std::span<const cracks::Primitive>(own);
-  const std::span<const cracks::PrimitiveExtent> shapes =
-      kept ? measured.extents : std::span<const cracks::PrimitiveExtent>();
-  const cracks::AttributeArray* cellIds = mesh.findCellData("bond_id");
-  const cracks::AttributeArray* pointIds = cellIds ? nullptr : mesh.findPointData("bond_id");
-  const std::size_t n = std::min(reference.size(), current.size());
   // Without a caller's normals, those of the bonds this mesh carries.
   BondNormals ownNormals(mesh.dimension, options.smoothingRadius);
   if (normals == nullptr) {
+    const cracks::AttributeArray* cellIds = mesh.findCellData("bond_id");
+    const cracks::AttributeArray* pointIds = cellIds ? nullptr : mesh.findPointData("bond_id");
     std::vector<std::int32_t> carried;
     for (const cracks::Primitive& primitive : primitives) {
       forEachBond(mesh, primitive, bonds.size(), cellIds, pointIds,
                   [&](std::size_t b) { carried.push_back(static_cast<std::int32_t>(b)); });
     }
-    ownNormals.add(bonds, carried, reference.first(n));
+    ownNormals.add(bonds, carried, reference.first(std::min(reference.size(), current.size())));
     normals = &ownNormals;
   }
-  const std::size_t count = primitives.size();
-  out.smoothingRadius = normals->radius();
-  sizeElements(out, count);
-  const std::size_t base = surfaceBase(mesh);
-  // Each element on its own: blocks on all cores, the same figures on any.
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const auto& range) {
-    for (std::size_t e = range.begin(); e < range.end(); ++e) {
-      measureElement(mesh, primitives[e], components, bonds, reference.first(n), current.first(n),
-                     *normals, cellIds, pointIds, base, shapes, out, e);
-    }
-  });
+  measureBondOpenings(mesh, primitives, bonds, reference, current, *normals, out);
+  placeOpenings(mesh, primitives, components,
+                kept ? measured.extents : std::span<const cracks::PrimitiveExtent>(), out);
 }
 
 void appendOpeningArrays(CrackMesh& mesh, const ElementOpenings& openings) {

@@ -35,17 +35,17 @@ RoseDiagram roseDiagram(const ElementOpenings& elements, int component, int bins
 }
 
 std::array<double, 2> equalAreaPoint(Vec3 n) {
-  if (n.z > 0.0) {
-    n = -1.0 * n;
-  }
-  // Unit normals: no overflow to guard against (std::hypot's care was a
-  // third of a step's stereonet).
-  const double horizontal = std::sqrt(n.x * n.x + n.y * n.y);
-  if (horizontal == 0.0) {
+  const double length = dem::norm(n);
+  if (length == 0.0) {
     return {0.0, 0.0};
   }
-  const double r = std::sqrt(std::max(0.0, 1.0 + n.z / dem::norm(n)));
-  return {r * n.x / horizontal, r * n.y / horizontal};
+  // The lower hemisphere's unit direction u (u.z = z <= 0) lands at radius
+  // sqrt(1 + z) along its horizontal part, which is (u.x, u.y) over
+  // sqrt(1 - z^2) = sqrt((1 - z)(1 + z)): so at (u.x, u.y) / sqrt(1 - z).
+  // One root and one quotient: every element of every step passes here.
+  const double z = -std::abs(n.z) / length;
+  const double scale = (n.z > 0.0 ? -1.0 : 1.0) / (length * std::sqrt(1.0 - z));
+  return {scale * n.x, scale * n.y};
 }
 
 Stereonet stereonet(const ElementOpenings& elements, int component, int size) {

@@ -590,7 +590,7 @@ namespace {
 // all their points (none without a point): minima and maxima, the same in
 // any order.
 std::optional<dem::Bounds> measureExtents(const CrackMesh& mesh,
-                                          const std::vector<Primitive>& primitives,
+                                          std::span<const Primitive> primitives,
                                           std::vector<PrimitiveExtent>& extents,
                                           bool shape = true) {
   extents.resize(primitives.size());
@@ -628,7 +628,7 @@ std::optional<dem::Bounds> measureExtents(const CrackMesh& mesh,
 // and plane. Without planes, each primitive's box and area (`extents`, in
 // primitive order: ComponentTracker::measureAndWeld's) are summed in
 // primitive order: the same sums as one pass.
-CrackComponents summariseSurface(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
+CrackComponents summariseSurface(const CrackMesh& mesh, std::span<const Primitive> primitives,
                                  const std::vector<std::int32_t>& groupOf, std::size_t groupCount,
                                  ComponentDetail detail,
                                  const std::vector<PrimitiveExtent>& extents) {
@@ -1001,8 +1001,7 @@ void ComponentTracker::unite(std::int32_t a, std::int32_t b) {
 // most points of the rest the key and the lookup. Each block keeps the pairs
 // it finds; they are united after, and the components a set of unions makes
 // do not depend on their order.
-void ComponentTracker::measureAndWeld(const CrackMesh& mesh,
-                                      const std::vector<Primitive>& primitives,
+void ComponentTracker::measureAndWeld(const CrackMesh& mesh, std::span<const Primitive> primitives,
                                       const std::vector<std::int32_t>& slots,
                                       std::int32_t oldSlots) {
   // Areas only where summariseSurface reads them; kEvery sums its moments.
@@ -1080,6 +1079,13 @@ void ComponentTracker::measureAndWeld(const CrackMesh& mesh,
 }
 
 const CrackComponents& ComponentTracker::update(const CrackMesh& mesh, bool carried) {
+  m_ownPrimitives = surfacePrimitives(mesh);
+  return update(mesh, carried, m_ownPrimitives);
+}
+
+const CrackComponents& ComponentTracker::update(const CrackMesh& mesh, bool carried,
+                                                std::span<const Primitive> primitives) {
+  m_primitives = primitives;
   if (carried && !mesh.holdsCells() && updateCarried(mesh)) {
     return m_components;
   }
@@ -1096,8 +1102,7 @@ bool ComponentTracker::updateCarried(const CrackMesh& mesh) {
   if (bondIds == nullptr) {
     return false;
   }
-  m_primitives = surfacePrimitives(mesh);
-  const std::vector<Primitive>& primitives = m_primitives;
+  const std::span<const Primitive> primitives = m_primitives;
   const std::size_t base = componentPrimitiveBase(mesh);
   const auto oldSlots = static_cast<std::int32_t>(m_parent.size());
   ++m_stamp;

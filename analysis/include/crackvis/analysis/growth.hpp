@@ -72,6 +72,8 @@ class CrackAnalysis {
   // `mesh`: the one given to analyse.
   cracks::ComponentPlane mainPlane(const CrackMesh& mesh) const;
   const ElementOpenings& openings() const { return m_openings; }
+  // The broken bonds' normals, kept across the steps analysed.
+  const BondNormals& normals() const { return m_normals; }
   const Fragments& fragments() const { return m_fragments.current(); }
   const FragmentTracker& fragmentTracker() const { return m_fragments; }
   const BreakModeTracker& modes() const { return m_modes; }
@@ -81,6 +83,7 @@ class CrackAnalysis {
   const dem::Lattice& m_lattice;
   AnalysisOptions m_options;
   BondDiffer m_bondDiff;
+  std::vector<cracks::Primitive> m_primitives;  // of the step analysed last
   cracks::ComponentTracker m_components;
   ElementOpenings m_openings;
   BondNormals m_normals;

@@ -72,6 +72,23 @@ void measureOpening(const CrackMesh& mesh, const CrackComponents& components,
                     const BondNormals* normals, const cracks::MeasuredSurface& measured,
                     ElementOpenings& out);
 
+// measureOpening in two halves, for a caller that finds the components
+// beside the first: `primitives` are surfacePrimitives(mesh), and `out` is
+// sized to them. The bonds' part of every element: its cell, normal,
+// opening and slip (`normals` has every bond the mesh carries).
+void measureBondOpenings(const CrackMesh& mesh, std::span<const cracks::Primitive> primitives,
+                         std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
+                         std::span<const Vec3> current, const BondNormals& normals,
+                         ElementOpenings& out);
+// Then where each element lies: its area and centroid (from `extents`, one
+// per primitive, or where empty from its points) and its component.
+void placeOpenings(const CrackMesh& mesh, std::span<const cracks::Primitive> primitives,
+                   const CrackComponents& components,
+                   std::span<const cracks::PrimitiveExtent> extents, ElementOpenings& out);
+// Whether `measured` holds the surface primitives of `mesh` and an extent
+// for each (ComponentTracker::measured() after an update with this mesh).
+bool measuredOn(const CrackMesh& mesh, const cracks::MeasuredSurface& measured);
+
 // Cell data "opening" and "slip" over all the mesh's primitives in VTK order
 // (NaN for those that are no surface element), appended to mesh.cellData.
 void appendOpeningArrays(CrackMesh& mesh, const ElementOpenings& openings);

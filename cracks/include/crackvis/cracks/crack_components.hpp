@@ -111,6 +111,11 @@ class ComponentTracker {
  public:
   explicit ComponentTracker(ComponentDetail detail = ComponentDetail::kEvery) : m_detail(detail) {}
   const CrackComponents& update(const CrackMesh& mesh, bool carried);
+  // The same with the mesh's surface primitives (surfacePrimitives(mesh))
+  // made by the caller, who keeps them until the next update: measured()
+  // refers to them.
+  const CrackComponents& update(const CrackMesh& mesh, bool carried,
+                                std::span<const Primitive> primitives);
   const CrackComponents& current() const { return m_components; }
   // How often update() found the components of the whole mesh anew.
   std::size_t recomputations() const { return m_recomputations; }
@@ -130,7 +135,7 @@ class ComponentTracker {
 
  private:
   bool updateCarried(const CrackMesh& mesh);
-  void measureAndWeld(const CrackMesh& mesh, const std::vector<Primitive>& primitives,
+  void measureAndWeld(const CrackMesh& mesh, std::span<const Primitive> primitives,
                       const std::vector<std::int32_t>& slots, std::int32_t oldSlots);
   void unite(std::int32_t a, std::int32_t b);
   std::int32_t slotOf(std::size_t bond);
@@ -146,7 +151,9 @@ class ComponentTracker {
   // kEvery boxes only, and not every step), kept from step to step for
   // their pages.
   std::vector<PrimitiveExtent> m_extents;
-  std::vector<Primitive> m_primitives;  // of the last update (kAreas, carried)
+  // The surface primitives of the last update: the caller's, or its own.
+  std::span<const Primitive> m_primitives;
+  std::vector<Primitive> m_ownPrimitives;
   CrackComponents m_components;
   std::size_t m_recomputations = 0;
 };
