@@ -110,6 +110,12 @@ struct MeasuredSurface {
 class ComponentTracker {
  public:
   explicit ComponentTracker(ComponentDetail detail = ComponentDetail::kEvery) : m_detail(detail) {}
+  // Not copied: measured() may refer to its own primitives, which a copy's
+  // would not be. Moved, they move with it (a vector keeps its buffer).
+  ComponentTracker(const ComponentTracker&) = delete;
+  ComponentTracker& operator=(const ComponentTracker&) = delete;
+  ComponentTracker(ComponentTracker&&) = default;
+  ComponentTracker& operator=(ComponentTracker&&) = default;
   const CrackComponents& update(const CrackMesh& mesh, bool carried);
   // The same with the mesh's surface primitives (surfacePrimitives(mesh))
   // made by the caller, who keeps them until the next update: measured()
