@@ -51,7 +51,11 @@ Vec3 elementNormal(const CrackMesh& mesh, const cracks::Primitive& primitive) {
     const double length = std::hypot(d.x, d.y);
     return length > 0.0 ? Vec3{-d.y / length, d.x / length, 0.0} : Vec3{};
   }
-  return cracks::polygonNormal(mesh.points, primitive.ids, primitive.count);
+  // polygonNormal is Newell's vector over 2, as long as the face's area:
+  // the element's normal is a unit one, as a bond's is.
+  const Vec3 n = cracks::polygonNormal(mesh.points, primitive.ids, primitive.count);
+  const double length = dem::norm(n);
+  return length > 0.0 ? (1.0 / length) * n : Vec3{};
 }
 
 // The bonds' part of element e of `out`: its cell, and the opening and slip
@@ -117,21 +121,6 @@ constexpr std::size_t kElementBlock = 1024;
 
 }  // namespace
 
-bool measuredOn(const CrackMesh& mesh, const cracks::MeasuredSurface& measured) {
-  // They point into the mesh's connectivity, as many as it has.
-  const auto& primitives = measured.primitives;
-  if (primitives.empty() || measured.extents.size() != primitives.size()) {
-    return false;
-  }
-  if (mesh.dimension != 2) {
-    return primitives.size() == mesh.polygons.size() &&
-           primitives.front().ids == mesh.polygons.connectivity.data();
-  }
-  const std::int32_t* lo = mesh.lines.connectivity.data();
-  const std::int32_t* hi = lo + mesh.lines.connectivity.size();
-  return primitives.front().ids >= lo && primitives.back().ids + 2 <= hi;
-}
-
 void measureBondOpenings(const CrackMesh& mesh, std::span<const cracks::Primitive> primitives,
                          std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
                          std::span<const Vec3> current, const BondNormals& normals,
@@ -157,6 +146,7 @@ void placeOpenings(const CrackMesh& mesh, std::span<const cracks::Primitive> pri
   if (extents.size() != primitives.size()) {
     extents = {};
   }
+  sizeElements(out, primitives.size());  // nothing to do after measureBondOpenings
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, primitives.size(), kElementBlock),
                     [&](const auto& range) {
                       for (std::size_t e = range.begin(); e < range.end(); ++e) {
@@ -175,27 +165,10 @@ void placeOpenings(const CrackMesh& mesh, std::span<const cracks::Primitive> pri
 ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& components,
                                std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
                                std::span<const Vec3> current, const OpeningOptions& options,
-                               const BondNormals* normals,
-                               const cracks::MeasuredSurface& measured) {
-  ElementOpenings out;
-  measureOpening(mesh, components, bonds, reference, current, options, normals, measured, out);
-  return out;
-}
-
-void measureOpening(const CrackMesh& mesh, const CrackComponents& components,
-                    std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
-                    std::span<const Vec3> current, const OpeningOptions& options,
-                    const BondNormals* normals, const cracks::MeasuredSurface& measured,
-                    ElementOpenings& out) {
-  const bool kept = measuredOn(mesh, measured);
-  std::vector<cracks::Primitive> own;
-  if (!kept) {
-    own = cracks::surfacePrimitives(mesh);
-  }
-  const std::span<const cracks::Primitive> primitives =
-      kept ? measured.primitives : std::span<const cracks::Primitive>(own);
+                               const BondNormals* normals) {
+  const std::vector<cracks::Primitive> primitives = cracks::surfacePrimitives(mesh);
   // Without a caller's normals, those of the bonds this mesh carries.
-  BondNormals ownNormals(mesh.dimension, options.smoothingRadius);
+  BondNormals own(mesh.dimension, options.smoothingRadius);
   if (normals == nullptr) {
     const cracks::AttributeArray* cellIds = mesh.findCellData("bond_id");
     const cracks::AttributeArray* pointIds = cellIds ? nullptr : mesh.findPointData("bond_id");
@@ -204,12 +177,13 @@ void measureOpening(const CrackMesh& mesh, const CrackComponents& components,
       forEachBond(mesh, primitive, bonds.size(), cellIds, pointIds,
                   [&](std::size_t b) { carried.push_back(static_cast<std::int32_t>(b)); });
     }
-    ownNormals.add(bonds, carried, reference.first(std::min(reference.size(), current.size())));
-    normals = &ownNormals;
+    own.add(bonds, carried, reference.first(std::min(reference.size(), current.size())));
+    normals = &own;
   }
+  ElementOpenings out;
   measureBondOpenings(mesh, primitives, bonds, reference, current, *normals, out);
-  placeOpenings(mesh, primitives, components,
-                kept ? measured.extents : std::span<const cracks::PrimitiveExtent>(), out);
+  placeOpenings(mesh, primitives, components, {}, out);
+  return out;
 }
 
 void appendOpeningArrays(CrackMesh& mesh, const ElementOpenings& openings) {

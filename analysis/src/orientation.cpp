@@ -39,12 +39,12 @@ std::array<double, 2> equalAreaPoint(Vec3 n) {
   if (length == 0.0) {
     return {0.0, 0.0};
   }
-  // The lower hemisphere's unit direction u (u.z = z <= 0) lands at radius
-  // sqrt(1 + z) along its horizontal part, which is (u.x, u.y) over
-  // sqrt(1 - z^2) = sqrt((1 - z)(1 + z)): so at (u.x, u.y) / sqrt(1 - z).
-  // One root and one quotient: every element of every step passes here.
-  const double z = -std::abs(n.z) / length;
-  const double scale = (n.z > 0.0 ? -1.0 : 1.0) / (length * std::sqrt(1.0 - z));
+  // The lower hemisphere's unit direction u = n / |n| (u.z = z <= 0) lands
+  // at radius sqrt(1 + z) along its horizontal part, which is (u.x, u.y)
+  // over sqrt(1 - z^2) = sqrt((1 - z)(1 + z)): so at (u.x, u.y) / sqrt(1 - z),
+  // which is (n.x, n.y) / sqrt(|n| (|n| + |n.z|)). Two roots and one
+  // quotient, not three of each: every element of every step passes here.
+  const double scale = (n.z > 0.0 ? -1.0 : 1.0) / std::sqrt(length * (length + std::abs(n.z)));
   return {scale * n.x, scale * n.y};
 }
 

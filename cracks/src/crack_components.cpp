@@ -993,14 +993,13 @@ void ComponentTracker::unite(std::int32_t a, std::int32_t b) {
 // kEvery only the boxes the search below needs), and the faces of the slots
 // from `oldSlots` on, new this step, welded: to each other through a hash of
 // their points' weld keys, and to an old face where one of its points has a
-// key of theirs. The weld tolerance is 1e-9 of the faces' box, which the
-// extents' pass gives: reading every point of the mesh again for it was a
-// tenth of the tracker's step on cuboid A. The old faces are then searched
-// on all cores: a face whose box lies beyond the new faces' by more than a
-// key's cell is turned away by six comparisons, and the coarse marks spare
-// most points of the rest the key and the lookup. Each block keeps the pairs
-// it finds; they are united after, and the components a set of unions makes
-// do not depend on their order.
+// key of theirs. The weld tolerance is 1e-9 of the box of the primitives'
+// points, which the extents' pass gives for the faces: reading every point
+// of the mesh again for it was a tenth of the tracker's step on cuboid A. The old faces are then
+// searched on all cores: a face whose box lies beyond the new faces' by more than a key's cell is
+// turned away by six comparisons, and the coarse marks spare most points of the rest the key and
+// the lookup. Each block keeps the pairs it finds; they are united after, and the components a set
+// of unions makes do not depend on their order.
 void ComponentTracker::measureAndWeld(const CrackMesh& mesh, std::span<const Primitive> primitives,
                                       const std::vector<std::int32_t>& slots,
                                       std::int32_t oldSlots) {
@@ -1010,9 +1009,18 @@ void ComponentTracker::measureAndWeld(const CrackMesh& mesh, std::span<const Pri
   if (!welding && !areas) {
     return;
   }
-  const std::optional<dem::Bounds> faces = measureExtents(mesh, primitives, m_extents, areas);
+  std::optional<dem::Bounds> faces = measureExtents(mesh, primitives, m_extents, areas);
   if (!welding || !faces) {
     return;
+  }
+  // The other primitives' points too (few: a 3D mesh's inconsistency
+  // lines, end to end between particle centres, reach beyond the faces),
+  // so that the tolerance is findComponents' wherever every point of the
+  // mesh is some primitive's.
+  for (const std::vector<std::int32_t>* ids : {&mesh.lines.connectivity, &mesh.vertices}) {
+    for (const std::int32_t id : *ids) {
+      grow(*faces, mesh.points[static_cast<std::size_t>(id)], false);
+    }
   }
   const double tolerance = 1e-9 * std::max(dem::norm(faces->hi - faces->lo), 1e-300);
   std::unordered_map<WeldKey, std::int32_t, WeldKeyHash> newKeys;
@@ -1079,7 +1087,9 @@ void ComponentTracker::measureAndWeld(const CrackMesh& mesh, std::span<const Pri
 }
 
 const CrackComponents& ComponentTracker::update(const CrackMesh& mesh, bool carried) {
-  m_ownPrimitives = surfacePrimitives(mesh);
+  // Only a surface that may be kept needs them here; findComponents makes its own.
+  const bool keepable = carried && !mesh.holdsCells();
+  m_ownPrimitives = keepable ? surfacePrimitives(mesh) : std::vector<Primitive>();
   return update(mesh, carried, m_ownPrimitives);
 }
 

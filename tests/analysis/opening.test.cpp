@@ -109,6 +109,29 @@ TEST_CASE("opening statistics: histogram by area, profile along the crack, no bo
   CHECK(summariseOpening(none, -1).elements == 0);
 }
 
+TEST_CASE("an element without a bond has its face's unit normal and no opening",
+          "[analysis][opening]") {
+  auto specimen = testing::movedHalf(dem::LatticeKind::kFcc, dem::fccUnitCells(3, 3, 3),
+                                     {0.4, 0, 0}, cracks::Method::kLocalVoronoi);
+  // The faces without their bonds: each keeps its own plane (the cut is
+  // x = const, so every face's normal has some x) at unit length, whatever
+  // its area (a face's Newell vector is as long as its area).
+  auto& cells = specimen.mesh.cellData;
+  std::erase_if(cells, [](const cracks::AttributeArray& a) { return a.name == "bond_id"; });
+  CrackComponents components;
+  const ElementOpenings openings = openingsOf(specimen, components);
+  REQUIRE(openings.size() > 0);
+  std::size_t notUnit = 0;
+  std::size_t withOpening = 0;
+  for (std::size_t e = 0; e < openings.size(); ++e) {
+    notUnit += std::abs(dem::norm(openings.normal[e]) - 1.0) < 1e-12 ? 0 : 1;
+    withOpening += std::isnan(openings.opening[e]) ? 0 : 1;
+  }
+  CHECK(notUnit == 0);
+  CHECK(withOpening == 0);
+  CHECK(openings.area[0] != Approx(1.0));  // so a length of 1 is no face's area by chance
+}
+
 TEST_CASE("per-component opening summaries in one pass equal each component's own",
           "[analysis][opening]") {
   // Elements of components 2, 0, 1, 0, none and 2, one without a bond.

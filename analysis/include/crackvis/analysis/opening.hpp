@@ -56,38 +56,27 @@ struct ElementOpenings {
 // `reference` and `current` are the particle centres [N]; `bonds` the
 // lattice's pairs [M]; `normals`, kept across steps by the caller, has every
 // bond the mesh carries (else the normals of those bonds are found here,
-// with options.smoothingRadius). `measured`: the surface primitives with
-// their areas and centroids as a cracks::ComponentTracker read them on this
-// mesh (ComponentTracker::measured()); empty, or not of this mesh: read here.
+// with options.smoothingRadius).
 ElementOpenings measureOpening(const CrackMesh& mesh, const CrackComponents& components,
                                std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
                                std::span<const Vec3> current, const OpeningOptions& options = {},
-                               const BondNormals* normals = nullptr,
-                               const cracks::MeasuredSurface& measured = {});
-// The same into `out`, whose arrays keep their memory: an analysis of every
-// step writes the same few megabytes again, not into fresh pages.
-void measureOpening(const CrackMesh& mesh, const CrackComponents& components,
-                    std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
-                    std::span<const Vec3> current, const OpeningOptions& options,
-                    const BondNormals* normals, const cracks::MeasuredSurface& measured,
-                    ElementOpenings& out);
+                               const BondNormals* normals = nullptr);
 
 // measureOpening in two halves, for a caller that finds the components
-// beside the first: `primitives` are surfacePrimitives(mesh), and `out` is
-// sized to them. The bonds' part of every element: its cell, normal,
-// opening and slip (`normals` has every bond the mesh carries).
+// beside the first (CrackAnalysis); `primitives` are surfacePrimitives(mesh)
+// and `out`'s arrays keep their memory from call to call. First the bonds'
+// part of every element: its cell, normal, opening and slip (`normals` has
+// every bond the mesh carries); `out` is sized to the primitives.
 void measureBondOpenings(const CrackMesh& mesh, std::span<const cracks::Primitive> primitives,
                          std::span<const dem::Bond> bonds, std::span<const Vec3> reference,
                          std::span<const Vec3> current, const BondNormals& normals,
                          ElementOpenings& out);
 // Then where each element lies: its area and centroid (from `extents`, one
-// per primitive, or where empty from its points) and its component.
+// per primitive of these, as ComponentTracker::measured() gives them; or
+// where empty, or of another length, from its points) and its component.
 void placeOpenings(const CrackMesh& mesh, std::span<const cracks::Primitive> primitives,
                    const CrackComponents& components,
                    std::span<const cracks::PrimitiveExtent> extents, ElementOpenings& out);
-// Whether `measured` holds the surface primitives of `mesh` and an extent
-// for each (ComponentTracker::measured() after an update with this mesh).
-bool measuredOn(const CrackMesh& mesh, const cracks::MeasuredSurface& measured);
 
 // Cell data "opening" and "slip" over all the mesh's primitives in VTK order
 // (NaN for those that are no surface element), appended to mesh.cellData.

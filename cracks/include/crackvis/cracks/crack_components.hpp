@@ -77,8 +77,8 @@ CrackComponents findComponents(const CrackMesh& mesh);
 // that shared a point keep sharing it, and faces only come as bonds break.
 // So only the faces of bonds new since the last step are welded: against
 // each other, and against the old faces' points that fall near them (within
-// 1e-9 of the size of the faces' box: the mesh's, unless a point of the mesh
-// is on no face, such as an inconsistency line's end beyond them). The
+// 1e-9 of the size of the box of its primitives' points: the mesh's, as
+// findComponents takes it, unless some point of the mesh is on none). The
 // components' areas, boxes and (ComponentDetail::kEvery) planes are summed
 // anew each step (the faces move). Anything else (cells, cell cut's point
 // bond ids, no reference configuration, a bond that left the mesh or holds
