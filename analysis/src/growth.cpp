@@ -64,13 +64,9 @@ StepAnalysis CrackAnalysis::analyse(int step, double time, const cracks::StepInp
       out.mainNormal = mainPlane(mesh).normal;
     }
   }
-  // The faces' areas and centroids from the components' pass where it
-  // measured these very primitives (the tracker kept the surface).
-  const cracks::MeasuredSurface measured = m_components.measured();
-  const bool ours = measured.primitives.data() == m_primitives.data() &&
-                    measured.primitives.size() == m_primitives.size();
-  placeOpenings(mesh, m_primitives, components,
-                ours ? measured.extents : std::span<const cracks::PrimitiveExtent>(), m_openings);
+  // The faces' areas and centroids from the components' pass, where it
+  // measured these primitives (it kept the surface).
+  placeOpenings(mesh, m_primitives, components, m_components.extents(), m_openings);
   out.mainOpening = summariseOpening(m_openings, 0);
   out.allOpening = summariseOpening(m_openings, -1);
   out.fragments = fragmentsNow->countAtLeast(m_options.minFragment);

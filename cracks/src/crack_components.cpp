@@ -245,6 +245,12 @@ void grow(dem::Bounds& box, Vec3 p, bool first) {
   box.hi = {std::max(box.hi.x, p.x), std::max(box.hi.y, p.y), std::max(box.hi.z, p.z)};
 }
 
+// `box` grown to hold `other` too.
+void grow(dem::Bounds& box, const dem::Bounds& other) {
+  grow(box, other.lo, false);
+  grow(box, other.hi, false);
+}
+
 // A square raster on a plane (or a line, ny = 1), in the plane's (u, w)
 // coordinates.
 class Raster {
@@ -599,8 +605,7 @@ std::optional<dem::Bounds> measureExtents(const CrackMesh& mesh,
     if (!a || !b) {
       return a ? a : b;
     }
-    grow(*a, b->lo, false);
-    grow(*a, b->hi, false);
+    grow(*a, *b);
     return a;
   };
   return tbb::parallel_reduce(
@@ -611,8 +616,11 @@ std::optional<dem::Bounds> measureExtents(const CrackMesh& mesh,
         for (std::size_t k = range.begin(); k < range.end(); ++k) {
           extents[k] = extentOf(mesh, primitives[k], shape);
           if (primitives[k].count > 0) {
-            grow(own, extents[k].box.lo, !any);
-            grow(own, extents[k].box.hi, false);
+            if (any) {
+              grow(own, extents[k].box);
+            } else {
+              own = extents[k].box;
+            }
             any = true;
           }
         }
@@ -664,8 +672,7 @@ CrackComponents summariseSurface(const CrackMesh& mesh, std::span<const Primitiv
     if (component.primitives == 1) {
       component.box = own;
     } else {
-      grow(component.box, own.lo, false);
-      grow(component.box, own.hi, false);
+      grow(component.box, own);
     }
   }
   for (std::size_t c = 0; planes && c < found.size(); ++c) {
@@ -693,8 +700,7 @@ dem::Bounds pointsBox(const std::vector<Vec3>& points) {
         return box;
       },
       [](dem::Bounds a, const dem::Bounds& b) {
-        grow(a, b.lo, false);
-        grow(a, b.hi, false);
+        grow(a, b);
         return a;
       });
 }
@@ -1089,14 +1095,12 @@ void ComponentTracker::measureAndWeld(const CrackMesh& mesh, std::span<const Pri
 const CrackComponents& ComponentTracker::update(const CrackMesh& mesh, bool carried) {
   // Only a surface that may be kept needs them here; findComponents makes its own.
   const bool keepable = carried && !mesh.holdsCells();
-  m_ownPrimitives = keepable ? surfacePrimitives(mesh) : std::vector<Primitive>();
-  return update(mesh, carried, m_ownPrimitives);
+  return update(mesh, carried, keepable ? surfacePrimitives(mesh) : std::vector<Primitive>());
 }
 
 const CrackComponents& ComponentTracker::update(const CrackMesh& mesh, bool carried,
                                                 std::span<const Primitive> primitives) {
-  m_primitives = primitives;
-  if (carried && !mesh.holdsCells() && updateCarried(mesh)) {
+  if (carried && !mesh.holdsCells() && updateCarried(mesh, primitives)) {
     return m_components;
   }
   reset();
@@ -1107,12 +1111,11 @@ const CrackComponents& ComponentTracker::update(const CrackMesh& mesh, bool carr
 
 // False where the mesh is not one whose components can be kept (the
 // caller then finds them anew).
-bool ComponentTracker::updateCarried(const CrackMesh& mesh) {
+bool ComponentTracker::updateCarried(const CrackMesh& mesh, std::span<const Primitive> primitives) {
   const AttributeArray* bondIds = mesh.findCellData("bond_id");
   if (bondIds == nullptr) {
     return false;
   }
-  const std::span<const Primitive> primitives = m_primitives;
   const std::size_t base = componentPrimitiveBase(mesh);
   const auto oldSlots = static_cast<std::int32_t>(m_parent.size());
   ++m_stamp;

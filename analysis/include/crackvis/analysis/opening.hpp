@@ -72,7 +72,7 @@ void measureBondOpenings(const CrackMesh& mesh, std::span<const cracks::Primitiv
                          std::span<const Vec3> current, const BondNormals& normals,
                          ElementOpenings& out);
 // Then where each element lies: its area and centroid (from `extents`, one
-// per primitive of these, as ComponentTracker::measured() gives them; or
+// per primitive of these, as ComponentTracker::extents() gives them; or
 // where empty, or of another length, from its points) and its component.
 void placeOpenings(const CrackMesh& mesh, std::span<const cracks::Primitive> primitives,
                    const CrackComponents& components,

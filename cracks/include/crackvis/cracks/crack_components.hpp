@@ -100,47 +100,30 @@ struct PrimitiveExtent {
 // One primitive's extent, reading its points once (none for an empty one).
 PrimitiveExtent measureExtent(const CrackMesh& mesh, const Primitive& primitive);
 
-// A surface's primitives (surfacePrimitives) and their extents, as read once
-// by one pass over a mesh; both empty where none was kept.
-struct MeasuredSurface {
-  std::span<const Primitive> primitives;
-  std::span<const PrimitiveExtent> extents;
-};
-
 class ComponentTracker {
  public:
   explicit ComponentTracker(ComponentDetail detail = ComponentDetail::kEvery) : m_detail(detail) {}
-  // Not copied: measured() may refer to its own primitives, which a copy's
-  // would not be. Moved, they move with it (a vector keeps its buffer).
-  ComponentTracker(const ComponentTracker&) = delete;
-  ComponentTracker& operator=(const ComponentTracker&) = delete;
-  ComponentTracker(ComponentTracker&&) = default;
-  ComponentTracker& operator=(ComponentTracker&&) = default;
   const CrackComponents& update(const CrackMesh& mesh, bool carried);
   // The same with the mesh's surface primitives (surfacePrimitives(mesh))
-  // made by the caller, who keeps them until the next update: measured()
-  // refers to them.
+  // made by the caller, who reads extents() with them.
   const CrackComponents& update(const CrackMesh& mesh, bool carried,
                                 std::span<const Primitive> primitives);
   const CrackComponents& current() const { return m_components; }
   // How often update() found the components of the whole mesh anew.
   std::size_t recomputations() const { return m_recomputations; }
-  // The surface primitives and each one's extent at the last update, in
-  // surfacePrimitives order, where that update summed areas
+  // Each surface primitive's extent at the last update, in the order of its
+  // primitives (surfacePrimitives order), where that update summed areas
   // (ComponentDetail::kAreas) of a carried surface; else empty. The openings
-  // read the primitives, areas and centroids from here instead of the
-  // faces' points again. Valid for the mesh given to that update only,
-  // until the next one.
-  MeasuredSurface measured() const {
+  // read the areas and centroids from here instead of the faces' points
+  // again. Valid for the mesh given to that update only, until the next one.
+  std::span<const PrimitiveExtent> extents() const {
     // Areas only were summed exactly where the tracker kept the surface.
-    if (m_components.planes) {
-      return {};
-    }
-    return {m_primitives, m_extents};
+    return m_components.planes ? std::span<const PrimitiveExtent>()
+                               : std::span<const PrimitiveExtent>(m_extents);
   }
 
  private:
-  bool updateCarried(const CrackMesh& mesh);
+  bool updateCarried(const CrackMesh& mesh, std::span<const Primitive> primitives);
   void measureAndWeld(const CrackMesh& mesh, std::span<const Primitive> primitives,
                       const std::vector<std::int32_t>& slots, std::int32_t oldSlots);
   void unite(std::int32_t a, std::int32_t b);
@@ -157,9 +140,6 @@ class ComponentTracker {
   // kEvery boxes only, and not every step), kept from step to step for
   // their pages.
   std::vector<PrimitiveExtent> m_extents;
-  // The surface primitives of the last update: the caller's, or its own.
-  std::span<const Primitive> m_primitives;
-  std::vector<Primitive> m_ownPrimitives;
   CrackComponents m_components;
   std::size_t m_recomputations = 0;
 };
