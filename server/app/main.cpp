@@ -297,7 +297,8 @@ int main(int argc, char** argv) {
                  "full-resolution frame this long after the last event")
       ->capture_default_str();
   app.add_option("--interactive-frame-ms", config.limits.interactiveFrameMs,
-                 "render-time budget of a reduced-resolution frame while interacting")
+                 "budget of a reduced-resolution frame while interacting: its wait for a render "
+                 "turn and its render")
       ->capture_default_str();
   app.add_option("--max-reduction", config.limits.maxReduction,
                  "largest image reduction factor while interacting (1: always full resolution)")

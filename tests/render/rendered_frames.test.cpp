@@ -133,7 +133,7 @@ TEST_CASE("a reduced frame is enlarged by the encoder as resample enlarges it",
   for (const int factor : {2, 3, 7, 2, 1}) {
     INFO("reduction " << factor);
     render::Image small;
-    REQUIRE((*renderer)->renderFrame(kWidth / factor, kHeight / factor, small, factor > 1).isOk());
+    REQUIRE((*renderer)->renderFrame(kWidth / factor, kHeight / factor, small).isOk());
     render::Image big;
     render::resample(small, kWidth, kHeight, big);
     const encode::RgbFrame reference = paddedFrame(big);
@@ -160,6 +160,6 @@ TEST_CASE("a reduced frame is enlarged by the encoder as resample enlarges it",
   const auto refused = (*replicating)->encode(tooWide, false);
   CHECK(refused.status().code() == StatusCode::kInvalidArgument);
   render::Image small;
-  REQUIRE((*renderer)->renderFrame(kWidth / 4, kHeight / 4, small, true).isOk());
+  REQUIRE((*renderer)->renderFrame(kWidth / 4, kHeight / 4, small).isOk());
   CHECK((*replicating)->encode(paddedFrame(small), false).isOk());
 }

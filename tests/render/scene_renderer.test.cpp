@@ -551,6 +551,118 @@ TEST_CASE("hidden particles are culled without changing the picture", "[render][
   CHECK(differing < kWidth * kHeight / 500);
 }
 
+// The mean colour of the pixels that are not background (black).
+std::array<double, 3> meanContentColour(const render::Image& image) {
+  std::array<double, 3> sum{};
+  int n = 0;
+  for (int y = 0; y < image.height; ++y) {
+    for (int x = 0; x < image.width; ++x) {
+      const std::uint8_t* p = image.pixel(x, y);
+      if (notBlack(p)) {
+        for (int c = 0; c < 3; ++c) {
+          sum[static_cast<std::size_t>(c)] += p[c];
+        }
+        ++n;
+      }
+    }
+  }
+  for (double& c : sum) {
+    c /= std::max(n, 1);
+  }
+  return sum;
+}
+
+TEST_CASE(
+    "a coarse frame draws stand-ins for the particles and cracks, as they are coloured and "
+    "clipped",
+    "[render][egl]") {
+  using Detail = render::SceneRenderer::FrameDetail;
+  auto renderer = render::SceneRenderer::create(kWidth, kHeight);
+  REQUIRE(renderer.isOk());
+  Scene scene;
+  render::Image full;
+  render::Image coarse;
+  render::Image again;
+  SECTION("the crack plane stays where it is, and the next full frame is as before") {
+    REQUIRE((*renderer)->render(scene.description, scene.input(), full).isOk());
+    REQUIRE((*renderer)->renderFrame(kWidth, kHeight, coarse, Detail::kCoarse).isOk());
+    const int fullRed = count(full, red);
+    INFO("red pixels: full " << fullRed << ", coarse " << count(coarse, red));
+    CHECK(red(coarse.pixel(kWidth / 2, kHeight / 2)));
+    CHECK(count(coarse, red) > fullRed / 2);
+    CHECK(count(coarse, red) < fullRed * 3 / 2);
+    REQUIRE((*renderer)->renderFrame(kWidth, kHeight, again).isOk());
+    CHECK(again.rgb == full.rgb);
+  }
+  SECTION("fewer spheres, the same colouring, the same clip plane") {
+    pipeline::PipelineDescription& d = scene.description;
+    d.cracks.visible = false;
+    d.particles.visible = true;
+    d.particles.colourBy = pipeline::ParticleColourBy::kDamage;
+    d.view.scalarBar = false;
+    REQUIRE((*renderer)->render(d, scene.input(), full).isOk());
+    const auto fullSpheres = (*renderer)->impostorStats();
+    REQUIRE((*renderer)->renderFrame(kWidth, kHeight, coarse, Detail::kCoarse).isOk());
+    const auto coarseSpheres = (*renderer)->impostorStats();
+    INFO("spheres: full " << fullSpheres.spheres << ", coarse " << coarseSpheres.spheres);
+    CHECK(coarseSpheres.spheres > 0);
+    CHECK(coarseSpheres.spheres * 4 < fullSpheres.spheres);
+    // The coarse spheres hold their members: the block's outline grows a
+    // little, it does not open.
+    const int fullPixels = count(full, notBlack);
+    INFO("pixels: full " << fullPixels << ", coarse " << count(coarse, notBlack));
+    const int coarsePixels = count(coarse, notBlack);
+    CHECK(coarsePixels >= fullPixels * 9 / 10);
+    CHECK(coarsePixels <= fullPixels * 3 / 2);
+    // Coloured by the same map (not the actor's plain colour).
+    const auto fullColour = meanContentColour(full);
+    const auto coarseColour = meanContentColour(coarse);
+    for (std::size_t c = 0; c < 3; ++c) {
+      INFO("channel " << c << ": full " << fullColour[c] << ", coarse " << coarseColour[c]);
+      CHECK(std::abs(fullColour[c] - coarseColour[c]) < 25.0);
+    }
+    REQUIRE((*renderer)->renderFrame(kWidth, kHeight, again).isOk());
+    CHECK(again.rgb == full.rgb);
+    CHECK((*renderer)->impostorStats().spheres == fullSpheres.spheres);
+    // A clip plane through the middle, across the view, hides half of
+    // the block in both.
+    const dem::Vec3 centre = 0.5 * scene.crack.block.extent;
+    d.particles.clip = pipeline::ClipPlane{centre, {0, 0, 1}};
+    REQUIRE((*renderer)->render(d, scene.input(), full).isOk());
+    REQUIRE((*renderer)->renderFrame(kWidth, kHeight, coarse, Detail::kCoarse).isOk());
+    INFO("clipped pixels: full " << count(full, notBlack) << ", coarse "
+                                 << count(coarse, notBlack));
+    CHECK(count(full, notBlack) < fullPixels * 2 / 3);
+    CHECK(count(coarse, notBlack) < coarsePixels * 2 / 3);
+    const auto clippedSpheres = (*renderer)->impostorStats().spheres;
+    // A new scene makes its own stand-ins: particles twice as wide, so
+    // cells twice as wide and fewer clusters. Stand-ins kept from the last
+    // scene would have as many spheres as before.
+    render::SceneInput wider = scene.input();
+    std::vector<double> radius(wider.step.radius.begin(), wider.step.radius.end());
+    for (double& r : radius) {
+      r *= 2.0;
+    }
+    wider.step.radius = radius;
+    REQUIRE((*renderer)->setScene(d, wider).isOk());
+    REQUIRE((*renderer)->renderFrame(kWidth, kHeight, coarse, Detail::kCoarse).isOk());
+    INFO("stand-in spheres: " << clippedSpheres << ", then "
+                              << (*renderer)->impostorStats().spheres);
+    CHECK((*renderer)->impostorStats().spheres > 0);
+    CHECK((*renderer)->impostorStats().spheres * 2 < clippedSpheres);
+    CHECK((*renderer)->drewStandIns());
+    // A full frame draws none.
+    REQUIRE((*renderer)->renderFrame(kWidth, kHeight, again).isOk());
+    CHECK_FALSE((*renderer)->drewStandIns());
+    // Without particles or cracks to stand in for, a coarse frame draws
+    // none either.
+    d.particles.visible = false;
+    REQUIRE((*renderer)->setScene(d, scene.input()).isOk());
+    REQUIRE((*renderer)->renderFrame(kWidth, kHeight, coarse, Detail::kCoarse).isOk());
+    CHECK_FALSE((*renderer)->drewStandIns());
+  }
+}
+
 TEST_CASE("A PNG that cannot be written is the call's error, naming the file and why", "[render]") {
   // The PNG is encoded in memory (VTK's writer never touches the disk, so
   // libpng prints nothing) and written through a partial file.

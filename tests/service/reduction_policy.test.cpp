@@ -1,6 +1,7 @@
-// The reduced-resolution rule of an interacting session (ReductionPolicy),
-// fed modelled render times: the sharpest factor that holds the budget, a
-// factor that does not pay off given up, the limits kept.
+// How an interacting session's frames are drawn (ReductionPolicy), fed
+// modelled render times and turn waits: the sharpest factor that holds the
+// budget, a factor that does not pay off given up, the limits kept, the wait
+// for a render turn counted, and coarse stand-ins only while frames meet others.
 #include "reduction_policy.hpp"
 
 #include <algorithm>
@@ -25,7 +26,7 @@ std::vector<int> run(ReductionPolicy& policy, const std::function<double(int)>& 
   std::vector<int> factors;
   for (int k = 0; k < frames; ++k) {
     factors.push_back(policy.factor());
-    policy.adaptReduction(renderMs(policy.factor()));
+    policy.adapt(renderMs(policy.factor()), 0.0, false, false);
   }
   return factors;
 }
@@ -74,6 +75,88 @@ TEST_CASE("the factor never exceeds the configured limit", "[service][reduction]
       policy, [](int f) { return 1000.0 / (f * f); }, 30);
   CHECK(*std::max_element(factors.begin(), factors.end()) == 3);
   CHECK(factors.back() == 3);
+}
+
+TEST_CASE("the wait for a render turn counts toward the budget", "[service][reduction]") {
+  // 5 ms that no reduction saves plus 100 ms of pixels at full size: alone,
+  // factor 2 (30 ms) holds the 35 ms budget. Behind a 30 ms wait for its
+  // turn every factor misses it, and larger ones still pay off.
+  const auto renderMs = [](int f) { return 5.0 + 100.0 / (f * f); };
+  ReductionPolicy alone(limitsOf(35.0, 8));
+  ReductionPolicy waiting(limitsOf(35.0, 8));
+  std::vector<int> aloneFactors;
+  std::vector<int> waitingFactors;
+  for (int k = 0; k < 40; ++k) {
+    aloneFactors.push_back(alone.factor());
+    alone.adapt(renderMs(alone.factor()), 0.0, false, false);
+    waitingFactors.push_back(waiting.factor());
+    waiting.adapt(renderMs(waiting.factor()), 30.0, false, false);
+  }
+  CHECK(std::count(aloneFactors.end() - 10, aloneFactors.end(), 2) == 10);
+  CHECK(*std::min_element(waitingFactors.end() - 10, waitingFactors.end()) >= 4);
+}
+
+// Feeds frames (10 ms each, no wait), crowded or not, and returns coarse()
+// before each.
+std::vector<bool> details(ReductionPolicy& policy, const std::vector<bool>& crowded) {
+  std::vector<bool> coarse;
+  for (const bool q : crowded) {
+    coarse.push_back(policy.coarse());
+    policy.adapt(10.0, 0.0, policy.coarse(), q);
+  }
+  return coarse;
+}
+
+TEST_CASE("coarse stand-ins only while most frames meet other sessions' frames",
+          "[service][reduction]") {
+  ReductionPolicy policy(limitsOf(35.0, 8));
+  SECTION("a session alone keeps every primitive") {
+    const auto coarse = details(policy, std::vector<bool>(50, false));
+    CHECK(std::count(coarse.begin(), coarse.end(), true) == 0);
+  }
+  SECTION("one crowded frame now and then does not switch") {
+    std::vector<bool> crowded(50, false);
+    for (std::size_t k = 0; k < crowded.size(); k += 5) {
+      crowded[k] = true;
+    }
+    const auto coarse = details(policy, crowded);
+    CHECK(std::count(coarse.begin(), coarse.end(), true) == 0);
+  }
+  SECTION("crowded frames switch to coarse, and frames alone back") {
+    std::vector<bool> crowded(20, true);
+    crowded.resize(40, false);
+    const auto coarse = details(policy, crowded);
+    CHECK_FALSE(coarse[0]);
+    CHECK(coarse[3]);  // from the second crowded frame on
+    CHECK(std::count(coarse.begin() + 3, coarse.begin() + 21, true) == 18);
+    CHECK_FALSE(coarse.back());
+    // Back to full some frames after the crowd left: four frames alone
+    // leave a share of 0.7^4 = 0.24, five 0.17.
+    CHECK(coarse[24]);
+    CHECK_FALSE(coarse[26]);
+  }
+  SECTION("playback frames leave the detail as it is, and a new drag starts in full") {
+    details(policy, std::vector<bool>(5, true));
+    REQUIRE(policy.coarse());
+    for (int k = 0; k < 20; ++k) {
+      policy.adapt(10.0, 0.0, false, std::nullopt);
+    }
+    CHECK(policy.coarse());
+    policy.newDrag();
+    CHECK_FALSE(policy.coarse());
+    const auto again = details(policy, {true, true, true});
+    CHECK(again == std::vector<bool>{false, false, true});
+  }
+  SECTION("frames crowded every other time keep the detail steady") {
+    std::vector<bool> crowded;
+    for (int k = 0; k < 60; ++k) {
+      crowded.push_back(k % 2 == 0);
+    }
+    const auto coarse = details(policy, crowded);
+    const auto first = std::find(coarse.begin(), coarse.end(), true);
+    REQUIRE(first != coarse.end());
+    CHECK(std::all_of(first, coarse.end(), [](bool c) { return c; }));
+  }
 }
 
 }  // namespace

@@ -295,6 +295,21 @@ TEST_CASE("a drag whose moves come in bunches is not broken up by full-resolutio
   session.detach(attachment);
 }
 
+// A 320x240 session whose moves are drawn reduced (at most 1/4; with a
+// budget of 1 ms every one), refined `refineAfterMs` after the last, its
+// renders taking `turns`.
+auto openDragged(const Fixture& fixture, const std::string& id, double refineAfterMs,
+                 std::shared_ptr<service::RenderTurns> turns, double budgetMs = 1.0) {
+  service::SessionLimits limits;
+  limits.refineAfterMs = refineAfterMs;
+  limits.interactiveFrameMs = budgetMs;
+  limits.maxReduction = 4;
+  pipeline::PipelineDescription view = smallView(0);
+  view.view.width = 320;
+  view.view.height = 240;
+  return Session::open(id, view, fixture.opener(-1), limits, std::move(turns));
+}
+
 TEST_CASE("render turns: at most so many at once, in the order asked", "[session][turns]") {
   SECTION("never more at once than allowed, and as many when asked") {
     for (int atOnce : {1, 2}) {
@@ -348,6 +363,108 @@ TEST_CASE("render turns: at most so many at once, in the order asked", "[session
     CHECK(service::RenderTurns(0).atOnce() ==
           std::max(1, static_cast<int>(std::thread::hardware_concurrency())));
   }
+  SECTION("a turn is crowded when another frame renders or waits, even with places free") {
+    service::RenderTurns turns(2);
+    CHECK_FALSE(turns.take().crowded());
+    const auto other = turns.take();
+    CHECK(turns.take().crowded());  // a place was free: no wait, yet crowded
+  }
+}
+
+TEST_CASE("a drag beside another session's renders is drawn coarse, and alone in full detail",
+          "[session][render][turns]") {
+  // issue 34 point 3: llvmpipe rasterises all sessions' frames in turn, so
+  // a crowded server's drag frames draw coarse stand-ins.
+  const Fixture fixture;
+  auto turns = std::make_shared<service::RenderTurns>(2);
+  // A budget of 1 s: the factor soon falls to 1, where a coarse frame is
+  // still no full-resolution one, and is refined.
+  const double budgetMs = GENERATE(1.0, 1000.0);
+  INFO("budget " << budgetMs << " ms");
+  auto opened = openDragged(fixture, "s8", 150.0, turns, budgetMs);
+  REQUIRE(opened);
+  Session& session = **opened;
+  const std::uint64_t attachment = session.attach();
+  std::uint64_t id = 0;
+  // Drags `moves` rotations 20 ms apart, reading the frames meanwhile (the
+  // stream keeps only the latest); returns the drag's frames, until the one
+  // that reflects its last move.
+  auto drag = [&](int moves) {
+    std::vector<service::RenderedFrame> frames;
+    service::RenderedFrame frame;
+    SessionNotice notice;
+    auto readUntil = [&](service::Clock::time_point until, bool lastMove) {
+      while (service::Clock::now() < until && !(lastMove && frame.lastEventId >= id)) {
+        if (session.next(attachment, std::chrono::milliseconds(5), frame, notice) ==
+            Session::Next::kFrame) {
+          frames.push_back(frame);
+        }
+      }
+    };
+    for (int k = 0; k < moves; ++k) {
+      session.post({++id, service::Clock::now(),
+                    service::CameraEvent{render::CameraMove::kRotate, 0.01, 0.0}});
+      readUntil(service::Clock::now() + std::chrono::milliseconds(20), false);
+    }
+    readUntil(service::Clock::now() + std::chrono::seconds(30), true);
+    REQUIRE(frame.lastEventId == id);
+    return frames;
+  };
+  auto coarseFrames = [](const std::vector<service::RenderedFrame>& frames) {
+    return std::count_if(frames.begin(), frames.end(),
+                         [](const service::RenderedFrame& f) { return f.coarse; });
+  };
+  // Drags in bunches of 5 moves until `done` holds for the last bunch's
+  // frames, at most `most` bunches (a slow machine draws fewer frames per
+  // bunch); returns every frame.
+  auto dragUntil = [&](auto done, int most) {
+    std::vector<service::RenderedFrame> all;
+    for (int bunch = 0; bunch < most; ++bunch) {
+      const auto frames = drag(5);
+      all.insert(all.end(), frames.begin(), frames.end());
+      if (done(frames)) {
+        break;
+      }
+    }
+    return all;
+  };
+  const auto alone = drag(15);
+  INFO("frames alone: " << alone.size());
+  CHECK(alone.size() >= 3);
+  CHECK(coarseFrames(alone) == 0);
+  std::vector<service::RenderedFrame> crowded;
+  {
+    const auto other = turns->take();  // another session renders all along
+    crowded = dragUntil([](const auto& frames) { return frames.back().coarse; }, 20);
+    // At rest, still crowded, the refinement follows: full resolution, in
+    // full detail.
+    service::RenderedFrame frame;
+    SessionNotice notice;
+    const auto until = service::Clock::now() + std::chrono::seconds(5);
+    while (!frame.fullResolution && service::Clock::now() < until) {
+      if (session.next(attachment, std::chrono::milliseconds(100), frame, notice) ==
+          Session::Next::kFrame) {
+        crowded.push_back(frame);
+      }
+    }
+    CHECK(frame.fullResolution);
+    CHECK_FALSE(frame.coarse);
+  }
+  INFO("frames beside another's: " << crowded.size());
+  CHECK(coarseFrames(crowded) >= 1);
+  // Alone again: back to full detail within a few frames (the crowded
+  // share decays by 0.7 a frame, from coarse to full below 0.2).
+  const auto after = dragUntil([](const auto& frames) { return !frames.back().coarse; }, 20);
+  INFO("frames alone again: " << after.size());
+  CHECK_FALSE(after.back().coarse);
+  // A full-resolution frame (the refinement at rest) is never coarse.
+  using Frames = std::vector<service::RenderedFrame>;
+  for (const Frames* frames : std::initializer_list<const Frames*>{&alone, &crowded, &after}) {
+    for (const auto& frame : *frames) {
+      CHECK((frame.fullResolution ? !frame.coarse : true));
+    }
+  }
+  session.detach(attachment);
 }
 
 TEST_CASE("a drag that waited for its render turn goes on with reduced frames",
@@ -356,15 +473,8 @@ TEST_CASE("a drag that waited for its render turn goes on with reduced frames",
   // refinement planned after its previous reduced frame due, and drew a
   // full-resolution frame in the middle of the drag.
   const Fixture fixture;
-  service::SessionLimits limits;
-  limits.refineAfterMs = 50.0;
-  limits.interactiveFrameMs = 1.0;  // every move is drawn reduced
-  limits.maxReduction = 4;
-  pipeline::PipelineDescription view = smallView(0);
-  view.view.width = 320;
-  view.view.height = 240;
   auto turns = std::make_shared<service::RenderTurns>(1);
-  auto opened = Session::open("s7", view, fixture.opener(-1), limits, turns);
+  auto opened = openDragged(fixture, "s7", 50.0, turns);
   REQUIRE(opened);
   Session& session = **opened;
   const std::uint64_t attachment = session.attach();
@@ -404,7 +514,10 @@ TEST_CASE("a drag that waited for its render turn goes on with reduced frames",
   // supersede the refinement planned after the frame that waited). A
   // refinement of move 1 may come first, rightly: where this test runs
   // slowly (under ASan), move 2 can follow move 1's frame by more than the
-  // 50 ms after which a resting view is refined.
+  // 50 ms after which a resting view is refined. So may the last move's
+  // frame be full, rightly too: the drag has ended, and where the frame
+  // that waited takes long (25-40 ms measured after the wait on one
+  // machine), the last move is older than 50 ms when its frame starts.
   std::vector<std::uint64_t> fullFor;  // the last event of each full-resolution frame
   service::RenderedFrame frame;
   SessionNotice notice;
@@ -418,7 +531,8 @@ TEST_CASE("a drag that waited for its render turn goes on with reduced frames",
   }
   REQUIRE(frame.lastEventId == id);
   INFO("full-resolution frames for events " << Catch::Detail::stringify(fullFor));
-  CHECK(std::count_if(fullFor.begin(), fullFor.end(), [](std::uint64_t e) { return e > 1; }) == 0);
+  CHECK(std::count_if(fullFor.begin(), fullFor.end(),
+                      [&](std::uint64_t e) { return e > 1 && e < id; }) == 0);
   session.detach(attachment);
 }
 

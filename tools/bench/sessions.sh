@@ -124,21 +124,23 @@ for n in counts:
         s = run["per_session"]
         print(f"  N={n} round {r}: p50 per session {[round(x['event_to_frame_ms']['p50'], 1) for x in s]} ms, "
               f"p95 {[round(x['event_to_frame_ms']['p95'], 1) for x in s]} ms, "
-              f"fps {[round(x['fps'], 1) for x in s]}, reduction {[round(x['reduction_mean'], 2) for x in s]}; "
+              f"fps {[round(x['fps'], 1) for x in s]}, reduction {[round(x['reduction_mean'], 2) for x in s]}, "
+              f"coarse {[round(x.get('coarse_share', 0) * 100) for x in s]} %; "
               f"server {run['server']['cpu_cores']:.2f} cores, {run['server']['rss_peak_mib']:.0f} MiB peak; "
               f"load {run['load_before'][0]:.2f}")
 base = med(run["p50_median_ms"] for run in runs[counts[0]])
 print(f"\n{'N':>3} {'p50 median':>11} {'p50 worst':>10} {'p95 worst':>10} {'fps':>6} {'reduction':>9} "
-      f"{'cores':>6} {'RSS MiB':>8} {'p50 / N=' + str(counts[0]):>10}")
+      f"{'coarse':>6} {'cores':>6} {'RSS MiB':>8} {'p50 / N=' + str(counts[0]):>10}")
 for n in counts:
     p50 = med(run["p50_median_ms"] for run in runs[n])
     worst = med(run["p50_max_ms"] for run in runs[n])
     p95 = med(run["p95_max_ms"] for run in runs[n])
     fps = med(x["fps"] for run in runs[n] for x in run["per_session"])
     reduction = med(x["reduction_mean"] for run in runs[n] for x in run["per_session"])
+    coarse = med(x.get("coarse_share", 0) for run in runs[n] for x in run["per_session"])
     cores = med(run["server"]["cpu_cores"] for run in runs[n])
     rss = max(run["server"]["rss_peak_mib"] for run in runs[n])
-    print(f"{n:>3} {p50:>11.1f} {worst:>10.1f} {p95:>10.1f} {fps:>6.1f} {reduction:>9.2f} {cores:>6.2f} "
+    print(f"{n:>3} {p50:>11.1f} {worst:>10.1f} {p95:>10.1f} {fps:>6.1f} {reduction:>9.2f} {coarse * 100:>5.0f}% {cores:>6.2f} "
           f"{rss:>8.0f} {p50 / base:>10.2f}")
 if 4 in counts and counts[0] == 1:
     ratio = med(run["p50_max_ms"] for run in runs[4]) / base

@@ -243,7 +243,8 @@ std::string particleDrawingName(const v1::Frame& frame) {
 }
 
 std::string frameKind(const v1::Frame& frame) {
-  return fmt::format("1/{} {}", std::max(1, frame.reduction()), particleDrawingName(frame));
+  return fmt::format("1/{} {}{}", std::max(1, frame.reduction()), particleDrawingName(frame),
+                     frame.coarse() ? " coarse" : "");
 }
 
 // The errors the session sent, for a failure message: "; the server said: ...".
@@ -1008,6 +1009,7 @@ struct SessionFeel {
   std::size_t frames = 0;  // received during the drag
   double seconds = 0.0;
   std::vector<double> reductions;
+  std::size_t coarseFrames = 0;    // drawn with coarse stand-ins (a crowded server)
   std::vector<double> turnWaitMs;  // the server's wait for its render turn, per frame
   std::vector<double> renderMs;
   std::string error;
@@ -1168,6 +1170,7 @@ Status dragAlongside(const RenderBenchOptions& options, const tls::TlsMaterial& 
         if (frames[f].received <= drag->sent.back()) {
           ++feel.frames;
           feel.reductions.push_back(std::max(1, frames[f].frame.reduction()));
+          feel.coarseFrames += frames[f].frame.coarse() ? 1 : 0;
           feel.turnWaitMs.push_back(frames[f].frame.timings().turn_wait_ms());
           feel.renderMs.push_back(frames[f].frame.timings().render_ms());
         }
@@ -1184,6 +1187,9 @@ nlohmann::json toJson(const SessionFeel& feel) {
           {"event_to_frame_ms", summaryJson(feel.latencies)},
           {"fps", feel.seconds > 0.0 ? static_cast<double>(feel.frames) / feel.seconds : 0.0},
           {"reduction_mean", mean(feel.reductions)},
+          {"coarse_share", feel.frames > 0 ? static_cast<double>(feel.coarseFrames) /
+                                                 static_cast<double>(feel.frames)
+                                           : 0.0},
           {"server_turn_wait_ms", summaryJson(feel.turnWaitMs)},
           {"server_render_ms", summaryJson(feel.renderMs)},
           {"error", feel.error}};
@@ -1255,15 +1261,16 @@ void printSessions(const nlohmann::json& j) {
       j["sessions"].get<int>(), j["size"].get<std::string>().c_str(), j["seconds"].get<double>(),
       j["event_rate"].get<double>(), j["machine"].get<std::string>().c_str(),
       loadText(j["load_before"]).c_str(), loadText(j["load_after"]).c_str());
-  std::printf("%-8s %-24s %7s %9s %9s %7s %9s %10s %10s\n", "session", "file", "events", "p50 ms",
-              "p95 ms", "fps", "reduction", "turn wait", "render");
+  std::printf("%-8s %-24s %7s %9s %9s %7s %9s %7s %10s %10s\n", "session", "file", "events",
+              "p50 ms", "p95 ms", "fps", "reduction", "coarse", "turn wait", "render");
   int k = 0;
   for (const auto& s : j["per_session"]) {
     const auto& latency = s["event_to_frame_ms"];
-    std::printf("%-8d %-24s %7zu %9.1f %9.1f %7.1f %9.2f %10.1f %10.1f %s\n", ++k,
+    std::printf("%-8d %-24s %7zu %9.1f %9.1f %7.1f %9.2f %6.0f%% %10.1f %10.1f %s\n", ++k,
                 s["file"].get<std::string>().c_str(), s["events"].get<std::size_t>(),
                 latency["p50"].get<double>(), latency["p95"].get<double>(), s["fps"].get<double>(),
-                s["reduction_mean"].get<double>(), s["server_turn_wait_ms"]["p50"].get<double>(),
+                s["reduction_mean"].get<double>(), 100.0 * s["coarse_share"].get<double>(),
+                s["server_turn_wait_ms"]["p50"].get<double>(),
                 s["server_render_ms"]["p50"].get<double>(), s["error"].get<std::string>().c_str());
   }
   std::printf("worst session: p50 %.1f ms, p95 %.1f ms; median session p50 %.1f ms\n",
@@ -1369,8 +1376,9 @@ Command addBenchRenderCommand(CLI::App& bench) {
       ->add_option("--sessions", options->sessions,
                    "instead of the single-session run: N sessions at once, each with its own "
                    "connection, file (the --file list in turn) and view, all dragging together "
-                   "for --seconds; prints each one's event-to-frame p50 and p95, frame rate and "
-                   "reduction, and the server's CPU and memory with --server-pid")
+                   "for --seconds; prints each one's event-to-frame p50 and p95, frame rate, "
+                   "reduction and share of coarse frames, and the server's CPU and memory with "
+                   "--server-pid")
       ->check(CLI::Range(1, 64));
   command
       ->add_option("--server-pid", options->serverPid,

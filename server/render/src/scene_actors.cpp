@@ -249,7 +249,7 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   vtkNew<vtkIdTypeArray> connectivity;
   connectivity->SetNumberOfValues(n);
   vtkNew<vtkFloatArray> radius;
-  radius->SetName("sphere_radius");
+  radius->SetName(kSphereRadiusArray);
   radius->SetNumberOfValues(n);
   double* point = xyz->GetPointer(0);
   vtkIdType* offset = offsets->GetPointer(0);
@@ -299,7 +299,7 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
   if (particles.representation == pipeline::ParticleRepresentation::kImpostors) {
     // Point sprites, hidden spheres left out (point_sprite_sphere_mapper.hpp).
     auto spheres = vtkSmartPointer<vtkPointSpriteSphereMapper>::New();
-    spheres->SetScaleArray("sphere_radius");
+    spheres->SetScaleArray(kSphereRadiusArray);
     mapper = spheres;
   } else {
     mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
@@ -324,8 +324,9 @@ vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
 // Crack primitives of broken, consistent bonds; the local Voronoi
 // inconsistency marks (lines between the particle centres) and intact faces
 // (the local decomposition) as separate actors when the description shows them.
-void addCracks(const pipeline::PipelineDescription& d, const SceneInput& input,
-               vtkRenderer* renderer, std::vector<Legend>* legends) {
+// Returns the crack primitives' actor (the renderer holds it).
+vtkActor* addCracks(const pipeline::PipelineDescription& d, const SceneInput& input,
+                    vtkRenderer* renderer, std::vector<Legend>* legends) {
   const scene::CrackLayers layers = scene::crackLayers(d, *input.cracks);
   const MeshColouring colouring{scene::crackArrayName(d.cracks.colourBy, d.cracks.method),
                                 d.view.colourMap, d.cracks.range, input.series.cracks,
@@ -349,6 +350,7 @@ void addCracks(const pipeline::PipelineDescription& d, const SceneInput& input,
     intactActor->GetProperty()->SetOpacity(0.25);
     renderer->AddActor(intactActor);
   }
+  return actor;
 }
 // The cell methods' local decomposition: the edges of its cells, faint.
 void addDecompositionEdges(const SceneInput& input, vtkRenderer* renderer) {

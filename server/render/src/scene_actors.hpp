@@ -16,10 +16,14 @@
 
 namespace crackvis::render::detail {
 
+// The impostors' radius array (their mapper's scale array).
+inline constexpr const char* kSphereRadiusArray = "sphere_radius";
+
 vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
                                         const SceneInput& input, std::vector<Legend>* legends);
-void addCracks(const pipeline::PipelineDescription& d, const SceneInput& input,
-               vtkRenderer* renderer, std::vector<Legend>* legends);
+// Returns the crack primitives' actor (not their marks' or intact faces').
+vtkActor* addCracks(const pipeline::PipelineDescription& d, const SceneInput& input,
+                    vtkRenderer* renderer, std::vector<Legend>* legends);
 void addDecompositionEdges(const SceneInput& input, vtkRenderer* renderer);
 void addBonds(const pipeline::PipelineDescription& d, const SceneInput& input,
               vtkRenderer* renderer, std::vector<Legend>* legends);

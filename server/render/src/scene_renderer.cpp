@@ -8,12 +8,16 @@
 #include <limits>
 #include <mutex>
 #include <numbers>
+#include <optional>
+#include <vector>
 
 #include <fmt/format.h>
 #include <vtkActor.h>
 #include <vtkCamera.h>
 #include <vtkGenericOpenGLRenderWindow.h>
 #include <vtkNew.h>
+#include <vtkPolyData.h>
+#include <vtkPolyDataMapper.h>
 #include <vtkRenderer.h>
 #include <vtkUnsignedCharArray.h>
 
@@ -21,6 +25,7 @@
 #include "point_sprite_sphere_mapper.hpp"
 #include "scene_actors.hpp"
 #include "vtk_errors.hpp"
+#include <crackvis/render/coarse_geometry.hpp>
 #include <crackvis/render/egl_context.hpp>
 #include <crackvis/render/scene_renderer.hpp>
 
@@ -55,6 +60,27 @@ std::array<double, 6> specimenBounds(const cracks::StepInput& step) {
   return b;
 }
 
+// Two mean particle diameters: the coarse stand-ins' cell (eight lattice
+// neighbours become one sphere); 0 without particles.
+double coarseCell(const cracks::StepInput& step) {
+  if (step.radius.empty()) {
+    return 0.0;
+  }
+  double sum = 0.0;
+  for (const double r : step.radius) {
+    sum += r;
+  }
+  return 4.0 * sum / static_cast<double>(step.radius.size());
+}
+
+// A layer's coarse stand-in (FrameDetail::kCoarse): its actor, the actor's
+// own mapper and the stand-in's, swapped in for a coarse frame.
+struct StandIn {
+  vtkSmartPointer<vtkActor> actor;
+  vtkSmartPointer<vtkMapper> own;
+  vtkSmartPointer<vtkMapper> coarse;
+};
+
 }  // namespace
 
 struct SceneRenderer::Impl {
@@ -65,6 +91,10 @@ struct SceneRenderer::Impl {
   int height = 0;
   bool cameraSet = false;
   vtkSmartPointer<vtkPointSpriteSphereMapper> impostors;  // null unless particles are impostors
+  // The last frame's impostors (the particles' own or their stand-in's),
+  // and whether that frame drew stand-ins.
+  vtkPointSpriteSphereMapper* drawnImpostors = nullptr;
+  bool drewStandIns = false;
   ImpostorOptions impostorOptions;
   // What this renderer's OpenGL calls for (occlusionCullingFor): the options
   // a cleared scene goes back to, so that a kept renderer draws as a new one.
@@ -74,6 +104,21 @@ struct SceneRenderer::Impl {
   // The whole specimen at the step shown (every particle with its radius):
   // what a camera reset fits, whatever is hidden, clipped or thresholded.
   std::array<double, 6> specimenBounds{0, -1, 0, -1, 0, -1};
+  // The layers a coarse frame draws by stand-ins (FrameDetail::kCoarse), and
+  // the stand-ins, made at the scene's first coarse frame.
+  vtkSmartPointer<vtkActor> particleActor;  // impostors only; null otherwise
+  vtkSmartPointer<vtkActor> crackActor;
+  double coarseCell = 0.0;
+  std::optional<std::vector<StandIn>> standIns;
+
+  void forgetStandIns() {
+    drawnImpostors = nullptr;
+    drewStandIns = false;
+    particleActor = nullptr;
+    crackActor = nullptr;
+    standIns.reset();
+  }
+  const std::vector<StandIn>& coarseStandIns();
 
   void resetCamera() {
     if (specimenBounds[0] <= specimenBounds[1]) {
@@ -89,8 +134,92 @@ struct SceneRenderer::Impl {
       impostors->SetOcclusionCulling(impostorOptions.occlusionCulling);
       impostors->SetOcclusionCellThreshold(impostorOptions.occlusionCellThreshold);
     }
+    // The particles' stand-in takes the options when made again.
+    standIns.reset();
+    drawnImpostors = nullptr;
   }
 };
+
+namespace {
+// A stand-in's mapper colours and clips as the layer's own. Not
+// ShallowCopy: vtkOpenGLPolyDataMapper's copies the shader code through
+// calls deprecated in VTK 9, each of which logs a warning.
+void copyColouring(vtkMapper& from, vtkMapper& to) {
+  to.SetLookupTable(from.GetLookupTable());
+  to.SetScalarVisibility(from.GetScalarVisibility());
+  to.SetScalarRange(from.GetScalarRange());
+  to.SetScalarMode(from.GetScalarMode());
+  to.SetColorMode(from.GetColorMode());
+  to.SetUseLookupTableScalarRange(from.GetUseLookupTableScalarRange());
+  to.SetInterpolateScalarsBeforeMapping(from.GetInterpolateScalarsBeforeMapping());
+  if (from.GetArrayAccessMode() == VTK_GET_ARRAY_BY_ID) {
+    to.ColorByArrayComponent(from.GetArrayId(), from.GetArrayComponent());
+  } else {
+    to.ColorByArrayComponent(from.GetArrayName(), from.GetArrayComponent());
+  }
+  to.SetClippingPlanes(from.GetClippingPlanes());
+}
+
+// The stand-ins' mappers on their actors while it lives.
+class StandInsSwapped {
+ public:
+  explicit StandInsSwapped(const std::vector<StandIn>& standIns) : m_standIns(standIns) {
+    for (const auto& standIn : m_standIns) {
+      standIn.actor->SetMapper(standIn.coarse);
+    }
+  }
+  ~StandInsSwapped() {
+    for (const auto& standIn : m_standIns) {
+      standIn.actor->SetMapper(standIn.own);
+    }
+  }
+  StandInsSwapped(const StandInsSwapped&) = delete;
+  StandInsSwapped& operator=(const StandInsSwapped&) = delete;
+
+ private:
+  const std::vector<StandIn>& m_standIns;
+};
+}  // namespace
+
+// A layer without a stand-in (no clusters, another kind of data) is drawn
+// as it is.
+const std::vector<StandIn>& SceneRenderer::Impl::coarseStandIns() {
+  if (standIns) {
+    return *standIns;
+  }
+  // Made aside and kept whole: an exception partway (out of memory) leaves
+  // none, to be tried again at the next coarse frame.
+  std::vector<StandIn> made;
+  if (particleActor) {
+    auto* own = vtkPointSpriteSphereMapper::SafeDownCast(particleActor->GetMapper());
+    auto* spheres = own != nullptr ? vtkPolyData::SafeDownCast(own->GetInput()) : nullptr;
+    if (auto coarse = spheres != nullptr
+                          ? coarseSpheres(*spheres, detail::kSphereRadiusArray, coarseCell)
+                          : nullptr) {
+      auto mapper = vtkSmartPointer<vtkPointSpriteSphereMapper>::New();
+      copyColouring(*own, *mapper);
+      mapper->SetScaleArray(detail::kSphereRadiusArray);
+      mapper->SetRadius(own->GetRadius());
+      mapper->SetForceGeometryShader(impostorOptions.geometryShader);
+      mapper->SetOcclusionCulling(impostorOptions.occlusionCulling);
+      mapper->SetOcclusionCellThreshold(impostorOptions.occlusionCellThreshold);
+      mapper->SetInputData(coarse);
+      made.push_back({particleActor, own, mapper});
+    }
+  }
+  if (crackActor) {
+    auto* own = vtkPolyDataMapper::SafeDownCast(crackActor->GetMapper());
+    auto* surface = own != nullptr ? vtkPolyData::SafeDownCast(own->GetInput()) : nullptr;
+    if (auto coarse = surface != nullptr ? coarseSurface(*surface, coarseCell) : nullptr) {
+      auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+      copyColouring(*own, *mapper);
+      mapper->SetInputData(coarse);
+      made.push_back({crackActor, own, mapper});
+    }
+  }
+  standIns = std::move(made);
+  return *standIns;
+}
 
 SceneRenderer::SceneRenderer() : m_impl(std::make_unique<Impl>()) {}
 SceneRenderer::~SceneRenderer() {
@@ -200,14 +329,19 @@ Status SceneRenderer::setScene(const pipeline::PipelineDescription& d, const Sce
                           d.view.background.b / 255.0);
   std::vector<Legend> legends;
   impl.impostors = nullptr;
+  impl.forgetStandIns();
+  impl.coarseCell = coarseCell(input.step);
   if (d.particles.visible) {
     auto particles = particleActor(d, input, &legends);
     renderer->AddActor(particles);
     impl.impostors = vtkPointSpriteSphereMapper::SafeDownCast(particles->GetMapper());
     impl.applyImpostorOptions();
+    if (impl.impostors) {
+      impl.particleActor = particles;
+    }
   }
   if (d.cracks.visible && input.cracks != nullptr) {
-    addCracks(d, input, renderer, &legends);
+    impl.crackActor = addCracks(d, input, renderer, &legends);
   }
   if (d.showDecomposition && input.decomposition != nullptr) {
     addDecompositionEdges(input, renderer);
@@ -230,8 +364,7 @@ Status SceneRenderer::setScene(const pipeline::PipelineDescription& d, const Sce
   return vtkErrors.status("building the scene");
 }
 
-Status SceneRenderer::renderFrame(int width, int height, Image& out,
-                                  [[maybe_unused]] bool interactive) {
+Status SceneRenderer::renderFrame(int width, int height, Image& out, FrameDetail detail) {
   Impl& impl = *m_impl;
   if (width < 1 || height < 1 || width > impl.width || height > impl.height) {
     return invalidArgument(fmt::format("frame {}x{} does not fit the renderer's {}x{}", width,
@@ -242,13 +375,24 @@ Status SceneRenderer::renderFrame(int width, int height, Image& out,
   // A frame smaller than the pbuffer renders into its lower-left corner.
   impl.window->SetSize(width, height);
   impl.overlays->layout(width, height);
-  impl.renderer->ResetCameraClippingRange();
+  const std::vector<StandIn> noStandIns;
+  const auto& standIns = detail == FrameDetail::kCoarse ? impl.coarseStandIns() : noStandIns;
   {
+    // The layers' own mappers come back however the frame ends.
+    const StandInsSwapped swapped(standIns);
+    impl.renderer->ResetCameraClippingRange();
     std::unique_lock<std::mutex> text(Overlays::textMutex(), std::defer_lock);
     if (impl.overlays->drawsText()) {
       text.lock();
     }
     impl.window->Render();
+  }
+  impl.drewStandIns = !standIns.empty();
+  impl.drawnImpostors = impl.impostors;
+  for (const auto& standIn : standIns) {
+    if (standIn.actor == impl.particleActor) {
+      impl.drawnImpostors = vtkPointSpriteSphereMapper::SafeDownCast(standIn.coarse);
+    }
   }
   CRACKVIS_RETURN_IF_ERROR(vtkErrors.status(fmt::format("rendering a {}x{} frame", width, height)));
   // The read-back buffer is the renderer's, kept from frame to frame (a
@@ -307,6 +451,7 @@ Status SceneRenderer::clearScene() {
   const VtkErrorScope vtkErrors;
   impl.renderer->RemoveAllViewProps();
   impl.impostors = nullptr;
+  impl.forgetStandIns();
   impl.impostorOptions = impl.defaultImpostorOptions;
   pipeline::PipelineDescription empty;
   empty.view.width = impl.width;
@@ -333,13 +478,22 @@ Status SceneRenderer::clearScene() {
   return vtkErrors.status("clearing the scene");
 }
 
+void SceneRenderer::prepareCoarse() {
+  (void)m_impl->coarseStandIns();
+}
+
+bool SceneRenderer::drewStandIns() const {
+  return m_impl->drewStandIns;
+}
+
 void SceneRenderer::setImpostorOptions(const ImpostorOptions& options) {
   m_impl->impostorOptions = options;
   m_impl->applyImpostorOptions();
 }
 
 SceneRenderer::ImpostorStats SceneRenderer::impostorStats() const {
-  const vtkPointSpriteSphereMapper* mapper = m_impl->impostors;
+  const vtkPointSpriteSphereMapper* mapper =
+      m_impl->drawnImpostors != nullptr ? m_impl->drawnImpostors : m_impl->impostors.Get();
   if (mapper == nullptr) {
     return {};
   }

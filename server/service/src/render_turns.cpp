@@ -15,13 +15,14 @@ RenderTurns::RenderTurns(int atOnce) : m_atOnce(atOnce > 0 ? atOnce : defaultAtO
 
 RenderTurns::Turn RenderTurns::take() {
   std::unique_lock lock(m_mutex);
+  const bool crowded = m_serving != m_nextTicket || m_rendering > 0;
   const std::uint64_t ticket = m_nextTicket++;
   m_changed.wait(lock, [&] { return ticket == m_serving && m_rendering < m_atOnce; });
   ++m_serving;
   ++m_rendering;
   // The next in line may also fit (atOnce > 1).
   m_changed.notify_all();
-  return Turn(this);
+  return Turn(this, crowded);
 }
 
 void RenderTurns::release() {

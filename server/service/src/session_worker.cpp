@@ -183,12 +183,13 @@ void Session::Worker::shelveRenderer() {
   });
 }
 
-Status Session::Worker::drawFrame(int w, int h, render::Image& image, bool interactive) {
+Status Session::Worker::drawFrame(int w, int h, render::Image& image,
+                                  render::SceneRenderer::FrameDetail detail) {
   // Unsound until the frame has come back well: a throw out of it leaves
   // the renderer unfit for another session.
   const bool sound = rendererSound;
   rendererSound = false;
-  const Status drawn = renderer->renderFrame(w, h, image, interactive);
+  const Status drawn = renderer->renderFrame(w, h, image, detail);
   rendererSound = sound && drawn.isOk();
   if (sound && !rendererSound) {
     noteRenderer();  // it will not be shelved: a close announces nothing
@@ -280,6 +281,7 @@ void Session::Worker::interacted(const SessionEvent& event) {
   const double configured = session.m_limits.refineAfterMs;
   if (event.received - lastInteraction > kNewDrag) {
     refineDelayMs = configured;
+    reduction.newDrag();
   } else if (refinedAt && event.received - *refinedAt < kPrematureRefine) {
     refineDelayMs = std::min(2.0 * refineDelayMs, kMaxRefineStretch * configured);
   }
@@ -481,10 +483,12 @@ void Session::Worker::renderIfDirty(std::optional<RenderedFrame>* hold) {
       playing ||
       std::chrono::duration<double, std::milli>(now - lastInteraction).count() < refineDelayMs;
   const int factor = interacting && !forceFull ? reduction.factor() : 1;
+  // Playback shows each step once: stand-ins made for one frame would cost
+  // more than they save.
+  const bool coarse = interacting && !forceFull && !playing && reduction.coarse();
   RenderedFrame frame;
   frame.step = scene->step();
   frame.reduction = factor;
-  frame.fullResolution = factor == 1;
   frame.keyframe = keyframe;
   frame.bitrate = description().stream.bitrate;
   frame.fps = description().stream.fps;
@@ -496,12 +500,20 @@ void Session::Worker::renderIfDirty(std::optional<RenderedFrame>* hold) {
   const int h = std::max(16, height / factor);
   Status rendered = needRenderer();
   auto start = Clock::now();
+  bool crowded = false;
+  if (rendered && coarse) {
+    renderer->prepareCoarse();  // outside the render turn: the others need not wait for it
+    start = Clock::now();
+  }
   if (rendered) {
     const auto asked = start;
     const RenderTurns::Turn turn = session.m_turns ? session.m_turns->take() : RenderTurns::Turn();
     start = Clock::now();
     frame.timings.turnWaitMs = millisecondsSince(asked);
-    rendered = drawFrame(w, h, image, factor > 1);
+    crowded = turn.crowded();
+    rendered = drawFrame(w, h, image,
+                         coarse ? render::SceneRenderer::FrameDetail::kCoarse
+                                : render::SceneRenderer::FrameDetail::kFull);
   }
   if (Status status = rendered; !status) {
     session.notify({lastEventId, status, std::nullopt});
@@ -509,16 +521,21 @@ void Session::Worker::renderIfDirty(std::optional<RenderedFrame>* hold) {
     return;
   }
   frame.timings.renderMs = millisecondsSince(start);
+  // Coarse only where something stood in; a coarse frame is refined as a
+  // reduced one is, even at factor 1.
+  frame.coarse = coarse && renderer->drewStandIns();
+  frame.fullResolution = factor == 1 && !frame.coarse;
   frame.particles = particleDrawing();
   frame.width = width;
   frame.height = height;
   frame.image = std::move(image);
-  if (factor > 1) {
+  if (!frame.fullResolution) {
     refineAt = lastInteraction + std::chrono::duration_cast<Clock::duration>(
                                      std::chrono::duration<double, std::milli>(refineDelayMs));
   }
   if (interacting && !forceFull) {
-    reduction.adaptReduction(frame.timings.renderMs);
+    reduction.adapt(frame.timings.renderMs, frame.timings.turnWaitMs, frame.coarse,
+                    playing ? std::nullopt : std::optional<bool>(crowded));
   }
   frame.frameId = ++frameId;
   const bool settled = frame.fullResolution && stateDue;
@@ -565,7 +582,7 @@ Result<render::Image> Session::Worker::snapshot(int w, int h, int& step,
     }
   }
   render::Image image;
-  CRACKVIS_RETURN_IF_ERROR(drawFrame(w, h, image, false));
+  CRACKVIS_RETURN_IF_ERROR(drawFrame(w, h, image, render::SceneRenderer::FrameDetail::kFull));
   step = scene->step();
   dirty = true;  // the stream's next frame is rendered again at its own size
   return image;

@@ -85,7 +85,7 @@ struct Session::Worker {
   // (RendererShelf::expect).
   void noteRenderer();
   // The renderer's frame, noting whether the renderer stays sound.
-  Status drawFrame(int w, int h, render::Image& image, bool interactive);
+  Status drawFrame(int w, int h, render::Image& image, render::SceneRenderer::FrameDetail detail);
   // Looks for a live file's new steps when due; shows the last while
   // following, and tells the stream of every change.
   void follow();

@@ -44,6 +44,7 @@ Result<v1::Frame> StreamEncoder::encode(RenderedFrame& frame) {
   out.set_full_resolution(frame.fullResolution);
   out.set_reduction(frame.reduction);
   out.set_particles(frame.particles);
+  out.set_coarse(frame.coarse);
   out.set_step(frame.step);
   out.set_h264(encoded->data.data(), encoded->data.size());
   auto* timings = out.mutable_timings();

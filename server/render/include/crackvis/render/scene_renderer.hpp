@@ -63,10 +63,22 @@ class SceneRenderer {
   // call, when `resetCamera` is true, and by moveCamera(kReset).
   Status setScene(const pipeline::PipelineDescription& description, const SceneInput& input,
                   bool resetCamera = false);
+  // How much of the scene a frame draws. kCoarse: the particles and the
+  // crack surfaces by coarse stand-ins (what lies within two particle
+  // diameters of each other clustered into one sphere or one vertex,
+  // coarse_geometry.hpp), for a drag's frames while other sessions render
+  // at the same time: llvmpipe's frame costs by its primitives, not by its
+  // pixels. The stand-ins are made at a scene's first coarse frame and
+  // kept until the next setScene. Other layers are drawn as they are.
+  enum class FrameDetail { kFull, kCoarse };
   // Renders the scene at width x height (at most the capacity).
-  // `interactive` marks a frame of a drag; it is drawn like any other (the
-  // sphere impostors are fast enough at every size to need no stand-in).
-  Status renderFrame(int width, int height, Image& out, bool interactive = false);
+  Status renderFrame(int width, int height, Image& out, FrameDetail detail = FrameDetail::kFull);
+  // Makes the scene's coarse stand-ins now if not yet made, so that a
+  // caller can make them outside its render turn (about 6 ms for cuboid A).
+  void prepareCoarse();
+  // Whether the last frame drew coarse stand-ins: a kCoarse frame of a
+  // scene with particles as impostors or crack surfaces to stand in for.
+  bool drewStandIns() const;
   // setScene(description, input, true) then renderFrame at the description's
   // view size: a snapshot.
   Status render(const pipeline::PipelineDescription& description, const SceneInput& input,
@@ -113,9 +125,10 @@ class SceneRenderer {
   // rasteriser (llvmpipe), off for a GPU; `setting` is the value of
   // CRACKVIS_OCCLUSION_CULLING (on, off, auto or null), which overrides it.
   static Result<bool> occlusionCullingFor(std::string_view glRenderer, const char* setting);
-  // The last frame's impostors: spheres drawn, of how many, and whether as
-  // points (false: the geometry shader, also used for a sphere wider than
-  // the largest point). All 0 without impostors.
+  // The last frame's impostors (a coarse frame's: the stand-in's): spheres
+  // drawn, of how many, and whether as points (false: the geometry shader,
+  // also used for a sphere wider than the largest point). All 0 without
+  // impostors.
   struct ImpostorStats {
     std::int64_t drawn = 0;
     std::int64_t spheres = 0;

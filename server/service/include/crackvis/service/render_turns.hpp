@@ -35,14 +35,21 @@ class RenderTurns {
   class Turn {
    public:
     Turn() = default;
-    explicit Turn(RenderTurns* turns) : m_turns(turns) {}
-    Turn(Turn&& other) noexcept : m_turns(other.m_turns) { other.m_turns = nullptr; }
+    Turn(RenderTurns* turns, bool crowded) : m_turns(turns), m_crowded(crowded) {}
+    Turn(Turn&& other) noexcept : m_turns(other.m_turns), m_crowded(other.m_crowded) {
+      other.m_turns = nullptr;
+    }
     Turn& operator=(Turn&&) = delete;
     Turn(const Turn&) = delete;
     ~Turn();
+    // Whether another frame was rendering or waiting when this one asked:
+    // frames that render at the same time slow each other down even with
+    // turns to spare (llvmpipe rasterises every context's frames in turn).
+    bool crowded() const { return m_crowded; }
 
    private:
     RenderTurns* m_turns = nullptr;
+    bool m_crowded = false;
   };
   // Blocks until it is this caller's turn.
   Turn take();

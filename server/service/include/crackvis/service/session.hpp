@@ -59,6 +59,7 @@ struct RenderedFrame {
   int step = 0;
   bool fullResolution = true;
   int reduction = 1;
+  bool coarse = false;    // the particles and cracks drawn by coarse stand-ins
   bool keyframe = false;  // the client asked for one
   int bitrate = 0;        // the description's stream bitrate
   int fps = 30;

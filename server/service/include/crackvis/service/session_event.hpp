@@ -23,7 +23,7 @@ struct SessionLimits {
   int maxWidth = 3840;
   int maxHeight = 2160;
   double refineAfterMs = 50.0;       // full resolution this long after the last event
-  double interactiveFrameMs = 35.0;  // render budget of a reduced frame
+  double interactiveFrameMs = 35.0;  // budget of a reduced frame: turn wait + render
   int maxReduction = 8;
   std::size_t cacheSteps = 8;
   // Frames of all sessions rendered at once (render_turns.hpp); 0: the
