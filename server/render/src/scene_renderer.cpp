@@ -105,7 +105,7 @@ struct SceneRenderer::Impl {
   // what a camera reset fits, whatever is hidden, clipped or thresholded.
   std::array<double, 6> specimenBounds{0, -1, 0, -1, 0, -1};
   // The layers a coarse frame draws by stand-ins (FrameDetail::kCoarse), and
-  // the stand-ins, made at the scene's first coarse frame.
+  // the stand-ins, made by prepareCoarse or the scene's first coarse frame.
   vtkSmartPointer<vtkActor> particleActor;  // impostors only; null otherwise
   vtkSmartPointer<vtkActor> crackActor;
   double coarseCell = 0.0;

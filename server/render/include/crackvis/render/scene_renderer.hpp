@@ -68,8 +68,9 @@ class SceneRenderer {
   // diameters of each other clustered into one sphere or one vertex,
   // coarse_geometry.hpp), for a drag's frames while other sessions render
   // at the same time: llvmpipe's frame costs by its primitives, not by its
-  // pixels. The stand-ins are made at a scene's first coarse frame and
-  // kept until the next setScene. Other layers are drawn as they are.
+  // pixels. The stand-ins are made by prepareCoarse or a scene's first
+  // coarse frame and kept until the next setScene or setImpostorOptions.
+  // Other layers are drawn as they are.
   enum class FrameDetail { kFull, kCoarse };
   // Renders the scene at width x height (at most the capacity).
   Status renderFrame(int width, int height, Image& out, FrameDetail detail = FrameDetail::kFull);
