@@ -222,6 +222,10 @@ vtkSmartPointer<vtkPolyData> bondPolyData(const SceneInput& input,
   data->SetLines(lines);
   return data;
 }
+}  // namespace
+
+namespace detail {
+
 double meanRadius(std::span<const double> radius) {
   double sum = 0.0;
   for (double r : radius) {
@@ -229,9 +233,6 @@ double meanRadius(std::span<const double> radius) {
   }
   return radius.empty() ? 1.0 : sum / static_cast<double>(radius.size());
 }
-}  // namespace
-
-namespace detail {
 
 vtkSmartPointer<vtkActor> particleActor(const pipeline::PipelineDescription& d,
                                         const SceneInput& input, std::vector<Legend>* legends) {

@@ -4,6 +4,7 @@
 // layer appends its legend to `legends` (when not null) for the overlays.
 #pragma once
 
+#include <span>
 #include <vector>
 
 #include <vtkActor.h>
@@ -15,6 +16,9 @@
 #include <crackvis/render/scene_renderer.hpp>
 
 namespace crackvis::render::detail {
+
+// The particles' mean radius; 1 without particles.
+double meanRadius(std::span<const double> radius);
 
 // The impostors' radius array (their mapper's scale array).
 inline constexpr const char* kSphereRadiusArray = "sphere_radius";

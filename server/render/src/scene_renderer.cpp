@@ -63,14 +63,7 @@ std::array<double, 6> specimenBounds(const cracks::StepInput& step) {
 // Two mean particle diameters: the coarse stand-ins' cell (eight lattice
 // neighbours become one sphere); 0 without particles.
 double coarseCell(const cracks::StepInput& step) {
-  if (step.radius.empty()) {
-    return 0.0;
-  }
-  double sum = 0.0;
-  for (const double r : step.radius) {
-    sum += r;
-  }
-  return 4.0 * sum / static_cast<double>(step.radius.size());
+  return step.radius.empty() ? 0.0 : 4.0 * detail::meanRadius(step.radius);
 }
 
 // A layer's coarse stand-in (FrameDetail::kCoarse): its actor, the actor's

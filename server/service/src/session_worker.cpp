@@ -482,10 +482,11 @@ void Session::Worker::renderIfDirty(std::optional<RenderedFrame>* hold) {
   const bool interacting =
       playing ||
       std::chrono::duration<double, std::milli>(now - lastInteraction).count() < refineDelayMs;
-  const int factor = interacting && !forceFull ? reduction.factor() : 1;
+  const bool reduced = interacting && !forceFull;  // as the policy says
+  const int factor = reduced ? reduction.factor() : 1;
   // Playback shows each step once: stand-ins made for one frame would cost
   // more than they save.
-  const bool coarse = interacting && !forceFull && !playing && reduction.coarse();
+  const bool coarse = reduced && !playing && reduction.coarse();
   RenderedFrame frame;
   frame.step = scene->step();
   frame.reduction = factor;
@@ -533,7 +534,7 @@ void Session::Worker::renderIfDirty(std::optional<RenderedFrame>* hold) {
     refineAt = lastInteraction + std::chrono::duration_cast<Clock::duration>(
                                      std::chrono::duration<double, std::milli>(refineDelayMs));
   }
-  if (interacting && !forceFull) {
+  if (reduced) {
     reduction.adapt(frame.timings.renderMs, frame.timings.turnWaitMs, frame.coarse,
                     playing ? std::nullopt : std::optional<bool>(crowded));
   }
