@@ -150,6 +150,14 @@ int runGuarded(Run run) {
   }
 }
 
+// The heap reserve in effect, and why none where one was asked for.
+std::string heapReserveText(const RenderServerConfig& config, std::size_t bytes) {
+  if (bytes > 0) {
+    return fmt::format("{} MiB", bytes >> 20);
+  }
+  return config.heapReserveMb > 0 ? "none (threads have heaps of their own)" : "none";
+}
+
 int serve(const RenderServerConfig& config) {
   const crackvis::TerminationSignals signals;
   crackvis::encode::limitCodecLogsToWarnings();
@@ -180,7 +188,8 @@ int serve(const RenderServerConfig& config) {
                        {{"address", (*server)->address()},
                         {"tls", config.insecure ? "none (INSECURE, loopback only)" : "mutual"},
                         {"data_service", config.data.target},
-                        {"max_sessions", std::to_string(config.maxSessions)}});
+                        {"max_sessions", std::to_string(config.maxSessions)},
+                        {"heap_reserve", heapReserveText(config, (*server)->heapReserveBytes())}});
   if (!config.web.listen.empty()) {
     // The URL a person opens; "localhost" rather than 127.0.0.1 so that the
     // page is a secure context even on plaintext loopback.
@@ -292,6 +301,11 @@ int main(int argc, char** argv) {
                  "renderers (GL contexts, about 35 MB each at 1280x720) of ended sessions kept "
                  "for the next session of the same view size, one made at start, so that a "
                  "first picture does not wait for making one (0: every session makes its own)")
+      ->capture_default_str();
+  app.add_option("--heap-reserve-mb", config.heapReserveMb,
+                 "MiB of heap kept resident while idle (written at start and after each trim of "
+                 "the heap) for the next session's arrays, so that a first picture does not wait "
+                 "for the kernel to zero fresh pages (0: none)")
       ->capture_default_str();
   app.add_option("--refine-after-ms", config.limits.refineAfterMs,
                  "full-resolution frame this long after the last event")

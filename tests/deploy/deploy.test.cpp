@@ -224,6 +224,15 @@ TEST_CASE("both services run from config files, answer health and stop on SIGTER
   // Versions and the rendering backend at start-up.
   CHECK(renderer.output().find("event=start version=\"0.") != std::string::npos);
   CHECK(renderer.output().find("backend=\"EGL") != std::string::npos);
+  // The heap kept touched for first pictures (160 MiB unless set): where THP
+  // is "madvise" the service runs on one malloc arena (common/huge_pages.hpp),
+  // which the reserve needs; elsewhere it reports why it keeps none.
+  std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
+  const std::string thpMode(std::istreambuf_iterator<char>(thp), {});
+  CHECK(renderer.output().find(thpMode.find("[madvise]") != std::string::npos
+                                   ? "heap_reserve=\"160 MiB\""
+                                   : "heap_reserve=\"none (threads have heaps of their own)\"") !=
+        std::string::npos);
   CHECK(data.output().find("crackvis-data event=start version=\"0.") != std::string::npos);
   CHECK(healthOf(dataPort).find("SERVING") != std::string::npos);
   CHECK(healthOf(renderPort).find("SERVING") != std::string::npos);

@@ -1,7 +1,8 @@
 // The render server's deferred heap trim (HeapTrimmer): sessions that end
 // close together are trimmed for once, after the server has been quiet; a
 // stream of ends cannot put it off past `longest`; a trim still due runs
-// when the server stops.
+// when the server stops; the heap reserve is written again after each trim,
+// but not after the one at the stop.
 #include <atomic>
 #include <chrono>
 #include <functional>
@@ -85,6 +86,31 @@ TEST_CASE("a trim still due runs when the trimmer stops", "[service][trim]") {
     HeapTrimmer idle({milliseconds(60000), milliseconds(60000)}, [&] { ++trimmed; });
   }
   CHECK(trimmed == 1);  // none asked for: none run
+}
+
+TEST_CASE("the reserve is written again after each trim, not after the one at the stop",
+          "[service][trim]") {
+  std::atomic<int> trimmed{0};
+  std::atomic<int> refilled{0};
+  std::atomic<bool> refillAfterTrim{true};
+  {
+    HeapTrimmer trimmer(
+        {milliseconds(100), milliseconds(60000)}, [&] { ++trimmed; },
+        [&] {
+          refillAfterTrim = refillAfterTrim && refilled + 1 == trimmed;
+          ++refilled;
+        });
+    trimmer.request();
+    REQUIRE(waitFor([&] { return trimmer.trims() == 1; }, milliseconds(10000)));
+    CHECK(refilled == 1);
+    trimmer.request();
+    REQUIRE(waitFor([&] { return trimmer.trims() == 2; }, milliseconds(10000)));
+    CHECK(refilled == 2);
+    trimmer.request();  // still due when the trimmer stops
+  }
+  CHECK(trimmed == 3);
+  CHECK(refilled == 2);  // a server shutting down has no use for a reserve
+  CHECK(refillAfterTrim);
 }
 
 }  // namespace

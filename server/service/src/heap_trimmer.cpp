@@ -6,9 +6,10 @@
 
 namespace crackvis::service {
 
-HeapTrimmer::HeapTrimmer(Timing timing, std::function<void()> trim)
+HeapTrimmer::HeapTrimmer(Timing timing, std::function<void()> trim, std::function<void()> refill)
     : m_timing(timing),
       m_trim(trim ? std::move(trim) : std::function<void()>([] { malloc_trim(0); })),
+      m_refill(std::move(refill)),
       m_thread([this] { run(); }) {}
 
 HeapTrimmer::~HeapTrimmer() {
@@ -53,8 +54,12 @@ void HeapTrimmer::run() {
       continue;
     }
     m_firstPending.reset();
+    const bool stopping = m_stopping;
     lock.unlock();
     m_trim();  // outside the lock: requests go on arriving while it runs
+    if (m_refill && !stopping) {
+      m_refill();
+    }
     lock.lock();
     ++m_trims;
   }

@@ -31,11 +31,11 @@ Status readDataService(const json& object, const std::string& where,
 }
 
 Status readLimits(const json& object, const std::string& where, RenderServerConfig& config) {
-  CRACKVIS_RETURN_IF_ERROR(
-      checkKeys(object, where,
-                {"max_sessions", "max_sessions_per_user", "session_grace_seconds", "attach_seconds",
-                 "refine_after_ms", "interactive_frame_ms", "max_reduction", "max_width",
-                 "max_height", "max_particles", "max_bonds", "renders_at_once", "kept_renderers"}));
+  CRACKVIS_RETURN_IF_ERROR(checkKeys(
+      object, where,
+      {"max_sessions", "max_sessions_per_user", "session_grace_seconds", "attach_seconds",
+       "refine_after_ms", "interactive_frame_ms", "max_reduction", "max_width", "max_height",
+       "max_particles", "max_bonds", "renders_at_once", "kept_renderers", "heap_reserve_mb"}));
   CRACKVIS_RETURN_IF_ERROR(read(object, "renders_at_once", where, config.limits.rendersAtOnce));
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "max_particles", where, config.limits.fileSizes.maxParticles));
@@ -46,6 +46,7 @@ Status readLimits(const json& object, const std::string& where, RenderServerConf
       read(object, "session_grace_seconds", where, config.sessionGraceSeconds));
   CRACKVIS_RETURN_IF_ERROR(read(object, "attach_seconds", where, config.attachSeconds));
   CRACKVIS_RETURN_IF_ERROR(read(object, "kept_renderers", where, config.keptRenderers));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "heap_reserve_mb", where, config.heapReserveMb));
   CRACKVIS_RETURN_IF_ERROR(read(object, "refine_after_ms", where, config.limits.refineAfterMs));
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "interactive_frame_ms", where, config.limits.interactiveFrameMs));
@@ -141,6 +142,8 @@ Status validateRenderServerConfig(const RenderServerConfig& config) {
                                         config.attachSeconds, 0.1, 3600.0));
   CRACKVIS_RETURN_IF_ERROR(
       checkSetting({"--kept-renderers", "limits.kept_renderers"}, config.keptRenderers, 0, 16));
+  CRACKVIS_RETURN_IF_ERROR(
+      checkSetting({"--heap-reserve-mb", "limits.heap_reserve_mb"}, config.heapReserveMb, 0, 4096));
   const SessionLimits& limits = config.limits;
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--refine-after-ms", "limits.refine_after_ms"},
                                         limits.refineAfterMs, 0.0, 5000.0));

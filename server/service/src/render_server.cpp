@@ -122,6 +122,10 @@ int RenderServer::keptRenderers() const {
   return shelf ? static_cast<int>(shelf->size()) : 0;
 }
 
+std::size_t RenderServer::heapReserveBytes() const {
+  return m_impl->service->heapReserve();
+}
+
 void RenderServer::shutdown(double graceSeconds) {
   m_impl->host->shutdown(graceSeconds);  // closes the sessions, so the web streams end too
   if (m_impl->web) {

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
 #include <thread>
 
 #include <grpcpp/grpcpp.h>
@@ -15,6 +16,7 @@
 #include "crackvis/v1/render.grpc.pb.h"
 #include "session_registry.hpp"
 #include "stream_encoder.hpp"
+#include <crackvis/common/heap_reserve.hpp>
 #include <crackvis/dataservice_client/data_client.hpp>
 #include <crackvis/rpc_server/access_log.hpp>
 #include <crackvis/rpc_server/call.hpp>
@@ -57,7 +59,13 @@ class RenderServiceImpl final : public v1::RenderService::Service {
         m_renderers(config.keptRenderers > 0 ? std::make_shared<RendererShelf>(
                                                    static_cast<std::size_t>(config.keptRenderers))
                                              : nullptr),
-        m_trimmer(std::make_shared<HeapTrimmer>()) {
+        m_heapReserve(heapReserveFor(config)),
+        m_trimmer(std::make_shared<HeapTrimmer>(
+            HeapTrimmer::Timing{}, nullptr,
+            // What stays resident for the next session.
+            [reserve = m_heapReserve] { touchHeapReserve(reserve); })) {
+    setHeapReserveThresholds(m_heapReserve);
+    m_heapWarmUp = std::jthread([reserve = m_heapReserve] { touchHeapReserve(reserve); });
     const pipeline::ViewDescription view;
     if (m_renderers) {
       // One renderer of the default view's size waits for the first session.
@@ -71,6 +79,8 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   bool dataConnected() const { return m_data.connected(); }
   // Null with --kept-renderers 0.
   const RendererShelf* renderers() const { return m_renderers.get(); }
+  // Bytes of heap kept touched while idle (0: none).
+  std::size_t heapReserve() const { return m_heapReserve; }
   // Drops the crack histories of live files no call has used for a while.
   void reapCrackHistories();
   AttachWatch& attaching() { return m_attaching; }
@@ -143,8 +153,22 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   FinishedSeries m_finishedSeries;
   std::shared_ptr<RenderTurns> m_turns;        // shared by every session's frames
   std::shared_ptr<RendererShelf> m_renderers;  // the renderers of ended sessions; may be null
-  std::shared_ptr<HeapTrimmer> m_trimmer;      // the heap, trimmed once sessions stop ending
-  std::jthread m_encoderWarmUp;                // libx264's start, joined before the rest goes
+  // --heap-reserve-mb, where threads share the main heap (else 0).
+  const std::size_t m_heapReserve;
+  std::shared_ptr<HeapTrimmer> m_trimmer;  // the heap, trimmed once sessions stop ending
+  std::jthread m_heapWarmUp;               // the reserve's first writing
+  std::jthread m_encoderWarmUp;            // libx264's start, joined before the rest goes
+
+  // The reserve asked for, where a new thread allocates from the main heap
+  // (one malloc arena: the services' default where THP is "madvise",
+  // common/huge_pages.hpp); a reserve in one thread's heap would serve no
+  // other thread.
+  static std::size_t heapReserveFor(const RenderServerConfig& config) {
+    if (config.heapReserveMb <= 0 || !threadsShareMainHeap()) {
+      return 0;
+    }
+    return static_cast<std::size_t>(config.heapReserveMb) << 20;
+  }
 };
 
 }  // namespace crackvis::service

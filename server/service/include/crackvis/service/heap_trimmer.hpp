@@ -33,8 +33,11 @@ class HeapTrimmer {
     std::chrono::milliseconds quiet{1000};
     std::chrono::milliseconds longest{5000};
   };
-  // `trim` defaults to malloc_trim(0).
-  explicit HeapTrimmer(Timing timing, std::function<void()> trim = {});
+  // `trim` defaults to malloc_trim(0). `refill`, if given, runs after each
+  // trim but one at destruction: the heap reserve written again
+  // (common/heap_reserve.hpp), which a server shutting down has no use for.
+  explicit HeapTrimmer(Timing timing, std::function<void()> trim = {},
+                       std::function<void()> refill = {});
   HeapTrimmer() : HeapTrimmer(Timing{}) {}
   HeapTrimmer(const HeapTrimmer&) = delete;
   HeapTrimmer& operator=(const HeapTrimmer&) = delete;
@@ -49,6 +52,7 @@ class HeapTrimmer {
 
   const Timing m_timing;
   const std::function<void()> m_trim;
+  const std::function<void()> m_refill;
   mutable std::mutex m_mutex;
   std::condition_variable m_changed;
   std::optional<Clock::time_point> m_firstPending;  // the oldest request not yet trimmed

@@ -6,6 +6,7 @@
 // tests start a server through it.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <vector>
@@ -47,6 +48,10 @@ struct RenderServerConfig {
   // Renderers of ended sessions kept for the next session of their view
   // size, one stocked at start (RendererShelf; 0: every session makes its own).
   int keptRenderers = 1;
+  // MiB of heap kept touched while idle (common/heap_reserve.hpp), written
+  // at start and after each trim of the heap, so that a first picture finds
+  // resident pages (0: none).
+  int heapReserveMb = 160;
   SessionLimits limits;
   std::string accessLog = "-";  // "-": stderr; "": none
   WebConfig web;
@@ -56,7 +61,7 @@ struct RenderServerConfig {
 // tls {ca, cert, key}, insecure, users_from (a crackvis-data configuration
 // whose users apply here too), data_service {target, ca, cert, key, token,
 // insecure, server_name}, limits {max_sessions, max_sessions_per_user,
-// session_grace_seconds, attach_seconds, kept_renderers, refine_after_ms,
+// session_grace_seconds, attach_seconds, kept_renderers, heap_reserve_mb, refine_after_ms,
 // interactive_frame_ms, max_width, max_height, max_particles, max_bonds},
 // access_log, web {listen, root, origins}.
 // Unknown keys are errors; values are range-checked by
@@ -89,6 +94,9 @@ class RenderServer {
   // Renderers of ended sessions (or stocked at start) waiting for the next
   // session: each holds a GL context (RendererShelf).
   int keptRenderers() const;
+  // The heap kept touched while idle (RenderServerConfig::heapReserveMb):
+  // 0 when none was asked for, or when threads do not share the main heap.
+  std::size_t heapReserveBytes() const;
   // Whether the connection to crackvis-data is made (it is started as the
   // server starts, and retried while crackvis-data is unreachable).
   bool dataServiceConnected() const;

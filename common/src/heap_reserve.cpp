@@ -1,0 +1,76 @@
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <thread>
+#include <vector>
+
+#include <malloc.h>
+#include <unistd.h>
+
+#include <crackvis/common/heap_reserve.hpp>
+
+namespace crackvis {
+namespace {
+
+// glibc's largest adaptive mmap threshold (DEFAULT_MMAP_THRESHOLD_MAX on
+// 64-bit): blocks under it come from the heap, larger ones are mappings of
+// their own (with huge pages where asked), as before.
+constexpr std::size_t kMmapThreshold = std::size_t{32} << 20;
+// Well under the mmap threshold, so each block comes from the heap; large
+// enough that the blocks' headers are a negligible part.
+constexpr std::size_t kBlock = std::size_t{1} << 20;
+
+int clampToInt(std::size_t bytes) {
+  return bytes > static_cast<std::size_t>(std::numeric_limits<int>::max())
+             ? std::numeric_limits<int>::max()
+             : static_cast<int>(bytes);
+}
+
+}  // namespace
+
+void setHeapReserveThresholds(std::size_t bytes) {
+  if (bytes == 0) {
+    return;
+  }
+  mallopt(M_MMAP_THRESHOLD, clampToInt(kMmapThreshold));
+  mallopt(M_TRIM_THRESHOLD, clampToInt(bytes + kMmapThreshold));
+}
+
+void touchHeapReserve(std::size_t bytes) {
+  std::vector<void*> blocks;
+  blocks.reserve(bytes / kBlock + 1);
+  for (std::size_t done = 0; done < bytes; done += kBlock) {
+    void* block = std::malloc(kBlock);
+    if (block == nullptr) {
+      break;  // no memory for a reserve: nothing is lost by its absence
+    }
+    // Any value but zero: the kernel's zero page would not make it resident.
+    std::memset(block, 0x5a, kBlock);
+    // The writes must happen though nothing reads them before the free.
+    asm volatile("" : : "r"(block) : "memory");
+    blocks.push_back(block);
+  }
+  // Newest first, so that the blocks merge into one free region (the heap's
+  // top when nothing was allocated above them meanwhile).
+  for (auto it = blocks.rbegin(); it != blocks.rend(); ++it) {
+    std::free(*it);
+  }
+}
+
+bool threadsShareMainHeap() {
+  void* theirs = nullptr;
+  std::thread([&theirs] { theirs = std::malloc(64); }).join();
+  // The main heap lies below the program's break; other arenas' heaps are
+  // mappings of their own, far above it.
+  const auto top = reinterpret_cast<std::uintptr_t>(sbrk(0));
+  const bool shared = theirs != nullptr && reinterpret_cast<std::uintptr_t>(theirs) < top;
+  std::free(theirs);
+  return shared;
+}
+
+std::size_t heapFreeBytes() {
+  return mallinfo2().fordblks;
+}
+
+}  // namespace crackvis

@@ -1,0 +1,75 @@
+// The heap a service keeps touched while idle (common/heap_reserve.hpp):
+// written and freed, it stays in malloc's free space and resident, a trim
+// gives it back, and writing it again brings it back. Whether threads share
+// the main heap is checked here in a process with several arenas (glibc's
+// default); the render server started as a program, which runs on one,
+// reports its reserve in tests/deploy/deploy.test.cpp.
+#include <cstddef>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+
+#include <catch2/catch.hpp>
+#include <malloc.h>
+#include <unistd.h>
+
+#include <crackvis/common/heap_reserve.hpp>
+
+namespace {
+
+constexpr std::size_t kMiB = std::size_t{1} << 20;
+
+// This process's resident memory, from /proc/self/statm.
+std::size_t residentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  std::size_t size = 0;
+  std::size_t resident = 0;
+  statm >> size >> resident;
+  return resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+}
+
+TEST_CASE("a heap reserve stays resident in malloc's free space until a trim",
+          "[common][heap-reserve]") {
+  constexpr std::size_t kReserve = 64 * kMiB;
+  crackvis::setHeapReserveThresholds(kReserve);
+  malloc_trim(0);
+  const std::size_t freeBefore = crackvis::heapFreeBytes();
+  const std::size_t residentBefore = residentBytes();
+
+  crackvis::touchHeapReserve(kReserve);
+  // Freed, yet held by malloc and resident: free() did not give it back.
+  CHECK(crackvis::heapFreeBytes() >= freeBefore + kReserve - kMiB);
+  CHECK(residentBytes() >= residentBefore + kReserve - 4 * kMiB);
+
+  // The next blocks of that size come from it, without growing the process.
+  const std::size_t residentKept = residentBytes();
+  void* reused = std::malloc(32 * kMiB - kMiB);  // under the mmap threshold: from the heap
+  REQUIRE(reused != nullptr);
+  CHECK(crackvis::heapFreeBytes() + 31 * kMiB <= freeBefore + kReserve + kMiB);
+  std::free(reused);
+  CHECK(residentBytes() <= residentKept + kMiB);
+
+  // A trim gives it back; writing it again brings it back.
+  malloc_trim(0);
+  CHECK(residentBytes() + kReserve / 2 <= residentKept);
+  crackvis::touchHeapReserve(kReserve);
+  CHECK(residentBytes() + 4 * kMiB >= residentKept);
+  malloc_trim(0);
+}
+
+TEST_CASE("a reserve of nothing writes nothing", "[common][heap-reserve]") {
+  malloc_trim(0);
+  const std::size_t before = crackvis::heapFreeBytes();
+  crackvis::touchHeapReserve(0);
+  CHECK(crackvis::heapFreeBytes() <= before + kMiB);
+}
+
+TEST_CASE("threads have heaps of their own under glibc's default arenas",
+          "[common][heap-reserve]") {
+  // This test program runs without glibc.malloc.arena_max (the services set
+  // it where THP is "madvise"): a new thread gets an arena of its own.
+  REQUIRE(std::getenv("GLIBC_TUNABLES") == nullptr);
+  CHECK_FALSE(crackvis::threadsShareMainHeap());
+}
+
+}  // namespace

@@ -1,0 +1,147 @@
+#!/usr/bin/env bash
+# The time to the first picture with two settings of crackvis-render, A and B
+# (extra arguments for each), alternating over R rounds on fresh services
+# (the order reversed every other round). Each run: fresh crackvis-data and
+# crackvis-render on loopback, then `crackvis bench render --first-pictures
+# 3`: the first open is cold (nothing described, cached or touched in the
+# fresh services; the file in the page cache), the later two warm. Prints
+# each run's cold and warm times with their parts, crackvis-render's resident
+# memory idle (2 s after it answers) and after the sessions (7 s later: the
+# heap trimmed), and the load; then the medians.
+# Figures: docs/benchmarks.md ("A heap kept touched for the first picture").
+set -euo pipefail
+
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+root=$(cd "$here/../.." && pwd)
+readonly here root
+build=${CRACKVIS_BUILD:-$root/build/release}
+readonly build
+
+usage() {
+  cat <<EOF
+usage: tools/bench/first-picture-ab.sh --data DIR --file NAME --a "ARGS" --b "ARGS"
+                                       [--rounds R] [--size WxH] [--step S] [--out DIR]
+
+Times the first picture of DIR/NAME (default: the last step, 1280x720) with crackvis-render
+started with the extra arguments of --a and of --b in turn (e.g. --a "--heap-reserve-mb 0"
+--b ""), fresh services each run, R rounds (default 4). --out keeps each run's JSON and logs.
+EOF
+}
+
+die() {
+  echo "first-picture-ab.sh: $*" >&2
+  exit 1
+}
+
+data=
+file=
+rounds=4
+size=1280x720
+step=-1
+out=
+args_a=
+args_b=
+given_a=
+given_b=
+while (($#)); do
+  case $1 in
+    -h | --help) usage; exit 0 ;;
+    --data) data=${2:?--data needs a value}; shift 2 ;;
+    --file) file=${2:?--file needs a value}; shift 2 ;;
+    --a) args_a=${2?--a needs a value}; given_a=1; shift 2 ;;
+    --b) args_b=${2?--b needs a value}; given_b=1; shift 2 ;;
+    --rounds) rounds=${2:?--rounds needs a value}; shift 2 ;;
+    --size) size=${2:?--size needs a value}; shift 2 ;;
+    --step) step=${2:?--step needs a value}; shift 2 ;;
+    --out) out=${2:?--out needs a value}; shift 2 ;;
+    *) die "unknown argument $1 (see --help)" ;;
+  esac
+done
+[[ -d $data ]] || die "--data DIR is required and must be a folder"
+[[ -n $file && -f $data/$file ]] || die "--file NAME must name a file in $data"
+[[ -n $given_a && -n $given_b ]] || die "--a and --b are both required (either may be \"\")"
+[[ $rounds =~ ^[1-9][0-9]*$ ]] || die "--rounds $rounds: expected a positive integer"
+for binary in tools/crackvis dataservice/crackvis-data server/app/crackvis-render; do
+  [[ -x $build/$binary ]] || die "$build/$binary is missing: build the project first"
+done
+
+# shellcheck source=tools/bench/bench_services.sh
+source "$here/bench_services.sh"
+cd "$root"
+bench_output "$out"
+cat "$data/$file" >/dev/null # into the page cache
+
+resident_kb() {
+  awk '/^VmRSS/ {print $2}' "/proc/$1/status"
+}
+
+# run TAG ROUND ARGS: one run on fresh services, its figures in $out/TAG-ROUND.*
+run() {
+  local tag=$1 round=$2 extra=$3 log=$out/$1-$2
+  local data_port render_port
+  data_port=$(bench_free_port)
+  render_port=$(bench_free_port)
+  "$build/dataservice/crackvis-data" --root "$data" --listen "127.0.0.1:$data_port" \
+    --access-log '' >"$log-data.log" 2>&1 &
+  local data_pid=$!
+  # shellcheck disable=SC2086 # the extra arguments are words
+  "$build/server/app/crackvis-render" --listen "127.0.0.1:$render_port" \
+    --data-server "localhost:$data_port" --access-log '' $extra >"$log-render.log" 2>&1 &
+  local render_pid=$!
+  bench_pids+=("$data_pid" "$render_pid")
+  bench_wait_render "$render_port" "$log-render.log"
+  sleep 2
+  resident_kb "$render_pid" >"$log.idle"
+  cut -d' ' -f1 /proc/loadavg >"$log.load"
+  "$build/tools/crackvis" bench render --server "localhost:$render_port" --file "$file" \
+    --step "$step" --size "$size" --first-pictures 3 --seconds 0.5 --still-frames 0 --jumps 0 \
+    --playback-steps 0 --json >"$log.json" 2>"$log.log" ||
+    die "bench render failed: $(tail -3 "$log.log")"
+  sleep 7
+  resident_kb "$render_pid" >"$log.after"
+  kill "$render_pid" "$data_pid"
+  wait "$render_pid" "$data_pid" 2>/dev/null || true
+}
+
+for r in $(seq "$rounds"); do
+  order=(a b)
+  ((r % 2 == 0)) && order=(b a)
+  for tag in "${order[@]}"; do
+    extra=$args_a
+    [[ $tag == b ]] && extra=$args_b
+    echo "round $r of $rounds: $tag ($extra) (load $(cut -d' ' -f1-3 /proc/loadavg))" >&2
+    run "$tag" "$r" "$extra"
+  done
+done
+
+python3 - "$out" "$rounds" "$file" "$args_a" "$args_b" <<'EOF'
+import json, statistics, sys
+out, rounds, name, args = sys.argv[1], int(sys.argv[2]), sys.argv[3], {"a": sys.argv[4], "b": sys.argv[5]}
+med = statistics.median
+rows = {"a": [], "b": []}
+for tag in rows:
+    for r in range(1, rounds + 1):
+        base = f"{out}/{tag}-{r}"
+        pictures = json.load(open(f"{base}.json"))["first_picture"]
+        read = lambda suffix: float(open(f"{base}.{suffix}").read())
+        rows[tag].append({"cold": pictures["first"], "warm": pictures["later_median"],
+                          "idle": read("idle") / 1024, "after": read("after") / 1024,
+                          "load": read("load")})
+parts = ["open_file_ms", "extract_ms", "render_ms", "encode_ms"]
+print(f"first picture of {name}, fresh services each run, alternating (ms; resident MB)")
+print(f"{'run':>6} {'cold':>6} {'open':>5} {'extract':>8} {'render':>7} {'encode':>7} {'warm':>6} "
+      f"{'idle MB':>8} {'after MB':>9}  load")
+for tag in rows:
+    for r, row in enumerate(rows[tag], 1):
+        c = row["cold"]
+        print(f"{tag + str(r):>6} {c['total_ms']:>6.0f} " +
+              " ".join(f"{c['server'][p]:>{w}.0f}" for p, w in zip(parts, (5, 8, 7, 7))) +
+              f" {row['warm']['total_ms']:>6.0f} {row['idle']:>8.0f} {row['after']:>9.0f}  {row['load']:.2f}")
+for tag in rows:
+    rs = rows[tag]
+    print(f"{tag} ({args[tag] or 'defaults'}): median cold {med(r['cold']['total_ms'] for r in rs):.0f} ms "
+          f"(extract {med(r['cold']['server']['extract_ms'] for r in rs):.0f}, "
+          f"render {med(r['cold']['server']['render_ms'] for r in rs):.0f}), "
+          f"warm {med(r['warm']['total_ms'] for r in rs):.0f} ms, "
+          f"resident idle {med(r['idle'] for r in rs):.0f} MB, after {med(r['after'] for r in rs):.0f} MB")
+EOF
