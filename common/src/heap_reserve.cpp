@@ -1,7 +1,6 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
-#include <limits>
 #include <thread>
 #include <vector>
 
@@ -21,20 +20,21 @@ constexpr std::size_t kMmapThreshold = std::size_t{32} << 20;
 // enough that the blocks' headers are a negligible part.
 constexpr std::size_t kBlock = std::size_t{1} << 20;
 
-int clampToInt(std::size_t bytes) {
-  return bytes > static_cast<std::size_t>(std::numeric_limits<int>::max())
-             ? std::numeric_limits<int>::max()
-             : static_cast<int>(bytes);
-}
+// mallopt takes an int: a trim threshold of a reserve this large or larger
+// would not fit.
+constexpr std::size_t kLargestReserve = std::size_t{1} << 30;
 
 }  // namespace
 
-void setHeapReserveThresholds(std::size_t bytes) {
+bool setHeapReserveThresholds(std::size_t bytes) {
   if (bytes == 0) {
-    return;
+    return true;
   }
-  mallopt(M_MMAP_THRESHOLD, clampToInt(kMmapThreshold));
-  mallopt(M_TRIM_THRESHOLD, clampToInt(bytes + kMmapThreshold));
+  if (bytes >= kLargestReserve) {
+    return false;
+  }
+  return mallopt(M_MMAP_THRESHOLD, static_cast<int>(kMmapThreshold)) == 1 &&
+         mallopt(M_TRIM_THRESHOLD, static_cast<int>(bytes + kMmapThreshold)) == 1;
 }
 
 void touchHeapReserve(std::size_t bytes) {
@@ -45,7 +45,8 @@ void touchHeapReserve(std::size_t bytes) {
     if (block == nullptr) {
       break;  // no memory for a reserve: nothing is lost by its absence
     }
-    // Any value but zero: the kernel's zero page would not make it resident.
+    // Not zero: GCC may turn malloc + memset(0) into calloc, which skips
+    // clearing a freshly grown heap, and nothing would be written.
     std::memset(block, 0x5a, kBlock);
     // The writes must happen though nothing reads them before the free.
     asm volatile("" : : "r"(block) : "memory");

@@ -28,10 +28,13 @@ std::size_t residentBytes() {
   return resident * static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
 }
 
+#ifndef __SANITIZE_ADDRESS__
+// AddressSanitizer replaces malloc: glibc's free space and trim do not see its
+// blocks, so these two cases are of glibc's malloc only.
 TEST_CASE("a heap reserve stays resident in malloc's free space until a trim",
           "[common][heap-reserve]") {
   constexpr std::size_t kReserve = 64 * kMiB;
-  crackvis::setHeapReserveThresholds(kReserve);
+  REQUIRE(crackvis::setHeapReserveThresholds(kReserve));
   malloc_trim(0);
   const std::size_t freeBefore = crackvis::heapFreeBytes();
   const std::size_t residentBefore = residentBytes();
@@ -63,12 +66,23 @@ TEST_CASE("a reserve of nothing writes nothing", "[common][heap-reserve]") {
   crackvis::touchHeapReserve(0);
   CHECK(crackvis::heapFreeBytes() <= before + kMiB);
 }
+#endif
+
+TEST_CASE("a reserve too large for malloc's thresholds is refused", "[common][heap-reserve]") {
+  CHECK(crackvis::setHeapReserveThresholds(0));
+  CHECK_FALSE(crackvis::setHeapReserveThresholds(std::size_t{1} << 30));
+  CHECK_FALSE(crackvis::setHeapReserveThresholds(std::size_t{64} << 30));
+}
 
 TEST_CASE("threads have heaps of their own under glibc's default arenas",
           "[common][heap-reserve]") {
   // This test program runs without glibc.malloc.arena_max (the services set
   // it where THP is "madvise"): a new thread gets an arena of its own.
-  REQUIRE(std::getenv("GLIBC_TUNABLES") == nullptr);
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  if (tunables != nullptr && std::string(tunables).find("arena_max") != std::string::npos) {
+    WARN("GLIBC_TUNABLES names an arena count: not checked");
+    return;
+  }
   CHECK_FALSE(crackvis::threadsShareMainHeap());
 }
 

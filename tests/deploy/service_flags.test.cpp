@@ -176,10 +176,10 @@ TEST_CASE("crackvis-render refuses out-of-range limits from flags and file at st
        "--kept-renderers must be between 0 and 16, got 300 (limits.kept_renderers in the "
        "configuration file)"},
       {"negative heap reserve", with({"--heap-reserve-mb", "-1"}), "",
-       "--heap-reserve-mb must be between 0 and 4096, got -1 (limits.heap_reserve_mb in the "
+       "--heap-reserve-mb must be between 0 and 1023, got -1 (limits.heap_reserve_mb in the "
        "configuration file)"},
       {"huge heap reserve in the file", base, R"({"limits": {"heap_reserve_mb": 100000}})",
-       "--heap-reserve-mb must be between 0 and 4096, got 100000 (limits.heap_reserve_mb in the "
+       "--heap-reserve-mb must be between 0 and 1023, got 100000 (limits.heap_reserve_mb in the "
        "configuration file)"},
       {"listen address",
        {"--insecure", "--listen", "[::1]50052", "--data-server", "127.0.0.1:1", "--data-insecure"},

@@ -95,7 +95,7 @@ TEST_CASE("the reserve is written again after each trim, not after the one at th
   std::atomic<bool> refillAfterTrim{true};
   {
     HeapTrimmer trimmer(
-        {milliseconds(100), milliseconds(60000)}, [&] { ++trimmed; },
+        {milliseconds(1500), milliseconds(60000)}, [&] { ++trimmed; },
         [&] {
           refillAfterTrim = refillAfterTrim && refilled + 1 == trimmed;
           ++refilled;

@@ -54,13 +54,16 @@ void HeapTrimmer::run() {
       continue;
     }
     m_firstPending.reset();
-    const bool stopping = m_stopping;
     lock.unlock();
     m_trim();  // outside the lock: requests go on arriving while it runs
-    if (m_refill && !stopping) {
-      m_refill();
-    }
     lock.lock();
+    // A trimmer stopping meanwhile (the server shutting down) has no use for
+    // the reserve, and its destructor waits for this thread.
+    if (m_refill && !m_stopping) {
+      lock.unlock();
+      m_refill();
+      lock.lock();
+    }
     ++m_trims;
   }
 }

@@ -143,7 +143,7 @@ Status validateRenderServerConfig(const RenderServerConfig& config) {
   CRACKVIS_RETURN_IF_ERROR(
       checkSetting({"--kept-renderers", "limits.kept_renderers"}, config.keptRenderers, 0, 16));
   CRACKVIS_RETURN_IF_ERROR(
-      checkSetting({"--heap-reserve-mb", "limits.heap_reserve_mb"}, config.heapReserveMb, 0, 4096));
+      checkSetting({"--heap-reserve-mb", "limits.heap_reserve_mb"}, config.heapReserveMb, 0, 1023));
   const SessionLimits& limits = config.limits;
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--refine-after-ms", "limits.refine_after_ms"},
                                         limits.refineAfterMs, 0.0, 5000.0));

@@ -64,7 +64,6 @@ class RenderServiceImpl final : public v1::RenderService::Service {
             HeapTrimmer::Timing{}, nullptr,
             // What stays resident for the next session.
             [reserve = m_heapReserve] { touchHeapReserve(reserve); })) {
-    setHeapReserveThresholds(m_heapReserve);
     m_heapWarmUp = std::jthread([reserve = m_heapReserve] { touchHeapReserve(reserve); });
     const pipeline::ViewDescription view;
     if (m_renderers) {
@@ -164,10 +163,11 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   // common/huge_pages.hpp); a reserve in one thread's heap would serve no
   // other thread.
   static std::size_t heapReserveFor(const RenderServerConfig& config) {
-    if (config.heapReserveMb <= 0 || !threadsShareMainHeap()) {
+    const std::size_t bytes = static_cast<std::size_t>(std::max(config.heapReserveMb, 0)) << 20;
+    if (bytes == 0 || !threadsShareMainHeap() || !setHeapReserveThresholds(bytes)) {
       return 0;
     }
-    return static_cast<std::size_t>(config.heapReserveMb) << 20;
+    return bytes;
   }
 };
 

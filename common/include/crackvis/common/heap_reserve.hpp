@@ -26,10 +26,13 @@ namespace crackvis {
 // Sets malloc's thresholds for a reserve of `bytes` (process-wide; a no-op
 // for 0): blocks under 32 MiB come from the heap (glibc's adaptive mmap
 // threshold stops adapting once any threshold is set, and 32 MiB is where it
-// would end), and free() gives the heap's top back to the system only beyond
-// `bytes` + 32 MiB, so that the reserve freed is not trimmed away at once.
-// malloc_trim still returns everything free.
-void setHeapReserveThresholds(std::size_t bytes);
+// would end), and free() trims the heap's top only once it exceeds `bytes` +
+// 32 MiB, so that the reserve freed is not trimmed away at once. (Past that,
+// free() trims the whole top, reserve included, until the next refill; and
+// malloc_trim returns everything free.) False, and nothing to rely on, when
+// malloc refuses either threshold (a heap of a few MiB under
+// glibc.malloc.hugetlb=2, say) or `bytes` is 1 GiB or more.
+bool setHeapReserveThresholds(std::size_t bytes);
 
 // Writes `bytes` of fresh heap (blocks of 1 MiB, under the mmap threshold)
 // and frees it, leaving it resident in malloc's free space. Call after
