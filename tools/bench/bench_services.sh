@@ -1,7 +1,8 @@
 # Sourced by the benchmark scripts in tools/bench/: their output folder,
 # free loopback ports, background services (crackvis-data, crackvis-render,
-# followers) that are stopped on any exit, and the wait for a render server
-# to answer. Needs $root (the source tree) and $build (the build tree).
+# followers) that are stopped on any exit, the wait for a render server to
+# answer, and a fresh pair of services for one run. Needs $root (the source
+# tree) and $build (the build tree).
 
 # bench_output DIR: $out is DIR, or a temporary folder removed on exit when
 # DIR is empty; the development certificates are made when missing.
@@ -50,4 +51,31 @@ bench_wait_render() {
   done
   echo "crackvis-render did not start: $(tail -3 "$log")" >&2
   exit 1
+}
+
+# bench_start_services DATA LOG [RENDER_ARGS...]: fresh crackvis-data serving
+# DATA and crackvis-render on free loopback ports, logging to LOG-data.log and
+# LOG-render.log, with RENDER_ARGS added to crackvis-render's; returns once
+# crackvis-render answers. Sets bench_render_port, bench_data_pid and
+# bench_render_pid.
+bench_start_services() {
+  local data=$1 log=$2
+  shift 2
+  local data_port
+  data_port=$(bench_free_port)
+  bench_render_port=$(bench_free_port)
+  "$build/dataservice/crackvis-data" --root "$data" --listen "127.0.0.1:$data_port" \
+    --access-log '' >"$log-data.log" 2>&1 &
+  bench_data_pid=$!
+  "$build/server/app/crackvis-render" --listen "127.0.0.1:$bench_render_port" \
+    --data-server "localhost:$data_port" --access-log '' "$@" >"$log-render.log" 2>&1 &
+  bench_render_pid=$!
+  bench_pids+=("$bench_data_pid" "$bench_render_pid")
+  bench_wait_render "$bench_render_port" "$log-render.log"
+}
+
+# bench_stop_services: stops the pair bench_start_services started last.
+bench_stop_services() {
+  kill "$bench_render_pid" "$bench_data_pid"
+  wait "$bench_render_pid" "$bench_data_pid" 2>/dev/null || true
 }

@@ -20,11 +20,15 @@ readonly build
 usage() {
   cat <<EOF
 usage: tools/bench/first-picture-ab.sh --data DIR --file NAME --a "ARGS" --b "ARGS"
-                                       [--rounds R] [--size WxH] [--step S] [--out DIR]
+                                       [--rounds R] [--size WxH] [--step S] [--gap SECONDS]
+                                       [--out DIR]
 
 Times the first picture of DIR/NAME (default: the last step, 1280x720) with crackvis-render
 started with the extra arguments of --a and of --b in turn (e.g. --a "--heap-reserve-mb 0"
---b ""), fresh services each run, R rounds (default 4). --out keeps each run's JSON and logs.
+--b ""), fresh services each run, R rounds (default 4). --gap pauses between one session's
+close and the next open (default 0, the browser's pattern; 1.1 to 2: the next open meets the
+heap trim and what follows it, see crackvis-render's HeapTrimmer). --out keeps each run's JSON
+and logs.
 EOF
 }
 
@@ -38,6 +42,7 @@ file=
 rounds=4
 size=1280x720
 step=-1
+gap=0
 out=
 args_a=
 args_b=
@@ -53,6 +58,7 @@ while (($#)); do
     --rounds) rounds=${2:?--rounds needs a value}; shift 2 ;;
     --size) size=${2:?--size needs a value}; shift 2 ;;
     --step) step=${2:?--step needs a value}; shift 2 ;;
+    --gap) gap=${2:?--gap needs a value}; shift 2 ;;
     --out) out=${2:?--out needs a value}; shift 2 ;;
     *) die "unknown argument $1 (see --help)" ;;
   esac
@@ -61,6 +67,7 @@ done
 [[ -n $file && -f $data/$file ]] || die "--file NAME must name a file in $data"
 [[ -n $given_a && -n $given_b ]] || die "--a and --b are both required (either may be \"\")"
 [[ $rounds =~ ^[1-9][0-9]*$ ]] || die "--rounds $rounds: expected a positive integer"
+[[ $gap =~ ^[0-9]+(\.[0-9]+)?$ ]] || die "--gap $gap: expected seconds, e.g. 1.2"
 for binary in tools/crackvis dataservice/crackvis-data server/app/crackvis-render; do
   [[ -x $build/$binary ]] || die "$build/$binary is missing: build the project first"
 done
@@ -77,30 +84,19 @@ resident_kb() {
 
 # run TAG ROUND ARGS: one run on fresh services, its figures in $out/TAG-ROUND.*
 run() {
-  local tag=$1 round=$2 extra=$3 log=$out/$1-$2
-  local data_port render_port
-  data_port=$(bench_free_port)
-  render_port=$(bench_free_port)
-  "$build/dataservice/crackvis-data" --root "$data" --listen "127.0.0.1:$data_port" \
-    --access-log '' >"$log-data.log" 2>&1 &
-  local data_pid=$!
+  local extra=$3 log=$out/$1-$2
   # shellcheck disable=SC2086 # the extra arguments are words
-  "$build/server/app/crackvis-render" --listen "127.0.0.1:$render_port" \
-    --data-server "localhost:$data_port" --access-log '' $extra >"$log-render.log" 2>&1 &
-  local render_pid=$!
-  bench_pids+=("$data_pid" "$render_pid")
-  bench_wait_render "$render_port" "$log-render.log"
+  bench_start_services "$data" "$log" $extra
   sleep 2
-  resident_kb "$render_pid" >"$log.idle"
+  resident_kb "$bench_render_pid" >"$log.idle"
   cut -d' ' -f1 /proc/loadavg >"$log.load"
-  "$build/tools/crackvis" bench render --server "localhost:$render_port" --file "$file" \
-    --step "$step" --size "$size" --first-pictures 3 --seconds 0.5 --still-frames 0 --jumps 0 \
-    --playback-steps 0 --json >"$log.json" 2>"$log.log" ||
+  "$build/tools/crackvis" bench render --server "localhost:$bench_render_port" --file "$file" \
+    --step "$step" --size "$size" --first-pictures 3 --first-picture-gap "$gap" --seconds 0.5 \
+    --still-frames 0 --jumps 0 --playback-steps 0 --json >"$log.json" 2>"$log.log" ||
     die "bench render failed: $(tail -3 "$log.log")"
   sleep 7
-  resident_kb "$render_pid" >"$log.after"
-  kill "$render_pid" "$data_pid"
-  wait "$render_pid" "$data_pid" 2>/dev/null || true
+  resident_kb "$bench_render_pid" >"$log.after"
+  bench_stop_services
 }
 
 for r in $(seq "$rounds"); do
@@ -114,9 +110,10 @@ for r in $(seq "$rounds"); do
   done
 done
 
-python3 - "$out" "$rounds" "$file" "$args_a" "$args_b" <<'EOF'
+python3 - "$out" "$rounds" "$file" "$args_a" "$args_b" "$gap" <<'EOF'
 import json, statistics, sys
 out, rounds, name, args = sys.argv[1], int(sys.argv[2]), sys.argv[3], {"a": sys.argv[4], "b": sys.argv[5]}
+gap = float(sys.argv[6])
 med = statistics.median
 rows = {"a": [], "b": []}
 for tag in rows:
@@ -128,7 +125,8 @@ for tag in rows:
                           "idle": read("idle") / 1024, "after": read("after") / 1024,
                           "load": read("load")})
 parts = ["open_file_ms", "extract_ms", "render_ms", "encode_ms"]
-print(f"first picture of {name}, fresh services each run, alternating (ms; resident MB)")
+print(f"first picture of {name}, fresh services each run, alternating (ms; resident MB); "
+      f"warm: the later opens, {gap:g} s after the previous close")
 print(f"{'run':>6} {'cold':>6} {'open':>5} {'extract':>8} {'render':>7} {'encode':>7} {'warm':>6} "
       f"{'idle MB':>8} {'after MB':>9}  load")
 for tag in rows:

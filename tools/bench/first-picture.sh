@@ -75,23 +75,13 @@ cat "$data/$file" >/dev/null # into the page cache, for both
 
 # crackvis ROUND: fresh services, three first pictures, the services stopped.
 run_crackvis() {
-  local data_port render_port log=$out/crackvis-$1
-  data_port=$(bench_free_port)
-  render_port=$(bench_free_port)
-  "$build/dataservice/crackvis-data" --root "$data" --listen "127.0.0.1:$data_port" \
-    --access-log '' >"$log-data.log" 2>&1 &
-  local data_pid=$!
-  "$build/server/app/crackvis-render" --listen "127.0.0.1:$render_port" \
-    --data-server "localhost:$data_port" --access-log '' >"$log-render.log" 2>&1 &
-  local render_pid=$!
-  bench_pids+=("$data_pid" "$render_pid")
-  bench_wait_render "$render_port" "$log-render.log"
-  "$crackvis" bench render --server "localhost:$render_port" --file "$file" --step "$step" \
-    --size "$size" --first-pictures 3 --seconds 0.5 --still-frames 0 --jumps 0 \
+  local log=$out/crackvis-$1
+  bench_start_services "$data" "$log"
+  "$crackvis" bench render --server "localhost:$bench_render_port" --file "$file" \
+    --step "$step" --size "$size" --first-pictures 3 --seconds 0.5 --still-frames 0 --jumps 0 \
     --playback-steps 0 --json >"$log.json" 2>"$log.log" ||
     die "bench render failed: $(tail -3 "$log.log")"
-  kill "$render_pid" "$data_pid"
-  wait "$render_pid" "$data_pid" 2>/dev/null || true
+  bench_stop_services
 }
 
 run_paraview() {

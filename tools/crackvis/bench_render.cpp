@@ -55,6 +55,7 @@ struct RenderBenchOptions {
   double eventRate = 60.0;     // events per second, a mouse drag's rate
   int stillFrames = 10;        // isolated camera moves answered at full resolution
   int firstPictures = 3;       // sessions opened and closed for the time to the first picture
+  double firstPictureGap = 0;  // seconds from one such session's close to the next open
   int jumps = 20;              // SetStep to random other steps, each until its full frame
   int playbackSteps = 50;      // steps played (ending at the last step); 0: none
   double playbackRate = 10.0;  // steps per second while playing
@@ -603,6 +604,9 @@ Result<Report> run(const RenderBenchOptions& options) {
   const LoadAverage loadBefore = loadAverage();
   std::vector<FirstPicture> firstPictures;
   for (int k = 0; k < options.firstPictures; ++k) {
+    if (k > 0 && options.firstPictureGap > 0) {
+      std::this_thread::sleep_for(std::chrono::duration<double>(options.firstPictureGap));
+    }
     auto picture = timeFirstPicture(*stub, options, d, channel);
     if (!picture) {
       return picture.status();
@@ -1366,6 +1370,13 @@ Command addBenchRenderCommand(CLI::App& bench) {
                    "services started fresh) and the median of the others (warm)")
       ->capture_default_str()
       ->check(CLI::Range(0, 100));
+  command
+      ->add_option("--first-picture-gap", options->firstPictureGap,
+                   "seconds between a first-picture session's close and the next open (0: at "
+                   "once, the browser's pattern; over a second: the render server's heap "
+                   "trimmed meanwhile)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 60.0));
   command
       ->add_option("--jumps", options->jumps,
                    "step changes to random other steps after the still moves, forwards and "

@@ -61,8 +61,11 @@ class RenderServiceImpl final : public v1::RenderService::Service {
                                              : nullptr),
         m_heapReserve(heapReserveFor(config)),
         m_trimmer(std::make_shared<HeapTrimmer>(
-            HeapTrimmer::Timing{}, nullptr,
-            // What stays resident for the next session.
+            HeapTrimmer::Timing{},
+            // What sessions freed beyond the reserve goes back to the system.
+            [reserve = m_heapReserve] { trimHeapKeepingReserve(reserve); },
+            // The reserve's pages not yet resident written: new ones where
+            // the trim grew the heap to keep it (sessions still open).
             [reserve = m_heapReserve] { touchHeapReserve(reserve); })) {
     m_heapWarmUp = std::jthread([reserve = m_heapReserve] { touchHeapReserve(reserve); });
     const pipeline::ViewDescription view;

@@ -10,8 +10,8 @@
 // trims its heap after each session (HeapTrimmer) pays this again for each
 // session after a quiet spell.
 //
-// The reserve: `bytes` of the heap written once at start-up and after every
-// trim, then freed back to malloc, which hands the same, already resident,
+// The reserve: `bytes` of the heap written once at start-up, kept back from
+// every trim, then freed back to malloc, which hands the same, already resident,
 // pages to the next session's arrays. With crackvis-render's 160 MiB the
 // cold first picture of cuboid A fell from 265 to 143-183 ms (medians of
 // alternating runs). The cost is resident memory while idle: crackvis-render
@@ -34,13 +34,23 @@ namespace crackvis {
 // glibc.malloc.hugetlb=2, say) or `bytes` is 1 GiB or more.
 bool setHeapReserveThresholds(std::size_t bytes);
 
-// Writes `bytes` of fresh heap (blocks of 1 MiB, under the mmap threshold)
-// and frees it, leaving it resident in malloc's free space. Call after
-// setHeapReserveThresholds, and after each malloc_trim. The blocks come
-// from the arena of the calling thread: the main heap where a service runs
-// with one arena (glibc.malloc.arena_max=1, set with huge pages:
-// huge_pages.hpp), which every thread then allocates from.
+// Writes each page of `bytes` of heap (blocks of 1 MiB, under the mmap
+// threshold) and frees it, leaving it resident in malloc's free space: pages
+// not yet resident are faulted in, the others cost next to nothing. Call
+// after setHeapReserveThresholds, and after each trim. The blocks come from
+// the arena of the calling thread: the main heap where a service runs with
+// one arena (glibc.malloc.arena_max=1, set with huge pages: huge_pages.hpp),
+// which every thread then allocates from.
 void touchHeapReserve(std::size_t bytes);
+
+// malloc_trim(0) but for `bytes` of free heap kept back (taken from malloc
+// while it trims, then freed): what sessions freed beyond the reserve goes
+// back to the system, the reserve's pages stay resident. A plain
+// malloc_trim(0) gave the reserve back too, and writing it again after each
+// trim took 57-306 ms of CPU against 10-22 ms now (docs/benchmarks.md, "The
+// trim keeps the reserve"). Where less than `bytes` is free (sessions still
+// open), the heap grows to keep it.
+void trimHeapKeepingReserve(std::size_t bytes);
 
 // Whether a new thread allocates from the main heap (the one the program's
 // break grows): true where malloc has one arena. Where threads have heaps of

@@ -34,8 +34,9 @@ class HeapTrimmer {
     std::chrono::milliseconds longest{5000};
   };
   // `trim` defaults to malloc_trim(0). `refill`, if given, runs after each
-  // trim but one at destruction: the heap reserve written again
-  // (common/heap_reserve.hpp), which a server shutting down has no use for.
+  // trim but one at destruction: the heap reserve's pages not resident
+  // written (common/heap_reserve.hpp), which a server shutting down has no
+  // use for.
   explicit HeapTrimmer(Timing timing, std::function<void()> trim = {},
                        std::function<void()> refill = {});
   HeapTrimmer() : HeapTrimmer(Timing{}) {}
