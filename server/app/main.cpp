@@ -303,9 +303,9 @@ int main(int argc, char** argv) {
                  "first picture does not wait for making one (0: every session makes its own)")
       ->capture_default_str();
   app.add_option("--heap-reserve-mb", config.heapReserveMb,
-                 "MiB of heap kept resident while idle (written at start and after each trim of "
-                 "the heap) for the next session's arrays, so that a first picture does not wait "
-                 "for the kernel to zero fresh pages (0: none)")
+                 "MiB of heap kept resident while idle (written at start, kept back from each "
+                 "trim of the heap) for the next session's arrays, so that a first picture does "
+                 "not wait for the kernel to zero fresh pages (0: none)")
       ->capture_default_str();
   app.add_option("--refine-after-ms", config.limits.refineAfterMs,
                  "full-resolution frame this long after the last event")

@@ -1,7 +1,7 @@
 // The render server's deferred heap trim (HeapTrimmer): sessions that end
 // close together are trimmed for once, after the server has been quiet; a
 // stream of ends cannot put it off past `longest`; a trim still due runs
-// when the server stops; the heap reserve is written again after each trim,
+// when the server stops; the heap reserve is touched again after each trim,
 // but not after the one at the stop.
 #include <atomic>
 #include <chrono>
@@ -88,7 +88,7 @@ TEST_CASE("a trim still due runs when the trimmer stops", "[service][trim]") {
   CHECK(trimmed == 1);  // none asked for: none run
 }
 
-TEST_CASE("the reserve is written again after each trim, not after the one at the stop",
+TEST_CASE("the reserve is touched again after each trim, not after the one at the stop",
           "[service][trim]") {
   std::atomic<int> trimmed{0};
   std::atomic<int> refilled{0};

@@ -49,8 +49,8 @@ struct RenderServerConfig {
   // size, one stocked at start (RendererShelf; 0: every session makes its own).
   int keptRenderers = 1;
   // MiB of heap kept touched while idle (common/heap_reserve.hpp), written
-  // at start and after each trim of the heap, so that a first picture finds
-  // resident pages (0: none).
+  // at start and kept back from each trim of the heap, so that a first
+  // picture finds resident pages (0: none).
   int heapReserveMb = 160;
   SessionLimits limits;
   std::string accessLog = "-";  // "-": stderr; "": none
