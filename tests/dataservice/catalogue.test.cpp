@@ -74,6 +74,25 @@ TEST_CASE("The catalogue describes a 2D file and refuses what it must", "[datase
   CHECK((*fetch)->size() == std::filesystem::file_size(sampleRoot().file("run.h5")));
 }
 
+TEST_CASE("A worker's rehearsal describes and reads a crackvis-dem file in memory, none on disk",
+          "[dataservice]") {
+  const auto folder = std::filesystem::current_path();
+  auto description = rehearseDescribeAndRead();
+  INFO(description.status().message());
+  REQUIRE(description.isOk());
+  // Found as a crackvis-dem file with its steps: the walk and the summary ran.
+  CHECK(description->format == "crackvis-dem");
+  REQUIRE(description->steps.size() == 2);
+  CHECK(description->steps[1].time == Approx(0.1));
+  const DatasetInfo* states = description->findDataset("/steps/000001/bond_state");
+  REQUIRE(states != nullptr);
+  CHECK(states->chunkShape == std::vector<std::uint64_t>{256});  // the filters ran too
+  CHECK(description->findDataset("/bonds/pairs")->shape == std::vector<std::uint64_t>{1024, 2});
+  CHECK_FALSE(std::filesystem::exists(folder / "crackvis-worker-rehearsal.h5"));
+  // A second one in the same process: nothing of the first is left open.
+  CHECK(rehearseDescribeAndRead().isOk());
+}
+
 // A (3, 5, 70000) float64 ramp (value = flat index) in a file of its own.
 void writeRamp3d(const std::string& path) {
   std::lock_guard lock(hdf5Mutex());

@@ -56,15 +56,16 @@ bench_wait_render() {
 # bench_start_services DATA LOG [RENDER_ARGS...]: fresh crackvis-data serving
 # DATA and crackvis-render on free loopback ports, logging to LOG-data.log and
 # LOG-render.log, with RENDER_ARGS added to crackvis-render's; returns once
-# crackvis-render answers. Sets bench_render_port, bench_data_pid and
-# bench_render_pid.
+# crackvis-render answers. crackvis-data is $bench_data_program when set (an
+# older build's, for an A/B; its HDF5 workers are the program beside it).
+# Sets bench_render_port, bench_data_pid and bench_render_pid.
 bench_start_services() {
   local data=$1 log=$2
   shift 2
   local data_port
   data_port=$(bench_free_port)
   bench_render_port=$(bench_free_port)
-  "$build/dataservice/crackvis-data" --root "$data" --listen "127.0.0.1:$data_port" \
+  "${bench_data_program:-$build/dataservice/crackvis-data}" --root "$data" --listen "127.0.0.1:$data_port" \
     --access-log '' >"$log-data.log" 2>&1 &
   bench_data_pid=$!
   "$build/server/app/crackvis-render" --listen "127.0.0.1:$bench_render_port" \

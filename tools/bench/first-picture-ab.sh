@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The time to the first picture with two settings of crackvis-render, A and B
-# (extra arguments for each), alternating over R rounds on fresh services
+# (extra arguments for each; optionally a crackvis-data program for each, an
+# older build's against this one's), alternating over R rounds on fresh services
 # (the order reversed every other round). Each run: fresh crackvis-data and
 # crackvis-render on loopback, then `crackvis bench render --first-pictures
 # 3`: the first open is cold (nothing described, cached or touched in the
@@ -20,12 +21,15 @@ readonly build
 usage() {
   cat <<EOF
 usage: tools/bench/first-picture-ab.sh --data DIR --file NAME --a "ARGS" --b "ARGS"
+                                       [--a-data PROGRAM] [--b-data PROGRAM]
                                        [--rounds R] [--size WxH] [--step S] [--gap SECONDS]
                                        [--out DIR]
 
 Times the first picture of DIR/NAME (default: the last step, 1280x720) with crackvis-render
 started with the extra arguments of --a and of --b in turn (e.g. --a "--heap-reserve-mb 0"
---b ""), fresh services each run, R rounds (default 4). --gap pauses between one session's
+--b ""), fresh services each run, R rounds (default 4). --a-data and --b-data name the
+crackvis-data each arm runs (default this build's; its HDF5 workers are the crackvis-hdf5-worker
+beside it), e.g. a copy of an older build's to compare the two. --gap pauses between one session's
 close and the next open (default 0, the browser's pattern; 1.1 to 2: the next open meets the
 heap trim and what follows it, see crackvis-render's HeapTrimmer). --out keeps each run's JSON
 and logs.
@@ -46,6 +50,8 @@ gap=0
 out=
 args_a=
 args_b=
+data_a=
+data_b=
 given_a=
 given_b=
 while (($#)); do
@@ -55,6 +61,8 @@ while (($#)); do
     --file) file=${2:?--file needs a value}; shift 2 ;;
     --a) args_a=${2?--a needs a value}; given_a=1; shift 2 ;;
     --b) args_b=${2?--b needs a value}; given_b=1; shift 2 ;;
+    --a-data) data_a=${2:?--a-data needs a value}; shift 2 ;;
+    --b-data) data_b=${2:?--b-data needs a value}; shift 2 ;;
     --rounds) rounds=${2:?--rounds needs a value}; shift 2 ;;
     --size) size=${2:?--size needs a value}; shift 2 ;;
     --step) step=${2:?--step needs a value}; shift 2 ;;
@@ -68,6 +76,9 @@ done
 [[ -n $given_a && -n $given_b ]] || die "--a and --b are both required (either may be \"\")"
 [[ $rounds =~ ^[1-9][0-9]*$ ]] || die "--rounds $rounds: expected a positive integer"
 [[ $gap =~ ^[0-9]+(\.[0-9]+)?$ ]] || die "--gap $gap: expected seconds, e.g. 1.2"
+for program in "$data_a" "$data_b"; do
+  [[ -z $program || -x $program ]] || die "$program is not an executable crackvis-data"
+done
 for binary in tools/crackvis dataservice/crackvis-data server/app/crackvis-render; do
   [[ -x $build/$binary ]] || die "$build/$binary is missing: build the project first"
 done
@@ -85,6 +96,7 @@ resident_kb() {
 # run TAG ROUND ARGS: one run on fresh services, its figures in $out/TAG-ROUND.*
 run() {
   local extra=$3 log=$out/$1-$2
+  bench_data_program=$4
   # shellcheck disable=SC2086 # the extra arguments are words
   bench_start_services "$data" "$log" $extra
   sleep 2
@@ -103,10 +115,10 @@ for r in $(seq "$rounds"); do
   order=(a b)
   ((r % 2 == 0)) && order=(b a)
   for tag in "${order[@]}"; do
-    extra=$args_a
-    [[ $tag == b ]] && extra=$args_b
-    echo "round $r of $rounds: $tag ($extra) (load $(cut -d' ' -f1-3 /proc/loadavg))" >&2
-    run "$tag" "$r" "$extra"
+    extra=$args_a program=$data_a
+    [[ $tag == b ]] && extra=$args_b program=$data_b
+    echo "round $r of $rounds: $tag ($extra${program:+, $program}) (load $(cut -d' ' -f1-3 /proc/loadavg))" >&2
+    run "$tag" "$r" "$extra" "$program"
   done
 done
 

@@ -285,38 +285,47 @@ void fillDemSummary(FileDescription& description, hid_t file) {
 
 }  // namespace
 
-Result<FileDescription> Catalogue::describe(const ResolvedPath& file,
-                                            const DescribeOptions& options) const {
+Result<FileDescription> describeOpenFile(hid_t file, const std::string& name,
+                                         const DescribeOptions& options) {
   FileDescription description;
-  description.file = file.requested;
-  std::error_code error;
-  description.sizeBytes = fs::file_size(file.absolute, error);
-  std::lock_guard lock(hdf5Mutex());
-  h5::quietHdf5();
-  auto handle = m_openFiles->open(file);
-  if (!handle) {
-    return handle.status();
-  }
-  auto rootAttributes = readAttributes(handle->get(), "/");
+  description.file = name;
+  auto rootAttributes = readAttributes(file, "/");
   if (!rootAttributes) {
     return Status(rootAttributes.status().code(),
-                  fmt::format("{}: {}", file.requested, rootAttributes.status().message()));
+                  fmt::format("{}: {}", name, rootAttributes.status().message()));
   }
   description.groups.push_back({"/", std::move(*rootAttributes)});
   TreeWalk walk{
       &description, Status::ok(), &options,
       std::chrono::steady_clock::now() +
           std::chrono::duration_cast<std::chrono::steady_clock::duration>(options.limits.maxTime)};
-  const herr_t visited = H5Lvisit(handle->get(), H5_INDEX_NAME, H5_ITER_INC, visitLink, &walk);
+  const herr_t visited = H5Lvisit(file, H5_INDEX_NAME, H5_ITER_INC, visitLink, &walk);
   if (!walk.status) {
-    return Status(walk.status.code(), fmt::format("{}: {}", file.requested, walk.status.message()));
+    return Status(walk.status.code(), fmt::format("{}: {}", name, walk.status.message()));
   }
   if (visited < 0) {
     return failedPrecondition(
-        fmt::format("{}: cannot walk the file's tree ({})", file.requested, h5::lastHdf5Error()));
+        fmt::format("{}: cannot walk the file's tree ({})", name, h5::lastHdf5Error()));
   }
   description.buildIndex();
-  fillDemSummary(description, handle->get());
+  fillDemSummary(description, file);
+  return description;
+}
+
+Result<FileDescription> Catalogue::describe(const ResolvedPath& file,
+                                            const DescribeOptions& options) const {
+  std::error_code error;
+  const std::uintmax_t sizeBytes = fs::file_size(file.absolute, error);
+  std::lock_guard lock(hdf5Mutex());
+  h5::quietHdf5();
+  auto handle = m_openFiles->open(file);
+  if (!handle) {
+    return handle.status();
+  }
+  auto description = describeOpenFile(handle->get(), file.requested, options);
+  if (description) {
+    description->sizeBytes = sizeBytes;
+  }
   return description;
 }
 

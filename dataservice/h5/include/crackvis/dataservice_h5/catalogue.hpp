@@ -26,6 +26,14 @@
 
 namespace crackvis::dataservice {
 
+// Describes and reads a small crackvis-dem file held in memory (HDF5's core
+// driver; nothing on disk): a fresh HDF5 worker makes these calls before it
+// says it is ready, so that libhdf5's first use in the process (its
+// packages' start, free lists, the filters, the heap's first pages) is not
+// paid by the first caller's Describe, which took about twice a later one's
+// time. Returns the description (for the worker to encode once, too).
+Result<FileDescription> rehearseDescribeAndRead();
+
 // The lock around every HDF5 call in this process that may run beside the
 // service (the catalogue's, and a test's or tool's direct reads).
 std::mutex& hdf5Mutex();
