@@ -76,9 +76,19 @@ done
 [[ -n $given_a && -n $given_b ]] || die "--a and --b are both required (either may be \"\")"
 [[ $rounds =~ ^[1-9][0-9]*$ ]] || die "--rounds $rounds: expected a positive integer"
 [[ $gap =~ ^[0-9]+(\.[0-9]+)?$ ]] || die "--gap $gap: expected seconds, e.g. 1.2"
-for program in "$data_a" "$data_b"; do
-  [[ -z $program || -x $program ]] || die "$program is not an executable crackvis-data"
-done
+# An arm's crackvis-data: an absolute path (the runs start from the source
+# tree), with its own HDF5 worker beside it (else crackvis-data would fall
+# back to this build's worker, and the arm would mix two builds).
+arm_program() {
+  local program=$1
+  [[ -z $program ]] && return 0
+  [[ -x $program ]] || die "$program is not an executable crackvis-data"
+  [[ -x $(dirname "$program")/crackvis-hdf5-worker ]] ||
+    die "no crackvis-hdf5-worker beside $program: copy both programs"
+  realpath -e -- "$program"
+}
+data_a=$(arm_program "$data_a")
+data_b=$(arm_program "$data_b")
 for binary in tools/crackvis dataservice/crackvis-data server/app/crackvis-render; do
   [[ -x $build/$binary ]] || die "$build/$binary is missing: build the project first"
 done
@@ -122,10 +132,16 @@ for r in $(seq "$rounds"); do
   done
 done
 
-python3 - "$out" "$rounds" "$file" "$args_a" "$args_b" "$gap" <<'EOF'
+python3 - "$out" "$rounds" "$file" "$args_a" "$args_b" "$gap" "$data_a" "$data_b" <<'EOF'
 import json, statistics, sys
 out, rounds, name, args = sys.argv[1], int(sys.argv[2]), sys.argv[3], {"a": sys.argv[4], "b": sys.argv[5]}
 gap = float(sys.argv[6])
+programs = {"a": sys.argv[7], "b": sys.argv[8]}
+def label(tag):
+    words = [args[tag] or "defaults"]
+    if programs[tag]:
+        words.append(programs[tag])
+    return ", ".join(words)
 med = statistics.median
 rows = {"a": [], "b": []}
 for tag in rows:
@@ -149,7 +165,7 @@ for tag in rows:
               f" {row['warm']['total_ms']:>6.0f} {row['idle']:>8.0f} {row['after']:>9.0f}  {row['load']:.2f}")
 for tag in rows:
     rs = rows[tag]
-    print(f"{tag} ({args[tag] or 'defaults'}): median cold {med(r['cold']['total_ms'] for r in rs):.0f} ms "
+    print(f"{tag} ({label(tag)}): median cold {med(r['cold']['total_ms'] for r in rs):.0f} ms "
           f"(extract {med(r['cold']['server']['extract_ms'] for r in rs):.0f}, "
           f"render {med(r['cold']['server']['render_ms'] for r in rs):.0f}), "
           f"warm {med(r['warm']['total_ms'] for r in rs):.0f} ms, "

@@ -23,15 +23,18 @@ constexpr std::uint64_t kParticles = 512;
 constexpr std::uint64_t kBonds = 1024;
 constexpr int kSteps = 2;
 
-// A file in HDF5's core driver that is never written to disk: nothing in
-// the data root is touched, and the worker needs no writable folder.
+// A file in HDF5's core driver that is never written to disk, so the worker
+// needs no writable folder. Its name is one no open() can find: libhdf5
+// first tries to open an existing file of the name (the core driver would
+// read it in whole), and a worker's working folder may be the data root.
+constexpr const char* kRehearsalName = "/dev/null/crackvis-worker-rehearsal.h5";
+
 h5::Handle memoryFile() {
   h5::Handle access = h5::propertyListHandle(H5Pcreate(H5P_FILE_ACCESS));
   if (!access.valid() || H5Pset_fapl_core(access.get(), 1 << 20, /*backing_store=*/0) < 0) {
     return h5::fileHandle(-1);
   }
-  return h5::fileHandle(
-      H5Fcreate("crackvis-worker-rehearsal.h5", H5F_ACC_TRUNC, H5P_DEFAULT, access.get()));
+  return h5::fileHandle(H5Fcreate(kRehearsalName, H5F_ACC_TRUNC, H5P_DEFAULT, access.get()));
 }
 
 Status writeGroupWithDatasets(hid_t parent, const std::string& name,

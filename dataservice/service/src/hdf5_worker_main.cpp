@@ -145,6 +145,9 @@ void rehearse(void* shared) {
     crackvis::v1::DescribeResponse response;
     toProto(*description, response);
     [[maybe_unused]] const std::string encoded = response.SerializeAsString();
+  } else {
+    std::fprintf(stderr, "crackvis-hdf5-worker: the rehearsal at start failed: %s\n",
+                 description.status().message().c_str());
   }
   std::memset(shared, 0, kMaxChunkBytes);
 }
