@@ -1,7 +1,7 @@
 // A Describe and a Read of a small crackvis-dem file held in memory, for a
 // fresh HDF5 worker to make before its first caller's file (catalogue.hpp).
-#include <array>
 #include <cstdint>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -95,30 +95,24 @@ Status writeRehearsalFile(hid_t file) {
   return Status::ok();
 }
 
-// A hyperslab of a step's positions and the whole of a compressed dataset:
-// the two kinds of read a view's Read makes.
+// Rows of a step's positions (a hyperslab, through the readers' own
+// h5::readRowsAt) and the whole of a compressed dataset: the two kinds of
+// read a view's Read makes.
 Status readSlabs(hid_t file) {
   const std::string last = dem::stepGroupPath(kSteps - 1);
   h5::Handle positions =
       h5::datasetHandle(H5Dopen2(file, (last + "/positions").c_str(), H5P_DEFAULT));
-  h5::Handle space = h5::dataspaceHandle(positions.valid() ? H5Dget_space(positions.get()) : -1);
-  const std::array<hsize_t, 2> start{kParticles / 4, 0};
-  const std::array<hsize_t, 2> count{kParticles / 2, 3};
-  h5::Handle memory = h5::dataspaceHandle(H5Screate_simple(2, count.data(), nullptr));
-  std::vector<double> slab(count[0] * count[1]);
-  if (!space.valid() || !memory.valid() ||
-      H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(),
-                          nullptr) < 0 ||
-      H5Dread(positions.get(), H5T_NATIVE_DOUBLE, memory.get(), space.get(), H5P_DEFAULT,
-              slab.data()) < 0) {
-    return failedPrecondition(fmt::format("cannot read a slab ({})", h5::lastHdf5Error()));
-  }
   h5::Handle states =
       h5::datasetHandle(H5Dopen2(file, (last + "/bond_state").c_str(), H5P_DEFAULT));
-  std::vector<std::uint8_t> values(kBonds);
-  if (!states.valid()) {
-    return failedPrecondition(fmt::format("cannot open bond_state ({})", h5::lastHdf5Error()));
+  if (!positions.valid() || !states.valid()) {
+    return failedPrecondition(fmt::format("cannot open {} ({})", last, h5::lastHdf5Error()));
   }
+  std::vector<std::int32_t> rows(kParticles / 2);
+  std::iota(rows.begin(), rows.end(), static_cast<std::int32_t>(kParticles / 4));
+  std::vector<double> slab(rows.size() * 3);
+  CRACKVIS_RETURN_IF_ERROR(
+      h5::readRowsAt(positions.get(), h5::ElementType::kFloat64, -1, rows, slab.data()));
+  std::vector<std::uint8_t> values(kBonds);
   return h5::readDataset(states.get(), h5::ElementType::kUInt8, values.data());
 }
 
