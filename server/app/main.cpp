@@ -307,6 +307,11 @@ int main(int argc, char** argv) {
                  "trim of the heap) for the next session's arrays, so that a first picture does "
                  "not wait for the kernel to zero fresh pages (0: none)")
       ->capture_default_str();
+  app.add_option("--heap-trim-after-ms", config.heapTrimAfterMs,
+                 "what ended sessions freed beyond the heap reserve goes back to the system "
+                 "once no session has ended for this long (a trim before the next open makes "
+                 "its first picture fault those pages in again)")
+      ->capture_default_str();
   app.add_option("--refine-after-ms", config.limits.refineAfterMs,
                  "full-resolution frame this long after the last event")
       ->capture_default_str();

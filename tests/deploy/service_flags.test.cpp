@@ -86,6 +86,13 @@ TEST_CASE("crackvis-data refuses out-of-range limits from flags and file at star
       {"huge call time", with({"--max-call-seconds", "1e300"}), "",
        "--max-call-seconds must be between 0.001 and 604800, got 1e+300 "
        "(limits.max_call_seconds in the configuration file)"},
+      {"heap trimmed at once", with({"--heap-trim-after-ms", "0"}), "",
+       "--heap-trim-after-ms must be between 100 and 600000, got 0 (limits.heap_trim_after_ms in "
+       "the configuration file)"},
+      {"heap trim put off for hours in the file", base,
+       R"({"limits": {"heap_trim_after_ms": 3600000}})",
+       "--heap-trim-after-ms must be between 100 and 600000, got 3600000 "
+       "(limits.heap_trim_after_ms in the configuration file)"},
       {"listen address",
        {"--insecure", "--listen", "nowhere", "--root", dir.path().string()},
        "",

@@ -1575,6 +1575,11 @@ TEST_CASE("a session at the largest view stays within its memory bound, and clos
   // at the largest view (limits.max_width x max_height) costs this process,
   // the render server, is bounded here; docs/security.md states the bound.
   auto services = startServices();
+  // The heap trimmed a second after the last close, not after the default
+  // ten: what closing frees is read back within the wait below.
+  service::RenderServerConfig config = renderConfig(*services.data);
+  config.heapTrimAfterMs = 1000;
+  services.render = startRenderServer(config);
   auto stub = connect(*services.render);
   auto snapshotOf = [&](const std::string& id, int width, int height) {
     grpc::ClientContext context;
@@ -1613,8 +1618,8 @@ TEST_CASE("a session at the largest view stays within its memory bound, and clos
     CHECK(closeOf(id));
   }
   REQUIRE(waitUntil([&] { return services.render->sessionCount() == 0; }, 10.0));
-  // The server trims its heap once no session has ended for a second
-  // (HeapTrimmer): what is left is read until then, one reading at a time.
+  // The server trims its heap once no session has ended for a second (as
+  // configured above; HeapTrimmer): what is left is read until then.
   double leftMiB = 0.0;
   waitUntil(
       [&] {

@@ -31,11 +31,12 @@ Status readDataService(const json& object, const std::string& where,
 }
 
 Status readLimits(const json& object, const std::string& where, RenderServerConfig& config) {
-  CRACKVIS_RETURN_IF_ERROR(checkKeys(
-      object, where,
-      {"max_sessions", "max_sessions_per_user", "session_grace_seconds", "attach_seconds",
-       "refine_after_ms", "interactive_frame_ms", "max_reduction", "max_width", "max_height",
-       "max_particles", "max_bonds", "renders_at_once", "kept_renderers", "heap_reserve_mb"}));
+  CRACKVIS_RETURN_IF_ERROR(
+      checkKeys(object, where,
+                {"max_sessions", "max_sessions_per_user", "session_grace_seconds", "attach_seconds",
+                 "refine_after_ms", "interactive_frame_ms", "max_reduction", "max_width",
+                 "max_height", "max_particles", "max_bonds", "renders_at_once", "kept_renderers",
+                 "heap_reserve_mb", "heap_trim_after_ms"}));
   CRACKVIS_RETURN_IF_ERROR(read(object, "renders_at_once", where, config.limits.rendersAtOnce));
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "max_particles", where, config.limits.fileSizes.maxParticles));
@@ -47,6 +48,7 @@ Status readLimits(const json& object, const std::string& where, RenderServerConf
   CRACKVIS_RETURN_IF_ERROR(read(object, "attach_seconds", where, config.attachSeconds));
   CRACKVIS_RETURN_IF_ERROR(read(object, "kept_renderers", where, config.keptRenderers));
   CRACKVIS_RETURN_IF_ERROR(read(object, "heap_reserve_mb", where, config.heapReserveMb));
+  CRACKVIS_RETURN_IF_ERROR(read(object, "heap_trim_after_ms", where, config.heapTrimAfterMs));
   CRACKVIS_RETURN_IF_ERROR(read(object, "refine_after_ms", where, config.limits.refineAfterMs));
   CRACKVIS_RETURN_IF_ERROR(
       read(object, "interactive_frame_ms", where, config.limits.interactiveFrameMs));
@@ -144,6 +146,8 @@ Status validateRenderServerConfig(const RenderServerConfig& config) {
       checkSetting({"--kept-renderers", "limits.kept_renderers"}, config.keptRenderers, 0, 16));
   CRACKVIS_RETURN_IF_ERROR(
       checkSetting({"--heap-reserve-mb", "limits.heap_reserve_mb"}, config.heapReserveMb, 0, 1023));
+  CRACKVIS_RETURN_IF_ERROR(checkSetting({"--heap-trim-after-ms", "limits.heap_trim_after_ms"},
+                                        config.heapTrimAfterMs, 100, 600000));
   const SessionLimits& limits = config.limits;
   CRACKVIS_RETURN_IF_ERROR(checkSetting({"--refine-after-ms", "limits.refine_after_ms"},
                                         limits.refineAfterMs, 0.0, 5000.0));

@@ -61,7 +61,7 @@ class RenderServiceImpl final : public v1::RenderService::Service {
                                              : nullptr),
         m_heapReserve(heapReserveFor(config)),
         m_trimmer(std::make_shared<HeapTrimmer>(
-            HeapTrimmer::Timing{},
+            trimTiming(config),
             // What sessions freed beyond the reserve goes back to the system.
             [reserve = m_heapReserve] { trimHeapKeepingReserve(reserve); },
             // The reserve's pages not yet resident written: new ones where
@@ -160,6 +160,13 @@ class RenderServiceImpl final : public v1::RenderService::Service {
   std::shared_ptr<HeapTrimmer> m_trimmer;  // the heap, trimmed once sessions stop ending
   std::jthread m_heapWarmUp;               // the reserve's first writing
   std::jthread m_encoderWarmUp;            // libx264's start, joined before the rest goes
+
+  // Quiet for `heapTrimAfterMs`, and at most five times that (5 s at least)
+  // after the first session not yet trimmed for, where sessions keep ending.
+  static HeapTrimmer::Timing trimTiming(const RenderServerConfig& config) {
+    const std::chrono::milliseconds quiet(config.heapTrimAfterMs);
+    return {quiet, std::max(std::chrono::milliseconds(5000), 5 * quiet)};
+  }
 
   // The reserve asked for, where a new thread allocates from the main heap
   // (one malloc arena: the services' default where THP is "madvise",
