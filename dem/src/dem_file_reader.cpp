@@ -77,8 +77,7 @@ Result<DemFileReader> DemFileReader::open(const std::string& path) {
   reader.m_info.path = path;
   reader.m_file = h5::openReadOnly(path);
   if (!reader.m_file.valid()) {
-    return failedPrecondition(fmt::format("{}: cannot open: file is truncated or corrupt ({})",
-                                          path, h5::lastHdf5Error()));
+    return failedPrecondition(fmt::format("{}: cannot open: {}", path, h5::openRefusal()));
   }
   CRACKVIS_RETURN_IF_ERROR(reader.readStructure());
   CRACKVIS_RETURN_IF_ERROR(reader.readSteps());

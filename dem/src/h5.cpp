@@ -1,6 +1,8 @@
 #include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <string_view>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -713,21 +715,64 @@ Status readLeading(hid_t dataset, ElementType type, std::uint64_t count, void* o
   return Status::ok();
 }
 
+namespace {
+
+// The plain open's refusal when another process has the file open for
+// write: the superblock's write flag, or the writer's flock (EAGAIN, whose
+// system message lastHdf5Error() keeps).
+bool heldByWriter(const std::string& refusal) {
+  return refusal.find("open for write") != std::string::npos ||
+         refusal.find("temporarily unavailable") != std::string::npos;
+}
+
+// How openReadOnly's reason begins where a writer holds the file.
+constexpr std::string_view kHeldByWriter = "another process is writing it";
+
+}  // namespace
+
 Handle openReadOnly(const std::string& path, hid_t access) {
   Handle file = fileHandle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, access));
   if (file.valid()) {
     return file;
   }
   const std::string refusal = lastHdf5Error();
-  file = fileHandle(H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, access));
-  if (!file.valid()) {
-    // The plain open's reason is the one to give (a truncated file...): put
-    // it back on the stack for the caller's lastHdf5Error().
-    lastHdf5Error();
-    H5Epush2(H5E_DEFAULT, __FILE__, __func__, __LINE__, H5E_ERR_CLS, H5E_FILE, H5E_CANTOPENFILE,
-             "%s", refusal.c_str());
+  // A live writer's file opens for SWMR reading. libhdf5 retries a metadata
+  // read whose checksum fails (a block the writer is rewriting) without
+  // pausing, so a writer descheduled mid-write on a loaded machine can
+  // outlast its retries: a few more tries, spaced, ride that out.
+  constexpr int kSwmrTries = 4;
+  std::string swmrRefusal;
+  for (int attempt = 0; attempt < kSwmrTries; ++attempt) {
+    if (attempt > 0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10 * attempt));
+    }
+    file = fileHandle(H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, access));
+    if (file.valid()) {
+      return file;
+    }
+    swmrRefusal = lastHdf5Error();
+    if (!heldByWriter(refusal)) {
+      break;  // no writer: the file itself is the problem, retries cannot help
+    }
   }
+  // The plain open's reason is the one to give (a truncated file...); where
+  // a writer holds the file, the SWMR open's too. Put back on the stack for
+  // openRefusal().
+  const std::string reason =
+      heldByWriter(refusal) ? fmt::format("{}, not as a live file (opened: {}; as a live file: {})",
+                                          kHeldByWriter, refusal, swmrRefusal)
+                            : refusal;
+  H5Epush2(H5E_DEFAULT, __FILE__, __func__, __LINE__, H5E_ERR_CLS, H5E_FILE, H5E_CANTOPENFILE, "%s",
+           reason.c_str());
   return file;
+}
+
+std::string openRefusal() {
+  const std::string reason = lastHdf5Error();
+  if (reason.starts_with(kHeldByWriter)) {
+    return reason;
+  }
+  return fmt::format("file is truncated or corrupt ({})", reason);
 }
 
 Status refreshDataset(hid_t dataset) {

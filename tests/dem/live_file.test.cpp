@@ -270,6 +270,57 @@ TEST_CASE("readers see each step a live writer commits, while it writes", "[dem]
   }
 }
 
+TEST_CASE("a file a writer holds without SWMR is refused at once, with both opens' reasons",
+          "[dem][h5][live]") {
+  // A reader tries the plain open, then the SWMR open a live file needs,
+  // retried a few times while a writer holds the file (a live writer's
+  // metadata can be mid-write). A writer that never starts SWMR writing
+  // (here: a file of the fixed layout still being written) keeps both
+  // refusing: the error gives each reason, and the retries stay short.
+  TempDir dir;
+  const std::string path = dir.file("held.h5");
+  const SampleData sample = makeSample(3, 2);
+  int toWriter[2];
+  int fromWriter[2];
+  REQUIRE(pipe(toWriter) == 0);
+  REQUIRE(pipe(fromWriter) == 0);
+  const pid_t child = forkWriter([&] {
+    auto writer = DemFileWriter::create(path, sample.lattice, metadataFrom("crackvis tests"));
+    const char opened = 'o';
+    char go = 0;
+    return writer && writer->appendStep(sample.steps[0]) && write(fromWriter[1], &opened, 1) == 1 &&
+           read(toWriter[0], &go, 1) == 1 && writer->appendStep(sample.steps[1]) &&
+           writer->close().isOk();
+  });
+  REQUIRE(child > 0);
+  char opened = 0;
+  REQUIRE(read(fromWriter[0], &opened, 1) == 1);
+
+  const auto start = std::chrono::steady_clock::now();
+  auto held = DemFileReader::open(path);
+  const std::chrono::duration<double> took = std::chrono::steady_clock::now() - start;
+  REQUIRE_FALSE(held.isOk());
+  const std::string message = held.status().message();
+  INFO(message);
+  CHECK(message.find("held.h5") != std::string::npos);
+  CHECK(message.find("cannot open: another process is writing it, not as a live file") !=
+        std::string::npos);
+  CHECK(message.find("; as a live file: ") != std::string::npos);
+  CHECK(took.count() < 1.0);  // three retries, 60 ms of pauses in all
+
+  const char go = 'g';
+  REQUIRE(write(toWriter[1], &go, 1) == 1);
+  int status = 0;
+  REQUIRE(waitpid(child, &status, 0) == child);
+  CHECK((WIFEXITED(status) && WEXITSTATUS(status) == 0));
+  auto finished = DemFileReader::open(path);
+  REQUIRE(finished.isOk());
+  CHECK(finished->stepCount() == 2);
+  for (int fd : {toWriter[0], toWriter[1], fromWriter[0], fromWriter[1]}) {
+    close(fd);
+  }
+}
+
 TEST_CASE("a live writer killed at any moment leaves its complete steps readable",
           "[dem][h5][live]") {
   // Big enough that a step takes a while to write, so kills land inside

@@ -21,8 +21,8 @@ Result<h5::Handle> openHdf5(const ResolvedPath& file) {
   }
   h5::Handle handle = h5::openReadOnly(file.absolute.string());
   if (!handle.valid()) {
-    return failedPrecondition(fmt::format("{}: cannot open: file is truncated or corrupt ({})",
-                                          file.requested, h5::lastHdf5Error()));
+    return failedPrecondition(
+        fmt::format("{}: cannot open: {}", file.requested, h5::openRefusal()));
   }
   return handle;
 }

@@ -209,8 +209,12 @@ Status refreshDataset(hid_t dataset);
 // refuses that because a live writer is growing the file (or was killed,
 // which leaves the superblock marked as open for SWMR writing), again in
 // SWMR read mode. Files no writer holds open the plain way, as before live
-// files existed. An invalid handle when both fail, with the first refusal's
-// reason left for lastHdf5Error().
+// files existed. An invalid handle when both fail, with the reason left for
+// openRefusal().
 Handle openReadOnly(const std::string& path, hid_t access = H5P_DEFAULT);
+// Why openReadOnly failed, for "PATH: cannot open: <this>": the file is
+// truncated or corrupt, or another process is writing it without making it
+// a live file (SWMR), with libhdf5's reasons. Clears the error stack.
+std::string openRefusal();
 
 }  // namespace crackvis::dem::h5
