@@ -408,6 +408,20 @@ hid_t fileType(ElementType type) {
   return H5I_INVALID_HID;
 }
 
+}  // namespace
+
+hsize_t balancedChunkRows(std::uint64_t rows, std::uint64_t rowValues, std::uint64_t chunkValues) {
+  if (rows == 0) {
+    return 1;
+  }
+  const std::uint64_t most =
+      std::max<std::uint64_t>(1, chunkValues / std::max<std::uint64_t>(1, rowValues));
+  const std::uint64_t chunks = (rows + most - 1) / most;
+  return (rows + chunks - 1) / chunks;
+}
+
+namespace {
+
 // The dataset creation properties of `storage`: contiguous by default, or
 // chunked along the first axis with shuffle + deflate.
 Result<Handle> creationProperties(const std::vector<hsize_t>& dims, const Storage& storage) {
@@ -424,7 +438,7 @@ Result<Handle> creationProperties(const std::vector<hsize_t>& dims, const Storag
   for (size_t i = 1; i < dims.size(); ++i) {
     rowValues *= dims[i];
   }
-  chunk[0] = std::max<hsize_t>(1, std::min<hsize_t>(dims[0], storage.chunkValues / rowValues));
+  chunk[0] = balancedChunkRows(dims[0], rowValues, storage.chunkValues);
   if (H5Pset_chunk(properties.get(), static_cast<int>(chunk.size()), chunk.data()) < 0 ||
       H5Pset_shuffle(properties.get()) < 0 ||
       H5Pset_deflate(properties.get(), static_cast<unsigned>(storage.deflateLevel)) < 0) {
@@ -533,7 +547,7 @@ Result<Handle> createStepAxisDataset(hid_t location, const std::string& name, El
     // empty axis (a lattice without bonds) is left unlimited instead.
     maxDims.push_back(rowDims[i] == 0 ? H5S_UNLIMITED : rowDims[i]);
     const std::uint64_t along =
-        i == 0 ? std::min<std::uint64_t>(rowDims[i], storage.chunkValues / rowValues) : rowDims[i];
+        i == 0 ? balancedChunkRows(rowDims[i], rowValues, storage.chunkValues) : rowDims[i];
     chunk.push_back(std::max<hsize_t>(1, along));
   }
   Handle space =

@@ -17,6 +17,7 @@
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/dem/dem_file.hpp>
+#include <crackvis/dem/h5.hpp>
 
 using namespace crackvis;
 using namespace crackvis::dem;
@@ -164,6 +165,63 @@ TEST_CASE("a finished live file reads exactly like the same steps written at onc
   }
   CHECK(b->readStep(4).status().message() ==
         live + ": step 4 out of range (the file has steps 0..3)");
+}
+
+TEST_CASE("chunks along the step rows are balanced, so no edge chunk stands mostly empty",
+          "[dem][h5][live]") {
+  // At most 21,845 rows of 3 a chunk: cuboid A's 46,875 positions in three
+  // chunks of 15,625 rows (the most-per-chunk split, 21,845 + 21,845 +
+  // 3,185, stored its last chunk whole: 28 % of the dataset unused).
+  CHECK(h5::balancedChunkRows(46875, 3, 1u << 16) == 15625);
+  CHECK(h5::balancedChunkRows(21845, 3, 1u << 16) == 21845);  // one full chunk
+  CHECK(h5::balancedChunkRows(21846, 3, 1u << 16) == 10923);  // two halves
+  CHECK(h5::balancedChunkRows(10, 3, 1u << 16) == 10);
+  CHECK(h5::balancedChunkRows(0, 3, 1u << 16) == 1);
+  CHECK(h5::balancedChunkRows(5, 1u << 20, 1u << 16) == 1);  // a row beyond a chunk: one a chunk
+
+  // A live file whose positions' rows split as 40 %, 40 % and 20 % by the
+  // most per chunk: stored in three equal chunks, nothing beyond its rows.
+  TempDir dir;
+  const std::string path = dir.file("balanced.h5");
+  const SampleData sample = makeSample(3, 2);
+  const std::uint64_t n = sample.lattice.particleCount();
+  const std::uint64_t most = n * 2 / 5;
+  REQUIRE(most * 2 < n);
+  DemMetadata metadata = metadataFrom("crackvis tests");
+  metadata.stepLayout = StepLayout::kAppendable;
+  metadata.storage.chunkValues = 3 * most;
+  {
+    auto writer = DemFileWriter::create(path, sample.lattice, metadata);
+    REQUIRE(writer.isOk());
+    for (const StepState& step : sample.steps) {
+      REQUIRE(writer->appendStep(step).isOk());
+    }
+    REQUIRE(writer->close().isOk());
+  }
+  h5::Handle file = h5::fileHandle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT));
+  REQUIRE(file.valid());
+  h5::Handle positions = h5::datasetHandle(H5Dopen2(file.get(), "/steps/positions", H5P_DEFAULT));
+  REQUIRE(positions.valid());
+  h5::Handle properties = h5::propertyListHandle(H5Dget_create_plist(positions.get()));
+  std::array<hsize_t, 3> chunk{};
+  REQUIRE(H5Pget_chunk(properties.get(), 3, chunk.data()) == 3);
+  CHECK(chunk[0] == 1);
+  CHECK(chunk[1] == (n + 2) / 3);
+  CHECK(chunk[2] == 3);
+  const hsize_t logical = sample.steps.size() * n * 3 * sizeof(double);
+  const hsize_t stored = H5Dget_storage_size(positions.get());
+  INFO(stored << " bytes stored for " << logical);
+  CHECK(stored >= logical);
+  CHECK(stored < logical + sample.steps.size() * 3 * 3 * sizeof(double));  // < a row per chunk
+  properties = {};
+  positions = {};
+  file = {};
+  auto reader = DemFileReader::open(path);
+  REQUIRE(reader.isOk());
+  auto last = reader->readStep(1);
+  INFO((last ? std::string() : last.status().message()));
+  REQUIRE(last.isOk());
+  checkSameStep(*last, sample.steps[1]);
 }
 
 TEST_CASE("a live file refuses a step whose arrays differ from the first step's",
