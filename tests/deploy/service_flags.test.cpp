@@ -86,13 +86,6 @@ TEST_CASE("crackvis-data refuses out-of-range limits from flags and file at star
       {"huge call time", with({"--max-call-seconds", "1e300"}), "",
        "--max-call-seconds must be between 0.001 and 604800, got 1e+300 "
        "(limits.max_call_seconds in the configuration file)"},
-      {"heap trimmed at once", with({"--heap-trim-after-ms", "0"}), "",
-       "--heap-trim-after-ms must be between 100 and 600000, got 0 (limits.heap_trim_after_ms in "
-       "the configuration file)"},
-      {"heap trim put off for hours in the file", base,
-       R"({"limits": {"heap_trim_after_ms": 3600000}})",
-       "--heap-trim-after-ms must be between 100 and 600000, got 3600000 "
-       "(limits.heap_trim_after_ms in the configuration file)"},
       {"listen address",
        {"--insecure", "--listen", "nowhere", "--root", dir.path().string()},
        "",
@@ -188,6 +181,13 @@ TEST_CASE("crackvis-render refuses out-of-range limits from flags and file at st
       {"huge heap reserve in the file", base, R"({"limits": {"heap_reserve_mb": 100000}})",
        "--heap-reserve-mb must be between 0 and 1023, got 100000 (limits.heap_reserve_mb in the "
        "configuration file)"},
+      {"heap trimmed at once", with({"--heap-trim-after-ms", "0"}), "",
+       "--heap-trim-after-ms must be between 100 and 600000, got 0 (limits.heap_trim_after_ms in "
+       "the configuration file)"},
+      {"heap trim put off for hours in the file", base,
+       R"({"limits": {"heap_trim_after_ms": 3600000}})",
+       "--heap-trim-after-ms must be between 100 and 600000, got 3600000 "
+       "(limits.heap_trim_after_ms in the configuration file)"},
       {"listen address",
        {"--insecure", "--listen", "[::1]50052", "--data-server", "127.0.0.1:1", "--data-insecure"},
        "",
