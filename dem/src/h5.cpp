@@ -754,9 +754,11 @@ Handle openReadOnly(const std::string& path, hid_t access) {
   // read whose checksum fails (a block the writer is rewriting) without
   // pausing, so a writer descheduled mid-write on a loaded machine can
   // outlast its retries: a few more tries, spaced, ride that out.
-  constexpr int kSwmrTries = 4;
+  // Without a writer the file itself is the problem: one try.
+  const bool writer = heldByWriter(refusal);
+  const int tries = writer ? 4 : 1;
   std::string swmrRefusal;
-  for (int attempt = 0; attempt < kSwmrTries; ++attempt) {
+  for (int attempt = 0; attempt < tries; ++attempt) {
     if (attempt > 0) {
       std::this_thread::sleep_for(std::chrono::milliseconds(10 * attempt));
     }
@@ -765,17 +767,14 @@ Handle openReadOnly(const std::string& path, hid_t access) {
       return file;
     }
     swmrRefusal = lastHdf5Error();
-    if (!heldByWriter(refusal)) {
-      break;  // no writer: the file itself is the problem, retries cannot help
-    }
   }
   // The plain open's reason is the one to give (a truncated file...); where
   // a writer holds the file, the SWMR open's too. Put back on the stack for
   // openRefusal().
   const std::string reason =
-      heldByWriter(refusal) ? fmt::format("{}, not as a live file (opened: {}; as a live file: {})",
-                                          kHeldByWriter, refusal, swmrRefusal)
-                            : refusal;
+      writer ? fmt::format("{}, not as a live file (opened: {}; as a live file: {})", kHeldByWriter,
+                           refusal, swmrRefusal)
+             : refusal;
   H5Epush2(H5E_DEFAULT, __FILE__, __func__, __LINE__, H5E_ERR_CLS, H5E_FILE, H5E_CANTOPENFILE, "%s",
            reason.c_str());
   return file;
