@@ -69,6 +69,21 @@ dem::CellDecomposition decompositionOf(const dem::Lattice& lattice) {
                                                   : dem::CellDecomposition::kTriangulation;
 }
 
+Decomposition settledByFile(Decomposition chosen, dem::CellDecomposition recorded) {
+  if (chosen != Decomposition::kAuto) {
+    return chosen;
+  }
+  switch (recorded) {
+    case dem::CellDecomposition::kLattice:
+      return Decomposition::kLattice;
+    case dem::CellDecomposition::kTriangulation:
+      return Decomposition::kTriangulation;
+    case dem::CellDecomposition::kUnknown:
+      break;
+  }
+  return Decomposition::kAuto;
+}
+
 Status checkStepInput(const BondGraph& graph, const StepInput& step) {
   const std::size_t n = graph.particleCount();
   const std::size_t m = graph.bondCount();

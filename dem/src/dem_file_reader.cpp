@@ -805,11 +805,8 @@ Result<std::optional<SpatialIndexInfo>> DemFileReader::readSpatialIndexInfo() co
   info.longestBond = *longest;
   if (H5Aexists(group.get(), "decomposition") > 0) {
     auto name = h5::readStringAttribute(group.get(), "decomposition");
-    if (name && *name == decompositionName(CellDecomposition::kLattice)) {
-      info.decomposition = CellDecomposition::kLattice;
-    } else if (name && *name == decompositionName(CellDecomposition::kTriangulation)) {
-      info.decomposition = CellDecomposition::kTriangulation;
-    } else {
+    info.decomposition = name ? decompositionNamed(*name) : CellDecomposition::kUnknown;
+    if (info.decomposition == CellDecomposition::kUnknown) {
       return fail(failedPrecondition(fmt::format(
           "{}@decomposition is {}, expected 'lattice' or 'triangulation'", kSpatialIndexGroup,
           name ? "'" + echoed(*name) + "'" : std::string("not a string"))));

@@ -65,6 +65,16 @@ const char* decompositionName(CellDecomposition decomposition) {
   return "";
 }
 
+CellDecomposition decompositionNamed(std::string_view name) {
+  for (const CellDecomposition known :
+       {CellDecomposition::kLattice, CellDecomposition::kTriangulation}) {
+    if (name == decompositionName(known)) {
+      return known;
+    }
+  }
+  return CellDecomposition::kUnknown;
+}
+
 double longestBond(std::span<const Vec3> positions, std::span<const Bond> bonds) {
   double longest = 0.0;
   for (const Bond& bond : bonds) {

@@ -182,6 +182,23 @@ TEST_CASE("lattices keep their own cells", "[cracks][packing]") {
   CHECK(isLatticeGraph(fcc, 3));
 }
 
+TEST_CASE("auto takes the decomposition a file records; a chosen one and an unrecorded stay",
+          "[cracks][packing]") {
+  using dem::CellDecomposition;
+  CHECK(settledByFile(Decomposition::kAuto, CellDecomposition::kLattice) ==
+        Decomposition::kLattice);
+  CHECK(settledByFile(Decomposition::kAuto, CellDecomposition::kTriangulation) ==
+        Decomposition::kTriangulation);
+  CHECK(settledByFile(Decomposition::kAuto, CellDecomposition::kUnknown) == Decomposition::kAuto);
+  for (const Decomposition chosen : {Decomposition::kLattice, Decomposition::kTriangulation}) {
+    for (const CellDecomposition recorded :
+         {CellDecomposition::kLattice, CellDecomposition::kTriangulation,
+          CellDecomposition::kUnknown}) {
+      CHECK(settledByFile(chosen, recorded) == chosen);
+    }
+  }
+}
+
 TEST_CASE("a planted crack runs across the mid-plane, opens, and scatters isolated breaks",
           "[cracks][packing]") {
   const dem::RandomPacking packing = makePacking(3e-4, 3e-4);

@@ -84,6 +84,37 @@ TEST_CASE("The local and the remote reader word a layout problem alike",
   CHECK(read.message() == root.file("bad.h5") + ": " + problem);
 }
 
+TEST_CASE("The local and the remote step source give the cell decomposition the file records",
+          "[dataservice][integration]") {
+  TempDir root;
+  writeSampleFile(root.file("none.h5"), 3, 2);  // its writer decided none
+  writeSampleFile(root.file("lattice.h5"), 3, 2);
+  setStringAttribute(root.file("lattice.h5"), dem::kSpatialIndexGroup, "decomposition", "lattice");
+  writeSampleFile(root.file("triangulation.h5"), 3, 2);
+  setStringAttribute(root.file("triangulation.h5"), dem::kSpatialIndexGroup, "decomposition",
+                     "triangulation");
+  auto config = baseConfig();
+  config.dataRoot = root.path().string();
+  auto server = startServer(config);
+  auto client = connect(clientOptions(*server));
+
+  for (const auto& [file, expected] : std::vector<std::pair<std::string, dem::CellDecomposition>>{
+           {"none.h5", dem::CellDecomposition::kUnknown},
+           {"lattice.h5", dem::CellDecomposition::kLattice},
+           {"triangulation.h5", dem::CellDecomposition::kTriangulation}}) {
+    INFO(file);
+    auto remote = dataservice::RemoteDemFile::open(client, file);
+    REQUIRE(remote.isOk());
+    CHECK(remote->recordedDecomposition() == expected);
+    auto remoteSource = source::openRemoteSource(client, file);
+    REQUIRE(remoteSource.isOk());
+    CHECK((*remoteSource)->recordedDecomposition() == expected);
+    auto localSource = source::openLocalSource(root.file(file));
+    REQUIRE(localSource.isOk());
+    CHECK((*localSource)->recordedDecomposition() == expected);
+  }
+}
+
 TEST_CASE("a compressed crackvis-dem file reads through the service in pieces, as written",
           "[dataservice][integration][v1.1]") {
   // 60,000 particles: a step's positions are 1.4 MB, more than one 1 MiB piece.

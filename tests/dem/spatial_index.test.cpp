@@ -327,6 +327,17 @@ TEST_CASE("partial reads refuse rows out of range, out of order, and a corrupt i
   }
 }
 
+TEST_CASE("a decomposition's name in /index@decomposition reads back as itself, others unknown",
+          "[dem][index]") {
+  for (const CellDecomposition kind :
+       {CellDecomposition::kLattice, CellDecomposition::kTriangulation}) {
+    CHECK(decompositionNamed(decompositionName(kind)) == kind);
+  }
+  CHECK(decompositionNamed("") == CellDecomposition::kUnknown);
+  CHECK(decompositionNamed("voronoi") == CellDecomposition::kUnknown);
+  CHECK(decompositionNamed("Lattice") == CellDecomposition::kUnknown);
+}
+
 TEST_CASE("h5::readRowsAt reads far-apart rows, gapped rows and long runs in spans, exactly",
           "[dem][index]") {
   testing::TempDir dir;

@@ -1,9 +1,12 @@
 // The scene pipeline without GL: a description's file through a step source,
 // its cracks extracted as the cracks library extracts them, changes all or
 // nothing, and the extraction options compared as a whole.
+#include <filesystem>
+
 #include <catch2/catch.hpp>
 
 #include "support/forwarding_source.hpp"
+#include "support/h5_tamper.hpp"
 #include "support/sample_files.hpp"
 #include "support/temp_dir.hpp"
 #include <crackvis/cracks/crack_components.hpp>
@@ -98,6 +101,41 @@ TEST_CASE("a scene pipeline shows the description's step as the cracks library e
       CHECK((input.decomposition != nullptr) == (method != cracks::Method::kLocalVoronoi));
     }
   }
+}
+
+TEST_CASE("auto takes the cell decomposition the file records instead of deciding it again",
+          "[scene][cracks]") {
+  // The sample is a lattice. A copy that records "triangulation" gets the
+  // triangulation's cracks under auto, which deciding on its bonds would not.
+  const Series series;
+  const std::string recorded = series.dir.file("recorded.h5");
+  std::filesystem::copy_file(series.file, recorded);
+  testing::setStringAttribute(recorded, dem::kSpatialIndexGroup, "decomposition", "triangulation");
+  auto d = cellCut(-1);
+  d.cracks.method = cracks::Method::kCellCentre;  // its points are the cells' centres
+  REQUIRE(d.cracks.decomposition == cracks::Decomposition::kAuto);
+  auto lattice = d;
+  lattice.cracks.decomposition = cracks::Decomposition::kLattice;
+  auto triangulation = d;
+  triangulation.cracks.decomposition = cracks::Decomposition::kTriangulation;
+  const cracks::CrackMesh asLattice = extractedDirectly(series.file, lattice, 2);
+  const cracks::CrackMesh asTriangulation = extractedDirectly(series.file, triangulation, 2);
+  REQUIRE(asLattice.points != asTriangulation.points);
+
+  auto plain = scene::ScenePipeline::open(d, localOpener(series.dir));
+  REQUIRE(plain);
+  CHECK((*plain)->source().recordedDecomposition() != dem::CellDecomposition::kTriangulation);
+  requireSameGeometry((*plain)->cracks(), asLattice);
+
+  d.file = "recorded.h5";
+  auto settled = scene::ScenePipeline::open(d, localOpener(series.dir));
+  REQUIRE(settled);
+  CHECK((*settled)->source().recordedDecomposition() == dem::CellDecomposition::kTriangulation);
+  requireSameGeometry((*settled)->cracks(), asTriangulation);
+  // A chosen decomposition is the view's, whatever the file records.
+  d.cracks.decomposition = cracks::Decomposition::kLattice;
+  REQUIRE((*settled)->replace(d));
+  requireSameGeometry((*settled)->cracks(), asLattice);
 }
 
 TEST_CASE("a failed scene change leaves the pipeline as it was", "[scene]") {

@@ -29,6 +29,9 @@ class ForwardingSource : public source::StepSource {
   bool beingWritten() const override { return m_inner->beingWritten(); }
   Result<bool> refresh() override { return m_inner->refresh(); }
   double describeMs() const override { return m_inner->describeMs(); }
+  dem::CellDecomposition recordedDecomposition() const override {
+    return m_inner->recordedDecomposition();
+  }
 
  private:
   std::unique_ptr<source::StepSource> m_inner;

@@ -57,7 +57,8 @@ bench_wait_render() {
 # DATA and crackvis-render on free loopback ports, logging to LOG-data.log and
 # LOG-render.log, with RENDER_ARGS added to crackvis-render's; returns once
 # crackvis-render answers. crackvis-data is $bench_data_program when set (an
-# older build's, for an A/B; its HDF5 workers are the program beside it).
+# older build's, for an A/B; its HDF5 workers are the program beside it), and
+# crackvis-render $bench_render_program when set.
 # Sets bench_render_port, bench_data_pid and bench_render_pid.
 bench_start_services() {
   local data=$1 log=$2
@@ -68,7 +69,7 @@ bench_start_services() {
   "${bench_data_program:-$build/dataservice/crackvis-data}" --root "$data" --listen "127.0.0.1:$data_port" \
     --access-log '' >"$log-data.log" 2>&1 &
   bench_data_pid=$!
-  "$build/server/app/crackvis-render" --listen "127.0.0.1:$bench_render_port" \
+  "${bench_render_program:-$build/server/app/crackvis-render}" --listen "127.0.0.1:$bench_render_port" \
     --data-server "localhost:$data_port" --access-log '' "$@" >"$log-render.log" 2>&1 &
   bench_render_pid=$!
   bench_pids+=("$bench_data_pid" "$bench_render_pid")

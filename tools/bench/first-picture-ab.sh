@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The time to the first picture with two settings of crackvis-render, A and B
-# (extra arguments for each; optionally a crackvis-data program for each, an
-# older build's against this one's), alternating over R rounds on fresh services
-# (the order reversed every other round). Each run: fresh crackvis-data and
+# (extra arguments for each; optionally a crackvis-data or crackvis-render
+# program for each, an older build's against this one's), alternating over R
+# rounds on fresh services (the order reversed every other round). Each run: fresh crackvis-data and
 # crackvis-render on loopback, then `crackvis bench render --first-pictures
 # 3`: the first open is cold (nothing described, cached or touched in the
 # fresh services; the file in the page cache), the later two warm. Prints
@@ -22,6 +22,7 @@ usage() {
   cat <<EOF
 usage: tools/bench/first-picture-ab.sh --data DIR --file NAME --a "ARGS" --b "ARGS"
                                        [--a-data PROGRAM] [--b-data PROGRAM]
+                                       [--a-render PROGRAM] [--b-render PROGRAM]
                                        [--rounds R] [--size WxH] [--step S] [--gap SECONDS]
                                        [--out DIR]
 
@@ -29,7 +30,8 @@ Times the first picture of DIR/NAME (default: the last step, 1280x720) with crac
 started with the extra arguments of --a and of --b in turn (e.g. --a "--heap-reserve-mb 0"
 --b ""), fresh services each run, R rounds (default 4). --a-data and --b-data name the
 crackvis-data each arm runs (default this build's; its HDF5 workers are the crackvis-hdf5-worker
-beside it), e.g. a copy of an older build's to compare the two. --gap pauses between one session's
+beside it), e.g. a copy of an older build's to compare the two; --a-render and --b-render the
+crackvis-render likewise. --gap pauses between one session's
 close and the next open (default 0, the browser's pattern; 1.1 to 2: the next open meets the
 heap trim and what follows it, see crackvis-render's HeapTrimmer). --out keeps each run's JSON
 and logs.
@@ -52,6 +54,8 @@ args_a=
 args_b=
 data_a=
 data_b=
+render_a=
+render_b=
 given_a=
 given_b=
 while (($#)); do
@@ -63,6 +67,8 @@ while (($#)); do
     --b) args_b=${2?--b needs a value}; given_b=1; shift 2 ;;
     --a-data) data_a=${2:?--a-data needs a value}; shift 2 ;;
     --b-data) data_b=${2:?--b-data needs a value}; shift 2 ;;
+    --a-render) render_a=${2:?--a-render needs a value}; shift 2 ;;
+    --b-render) render_b=${2:?--b-render needs a value}; shift 2 ;;
     --rounds) rounds=${2:?--rounds needs a value}; shift 2 ;;
     --size) size=${2:?--size needs a value}; shift 2 ;;
     --step) step=${2:?--step needs a value}; shift 2 ;;
@@ -89,6 +95,15 @@ arm_program() {
 }
 data_a=$(arm_program "$data_a")
 data_b=$(arm_program "$data_b")
+# An arm's crackvis-render, likewise absolute.
+render_program() {
+  local program=$1
+  [[ -z $program ]] && return 0
+  [[ -x $program ]] || die "$program is not an executable crackvis-render"
+  realpath -e -- "$program"
+}
+render_a=$(render_program "$render_a")
+render_b=$(render_program "$render_b")
 for binary in tools/crackvis dataservice/crackvis-data server/app/crackvis-render; do
   [[ -x $build/$binary ]] || die "$build/$binary is missing: build the project first"
 done
@@ -103,10 +118,12 @@ resident_kb() {
   awk '/^VmRSS/ {print $2}' "/proc/$1/status"
 }
 
-# run TAG ROUND ARGS: one run on fresh services, its figures in $out/TAG-ROUND.*
+# run TAG ROUND ARGS DATA RENDER: one run on fresh services (DATA and RENDER:
+# the arm's programs, empty for this build's), its figures in $out/TAG-ROUND.*
 run() {
   local extra=$3 log=$out/$1-$2
   bench_data_program=$4
+  bench_render_program=$5
   # shellcheck disable=SC2086 # the extra arguments are words
   bench_start_services "$data" "$log" $extra
   sleep 2
@@ -125,22 +142,23 @@ for r in $(seq "$rounds"); do
   order=(a b)
   ((r % 2 == 0)) && order=(b a)
   for tag in "${order[@]}"; do
-    extra=$args_a program=$data_a
-    [[ $tag == b ]] && extra=$args_b program=$data_b
-    echo "round $r of $rounds: $tag ($extra${program:+, $program}) (load $(cut -d' ' -f1-3 /proc/loadavg))" >&2
-    run "$tag" "$r" "$extra" "$program"
+    extra=$args_a program=$data_a renderer=$render_a
+    [[ $tag == b ]] && extra=$args_b program=$data_b renderer=$render_b
+    echo "round $r of $rounds: $tag ($extra${program:+, $program}${renderer:+, $renderer})" \
+      "(load $(cut -d' ' -f1-3 /proc/loadavg))" >&2
+    run "$tag" "$r" "$extra" "$program" "$renderer"
   done
 done
 
-python3 - "$out" "$rounds" "$file" "$args_a" "$args_b" "$gap" "$data_a" "$data_b" <<'EOF'
+python3 - "$out" "$rounds" "$file" "$args_a" "$args_b" "$gap" "$data_a" "$data_b" \
+  "$render_a" "$render_b" <<'EOF'
 import json, statistics, sys
 out, rounds, name, args = sys.argv[1], int(sys.argv[2]), sys.argv[3], {"a": sys.argv[4], "b": sys.argv[5]}
 gap = float(sys.argv[6])
-programs = {"a": sys.argv[7], "b": sys.argv[8]}
+programs = {"a": [sys.argv[7], sys.argv[9]], "b": [sys.argv[8], sys.argv[10]]}
 def label(tag):
     words = [args[tag] or "defaults"]
-    if programs[tag]:
-        words.append(programs[tag])
+    words += [program for program in programs[tag] if program]
     return ", ".join(words)
 med = statistics.median
 rows = {"a": [], "b": []}

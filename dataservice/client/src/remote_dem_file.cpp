@@ -188,6 +188,14 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   return remote;
 }
 
+dem::CellDecomposition RemoteDemFile::recordedDecomposition() const {
+  const GroupInfo* index = m_description->findGroup(dem::kSpatialIndexGroup);
+  const AttributeInfo* recorded =
+      index != nullptr ? index->findAttribute("decomposition") : nullptr;
+  const auto* name = recorded != nullptr ? std::get_if<std::string>(&recorded->value) : nullptr;
+  return name != nullptr ? dem::decompositionNamed(*name) : dem::CellDecomposition::kUnknown;
+}
+
 Status RemoteDemFile::takePrefetchedBonds() {
   if (!m_prefetchedBonds) {
     return Status::ok();

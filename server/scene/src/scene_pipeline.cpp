@@ -44,6 +44,9 @@ class GuardedSource final : public source::StepSource {
   bool appendable() const override { return m_inner->appendable(); }
   bool beingWritten() const override { return m_inner->beingWritten(); }
   double describeMs() const override { return m_inner->describeMs(); }
+  dem::CellDecomposition recordedDecomposition() const override {
+    return m_inner->recordedDecomposition();
+  }
   Result<bool> refresh() override {
     return guardedCall([&] { return m_inner->refresh(); },
                        [&](std::string_view detail) {
@@ -281,8 +284,11 @@ Status ScenePipeline::apply(pipeline::PipelineDescription next) {
   CRACKVIS_RETURN_IF_ERROR(source::checkStepInRange(next.file, target, stepCount()));
   if (newExtractor) {
     m_state.normals.reset();  // another file or other bonds: found anew
+    cracks::ExtractOptions options = extractOptions(next);
+    options.decomposition =
+        cracks::settledByFile(options.decomposition, source().recordedDecomposition());
     m_state.extractor = cracks::makeExtractor(next.cracks.method, *m_state.graph,
-                                              source().lattice().dimension, extractOptions(next));
+                                              source().lattice().dimension, options);
   }
   m_state.description = std::move(next);
   const std::string series = seriesKey(m_state.description);

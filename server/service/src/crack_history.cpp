@@ -17,6 +17,15 @@ analysis::AnalysisOptions everyStepsPlane() {
   return options;
 }
 
+// The default options with "auto" settled by the file's record, as a view
+// settles it (ScenePipeline).
+cracks::ExtractOptions extractOptionsFor(const source::StepSource& source) {
+  cracks::ExtractOptions options;
+  options.decomposition =
+      cracks::settledByFile(options.decomposition, source.recordedDecomposition());
+  return options;
+}
+
 }  // namespace
 
 Result<std::unique_ptr<CrackHistoryRun>> CrackHistoryRun::start(
@@ -39,7 +48,8 @@ CrackHistoryRun::CrackHistoryRun(std::unique_ptr<source::StepSource> source, cra
       m_method(method),
       m_recordedModes(recordedModes),
       m_graph(m_source->lattice().particleCount(), m_source->lattice().bonds),
-      m_extractor(cracks::makeExtractor(method, m_graph, m_source->lattice().dimension)),
+      m_extractor(cracks::makeExtractor(method, m_graph, m_source->lattice().dimension,
+                                        extractOptionsFor(*m_source))),
       m_analyses(m_source->lattice(), everyStepsPlane()) {}
 
 bool CrackHistoryRun::continues(const std::string& file, cracks::Method method,

@@ -180,6 +180,9 @@ class RemoteSource final : public FileSource {
   const std::string& file() const override { return m_remote.file(); }
   int stepCount() const override { return m_remote.stepCount(); }
   double describeMs() const override { return m_remote.describeMs(); }
+  dem::CellDecomposition recordedDecomposition() const override {
+    return m_remote.recordedDecomposition();
+  }
   bool timeInIterations() const override { return m_remote.timeInIterations(); }
   bool appendable() const override { return m_remote.appendable(); }
   bool beingWritten() const override { return m_remote.beingWritten(); }
@@ -233,6 +236,10 @@ class LocalSource final : public FileSource {
       return lattice.status();
     }
     m_lattice = std::move(lattice).value();
+    // An index the reader refuses only loses the shortcut: "auto" decides.
+    if (auto index = m_reader.readSpatialIndexInfo(); index && *index) {
+      m_decomposition = (*index)->decomposition;
+    }
     return Status::ok();
   }
 
@@ -245,6 +252,7 @@ class LocalSource final : public FileSource {
     return m_reader.info().stepLayout == dem::StepLayout::kAppendable;
   }
   bool beingWritten() const override { return m_reader.info().beingWritten; }
+  dem::CellDecomposition recordedDecomposition() const override { return m_decomposition; }
 
  private:
   Result<std::vector<std::int32_t>> readBreakSteps() override { return m_reader.readBreakSteps(); }
@@ -260,6 +268,7 @@ class LocalSource final : public FileSource {
 
   std::string m_path;
   dem::DemFileReader m_reader;
+  dem::CellDecomposition m_decomposition = dem::CellDecomposition::kUnknown;
 };
 
 }  // namespace

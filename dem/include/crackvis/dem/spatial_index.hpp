@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include <crackvis/common/status.hpp>
@@ -42,6 +43,8 @@ inline constexpr const char* kIndexPeeledCellsPath = "/index/peeled_cells";
 
 // "lattice", "triangulation" (the attribute /index@decomposition); "" unknown.
 const char* decompositionName(CellDecomposition decomposition);
+// The decomposition decompositionName calls `name`; kUnknown for any other.
+CellDecomposition decompositionNamed(std::string_view name);
 
 // The index's scalar part (attributes of /index).
 struct SpatialIndexInfo {

@@ -20,6 +20,7 @@
 #include <crackvis/common/status.hpp>
 #include <crackvis/dataservice_client/data_client.hpp>
 #include <crackvis/dem/model.hpp>
+#include <crackvis/dem/spatial_index.hpp>
 #include <crackvis/dem_layout/layout.hpp>
 
 namespace crackvis::dataservice {
@@ -97,6 +98,9 @@ class RemoteDemFile {
   // first picture spends on the file's summary).
   double describeMs() const { return m_describeMs; }
   int stepCount() const { return static_cast<int>(m_description->steps.size()); }
+  // How the file's writer decided the crack methods divide its bond graph
+  // into cells (/index@decomposition); kUnknown when it records none.
+  dem::CellDecomposition recordedDecomposition() const;
   const std::vector<StepEntry>& steps() const { return m_description->steps; }
 
   // The fixed lattice topology, read on first use (alone, or with the first

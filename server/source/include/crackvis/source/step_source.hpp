@@ -21,6 +21,7 @@
 #include <crackvis/common/status.hpp>
 #include <crackvis/dataservice_client/data_client.hpp>
 #include <crackvis/dem/model.hpp>
+#include <crackvis/dem/spatial_index.hpp>
 #include <crackvis/dem_layout/layout.hpp>
 
 namespace crackvis::source {
@@ -89,6 +90,12 @@ class StepSource {
   // How long describing the file took as it was opened: crackvis-data's
   // Describe for a remote file; 0 for a local one (its reader opens it).
   virtual double describeMs() const { return 0.0; }
+  // How the file's writer decided the crack methods divide its bond graph
+  // into cells (/index@decomposition), which a view's "auto" then takes
+  // (cracks::settledByFile); kUnknown when the file records none.
+  virtual dem::CellDecomposition recordedDecomposition() const {
+    return dem::CellDecomposition::kUnknown;
+  }
 };
 
 // `file` relative to the data service's root. A file declaring more
