@@ -182,7 +182,7 @@ TEST_CASE("lattices keep their own cells", "[cracks][packing]") {
   CHECK(isLatticeGraph(fcc, 3));
 }
 
-TEST_CASE("auto takes the decomposition a file records; a chosen one and an unrecorded stay",
+TEST_CASE("auto takes the decomposition a file records, a chosen one and an unrecorded stay",
           "[cracks][packing]") {
   using dem::CellDecomposition;
   CHECK(settledByFile(Decomposition::kAuto, CellDecomposition::kLattice) ==
