@@ -40,7 +40,15 @@ Result<DemFileReader> DemFileReader::openGuarded(const std::string& path,
         if (const Status capped = capAddressSpace(kStructureHeadroom); !capped) {
           return encode(capped);
         }
-        return encode(open(path).status());
+        auto reader = open(path);
+        if (reader) {
+          // The spatial index's headers too: a local step source reads its
+          // summary right after the open (the decomposition the file
+          // records), and a fault there must end the child, not the caller.
+          // Its refusal is the caller's to ignore, as the source does.
+          (void)reader->readSpatialIndexInfo();
+        }
+        return encode(reader.status());
       },
       limit);
   if (!outcome) {

@@ -138,6 +138,31 @@ TEST_CASE("auto takes the cell decomposition the file records instead of decidin
   requireSameGeometry((*settled)->cracks(), asLattice);
 }
 
+TEST_CASE("a wrong recorded decomposition gives poorer cracks and a warning that names it",
+          "[scene][cracks]") {
+  // A random packing whose file claims a lattice: auto follows the claim, as
+  // choosing "lattice" would, and the warning says where it came from.
+  testing::TempDir dir;
+  testing::writePlantedRandomPacking(dir.file("claims-lattice.h5"), 2);
+  testing::setStringAttribute(dir.file("claims-lattice.h5"), dem::kSpatialIndexGroup,
+                              "decomposition", "lattice");
+  pipeline::PipelineDescription d;
+  d.file = "claims-lattice.h5";
+  d.step = -1;
+  d.cracks.method = cracks::Method::kCellCut;
+  auto scene = scene::ScenePipeline::open(d, localOpener(dir));
+  REQUIRE(scene);
+  CHECK((*scene)->crackMapping().fraction < 0.95);
+  CHECK_THAT((*scene)->crackMapping().warning, Catch::Contains("span no lattice"));
+  CHECK_THAT((*scene)->crackMapping().warning,
+             Catch::Contains("auto took 'lattice' from the file's /index@decomposition"));
+  // Chosen, the triangulation maps them, whatever the file claims.
+  d.cracks.decomposition = cracks::Decomposition::kTriangulation;
+  REQUIRE((*scene)->replace(d));
+  CHECK((*scene)->crackMapping().fraction >= 0.95);
+  CHECK((*scene)->crackMapping().warning.empty());
+}
+
 TEST_CASE("a failed scene change leaves the pipeline as it was", "[scene]") {
   const Series series;
   auto opened = scene::ScenePipeline::open(cellCut(1), localOpener(series.dir));

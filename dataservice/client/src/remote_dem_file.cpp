@@ -188,6 +188,9 @@ Result<RemoteDemFile> RemoteDemFile::open(const DataClient& client, const std::s
   return remote;
 }
 
+// The attribute alone: the local reader takes it only with an index that
+// validates whole, so on a damaged index the two may differ; either answer
+// is a decomposition the view may use (an unknown one is decided anew).
 dem::CellDecomposition RemoteDemFile::recordedDecomposition() const {
   const GroupInfo* index = m_description->findGroup(dem::kSpatialIndexGroup);
   const AttributeInfo* recorded =

@@ -414,6 +414,16 @@ ScenePipeline::CrackMapping ScenePipeline::mappingOf(const cracks::CrackMesh& me
   if (!cause.empty()) {
     result.warning = fmt::format("only {:.1f} % of the {} broken bonds became surface elements: {}",
                                  100.0 * mapping.fraction(), mapping.broken, cause);
+    // "auto" followed the file's record; its advice to choose auto would
+    // change nothing, so the warning names where the decomposition came from.
+    const dem::CellDecomposition recorded = source().recordedDecomposition();
+    if (m_state.description.cracks.decomposition == cracks::Decomposition::kAuto &&
+        recorded != dem::CellDecomposition::kUnknown) {
+      result.warning += fmt::format(
+          " (auto took '{}' from the file's /index@decomposition; choose the decomposition to "
+          "override it)",
+          dem::decompositionName(recorded));
+    }
   }
   return result;
 }
