@@ -146,10 +146,8 @@ TEST_CASE("a wrong recorded decomposition gives poorer cracks and a warning that
   testing::writePlantedRandomPacking(dir.file("claims-lattice.h5"), 2);
   testing::setStringAttribute(dir.file("claims-lattice.h5"), dem::kSpatialIndexGroup,
                               "decomposition", "lattice");
-  pipeline::PipelineDescription d;
+  auto d = cellCut(-1);
   d.file = "claims-lattice.h5";
-  d.step = -1;
-  d.cracks.method = cracks::Method::kCellCut;
   auto scene = scene::ScenePipeline::open(d, localOpener(dir));
   REQUIRE(scene);
   CHECK((*scene)->crackMapping().fraction < 0.95);
