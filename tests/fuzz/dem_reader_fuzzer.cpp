@@ -1,9 +1,9 @@
 // libFuzzer target: the crackvis-dem reader (dem/) on mutated files. The
 // input is written to a file and read the way `crackvis info --steps` and a
 // render session read one: open (structure), the spatial index's summary,
-// lattice, break steps, every step. Each call must return a value or a Status, never crash. Uses
-// only the public header; HDF5 itself is not instrumented, so coverage counts the reader's own
-// checks.
+// lattice, break steps, every step. Each call must return a value or a
+// Status, never crash. Uses only the public header; HDF5 itself is not
+// instrumented, so coverage counts the reader's own checks.
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>

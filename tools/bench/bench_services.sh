@@ -69,7 +69,8 @@ bench_start_services() {
   "${bench_data_program:-$build/dataservice/crackvis-data}" --root "$data" --listen "127.0.0.1:$data_port" \
     --access-log '' >"$log-data.log" 2>&1 &
   bench_data_pid=$!
-  "${bench_render_program:-$build/server/app/crackvis-render}" --listen "127.0.0.1:$bench_render_port" \
+  "${bench_render_program:-$build/server/app/crackvis-render}" \
+    --listen "127.0.0.1:$bench_render_port" \
     --data-server "localhost:$data_port" --access-log '' "$@" >"$log-render.log" 2>&1 &
   bench_render_pid=$!
   bench_pids+=("$bench_data_pid" "$bench_render_pid")

@@ -2,13 +2,13 @@
 # The time to the first picture with two settings of crackvis-render, A and B
 # (extra arguments for each; optionally a crackvis-data or crackvis-render
 # program for each, an older build's against this one's), alternating over R
-# rounds on fresh services (the order reversed every other round). Each run: fresh crackvis-data and
-# crackvis-render on loopback, then `crackvis bench render --first-pictures
-# 3`: the first open is cold (nothing described, cached or touched in the
-# fresh services; the file in the page cache), the later two warm. Prints
-# each run's cold and warm times with their parts, crackvis-render's resident
-# memory idle (2 s after it answers) and after the sessions (7 s later: the
-# heap trimmed), and the load; then the medians.
+# rounds on fresh services (the order reversed every other round). Each run:
+# fresh crackvis-data and crackvis-render on loopback, then `crackvis bench
+# render --first-pictures 3`: the first open is cold (nothing described,
+# cached or touched in the fresh services; the file in the page cache), the
+# later two warm. Prints each run's cold and warm times with their parts,
+# crackvis-render's resident memory idle (2 s after it answers) and after the
+# sessions (7 s later: the heap trimmed), and the load; then the medians.
 # Figures: docs/benchmarks.md ("A heap kept touched for the first picture").
 set -euo pipefail
 
